@@ -1,0 +1,281 @@
+//! Typed diagnostics with their place in the source.
+
+use crate::ast::Span;
+
+/// How serious a diagnostic is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Severity {
+    /// The program runs, but something deserves a look.
+    Warning,
+    /// The program (or this block) cannot be read or interpreted safely.
+    Error,
+}
+
+/// Everything that can be wrong with a program, as far as this crate can tell.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ErrorKind {
+    /// Bytes that are not UTF-8.
+    #[error("the line holds bytes that are not UTF-8")]
+    InvalidUtf8,
+    /// A `(` comment with no `)` on the same line.
+    #[error("comment is not closed")]
+    UnterminatedComment,
+    /// An address letter with no number after it.
+    #[error("the letter {0} has no number after it")]
+    LetterWithoutNumber(char),
+    /// A number with no address letter in front of it.
+    #[error("number `{0}` has no address letter")]
+    NumberWithoutLetter(String),
+    /// A character that cannot start a word or comment.
+    #[error("unexpected character `{0}`")]
+    UnexpectedCharacter(char),
+    /// A number that cannot be read (too long, or not finite).
+    #[error("cannot read the number `{0}`")]
+    BadNumber(String),
+    /// The same word letter twice in one block.
+    #[error("{0} appears twice in this block")]
+    DuplicateWord(String),
+    /// Two codes of one modal group in a block.
+    #[error("{first} and {second} are both in the {group} group")]
+    ModalGroupConflict {
+        /// The group's name.
+        group: &'static str,
+        /// The first code.
+        first: String,
+        /// The second code.
+        second: String,
+    },
+    /// A G-code this interpreter does not know.
+    #[error("unknown G-code G{0}")]
+    UnknownGCode(String),
+    /// A G or M number with more than one decimal.
+    #[error("{0} is not a valid code number")]
+    BadCodeNumber(String),
+    /// An arc whose start and end radii differ beyond tolerance.
+    #[error("arc radius at the start ({start:.6}) and at the end ({end:.6}) differ by {diff:.6}, more than the tolerance {tolerance}")]
+    ArcRadiusMismatch {
+        /// Radius from the centre to the start.
+        start: f64,
+        /// Radius from the centre to the end.
+        end: f64,
+        /// The difference.
+        diff: f64,
+        /// The tolerance in program units.
+        tolerance: f64,
+    },
+    /// G2/G3 with neither centre offsets nor a radius.
+    #[error("arc has neither I/J/K centre words nor an R radius")]
+    ArcWithoutCenter,
+    /// A radius arc whose end point is its start point.
+    #[error("an R-form arc cannot end where it starts (use I/J/K for a full circle)")]
+    ArcRadiusFullCircle,
+    /// A radius arc whose radius is less than half the chord.
+    #[error("arc radius {radius} is less than half the distance between start and end ({half_chord:.6})")]
+    ArcRadiusTooSmall {
+        /// |R|
+        radius: f64,
+        /// Half the chord.
+        half_chord: f64,
+    },
+    /// An arc with a zero radius.
+    #[error("arc has zero radius")]
+    ArcZeroRadius,
+    /// Both centre words and a radius.
+    #[error("arc has both I/J/K and R")]
+    ArcBothForms,
+    /// A centre word outside the active plane.
+    #[error("{0} is not a centre word of the active plane")]
+    ArcWrongPlaneWord(char),
+    /// Axis words with no motion mode.
+    #[error("axis words but no motion mode is active (after G80 or at program start)")]
+    NoMotionMode,
+    /// A feed move with no feed rate.
+    #[error("feed move with no feed rate (F) set")]
+    NoFeedRate,
+    /// G93 inverse-time move without F in the block.
+    #[error("inverse-time (G93) feed move without F in the block")]
+    InverseTimeNeedsF,
+    /// A canned cycle without the words it needs.
+    #[error("canned cycle G{code} needs {what}")]
+    CannedCycleIncomplete {
+        /// The cycle (81, 83, …).
+        code: String,
+        /// What is missing.
+        what: &'static str,
+    },
+    /// A word whose value makes no sense.
+    #[error("{word}: {why}")]
+    BadValue {
+        /// The word as written.
+        word: String,
+        /// Why it is wrong.
+        why: &'static str,
+    },
+    /// A feature that is read but not simulated.
+    #[error("{0} is not simulated: the trace shows the programmed path without it")]
+    NotSimulated(String),
+    /// A canned cycle passed through, not expanded.
+    #[error("canned cycle G{0} is passed through, not expanded into moves")]
+    CannedCyclePassedThrough(String),
+    /// A macro line whose value a later stage would need.
+    #[error("{0} is not evaluated (macros are kept verbatim, not run)")]
+    MacroNotEvaluated(&'static str),
+    /// A subprogram call not followed.
+    #[error("{0}: subprogram calls are not followed; the trace continues after the call")]
+    SubprogramNotFollowed(String),
+    /// A program with no blocks at all.
+    #[error("the program is empty")]
+    EmptyProgram,
+    /// A line far longer than any controller accepts.
+    #[error("the line is {0} bytes long")]
+    LineTooLong(usize),
+}
+
+impl ErrorKind {
+    /// What the user can do about it.
+    pub fn hint(&self) -> &'static str {
+        match self {
+            ErrorKind::InvalidUtf8 => "save the file as UTF-8 or ASCII; controllers read ASCII only",
+            ErrorKind::UnterminatedComment => "add `)` at the end of the comment",
+            ErrorKind::LetterWithoutNumber(_) => "give the word a value, e.g. `X0`, or remove the letter",
+            ErrorKind::NumberWithoutLetter(_) => "put the address letter in front of the number, e.g. `X1.5`",
+            ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
+            ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
+            ErrorKind::DuplicateWord(_) => "keep one value per letter in a block",
+            ErrorKind::ModalGroupConflict { .. } => "keep one code of each modal group per block",
+            ErrorKind::UnknownGCode(_) => "check the code against the controller's manual, or remove it",
+            ErrorKind::BadCodeNumber(_) => "G and M codes have at most one decimal, e.g. G31.1",
+            ErrorKind::ArcRadiusMismatch { .. } => "check the arc's end point and I/J/K (incremental from the start unless G90.1)",
+            ErrorKind::ArcWithoutCenter => "add I/J/K (centre offset) or R (radius)",
+            ErrorKind::ArcRadiusFullCircle => "write a full circle with I/J/K",
+            ErrorKind::ArcRadiusTooSmall { .. } => "the radius must be at least half the chord; check R and the end point",
+            ErrorKind::ArcZeroRadius => "check I/J/K or R",
+            ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
+            ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
+            ErrorKind::NoMotionMode => "add G0 or G1 to the block",
+            ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",
+            ErrorKind::InverseTimeNeedsF => "in G93 every feed move needs its own F",
+            ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its Z depth and R plane (and Q for peck cycles)",
+            ErrorKind::BadValue { .. } => "correct the value",
+            ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
+            ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
+            ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
+            ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
+            ErrorKind::EmptyProgram => "give a file that holds a program",
+            ErrorKind::LineTooLong(_) => "split the line; controllers take lines of a few hundred characters",
+        }
+    }
+}
+
+/// A short piece of the source line, for showing the user where the problem is.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct Snippet {
+    /// The text shown (the whole line, or a window of it for a long line).
+    pub text: String,
+    /// Where the caret starts, in characters from the start of `text`.
+    pub caret: usize,
+    /// How many characters the caret covers (at least 1).
+    pub width: usize,
+}
+
+/// A located diagnostic.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{line}:{column}: {kind}")]
+pub struct Diagnostic {
+    /// Error or warning.
+    pub severity: Severity,
+    /// What is wrong.
+    pub kind: ErrorKind,
+    /// 1-based line.
+    pub line: u32,
+    /// 1-based column, in characters.
+    pub column: u32,
+    /// The offending bytes.
+    pub span: Span,
+    /// The source around it.
+    pub snippet: Snippet,
+}
+
+/// The most characters of a line a snippet shows.
+const SNIPPET_WINDOW: usize = 100;
+
+impl Diagnostic {
+    /// A diagnostic for the bytes `start..end` (offsets within `line_text`) of a line that
+    /// starts at byte `line_offset` of the input.
+    pub fn at(
+        severity: Severity,
+        kind: ErrorKind,
+        line: u32,
+        line_offset: usize,
+        line_text: &[u8],
+        start: usize,
+        end: usize,
+    ) -> Self {
+        let start = start.min(line_text.len());
+        let end = end.clamp(start, line_text.len());
+        let before = String::from_utf8_lossy(&line_text[..start]);
+        let column = before.chars().count() + 1;
+        let snippet = make_snippet(line_text, start, end);
+        Diagnostic {
+            severity,
+            kind,
+            line,
+            column: u32::try_from(column).unwrap_or(u32::MAX),
+            span: Span::new(line_offset + start, line_offset + end),
+            snippet,
+        }
+    }
+
+    /// A diagnostic that concerns the whole input, not one place in it.
+    pub fn whole(severity: Severity, kind: ErrorKind) -> Self {
+        Diagnostic {
+            severity,
+            kind,
+            line: 0,
+            column: 0,
+            span: Span::default(),
+            snippet: Snippet {
+                text: String::new(),
+                caret: 0,
+                width: 0,
+            },
+        }
+    }
+
+    /// The hint for the user.
+    pub fn hint(&self) -> &'static str {
+        self.kind.hint()
+    }
+
+    /// True for errors.
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+}
+
+fn make_snippet(line: &[u8], start: usize, end: usize) -> Snippet {
+    // Window of at most SNIPPET_WINDOW bytes around the span, on char boundaries.
+    let lo = start.saturating_sub(SNIPPET_WINDOW / 2);
+    let hi = (lo + SNIPPET_WINDOW).max(end.min(start + SNIPPET_WINDOW / 2)).min(line.len());
+    let text_full = String::from_utf8_lossy(&line[lo..hi]);
+    let prefix = String::from_utf8_lossy(&line[lo..start]).chars().count();
+    let width = String::from_utf8_lossy(&line[start..end.min(hi).max(start)])
+        .chars()
+        .count()
+        .max(1);
+    let mut text: String = text_full
+        .chars()
+        .map(|c| if c == '\t' { ' ' } else { c })
+        .collect();
+    let mut caret = prefix;
+    if lo > 0 {
+        text.insert_str(0, "…");
+        caret += 1;
+    }
+    if hi < line.len() {
+        text.push('…');
+    }
+    Snippet { text, caret, width }
+}

@@ -1,0 +1,340 @@
+//! Writing blocks back out, verbatim or in a controller's dialect.
+
+use std::io::{self, Write};
+
+use crate::ast::{Block, BlockKind, CommentStyle, Item, Word};
+use crate::modal::{code_text, Units};
+
+/// Output dialect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dialect {
+    /// FADAL: `%` framing, forced decimal points, XYZ to 4 decimals in inch and 3 in
+    /// mm, ABC to 3.
+    Fadal,
+    /// Plain ISO/RS274: same resolutions, no forced decimal point on whole feeds.
+    Iso,
+}
+
+/// How to write.
+#[derive(Debug, Clone, Copy)]
+pub struct EmitOptions {
+    /// `None` keeps every number as written; a dialect rewrites numbers in its format.
+    pub dialect: Option<Dialect>,
+    /// Renumber blocks with N words from `start`, by `step`.
+    pub renumber: Option<(u64, u64)>,
+    /// Leave out a motion G-code equal to the one in force, and an F equal to the
+    /// feed in force (never in G93, where every move takes its F).
+    pub suppress_modal: bool,
+    /// Units before any G20/G21 (decides decimals).
+    pub units: Units,
+}
+
+impl Default for EmitOptions {
+    fn default() -> Self {
+        EmitOptions {
+            dialect: None,
+            renumber: None,
+            suppress_modal: false,
+            units: Units::Mm,
+        }
+    }
+}
+
+/// Writes blocks to `out`.
+#[derive(Debug)]
+pub struct Emitter<W: Write> {
+    out: W,
+    opts: EmitOptions,
+    next_n: u64,
+    units: Units,
+    motion: Option<u16>,
+    feed: Option<f64>,
+    inverse_time: bool,
+    first: bool,
+    last_percent: bool,
+    line: String,
+}
+
+fn trim_decimals(s: &mut String, keep_point: bool) {
+    if s.contains('.') {
+        while s.ends_with('0') {
+            s.pop();
+        }
+        if s.ends_with('.') && !keep_point {
+            s.pop();
+        }
+    } else if keep_point {
+        s.push('.');
+    }
+    if s == "-0" || s == "-0." {
+        s.remove(0);
+    }
+}
+
+/// Format `value` to `decimals` places; `-0.000` becomes `0.000`.
+pub fn fixed(value: f64, decimals: usize) -> String {
+    let mut s = format!("{value:.decimals$}");
+    if s.starts_with('-') && s[1..].bytes().all(|c| c == b'0' || c == b'.') {
+        s.remove(0);
+    }
+    s
+}
+
+/// The number text of a word in a dialect.
+pub fn format_value(dialect: Dialect, units: Units, letter: u8, register: Option<u8>, value: f64) -> String {
+    let forced = dialect == Dialect::Fadal;
+    let linear_dec = match units {
+        Units::Inch => 4,
+        Units::Mm => 3,
+    };
+    let mut s = match letter {
+        b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' => fixed(value, linear_dec),
+        b'R' if register.is_none() => fixed(value, linear_dec),
+        b'A' | b'B' | b'C' => fixed(value, 3),
+        b'G' | b'M' => {
+            let t = (value * 10.0).round();
+            if (value * 10.0 - t).abs() < 1e-9 && t >= 0.0 {
+                return code_text(t as u16);
+            }
+            let mut s = format!("{value:.4}");
+            trim_decimals(&mut s, false);
+            return s;
+        }
+        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' if value.fract() == 0.0 => {
+            return format!("{}", value as i64);
+        }
+        b'F' | b'S' | b'P' | b'E' | b'R' => {
+            let mut s = format!("{value:.5}");
+            trim_decimals(&mut s, forced && letter != b'S' && letter != b'P');
+            s
+        }
+        _ => {
+            let mut s = format!("{value:.5}");
+            trim_decimals(&mut s, false);
+            s
+        }
+    };
+    if register.is_some() && !s.starts_with('-') {
+        s.insert(0, '+');
+    }
+    if register.is_some() && !s.contains('.') {
+        s.push('.');
+    }
+    s
+}
+
+impl<W: Write> Emitter<W> {
+    /// An emitter writing to `out`.
+    pub fn new(out: W, opts: EmitOptions) -> Self {
+        Emitter {
+            out,
+            opts,
+            next_n: opts.renumber.map_or(0, |r| r.0),
+            units: opts.units,
+            motion: None,
+            feed: None,
+            inverse_time: false,
+            first: true,
+            last_percent: false,
+            line: String::with_capacity(128),
+        }
+    }
+
+    fn frame_start(&mut self, starts_with_percent: bool) -> io::Result<()> {
+        if self.first {
+            self.first = false;
+            if self.opts.dialect == Some(Dialect::Fadal) && !starts_with_percent {
+                self.out.write_all(b"%\n")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Write a FADAL/ISO program number line, `O1234 (comment)`.
+    pub fn program_number(&mut self, number: u32, comment: Option<&str>) -> io::Result<()> {
+        self.frame_start(false)?;
+        match comment {
+            Some(c) => writeln!(self.out, "O{number} ({})", c.replace([')', '('], "")),
+            None => writeln!(self.out, "O{number}"),
+        }?;
+        self.last_percent = false;
+        Ok(())
+    }
+
+    fn push_word(&mut self, letter: u8, register: Option<u8>, value: f64, text: Option<&str>) {
+        if !self.line.is_empty() && !self.line.ends_with('/') {
+            self.line.push(' ');
+        }
+        self.line.push(char::from(letter));
+        if let Some(r) = register {
+            self.line.push(char::from(b'0' + r));
+        }
+        match (self.opts.dialect, text) {
+            (None, Some(t)) => self.line.push_str(t),
+            (Some(d), _) => self.line.push_str(&format_value(d, self.units, letter, register, value)),
+            (None, None) => self.line.push_str(&format_value(Dialect::Iso, self.units, letter, register, value)),
+        }
+    }
+
+    fn track(&mut self, letter: u8, value: f64) {
+        if letter == b'G' {
+            let c = (value * 10.0).round() as i64;
+            match c {
+                200 | 700 => self.units = Units::Inch,
+                210 | 710 => self.units = Units::Mm,
+                930 => self.inverse_time = true,
+                940 | 950 => self.inverse_time = false,
+                _ => {}
+            }
+        }
+    }
+
+    /// Should this word be left out under modal suppression?
+    fn suppressed(&self, letter: u8, value: f64) -> bool {
+        if !self.opts.suppress_modal {
+            return false;
+        }
+        match letter {
+            b'G' => {
+                let c = (value * 10.0).round() as i64;
+                matches!(c, 0 | 10 | 20 | 30) && self.motion == Some(c as u16)
+            }
+            b'F' => !self.inverse_time && self.feed == Some(value),
+            _ => false,
+        }
+    }
+
+    fn after(&mut self, letter: u8, value: f64) {
+        if letter == b'G' {
+            let c = (value * 10.0).round() as i64;
+            if matches!(c, 0 | 10 | 20 | 30) {
+                self.motion = Some(c as u16);
+            } else if (730..=890).contains(&c) {
+                self.motion = None;
+            }
+        } else if letter == b'F' {
+            self.feed = Some(value);
+        }
+    }
+
+    fn flush_line(&mut self) -> io::Result<()> {
+        self.out.write_all(self.line.as_bytes())?;
+        self.out.write_all(b"\n")?;
+        self.line.clear();
+        Ok(())
+    }
+
+    /// Write one parsed block.
+    pub fn block(&mut self, b: &Block<'_>) -> io::Result<()> {
+        self.frame_start(b.kind == BlockKind::Percent)?;
+        self.line.clear();
+        match b.kind {
+            BlockKind::Percent => {
+                self.line.push_str(b.raw.trim());
+                self.last_percent = true;
+                return self.flush_line();
+            }
+            BlockKind::Macro(_) => {
+                self.line.push_str(b.raw.trim_end());
+                self.last_percent = false;
+                return self.flush_line();
+            }
+            BlockKind::Words => {}
+        }
+        if b.items.is_empty() && !b.block_delete {
+            self.last_percent = false;
+            return self.flush_line();
+        }
+        self.last_percent = false;
+        if b.block_delete {
+            self.line.push('/');
+        }
+        let numbered = self.opts.renumber.is_some() && b.has_words() && b.word(b'O').is_none();
+        if numbered {
+            let n = self.next_n;
+            self.push_word(b'N', None, n as f64, None);
+            self.next_n = self.next_n.saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+        }
+        for item in &b.items {
+            match item {
+                Item::Word(w) => {
+                    if numbered && w.letter == b'N' {
+                        continue;
+                    }
+                    self.track(w.letter, w.value);
+                    if self.suppressed(w.letter, w.value) {
+                        continue;
+                    }
+                    self.after(w.letter, w.value);
+                    self.push_word(w.letter, w.register, w.value, Some(w.text));
+                }
+                Item::Comment(c) => {
+                    if !self.line.is_empty() && !self.line.ends_with('/') {
+                        self.line.push(' ');
+                    }
+                    match c.style {
+                        CommentStyle::Paren => {
+                            self.line.push('(');
+                            self.line.push_str(c.text);
+                            self.line.push(')');
+                        }
+                        CommentStyle::Semicolon => {
+                            self.line.push(';');
+                            self.line.push_str(c.text);
+                        }
+                    }
+                }
+            }
+        }
+        self.flush_line()
+    }
+
+    /// Write a block made of words (letter, value) and an optional comment, in the
+    /// dialect (or ISO spelling when verbatim), numbered when renumbering.
+    pub fn words(&mut self, words: &[(u8, f64)], comment: Option<&str>) -> io::Result<()> {
+        self.frame_start(false)?;
+        self.line.clear();
+        self.last_percent = false;
+        if self.opts.renumber.is_some() && !words.is_empty() {
+            let n = self.next_n;
+            self.push_word(b'N', None, n as f64, None);
+            self.next_n = self.next_n.saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+        }
+        for &(l, v) in words {
+            self.track(l, v);
+            if self.suppressed(l, v) {
+                continue;
+            }
+            self.after(l, v);
+            self.push_word(l, None, v, None);
+        }
+        if let Some(c) = comment {
+            if !self.line.is_empty() {
+                self.line.push(' ');
+            }
+            self.line.push('(');
+            self.line.push_str(&c.replace([')', '('], ""));
+            self.line.push(')');
+        }
+        self.flush_line()
+    }
+
+    /// Close the program (FADAL: a final `%` if the last line was not one) and hand
+    /// back the writer.
+    pub fn finish(mut self) -> io::Result<W> {
+        if self.opts.dialect == Some(Dialect::Fadal) && !self.last_percent {
+            if self.first {
+                self.out.write_all(b"%\n")?;
+            }
+            self.out.write_all(b"%\n")?;
+        }
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+/// The word as the emitter writes it verbatim (letter, register, number text).
+pub fn word_text(w: &Word<'_>) -> String {
+    w.display()
+}

@@ -1,0 +1,942 @@
+//! The modal interpreter: blocks in, resolved absolute moves out.
+//!
+//! Positions are absolute, in the program's units, in the frame where every work
+//! offset the program itself sets (G10, G92, G52) is applied and every offset stored
+//! only in the controller is zero. For an ordinary CAM program, that is the
+//! program's own coordinates. Tool length offsets are recorded, not applied: the
+//! trace is of the controlled point the program names.
+
+use serde::Serialize;
+
+use crate::ast::{Block, BlockKind, Item, Word};
+use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::modal::*;
+
+/// What the E word means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EWord {
+    /// FADAL fixture offset E0 … E48.
+    FixtureOffset,
+    /// An extruder position from a slicer (recorded with each move).
+    Extrusion,
+}
+
+/// Interpreter settings.
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// Units before any G20/G21.
+    pub units: Units,
+    /// What E means.
+    pub e_word: EWord,
+    /// Arc radius tolerance in inches (scaled for millimetre programs).
+    pub arc_tolerance_inch: f64,
+    /// Skip blocks starting with `/`.
+    pub block_delete: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            units: Units::Mm,
+            e_word: EWord::FixtureOffset,
+            arc_tolerance_inch: 0.0005,
+            block_delete: false,
+        }
+    }
+}
+
+/// The kind of a resolved move.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "type")]
+pub enum MoveKind {
+    /// G0
+    Rapid,
+    /// G1 (and canned-cycle feeds, G33)
+    Linear,
+    /// A probing move (FADAL G31, LinuxCNC G38.x): straight, stops on touch.
+    Probe,
+    /// G2/G3
+    Arc {
+        /// G2.
+        clockwise: bool,
+        /// The centre, absolute (the normal axis holds the start's value).
+        center: [f64; 3],
+        /// Plane.
+        plane: Plane,
+        /// Number of turns (1 for an ordinary arc; a full circle is 1).
+        turns: u32,
+    },
+}
+
+/// Why a move exists.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Origin {
+    /// Written in the block.
+    Block,
+    /// Expanded from a canned cycle.
+    CannedCycle,
+    /// The intermediate or home move of G28/G30.
+    Home,
+}
+
+/// One resolved move.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Move {
+    /// Straight, arc or probe.
+    pub kind: MoveKind,
+    /// Where it starts.
+    pub start: Position,
+    /// Where it ends.
+    pub end: Position,
+    /// Feed (units/min, or 1/min in inverse time); 0 for rapids.
+    pub feed: f64,
+    /// Extruder E at the end (slicer programs), when E means extrusion.
+    pub extrusion: Option<f64>,
+    /// Modal state in force.
+    pub modal: Modal,
+    /// Source line.
+    pub line: u32,
+    /// Why the move exists.
+    pub origin: Origin,
+}
+
+/// What the interpreter reports.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// A move.
+    Move(Move),
+    /// A warning or error.
+    Diagnostic(Diagnostic),
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct CannedParams {
+    z: Option<f64>,
+    r: Option<f64>,
+    q: Option<f64>,
+    p: f64,
+}
+
+/// The interpreter. Feed it blocks in order with [`Interpreter::block`].
+#[derive(Debug, Clone)]
+pub struct Interpreter {
+    opts: Options,
+    modal: Modal,
+    pos: Position,
+    g5x: [Position; 10],
+    fixture: [Position; 49],
+    g92: Position,
+    g52: Position,
+    home28: Position,
+    home30: Position,
+    canned: CannedParams,
+    extrusion: f64,
+    ended: bool,
+    warned_after_end: bool,
+}
+
+/// Words of one block, looked up by letter.
+struct Words<'b, 'a> {
+    by_letter: [Option<&'b Word<'a>>; 26],
+    registers: [Option<&'b Word<'a>>; 10],
+    gs: smallvec::SmallVec<[(&'b Word<'a>, u16, GGroup); 4]>,
+    ms: smallvec::SmallVec<[(&'b Word<'a>, u16); 4]>,
+}
+
+impl<'b, 'a> Words<'b, 'a> {
+    fn get(&self, letter: u8) -> Option<f64> {
+        self.by_letter[usize::from(letter - b'A')].map(|w| w.value)
+    }
+    fn word(&self, letter: u8) -> Option<&'b Word<'a>> {
+        self.by_letter[usize::from(letter - b'A')]
+    }
+    fn has_g(&self, code: u16) -> bool {
+        self.gs.iter().any(|g| g.1 == code)
+    }
+    fn g_in(&self, group: GGroup) -> Option<(&'b Word<'a>, u16)> {
+        self.gs.iter().find(|g| g.2 == group).map(|g| (g.0, g.1))
+    }
+    fn has_axes(&self) -> bool {
+        AXES.iter().any(|&a| self.by_letter[usize::from(a - b'A')].is_some())
+    }
+}
+
+type Res<T> = Result<T, Diagnostic>;
+
+fn diag(b: &Block<'_>, sev: Severity, kind: ErrorKind, span: Option<crate::ast::Span>) -> Diagnostic {
+    let (s, e) = match span {
+        Some(sp) => (sp.start - b.span.start, sp.end - b.span.start),
+        None => (0, b.raw.len()),
+    };
+    Diagnostic::at(sev, kind, b.line, b.span.start, b.raw.as_bytes(), s, e)
+}
+
+impl Interpreter {
+    /// A fresh interpreter.
+    pub fn new(opts: Options) -> Self {
+        Interpreter {
+            opts,
+            modal: Modal::new(opts.units),
+            pos: [0.0; 9],
+            g5x: [[0.0; 9]; 10],
+            fixture: [[0.0; 9]; 49],
+            g92: [0.0; 9],
+            g52: [0.0; 9],
+            home28: [0.0; 9],
+            home30: [0.0; 9],
+            canned: CannedParams::default(),
+            extrusion: 0.0,
+            ended: false,
+            warned_after_end: false,
+        }
+    }
+
+    /// The modal state now.
+    pub fn modal(&self) -> &Modal {
+        &self.modal
+    }
+
+    /// The position now.
+    pub fn position(&self) -> &Position {
+        &self.pos
+    }
+
+    /// True after M2/M30.
+    pub fn ended(&self) -> bool {
+        self.ended
+    }
+
+    fn offset(&self) -> Position {
+        let base = match self.modal.work_offset {
+            WorkOffset::G5x(i) => self.g5x[usize::from(i)],
+            WorkOffset::Fixture(i) => self.fixture[usize::from(i)],
+        };
+        let mut o = [0.0; 9];
+        for a in 0..9 {
+            o[a] = base[a] + self.g92[a] + self.g52[a];
+        }
+        o
+    }
+
+    /// Interpret one block, sending moves and warnings to `out`. An error is returned
+    /// (and nothing of the block's motion is sent) when the block cannot be
+    /// interpreted; the state may then be partly updated, so callers that need the
+    /// motion stop there.
+    pub fn block(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
+        if b.block_delete && self.opts.block_delete {
+            return Ok(());
+        }
+        match b.kind {
+            BlockKind::Percent => return Ok(()),
+            BlockKind::Macro(k) => {
+                if !self.ended {
+                    out(Event::Diagnostic(diag(
+                        b,
+                        Severity::Warning,
+                        ErrorKind::MacroNotEvaluated(k.describe()),
+                        None,
+                    )));
+                }
+                return Ok(());
+            }
+            BlockKind::Words => {}
+        }
+        if !b.has_words() {
+            return Ok(());
+        }
+        if self.ended {
+            if !self.warned_after_end {
+                self.warned_after_end = true;
+                out(Event::Diagnostic(diag(
+                    b,
+                    Severity::Warning,
+                    ErrorKind::NotSimulated("a block after M2/M30".into()),
+                    None,
+                )));
+            }
+            return Ok(());
+        }
+        let w = self.collect(b)?;
+        self.execute(b, &w, out)
+    }
+
+    fn collect<'b, 'a>(&self, b: &'b Block<'a>) -> Res<Words<'b, 'a>> {
+        let mut w = Words {
+            by_letter: [None; 26],
+            registers: [None; 10],
+            gs: smallvec::SmallVec::new(),
+            ms: smallvec::SmallVec::new(),
+        };
+        for item in &b.items {
+            let Item::Word(word) = item else { continue };
+            match word.letter {
+                b'G' => {
+                    let code = word.code().ok_or_else(|| {
+                        diag(b, Severity::Error, ErrorKind::BadCodeNumber(word.display()), Some(word.span))
+                    })?;
+                    let group = g_group(code).ok_or_else(|| {
+                        diag(b, Severity::Error, ErrorKind::UnknownGCode(code_text(code)), Some(word.span))
+                    })?;
+                    for &(other, oc, og) in &w.gs {
+                        let conflict = og == group
+                            && match group {
+                                // G80 may share a block with the motion that follows it.
+                                GGroup::Motion => oc != 800 && code != 800,
+                                GGroup::Modifier => oc == code,
+                                _ => true,
+                            };
+                        if conflict {
+                            return Err(diag(
+                                b,
+                                Severity::Error,
+                                ErrorKind::ModalGroupConflict {
+                                    group: group.name(),
+                                    first: other.display_code(),
+                                    second: word.display_code(),
+                                },
+                                Some(word.span),
+                            ));
+                        }
+                    }
+                    w.gs.push((word, code, group));
+                }
+                b'M' => {
+                    let code = word.code().ok_or_else(|| {
+                        diag(b, Severity::Error, ErrorKind::BadCodeNumber(word.display()), Some(word.span))
+                    })?;
+                    if let Some(g) = m_group(code) {
+                        if let Some(&(other, _)) = w.ms.iter().find(|(_, oc)| m_group(*oc) == Some(g)) {
+                            return Err(diag(
+                                b,
+                                Severity::Error,
+                                ErrorKind::ModalGroupConflict {
+                                    group: g,
+                                    first: other.display_code(),
+                                    second: word.display_code(),
+                                },
+                                Some(word.span),
+                            ));
+                        }
+                    }
+                    w.ms.push((word, code));
+                }
+                l => match word.register {
+                    Some(r) => w.registers[usize::from(r)] = Some(word),
+                    None => w.by_letter[usize::from(l - b'A')] = Some(word),
+                },
+            }
+        }
+        Ok(w)
+    }
+
+    fn warn(&self, b: &Block<'_>, out: &mut impl FnMut(Event), kind: ErrorKind, span: Option<crate::ast::Span>) {
+        out(Event::Diagnostic(diag(b, Severity::Warning, kind, span)));
+    }
+
+    fn set_units(&mut self, units: Units) {
+        if units == self.modal.units {
+            return;
+        }
+        let f = self.modal.units.mm() / units.mm();
+        let scale = |p: &mut Position| {
+            for (a, v) in p.iter_mut().enumerate() {
+                if !is_rotary(a) {
+                    *v *= f;
+                }
+            }
+        };
+        scale(&mut self.pos);
+        for p in self.g5x.iter_mut().chain(self.fixture.iter_mut()) {
+            scale(p);
+        }
+        scale(&mut self.g92);
+        scale(&mut self.g52);
+        scale(&mut self.home28);
+        scale(&mut self.home30);
+        for v in [&mut self.canned.z, &mut self.canned.r, &mut self.canned.q]
+            .into_iter()
+            .flatten()
+        {
+            *v *= f;
+        }
+        self.modal.units = units;
+    }
+
+    fn execute(&mut self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) -> Res<()> {
+        let m = &mut self.modal;
+        // Feed mode, F, S, T.
+        if let Some((_, c)) = w.g_in(GGroup::FeedMode) {
+            m.feed_mode = match c {
+                930 => FeedMode::InverseTime,
+                950 => FeedMode::PerRevolution,
+                _ => FeedMode::PerMinute,
+            };
+        }
+        if let Some(f) = w.word(b'F') {
+            if f.value < 0.0 {
+                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: f.display(), why: "feed rate cannot be negative" }, Some(f.span)));
+            }
+            m.feed = f.value;
+        }
+        if let Some(s) = w.get(b'S') {
+            m.speed = s;
+        }
+        if let Some(t) = w.word(b'T') {
+            if t.value < 0.0 || t.value.fract() != 0.0 {
+                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: t.display(), why: "tool numbers are whole and not negative" }, Some(t.span)));
+            }
+            m.selected_tool = t.value as u32;
+        }
+        // M-codes that change state before motion.
+        let mut stop_after = false;
+        for &(mw, code) in &w.ms {
+            match code {
+                60 => m.tool = m.selected_tool,
+                610 => {
+                    if let Some(q) = w.get(b'Q') {
+                        m.tool = q.max(0.0) as u32;
+                        m.selected_tool = m.tool;
+                    }
+                }
+                30 => m.spindle = Spindle::Cw,
+                40 => m.spindle = Spindle::Ccw,
+                50 => m.spindle = Spindle::Off,
+                70 => m.mist = true,
+                80 => m.flood = true,
+                90 => {
+                    m.mist = false;
+                    m.flood = false;
+                }
+                20 | 300 => stop_after = true,
+                980 => {
+                    let what = format!("{} {}", mw.display_code(), w.word(b'P').map(|p| p.display()).unwrap_or_default());
+                    out(Event::Diagnostic(diag(b, Severity::Warning, ErrorKind::SubprogramNotFollowed(what.trim().to_string()), Some(mw.span))));
+                }
+                _ => {}
+            }
+        }
+        let m = &mut self.modal;
+        // E word.
+        if let Some(e) = w.word(b'E') {
+            match self.opts.e_word {
+                EWord::FixtureOffset => {
+                    if e.value < 0.0 || e.value > 48.0 || e.value.fract() != 0.0 {
+                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: e.display(), why: "FADAL fixture offsets are E0 to E48" }, Some(e.span)));
+                    }
+                    m.work_offset = WorkOffset::Fixture(e.value as u8);
+                }
+                EWord::Extrusion => self.extrusion = e.value,
+            }
+        }
+        // FADAL L words outside canned cycles call subroutines.
+        let canned_block = w.g_in(GGroup::Motion).map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| matches!(c, 730 | 740 | 760 | 810..=890));
+        if let Some(l) = w.word(b'L') {
+            if !canned_block && !w.has_g(100) {
+                self.warn(b, out, ErrorKind::SubprogramNotFollowed(l.display()), Some(l.span));
+            }
+        }
+        let m = &mut self.modal;
+        // Plane, units, cutter comp, tool length, coordinate system, distance, retract.
+        if let Some((_, c)) = w.g_in(GGroup::Plane) {
+            m.plane = match c {
+                180 => Plane::XZ,
+                190 => Plane::YZ,
+                _ => Plane::XY,
+            };
+        }
+        if let Some((_, c)) = w.g_in(GGroup::Units) {
+            self.set_units(if c == 200 || c == 700 { Units::Inch } else { Units::Mm });
+        }
+        let m = &mut self.modal;
+        if let Some((gw, c)) = w.g_in(GGroup::CutterComp) {
+            let before = m.cutter_comp;
+            m.cutter_comp = match c {
+                410 | 411 => CutterComp::Left,
+                420 | 421 => CutterComp::Right,
+                _ => CutterComp::Off,
+            };
+            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off {
+                self.warn(b, out, ErrorKind::NotSimulated(format!("cutter radius compensation {}", gw.display_code())), Some(gw.span));
+            }
+        }
+        let m = &mut self.modal;
+        if let Some((_, c)) = w.g_in(GGroup::ToolLength) {
+            m.tool_length = if c == 490 {
+                None
+            } else {
+                Some(w.get(b'H').map_or(m.tool, |h| h.max(0.0) as u32))
+            };
+        } else if let Some(h) = w.get(b'H') {
+            // FADAL: an H word alone applies that length offset.
+            m.tool_length = if h == 0.0 { None } else { Some(h.max(0.0) as u32) };
+        }
+        if let Some((_, c)) = w.g_in(GGroup::CoordSystem) {
+            m.work_offset = WorkOffset::G5x(match c {
+                591 => 7,
+                592 => 8,
+                593 => 9,
+                c => ((c - 530) / 10) as u8,
+            });
+        }
+        if let Some((_, c)) = w.g_in(GGroup::Distance) {
+            m.distance = if c == 910 { Distance::Incremental } else { Distance::Absolute };
+        }
+        if let Some((_, c)) = w.g_in(GGroup::ArcDistance) {
+            m.arc_distance = if c == 911 { Distance::Incremental } else { Distance::Absolute };
+        }
+        if let Some((_, c)) = w.g_in(GGroup::Retract) {
+            m.retract = if c == 990 { Retract::RPlane } else { Retract::InitialZ };
+        }
+        for group in [GGroup::Polar, GGroup::Scaling, GGroup::Mirror, GGroup::Rotation] {
+            if let Some((gw, c)) = w.g_in(group) {
+                if !matches!(c, 150 | 500 | 501 | 690) {
+                    self.warn(b, out, ErrorKind::NotSimulated(format!("{} ({})", gw.display_code(), group.name())), Some(gw.span));
+                }
+            }
+        }
+        // Motion mode change.
+        if let Some((gw, c)) = w.gs.iter().filter(|g| g.2 == GGroup::Motion).map(|g| (g.0, g.1)).find(|g| g.1 != 800).or_else(|| w.g_in(GGroup::Motion)) {
+            let m = &mut self.modal;
+            m.motion = match c {
+                0 => Motion::Rapid,
+                10 => Motion::Linear,
+                20 => Motion::ArcCw,
+                30 => Motion::ArcCcw,
+                330 | 331 => Motion::Thread,
+                382..=385 => Motion::Probe,
+                800 => Motion::None,
+                c => Motion::Canned(c),
+            };
+            if matches!(c, 330 | 331) {
+                self.warn(b, out, ErrorKind::NotSimulated(format!("spindle synchronisation of {}", gw.display_code())), Some(gw.span));
+            }
+            if !matches!(c, 730 | 740 | 760 | 810..=890) {
+                self.canned = CannedParams::default();
+            }
+        }
+        let g53 = w.has_g(530);
+        // Non-modal codes.
+        let mut axes_used = false;
+        for &(gw, c, g) in &w.gs {
+            if g != GGroup::NonModal {
+                continue;
+            }
+            match c {
+                40 => {
+                    if w.get(b'P').is_none() && w.get(b'X').is_none() {
+                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: gw.display_code(), why: "dwell needs its time in P" }, Some(gw.span)));
+                    }
+                }
+                100 => {
+                    axes_used = true;
+                    self.g10(b, w, gw)?;
+                }
+                280 | 300 => {
+                    axes_used = true;
+                    self.home(b, w, c, out);
+                }
+                281 => self.home28 = self.pos,
+                301 => self.home30 = self.pos,
+                520 => {
+                    axes_used = true;
+                    for (a, &l) in AXES.iter().enumerate() {
+                        if let Some(v) = w.get(l) {
+                            self.g52[a] = v;
+                        }
+                    }
+                }
+                920 => {
+                    axes_used = true;
+                    if !w.has_axes() {
+                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: gw.display_code(), why: "G92 needs at least one axis word" }, Some(gw.span)));
+                    }
+                    let off = self.offset();
+                    for (a, &l) in AXES.iter().enumerate() {
+                        if let Some(v) = w.get(l) {
+                            // New g92 so that pos reads v: pos = v + base + g92_new + g52.
+                            self.g92[a] = self.pos[a] - v - (off[a] - self.g92[a]);
+                        }
+                    }
+                }
+                921 | 922 => self.g92 = [0.0; 9],
+                923 => self.warn(b, out, ErrorKind::NotSimulated("G92.3 (restore saved G92 offsets)".into()), Some(gw.span)),
+                290 => {
+                    axes_used = true;
+                    self.warn(b, out, ErrorKind::NotSimulated("G29 (return from reference point)".into()), Some(gw.span));
+                }
+                450..=480 => self.warn(b, out, ErrorKind::NotSimulated(format!("{} (tool offset adjust)", gw.display_code())), Some(gw.span)),
+                310 | 311 => {
+                    if w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 10) || (w.g_in(GGroup::Motion).is_none() && self.modal.motion != Motion::Linear) {
+                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: gw.display_code(), why: "a probe move must be a G1 move" }, Some(gw.span)));
+                    }
+                }
+                _ => {}
+            }
+        }
+        if !axes_used && w.has_axes() {
+            let probe = w.has_g(310) || w.has_g(311);
+            self.motion(b, w, g53, probe, out)?;
+        }
+        if stop_after {
+            self.ended = true;
+        }
+        if w.ms.iter().any(|&(_, c)| c == 990) {
+            // M99: return from a subprogram; the rest is not reached from here.
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    fn g10(&mut self, b: &Block<'_>, w: &Words<'_, '_>, gw: &Word<'_>) -> Res<()> {
+        let l = w.get(b'L').unwrap_or(-1.0);
+        if l != 2.0 && l != 20.0 {
+            // G10 L1/L10/L11 set tool data: no effect on the programmed path.
+            return Ok(());
+        }
+        let p = w.get(b'P').unwrap_or(0.0);
+        if !(0.0..=9.0).contains(&p) || p.fract() != 0.0 {
+            let pw = w.word(b'P').map_or_else(|| gw.display_code(), |p| p.display());
+            return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: pw, why: "G10 L2/L20 takes P0 to P9" }, w.word(b'P').map(|p| p.span)));
+        }
+        let idx = if p == 0.0 {
+            match self.modal.work_offset {
+                WorkOffset::G5x(i) => usize::from(i),
+                WorkOffset::Fixture(_) => 1,
+            }
+        } else {
+            p as usize
+        };
+        for (a, &letter) in AXES.iter().enumerate() {
+            if let Some(v) = w.get(letter) {
+                self.g5x[idx][a] = if l == 2.0 {
+                    v
+                } else {
+                    // L20: the current position reads v in that system.
+                    self.pos[a] - v - self.g92[a] - self.g52[a]
+                };
+            }
+        }
+        Ok(())
+    }
+
+    fn home(&mut self, b: &Block<'_>, w: &Words<'_, '_>, code: u16, out: &mut impl FnMut(Event)) {
+        let home = if code == 280 { self.home28 } else { self.home30 };
+        let start = self.pos;
+        let mut inter = self.pos;
+        let mut target = self.pos;
+        let any = w.has_axes();
+        let off = self.offset();
+        for (a, &l) in AXES.iter().enumerate() {
+            match w.get(l) {
+                Some(v) => {
+                    inter[a] = match self.modal.distance {
+                        Distance::Absolute => v + off[a],
+                        Distance::Incremental => self.pos[a] + v,
+                    };
+                    target[a] = home[a];
+                }
+                None if !any => target[a] = home[a],
+                None => {}
+            }
+        }
+        let mut mv = |s: Position, e: Position, this: &mut Self| {
+            out(Event::Move(Move {
+                kind: MoveKind::Rapid,
+                start: s,
+                end: e,
+                feed: 0.0,
+                extrusion: this.extrusion_now(),
+                modal: this.modal,
+                line: b.line,
+                origin: Origin::Home,
+            }));
+        };
+        if any {
+            mv(start, inter, self);
+        }
+        mv(inter, target, self);
+        self.pos = target;
+    }
+
+    fn extrusion_now(&self) -> Option<f64> {
+        (self.opts.e_word == EWord::Extrusion).then_some(self.extrusion)
+    }
+
+    fn target(&self, w: &Words<'_, '_>, g53: bool) -> Position {
+        let mut t = self.pos;
+        let off = self.offset();
+        for (a, &l) in AXES.iter().enumerate() {
+            if let Some(v) = w.get(l) {
+                t[a] = if g53 {
+                    v
+                } else {
+                    match self.modal.distance {
+                        Distance::Absolute => v + off[a],
+                        Distance::Incremental => self.pos[a] + v,
+                    }
+                };
+            }
+        }
+        t
+    }
+
+    fn feed_for(&self, b: &Block<'_>, w: &Words<'_, '_>) -> Res<f64> {
+        match self.modal.feed_mode {
+            FeedMode::InverseTime => match w.get(b'F') {
+                Some(f) if f > 0.0 => Ok(f),
+                _ => Err(diag(b, Severity::Error, ErrorKind::InverseTimeNeedsF, None)),
+            },
+            _ if self.modal.feed <= 0.0 => Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None)),
+            _ => Ok(self.modal.feed),
+        }
+    }
+
+    fn emit(&mut self, b: &Block<'_>, kind: MoveKind, end: Position, feed: f64, origin: Origin, out: &mut impl FnMut(Event)) {
+        out(Event::Move(Move {
+            kind,
+            start: self.pos,
+            end,
+            feed,
+            extrusion: self.extrusion_now(),
+            modal: self.modal,
+            line: b.line,
+            origin,
+        }));
+        self.pos = end;
+    }
+
+    fn motion(&mut self, b: &Block<'_>, w: &Words<'_, '_>, g53: bool, probe: bool, out: &mut impl FnMut(Event)) -> Res<()> {
+        let target = self.target(w, g53);
+        match self.modal.motion {
+            Motion::None => Err(diag(b, Severity::Error, ErrorKind::NoMotionMode, w.gs.first().map(|g| g.0.span).or(b.words().next().map(|x| x.span)))),
+            Motion::Rapid if !probe => {
+                self.emit(b, MoveKind::Rapid, target, 0.0, Origin::Block, out);
+                Ok(())
+            }
+            Motion::Rapid | Motion::Linear | Motion::Thread | Motion::Probe => {
+                let feed = self.feed_for(b, w)?;
+                let kind = if probe || self.modal.motion == Motion::Probe { MoveKind::Probe } else { MoveKind::Linear };
+                self.emit(b, kind, target, feed, Origin::Block, out);
+                Ok(())
+            }
+            Motion::ArcCw | Motion::ArcCcw => self.arc(b, w, target, out),
+            Motion::Canned(c) => self.canned_cycle(b, w, c, out),
+        }
+    }
+
+    fn arc(&mut self, b: &Block<'_>, w: &Words<'_, '_>, target: Position, out: &mut impl FnMut(Event)) -> Res<()> {
+        let cw = self.modal.motion == Motion::ArcCw;
+        let plane = self.modal.plane;
+        let (u, v, n) = plane.axes();
+        let centre_letter = |axis: usize| [b'I', b'J', b'K'][axis];
+        // A centre word of the plane's normal axis is a mistake.
+        if let Some(word) = w.word(centre_letter(n)) {
+            return Err(diag(b, Severity::Error, ErrorKind::ArcWrongPlaneWord(word.letter_char()), Some(word.span)));
+        }
+        let radius_word = w.word(b'R').or(w.registers[0]);
+        let has_ijk = w.word(centre_letter(u)).is_some() || w.word(centre_letter(v)).is_some();
+        let feed = self.feed_for(b, w)?;
+        let turns = match w.word(b'P') {
+            Some(p) if p.value >= 1.0 && p.value.fract() == 0.0 => p.value as u32,
+            Some(p) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: p.display(), why: "the number of turns P is a whole number of at least 1" }, Some(p.span))),
+            None => 1,
+        };
+        let tol = self.opts.arc_tolerance_inch * 25.4 / self.modal.units.mm();
+        let (su, sv) = (self.pos[u], self.pos[v]);
+        let (eu, ev) = (target[u], target[v]);
+        let (cu, cv) = match (has_ijk, radius_word) {
+            (true, Some(r)) => return Err(diag(b, Severity::Error, ErrorKind::ArcBothForms, Some(r.span))),
+            (false, None) => return Err(diag(b, Severity::Error, ErrorKind::ArcWithoutCenter, None)),
+            (true, None) => {
+                let iu = w.get(centre_letter(u)).unwrap_or(0.0);
+                let iv = w.get(centre_letter(v)).unwrap_or(0.0);
+                let (cu, cv) = match self.modal.arc_distance {
+                    Distance::Incremental => (su + iu, sv + iv),
+                    Distance::Absolute => {
+                        let off = self.offset();
+                        (iu + off[u], iv + off[v])
+                    }
+                };
+                let r1 = (su - cu).hypot(sv - cv);
+                let r2 = (eu - cu).hypot(ev - cv);
+                if r1 <= 0.0 || r2 <= 0.0 {
+                    return Err(diag(b, Severity::Error, ErrorKind::ArcZeroRadius, None));
+                }
+                let diff = (r1 - r2).abs();
+                if diff > tol {
+                    return Err(diag(b, Severity::Error, ErrorKind::ArcRadiusMismatch { start: r1, end: r2, diff, tolerance: tol }, None));
+                }
+                (cu, cv)
+            }
+            (false, Some(rw)) => {
+                let r = rw.value;
+                let (du, dv) = (eu - su, ev - sv);
+                let d = du.hypot(dv);
+                if r == 0.0 {
+                    return Err(diag(b, Severity::Error, ErrorKind::ArcZeroRadius, Some(rw.span)));
+                }
+                if d <= 1e-12 {
+                    return Err(diag(b, Severity::Error, ErrorKind::ArcRadiusFullCircle, Some(rw.span)));
+                }
+                let half = d / 2.0;
+                let h2 = r * r - half * half;
+                let h = if h2 >= 0.0 {
+                    h2.sqrt()
+                } else if half - r.abs() <= tol {
+                    0.0
+                } else {
+                    return Err(diag(b, Severity::Error, ErrorKind::ArcRadiusTooSmall { radius: r.abs(), half_chord: half }, Some(rw.span)));
+                };
+                // Left normal of the chord; a short CCW arc has its centre on the left.
+                let (lu, lv) = (-dv / d, du / d);
+                let side = if cw == (r < 0.0) { 1.0 } else { -1.0 };
+                (su + du / 2.0 + side * h * lu, sv + dv / 2.0 + side * h * lv)
+            }
+        };
+        let mut center = [self.pos[0], self.pos[1], self.pos[2]];
+        center[u] = cu;
+        center[v] = cv;
+        self.emit(b, MoveKind::Arc { clockwise: cw, center, plane, turns }, target, feed, Origin::Block, out);
+        Ok(())
+    }
+
+    fn canned_cycle(&mut self, b: &Block<'_>, w: &Words<'_, '_>, code: u16, out: &mut impl FnMut(Event)) -> Res<()> {
+        let name = code_text(code);
+        if let Some(z) = w.get(b'Z') {
+            self.canned.z = Some(z);
+        }
+        if let Some(r) = w.get(b'R').or(w.registers[0].map(|r| r.value)) {
+            self.canned.r = Some(r);
+        }
+        if let Some(q) = w.get(b'Q') {
+            self.canned.q = Some(q);
+        }
+        if let Some(p) = w.get(b'P') {
+            self.canned.p = p;
+        }
+        let (Some(zv), Some(rv)) = (self.canned.z, self.canned.r) else {
+            return Err(diag(b, Severity::Error, ErrorKind::CannedCycleIncomplete { code: name, what: "Z (depth) and R (retract plane)" }, None));
+        };
+        let passthrough = matches!(code, 740 | 760 | 870 | 880) || self.modal.plane != Plane::XY;
+        let needs_q = matches!(code, 730 | 830);
+        let q = self.canned.q.unwrap_or(0.0);
+        if needs_q && q <= 0.0 {
+            return Err(diag(b, Severity::Error, ErrorKind::CannedCycleIncomplete { code: name, what: "a positive peck depth Q" }, None));
+        }
+        let repeats = match w.word(b'L') {
+            Some(l) if l.value >= 1.0 && l.value.fract() == 0.0 => l.value as u32,
+            Some(l) if l.value == 0.0 => 0,
+            Some(l) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: l.display(), why: "the repeat count L is a whole number" }, Some(l.span))),
+            None => 1,
+        };
+        let off = self.offset();
+        let incremental = self.modal.distance == Distance::Incremental;
+        let (r_abs, bottom) = if incremental {
+            let r = self.pos[Z] + rv;
+            (r, r + zv)
+        } else {
+            (rv + off[Z], zv + off[Z])
+        };
+        if bottom > r_abs {
+            return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: format!("G{name} Z"), why: "the hole bottom Z is above the R plane" }, w.word(b'Z').map(|z| z.span)));
+        }
+        let feed = if passthrough { 0.0 } else { self.feed_for(b, w)? };
+        let clear = match self.modal.retract {
+            Retract::InitialZ => self.pos[Z].max(r_abs),
+            Retract::RPlane => r_abs,
+        };
+        let delta = 0.010 * 25.4 / self.modal.units.mm();
+        if passthrough {
+            self.warn(b, out, ErrorKind::CannedCyclePassedThrough(name), None);
+        }
+        for rep in 0..repeats {
+            let mut xy = self.pos;
+            for a in [0usize, 1] {
+                if let Some(v) = w.get(AXES[a]) {
+                    xy[a] = if incremental { self.pos[a] + v } else { v + off[a] };
+                }
+            }
+            if passthrough {
+                xy[Z] = clear;
+                self.pos = xy;
+                continue;
+            }
+            let _ = rep;
+            let at = |p: Position, z: f64| {
+                let mut q = p;
+                q[Z] = z;
+                q
+            };
+            // Preliminary: up to the R plane if below it.
+            if self.pos[Z] < r_abs {
+                let t = at(self.pos, r_abs);
+                self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+            }
+            let t = at(xy, self.pos[Z]);
+            self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+            if self.pos[Z] != r_abs {
+                let t = at(self.pos, r_abs);
+                self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+            }
+            match code {
+                730 | 830 => {
+                    let mut depth = r_abs;
+                    while depth > bottom {
+                        let next = (depth - q).max(bottom);
+                        if code == 830 && depth < r_abs {
+                            let t = at(self.pos, depth + delta);
+                            self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                        }
+                        let t = at(self.pos, next);
+                        self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                        depth = next;
+                        if depth > bottom {
+                            let up = if code == 830 { r_abs } else { depth + delta };
+                            let t = at(self.pos, up);
+                            self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                        }
+                    }
+                    let t = at(self.pos, clear);
+                    self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                }
+                840 | 850 | 890 => {
+                    let t = at(self.pos, bottom);
+                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    let t = at(self.pos, r_abs);
+                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    if clear > r_abs {
+                        let t = at(self.pos, clear);
+                        self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                    }
+                }
+                _ => {
+                    // 81, 82 (dwell at the bottom), 86 (spindle stops at the bottom).
+                    let t = at(self.pos, bottom);
+                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    let t = at(self.pos, clear);
+                    self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                }
+            }
+            if !incremental {
+                // Absolute repeats drill the same hole again.
+                continue;
+            }
+        }
+        Ok(())
+    }
+}
+
+trait DisplayCode {
+    fn display_code(&self) -> String;
+}
+
+impl DisplayCode for Word<'_> {
+    fn display_code(&self) -> String {
+        match self.code() {
+            Some(c) => format!("{}{}", self.letter_char(), code_text(c)),
+            None => self.display(),
+        }
+    }
+}

@@ -1,0 +1,40 @@
+//! # lampost-gcode
+//!
+//! The G-code layer of lampost: a nom parser for RS274/ISO programs as FADAL
+//! controls and common CAM posts write them, a modal interpreter that resolves them
+//! into absolute moves, and an emitter with dialects.
+//!
+//! ```
+//! use lampost_gcode::{Event, Options, Stream};
+//! let program = b"G21 G90\nG0 X10 Y5\nG1 Z-1 F100\nG2 X20 Y5 I5 J0\n";
+//! let moves: Vec<_> = Stream::from_bytes(program, Options::default(), true)
+//!     .filter_map(|e| match e { Ok(Event::Move(m)) => Some(m), _ => None })
+//!     .collect();
+//! assert_eq!(moves.len(), 3);
+//! assert_eq!(moves[2].end[0], 20.0);
+//! ```
+//!
+//! ## Why these dependencies
+//! - `nom`: the number grammar (sign, digits, decimal point in every spelling);
+//! - `smallvec`: a block's words live inline, so parsing allocates nothing per block;
+//! - `memchr`: line and comment scanning at memory speed;
+//! - `thiserror`: the typed [`ErrorKind`];
+//! - `serde`: moves and modal state serialise to JSON for `lampost trace --json`.
+
+pub mod ast;
+pub mod diag;
+pub mod emit;
+pub mod interp;
+pub mod lines;
+pub mod modal;
+pub mod parse;
+pub mod stream;
+
+pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Word};
+pub use diag::{Diagnostic, ErrorKind, Severity, Snippet};
+pub use emit::{Dialect, EmitOptions, Emitter};
+pub use interp::{EWord, Event, Interpreter, Move, MoveKind, Options, Origin};
+pub use lines::{Line, LineReader, Lines};
+pub use modal::{Modal, Plane, Position, Units, AXES};
+pub use parse::parse_line;
+pub use stream::{check, LineSource, Stream};

@@ -1,0 +1,335 @@
+//! Modal state and the tables of G and M codes.
+
+use serde::Serialize;
+
+/// Axis letters in the order positions are stored.
+pub const AXES: [u8; 9] = *b"XYZABCUVW";
+/// Index of each axis letter in [`AXES`].
+pub const X: usize = 0;
+/// Y
+pub const Y: usize = 1;
+/// Z
+pub const Z: usize = 2;
+/// True for the rotary axes A, B, C.
+pub fn is_rotary(axis: usize) -> bool {
+    (3..6).contains(&axis)
+}
+/// Position of every axis, in [`AXES`] order.
+pub type Position = [f64; 9];
+
+/// Axis index of a letter.
+pub fn axis_index(letter: u8) -> Option<usize> {
+    AXES.iter().position(|&a| a == letter)
+}
+
+/// Length units.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Units {
+    /// G20 (FADAL G70)
+    Inch,
+    /// G21 (FADAL G71)
+    Mm,
+}
+
+impl Units {
+    /// Millimetres per unit.
+    pub fn mm(self) -> f64 {
+        match self {
+            Units::Inch => 25.4,
+            Units::Mm => 1.0,
+        }
+    }
+}
+
+/// Arc plane.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Plane {
+    /// G17
+    XY,
+    /// G18
+    XZ,
+    /// G19
+    YZ,
+}
+
+impl Plane {
+    /// Axis indices (first, second, normal) such that first × second = normal,
+    /// so counter-clockwise in (first, second) is G3.
+    pub fn axes(self) -> (usize, usize, usize) {
+        match self {
+            Plane::XY => (0, 1, 2),
+            Plane::XZ => (2, 0, 1),
+            Plane::YZ => (1, 2, 0),
+        }
+    }
+}
+
+/// G90 / G91.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Distance {
+    /// G90
+    Absolute,
+    /// G91
+    Incremental,
+}
+
+/// G93 / G94 / G95.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeedMode {
+    /// G94: units per minute.
+    PerMinute,
+    /// G93: 1/F minutes per move.
+    InverseTime,
+    /// G95: units per revolution.
+    PerRevolution,
+}
+
+/// The active motion mode (group 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Motion {
+    /// None active (start, or after G80).
+    None,
+    /// G0
+    Rapid,
+    /// G1
+    Linear,
+    /// G2
+    ArcCw,
+    /// G3
+    ArcCcw,
+    /// G33 spindle-synchronised (traced as straight moves).
+    Thread,
+    /// G38.x straight probe.
+    Probe,
+    /// A canned cycle: the code times ten (810 for G81).
+    Canned(u16),
+}
+
+/// G40 / G41 / G42.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CutterComp {
+    /// G40
+    Off,
+    /// G41
+    Left,
+    /// G42
+    Right,
+}
+
+/// Spindle state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Spindle {
+    /// M5
+    Off,
+    /// M3
+    Cw,
+    /// M4
+    Ccw,
+}
+
+/// G98 / G99.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Retract {
+    /// G98: back to the initial Z.
+    InitialZ,
+    /// G99: back to the R plane.
+    RPlane,
+}
+
+/// The active work offset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WorkOffset {
+    /// G54 = 1 … G59 = 6, G59.1 = 7, G59.2 = 8, G59.3 = 9.
+    G5x(u8),
+    /// FADAL fixture offset E1 … E48 (E0: none).
+    Fixture(u8),
+}
+
+/// The modal state that goes with each move.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Modal {
+    /// Group 1.
+    pub motion: Motion,
+    /// G17/G18/G19.
+    pub plane: Plane,
+    /// G90/G91.
+    pub distance: Distance,
+    /// G90.1/G91.1 (arc centres).
+    pub arc_distance: Distance,
+    /// G93/G94/G95.
+    pub feed_mode: FeedMode,
+    /// G20/G21.
+    pub units: Units,
+    /// G40/G41/G42.
+    pub cutter_comp: CutterComp,
+    /// Tool length offset register (G43 H, FADAL H), `None` after G49.
+    pub tool_length: Option<u32>,
+    /// G98/G99.
+    pub retract: Retract,
+    /// G54… or E….
+    pub work_offset: WorkOffset,
+    /// F as last programmed.
+    pub feed: f64,
+    /// S as last programmed.
+    pub speed: f64,
+    /// M3/M4/M5.
+    pub spindle: Spindle,
+    /// M7 on.
+    pub mist: bool,
+    /// M8 on.
+    pub flood: bool,
+    /// Tool selected with T.
+    pub selected_tool: u32,
+    /// Tool in the spindle (after M6).
+    pub tool: u32,
+}
+
+impl Modal {
+    /// The state at program start.
+    pub fn new(units: Units) -> Self {
+        Modal {
+            motion: Motion::None,
+            plane: Plane::XY,
+            distance: Distance::Absolute,
+            arc_distance: Distance::Incremental,
+            feed_mode: FeedMode::PerMinute,
+            units,
+            cutter_comp: CutterComp::Off,
+            tool_length: None,
+            retract: Retract::InitialZ,
+            work_offset: WorkOffset::G5x(1),
+            feed: 0.0,
+            speed: 0.0,
+            spindle: Spindle::Off,
+            mist: false,
+            flood: false,
+            selected_tool: 0,
+            tool: 0,
+        }
+    }
+}
+
+/// The modal group of a G-code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GGroup {
+    /// Non-modal codes that use axis words or act once (G4, G10, G28, G30, G92, G31…).
+    NonModal,
+    /// G53 and G9: modifiers of the block's own move.
+    Modifier,
+    /// Group 1: motion.
+    Motion,
+    /// G17/G18/G19.
+    Plane,
+    /// G90/G91.
+    Distance,
+    /// G90.1/G91.1.
+    ArcDistance,
+    /// G93/G94/G95.
+    FeedMode,
+    /// G20/G21/G70/G71.
+    Units,
+    /// G40/G41/G42.
+    CutterComp,
+    /// G43/G44/G49.
+    ToolLength,
+    /// G98/G99.
+    Retract,
+    /// G54–G59.3.
+    CoordSystem,
+    /// G61/G64.
+    PathControl,
+    /// G96/G97.
+    SpindleMode,
+    /// G15/G16 polar coordinates (FADAL).
+    Polar,
+    /// G50/G51 scaling (FADAL).
+    Scaling,
+    /// G50.1/G51.1 mirroring.
+    Mirror,
+    /// G68/G69 rotation.
+    Rotation,
+}
+
+impl GGroup {
+    /// Name for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            GGroup::NonModal => "non-modal",
+            GGroup::Modifier => "modifier",
+            GGroup::Motion => "motion",
+            GGroup::Plane => "plane",
+            GGroup::Distance => "distance mode",
+            GGroup::ArcDistance => "arc distance mode",
+            GGroup::FeedMode => "feed mode",
+            GGroup::Units => "units",
+            GGroup::CutterComp => "cutter compensation",
+            GGroup::ToolLength => "tool length",
+            GGroup::Retract => "canned-cycle return",
+            GGroup::CoordSystem => "work offset",
+            GGroup::PathControl => "path control",
+            GGroup::SpindleMode => "spindle speed mode",
+            GGroup::Polar => "polar coordinates",
+            GGroup::Scaling => "scaling",
+            GGroup::Mirror => "mirroring",
+            GGroup::Rotation => "coordinate rotation",
+        }
+    }
+}
+
+/// The group of a G-code given as ten times its number (`G31.1` = 311), or `None` when
+/// the code is unknown to both LinuxCNC and the FADAL.
+pub fn g_group(code: u16) -> Option<GGroup> {
+    use GGroup::*;
+    Some(match code {
+        0 | 10 | 20 | 30 | 330 | 331 | 382..=385 | 730 | 740 | 760 | 800 | 810..=890 => Motion,
+        40 | 100 | 280 | 281 | 290 | 300 | 301 | 310 | 311 | 450..=480 | 520 | 920..=923 => {
+            NonModal
+        }
+        90 | 530 => Modifier,
+        150 | 160 => Polar,
+        170 | 180 | 190 => Plane,
+        200 | 210 | 700 | 710 => Units,
+        400 | 410 | 420 | 411 | 421 => CutterComp,
+        430 | 431 | 432 | 440 | 490 => ToolLength,
+        500 | 510 => Scaling,
+        501 | 511 => Mirror,
+        540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => CoordSystem,
+        610 | 611 | 640 => PathControl,
+        680 | 690 => Rotation,
+        900 | 910 => Distance,
+        901 | 911 => ArcDistance,
+        930 | 940 | 950 => FeedMode,
+        960 | 970 => SpindleMode,
+        980 | 990 => Retract,
+        _ => return None,
+    })
+}
+
+/// The modal group of an M-code, for conflict checks (`None`: no group).
+pub fn m_group(code: u16) -> Option<&'static str> {
+    match code {
+        0 | 10 | 20 | 300 | 600 | 990 => Some("stopping"),
+        30 | 40 | 50 => Some("spindle"),
+        60 | 610 => Some("tool change"),
+        90 => Some("coolant off"),
+        480..=530 => Some("override"),
+        _ => None,
+    }
+}
+
+/// Format a code given as ten times its number: 311 → "31.1", 10 → "1".
+pub fn code_text(code: u16) -> String {
+    if code % 10 == 0 {
+        format!("{}", code / 10)
+    } else {
+        format!("{}.{}", code / 10, code % 10)
+    }
+}

@@ -1,0 +1,412 @@
+//! The parser: one line of bytes in, one [`Block`] (or one located error) out.
+//!
+//! Lexing walks the line byte by byte; the number grammar is a nom parser. Every
+//! block and word keeps its byte span, and every number keeps its text, so
+//! formatting can reproduce the digits exactly.
+
+use nom::branch::alt;
+use nom::bytes::complete::take_while;
+use nom::character::complete::{char as nchar, digit0, digit1, one_of};
+use nom::combinator::{opt, recognize};
+use nom::sequence::{pair, tuple};
+use nom::IResult;
+use smallvec::SmallVec;
+
+use crate::ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Word};
+use crate::diag::{Diagnostic, ErrorKind, Severity};
+
+/// Lines longer than this are refused without being read word by word.
+pub const MAX_LINE_BYTES: usize = 64 * 1024;
+
+/// A number: optional sign, then digits with an optional decimal part, or a leading dot.
+fn number(i: &str) -> IResult<&str, &str> {
+    recognize(tuple((
+        opt(one_of("+-")),
+        take_while(|c: char| c == ' ' || c == '\t'),
+        alt((
+            recognize(pair(digit1, opt(pair(nchar('.'), digit0)))),
+            recognize(pair(nchar('.'), digit1)),
+        )),
+    )))(i)
+}
+
+/// Parse a decimal number text (as accepted by [`number`]) to `f64`, correctly rounded.
+pub fn parse_number(text: &str) -> Option<f64> {
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    let mut negative = false;
+    if let Some(&c) = bytes.first() {
+        if c == b'+' || c == b'-' {
+            negative = c == b'-';
+            i = 1;
+        }
+    }
+    let mut mantissa: u64 = 0;
+    let mut digits = 0u32;
+    let mut decimals = 0u32;
+    let mut seen_dot = false;
+    let mut simple = true;
+    for &c in &bytes[i..] {
+        match c {
+            b'0'..=b'9' => {
+                if digits < 19 {
+                    mantissa = mantissa * 10 + u64::from(c - b'0');
+                    if mantissa != 0 {
+                        digits += 1;
+                    }
+                    if seen_dot {
+                        decimals += 1;
+                    }
+                } else {
+                    simple = false;
+                    break;
+                }
+            }
+            b'.' => seen_dot = true,
+            b' ' | b'\t' => {}
+            _ => return None,
+        }
+    }
+    // Exact fast path: both the integer mantissa and the power of ten are exact
+    // doubles, so one correctly rounded division gives the correctly rounded value.
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+        1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    if simple && digits <= 15 && (decimals as usize) < POW10.len() {
+        let v = mantissa as f64 / POW10[decimals as usize];
+        return Some(if negative { -v } else { v });
+    }
+    let cleaned: String = text.chars().filter(|c| !c.is_whitespace()).collect();
+    let cleaned = cleaned.strip_prefix('+').unwrap_or(&cleaned);
+    let cleaned = if cleaned.ends_with('.') {
+        format!("{cleaned}0")
+    } else {
+        cleaned.to_string()
+    };
+    cleaned.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+const OWORD_KEYWORDS: [&str; 15] = [
+    "sub", "endsub", "call", "if", "elseif", "else", "endif", "while", "endwhile", "do",
+    "return", "repeat", "endrepeat", "break", "continue",
+];
+
+fn is_oword(rest: &str) -> bool {
+    let b = rest.as_bytes();
+    if b.len() < 2 || !(b[0] == b'o' || b[0] == b'O') {
+        return false;
+    }
+    if b[1] == b'<' {
+        return true;
+    }
+    let digits = rest[1..].bytes().take_while(u8::is_ascii_digit).count();
+    if digits == 0 {
+        return false;
+    }
+    let after = rest[1 + digits..].trim_start();
+    let word: String = after
+        .chars()
+        .take_while(|c| c.is_ascii_alphabetic())
+        .collect::<String>()
+        .to_ascii_lowercase();
+    OWORD_KEYWORDS.contains(&word.as_str())
+}
+
+/// Parse one line (without its line ending) into a block.
+///
+/// `line_no` is 1-based; `offset` is the byte offset of the line's first byte in the
+/// whole input, so spans point into the input. At most one error is reported per line.
+pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>, Diagnostic> {
+    let err = |kind: ErrorKind, start: usize, end: usize| {
+        Diagnostic::at(Severity::Error, kind, line_no, offset, line, start, end)
+    };
+    if line.len() > MAX_LINE_BYTES {
+        return Err(err(ErrorKind::LineTooLong(line.len()), 0, 1));
+    }
+    let text = match std::str::from_utf8(line) {
+        Ok(t) => t,
+        Err(e) => {
+            let at = e.valid_up_to();
+            return Err(err(ErrorKind::InvalidUtf8, at, at + e.error_len().unwrap_or(1)));
+        }
+    };
+    let span = Span::new(offset, offset + line.len());
+    let mut block = Block {
+        line: line_no,
+        span,
+        kind: BlockKind::Words,
+        block_delete: false,
+        items: SmallVec::new(),
+        raw: text,
+    };
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() && (bytes[i] == b' ' || bytes[i] == b'\t') {
+        i += 1;
+    }
+    if i == bytes.len() {
+        return Ok(block);
+    }
+    match bytes[i] {
+        b'%' => {
+            block.kind = BlockKind::Percent;
+            return Ok(block);
+        }
+        b'#' => {
+            let next = bytes.get(i + 1).copied().unwrap_or(b' ');
+            block.kind = if next == b'<' || next.is_ascii_digit() {
+                BlockKind::Macro(MacroKind::LinuxCncExpression)
+            } else {
+                BlockKind::Macro(MacroKind::FadalStatement)
+            };
+            return Ok(block);
+        }
+        b'/' => {
+            block.block_delete = true;
+            i += 1;
+        }
+        _ => {}
+    }
+    if is_oword(text[i..].trim_start()) {
+        block.kind = BlockKind::Macro(MacroKind::LinuxCncOWord);
+        return Ok(block);
+    }
+    // Letters seen so far (bit per letter) and FADAL R registers seen.
+    let mut seen: u32 = 0;
+    let mut seen_reg: u16 = 0;
+    while i < bytes.len() {
+        let c = bytes[i];
+        match c {
+            b' ' | b'\t' => i += 1,
+            b'(' => match memchr::memchr(b')', &bytes[i + 1..]) {
+                Some(rel) => {
+                    let end = i + 1 + rel;
+                    block.items.push(Item::Comment(Comment {
+                        text: &text[i + 1..end],
+                        style: CommentStyle::Paren,
+                        span: Span::new(offset + i, offset + end + 1),
+                    }));
+                    i = end + 1;
+                }
+                None => return Err(err(ErrorKind::UnterminatedComment, i, bytes.len())),
+            },
+            b';' => {
+                block.items.push(Item::Comment(Comment {
+                    text: &text[i + 1..],
+                    style: CommentStyle::Semicolon,
+                    span: Span::new(offset + i, offset + bytes.len()),
+                }));
+                i = bytes.len();
+            }
+            b'#' | b'[' => {
+                block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
+                block.items.clear();
+                return Ok(block);
+            }
+            b'a'..=b'z' | b'A'..=b'Z' => {
+                let letter = c.to_ascii_uppercase();
+                let start = i;
+                let mut j = i + 1;
+                while j < bytes.len() && (bytes[j] == b' ' || bytes[j] == b'\t') {
+                    j += 1;
+                }
+                // FADAL signed register word: R<digit><sign><number>.
+                let mut register = None;
+                if letter == b'R'
+                    && j + 1 < bytes.len()
+                    && bytes[j].is_ascii_digit()
+                    && (bytes[j + 1] == b'+' || bytes[j + 1] == b'-')
+                {
+                    register = Some(bytes[j] - b'0');
+                    j += 1;
+                }
+                // A value taken from a register or expression makes the block a macro line.
+                let mut k = j;
+                if k < bytes.len() && (bytes[k] == b'+' || bytes[k] == b'-') {
+                    k += 1;
+                }
+                if k < bytes.len() {
+                    let v = bytes[k];
+                    if v == b'#' || v == b'[' {
+                        block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
+                        block.items.clear();
+                        return Ok(block);
+                    }
+                    if (v == b'R' || v == b'r' || v == b'V' || v == b'v')
+                        && bytes.get(k + 1).is_some_and(u8::is_ascii_digit)
+                    {
+                        block.kind = BlockKind::Macro(MacroKind::FadalRegisterWords);
+                        block.items.clear();
+                        return Ok(block);
+                    }
+                }
+                match number(&text[j..]) {
+                    Ok((rest, num)) => {
+                        let end = bytes.len() - rest.len();
+                        let value = parse_number(num).ok_or_else(|| {
+                            err(ErrorKind::BadNumber(num.to_string()), start, end)
+                        })?;
+                        // Duplicate check (G and M may repeat).
+                        if letter != b'G' && letter != b'M' {
+                            let dup = match register {
+                                Some(r) => {
+                                    let bit = 1u16 << r;
+                                    let d = seen_reg & bit != 0;
+                                    seen_reg |= bit;
+                                    d
+                                }
+                                None => {
+                                    let bit = 1u32 << (letter - b'A');
+                                    let d = seen & bit != 0;
+                                    seen |= bit;
+                                    d
+                                }
+                            };
+                            if dup {
+                                let name = match register {
+                                    Some(r) => format!("R{r}"),
+                                    None => char::from(letter).to_string(),
+                                };
+                                return Err(err(ErrorKind::DuplicateWord(name), start, end));
+                            }
+                        }
+                        block.items.push(Item::Word(Word {
+                            letter,
+                            register,
+                            value,
+                            text: num,
+                            span: Span::new(offset + start, offset + end),
+                        }));
+                        i = end;
+                    }
+                    Err(_) => {
+                        return Err(err(
+                            ErrorKind::LetterWithoutNumber(char::from(letter)),
+                            start,
+                            start + 1,
+                        ))
+                    }
+                }
+            }
+            b'0'..=b'9' | b'+' | b'-' | b'.' => {
+                let end = match number(&text[i..]) {
+                    Ok((rest, _)) => bytes.len() - rest.len(),
+                    Err(_) => i + 1,
+                };
+                return Err(err(
+                    ErrorKind::NumberWithoutLetter(text[i..end].to_string()),
+                    i,
+                    end,
+                ));
+            }
+            _ => {
+                let ch = text[i..].chars().next().unwrap_or('?');
+                return Err(err(
+                    ErrorKind::UnexpectedCharacter(ch),
+                    i,
+                    i + ch.len_utf8(),
+                ));
+            }
+        }
+    }
+    Ok(block)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(s: &str) -> Vec<(char, Option<u8>, f64, String)> {
+        let b = parse_line(s.as_bytes(), 1, 0).expect("parses");
+        b.words()
+            .map(|w| (w.letter_char(), w.register, w.value, w.text.to_string()))
+            .collect()
+    }
+
+    #[test]
+    fn numbers_in_every_spelling() {
+        let w = words("G1X1Y2");
+        assert_eq!(w[0].0, 'G');
+        assert_eq!(w[1].2, 1.0);
+        assert_eq!(w[2].2, 2.0);
+        assert_eq!(words("x-.25")[0].2, -0.25);
+        assert_eq!(words("X+.5")[0].2, 0.5);
+        assert_eq!(words("X1.")[0].2, 1.0);
+        assert_eq!(words("X 12.5")[0].2, 12.5);
+        assert_eq!(words("X0.1")[0].2, 0.1);
+        assert_eq!(words("X-34.78")[0].2, -34.78);
+        assert_eq!(words("F9991300.0")[0].2, 9991300.0);
+        assert_eq!(words("X12345678901234567890.5")[0].2, 12345678901234567890.5);
+    }
+
+    #[test]
+    fn fast_path_is_correctly_rounded() {
+        for s in ["0.1", "-34.788", "123.4567", "0.0001", "99999.9999", "1.000000000000001"] {
+            assert_eq!(parse_number(s), s.parse::<f64>().ok(), "{s}");
+        }
+    }
+
+    #[test]
+    fn fadal_register_words() {
+        let w = words("L9101 R1+1. R2+.4 D1");
+        assert_eq!(w[1], ('R', Some(1), 1.0, "+1.".into()));
+        assert_eq!(w[2], ('R', Some(2), 0.4, "+.4".into()));
+        // ISO radius is an ordinary R word.
+        assert_eq!(words("G2 X1 Y1 R11.605")[3], ('R', None, 11.605, "11.605".into()));
+    }
+
+    #[test]
+    fn macro_lines_kept_verbatim() {
+        for (s, k) in [
+            ("#V10 = 1 'comment", MacroKind::FadalStatement),
+            ("#IF (R1 = 3) THEN GOTO:FAULT", MacroKind::FadalStatement),
+            ("G1 G31 X+R6. Y+R7. F+R4. P1", MacroKind::FadalRegisterWords),
+            ("#<depth> = 5", MacroKind::LinuxCncExpression),
+            ("#1 = 5", MacroKind::LinuxCncExpression),
+            ("G1 X[#1 + 2]", MacroKind::LinuxCncExpression),
+            ("o100 sub", MacroKind::LinuxCncOWord),
+            ("O<probe> call [1]", MacroKind::LinuxCncOWord),
+        ] {
+            let b = parse_line(s.as_bytes(), 1, 0).expect("parses");
+            assert_eq!(b.kind, BlockKind::Macro(k), "{s}");
+            assert_eq!(b.raw, s);
+        }
+        // A FADAL program number is a word, not an O-word line.
+        let b = parse_line(b"O9101(ProbeKit)", 1, 0).expect("parses");
+        assert_eq!(b.kind, BlockKind::Words);
+    }
+
+    #[test]
+    fn comments_and_spans() {
+        let b = parse_line(b"N10 G0 (go) X1 ; rest", 3, 100).expect("parses");
+        assert_eq!(b.comments().count(), 2);
+        let x = b.word(b'X').expect("X");
+        assert_eq!(x.span, Span::new(112, 114));
+        assert_eq!(b.span, Span::new(100, 121));
+    }
+
+    #[test]
+    fn errors_are_located() {
+        let cases: [(&[u8], u32); 7] = [
+            (b"G1 X1 (open", 7),
+            (b"G1 X Y1", 4),
+            (b"G1 12.5", 4),
+            (b"G1 X1 X2", 7),
+            (b"G1 X1 @", 7),
+            (b"G1 X\xff", 5),
+            (b"G1 Y2 R1+1. R1-2.", 13),
+        ];
+        for (s, col) in cases {
+            let e = parse_line(s, 1, 0).expect_err("fails");
+            assert_eq!(e.column, col, "{:?}: {}", String::from_utf8_lossy(s), e.kind);
+        }
+    }
+
+    #[test]
+    fn long_line_refused_quickly() {
+        let long = vec![b'X'; MAX_LINE_BYTES + 1];
+        let e = parse_line(&long, 1, 0).expect_err("too long");
+        assert!(matches!(e.kind, ErrorKind::LineTooLong(_)));
+    }
+}

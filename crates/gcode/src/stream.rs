@@ -1,0 +1,137 @@
+//! Parse and interpret as one stream: lines in, [`Event`]s out, flat memory.
+
+use std::collections::VecDeque;
+use std::io::{self, BufRead};
+
+use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::interp::{Event, Interpreter, Options};
+use crate::lines::{Line, LineReader, Lines};
+use crate::parse::parse_line;
+
+/// Anything that hands out lines one at a time.
+pub trait LineSource {
+    /// The next line, or `None` at the end.
+    fn next_line(&mut self) -> io::Result<Option<Line<'_>>>;
+}
+
+impl LineSource for Lines<'_> {
+    fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
+        Ok(self.next())
+    }
+}
+
+impl<R: BufRead> LineSource for LineReader<R> {
+    fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
+        LineReader::next_line(self)
+    }
+}
+
+/// An iterator of interpreter events over a whole program.
+#[derive(Debug)]
+pub struct Stream<S> {
+    src: S,
+    interp: Interpreter,
+    queue: VecDeque<Event>,
+    stop_on_error: bool,
+    stopped: bool,
+    finished: bool,
+    any_content: bool,
+}
+
+impl<S: LineSource> Stream<S> {
+    /// A stream over `src`. With `stop_on_error`, the stream ends after the first error
+    /// (what follows an error cannot be trusted for motion); without it, every block is
+    /// read and every problem reported.
+    pub fn new(src: S, opts: Options, stop_on_error: bool) -> Self {
+        Stream {
+            src,
+            interp: Interpreter::new(opts),
+            queue: VecDeque::new(),
+            stop_on_error,
+            stopped: false,
+            finished: false,
+            any_content: false,
+        }
+    }
+
+    /// The interpreter, for its final state.
+    pub fn interpreter(&self) -> &Interpreter {
+        &self.interp
+    }
+}
+
+impl<'a> Stream<Lines<'a>> {
+    /// A stream over an in-memory program.
+    pub fn from_bytes(input: &'a [u8], opts: Options, stop_on_error: bool) -> Self {
+        Stream::new(Lines::new(input), opts, stop_on_error)
+    }
+}
+
+impl<R: BufRead> Stream<LineReader<R>> {
+    /// A stream over a reader, one line in memory at a time.
+    pub fn from_reader(reader: R, opts: Options, stop_on_error: bool) -> Self {
+        Stream::new(LineReader::new(reader), opts, stop_on_error)
+    }
+}
+
+impl<S: LineSource> Iterator for Stream<S> {
+    type Item = io::Result<Event>;
+
+    fn next(&mut self) -> Option<io::Result<Event>> {
+        loop {
+            if let Some(e) = self.queue.pop_front() {
+                return Some(Ok(e));
+            }
+            if self.stopped || self.finished {
+                return None;
+            }
+            let line = match self.src.next_line() {
+                Err(e) => {
+                    self.stopped = true;
+                    return Some(Err(e));
+                }
+                Ok(None) => {
+                    self.finished = true;
+                    if !self.any_content {
+                        self.queue.push_back(Event::Diagnostic(Diagnostic::whole(
+                            Severity::Error,
+                            ErrorKind::EmptyProgram,
+                        )));
+                    }
+                    continue;
+                }
+                Ok(Some(line)) => line,
+            };
+            if !self.any_content && line.bytes.iter().any(|b| !b.is_ascii_whitespace()) {
+                self.any_content = true;
+            }
+            let queue = &mut self.queue;
+            let failed = match parse_line(line.bytes, line.number, line.offset) {
+                Ok(block) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
+                    Ok(()) => false,
+                    Err(d) => {
+                        queue.push_back(Event::Diagnostic(d));
+                        true
+                    }
+                },
+                Err(d) => {
+                    queue.push_back(Event::Diagnostic(d));
+                    true
+                }
+            };
+            if failed && self.stop_on_error {
+                self.stopped = true;
+            }
+        }
+    }
+}
+
+/// Every diagnostic of a program (parse and interpretation), in order.
+pub fn check(input: &[u8], opts: Options) -> Vec<Diagnostic> {
+    Stream::from_bytes(input, opts, false)
+        .filter_map(|e| match e {
+            Ok(Event::Diagnostic(d)) => Some(d),
+            _ => None,
+        })
+        .collect()
+}
