@@ -1,1 +1,151 @@
-fn main() {}
+//! `lampost`: the command line of the lampost CAM post-processor and setup toolkit.
+//!
+//! The binary is thin: it parses arguments (clap), opens files, renders diagnostics and
+//! JSON; the work is done in the library crates.
+
+mod gcode_cmds;
+mod io;
+mod report;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use report::CliError;
+
+#[derive(Parser, Debug)]
+#[command(name = "lampost", version, about = "CAM post-processor and setup toolkit for hybrid laser-deposition / machining 5-axis machines")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Units a program starts in, before any G20/G21.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum UnitsArg {
+    /// Inches (G20).
+    Inch,
+    /// Millimetres (G21).
+    Mm,
+}
+
+/// What the E word means.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum EWordArg {
+    /// FADAL fixture offset E0–E48.
+    Fixture,
+    /// Slicer extrusion.
+    Extrusion,
+}
+
+/// Output dialect.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum DialectArg {
+    /// FADAL (% framing, forced decimal points, fixed decimals).
+    Fadal,
+    /// Plain ISO/RS274.
+    Iso,
+}
+
+/// Settings shared by the commands that interpret programs.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct InterpArgs {
+    /// Units before the program's first G20/G21.
+    #[arg(long, value_enum, default_value = "mm")]
+    units: UnitsArg,
+    /// Meaning of E words.
+    #[arg(long = "e-word", value_enum, default_value = "fixture")]
+    e_word: EWordArg,
+    /// Skip blocks that start with `/` (the block-delete switch on).
+    #[arg(long)]
+    block_delete: bool,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Check a program: every problem with file:line:col, the line, a caret and a hint.
+    Check {
+        /// Program file, or - for standard input.
+        file: String,
+        /// Report as JSON.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        interp: InterpArgs,
+    },
+    /// Rewrite a program: verbatim numbers, or a dialect's format; optional renumbering.
+    Fmt {
+        /// Program file, or - for standard input.
+        file: String,
+        /// Output file (written atomically); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+        /// Rewrite numbers in this dialect's format (default: keep every digit).
+        #[arg(long, value_enum)]
+        dialect: Option<DialectArg>,
+        /// Renumber blocks: START,STEP (e.g. 10,10).
+        #[arg(long, value_name = "START,STEP")]
+        renumber: Option<String>,
+        /// Leave out repeated motion G-codes and feed rates.
+        #[arg(long)]
+        suppress_modal: bool,
+        /// Units before the program's first G20/G21 (decides decimals).
+        #[arg(long, value_enum, default_value = "mm")]
+        units: UnitsArg,
+    },
+    /// Show the interpreted motion: one line per move, absolute, in program units.
+    Trace {
+        /// Program file, or - for standard input.
+        file: String,
+        /// Output file; standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+        /// Write JSON: {"moves": […], "diagnostics": […]}.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        interp: InterpArgs,
+    },
+}
+
+fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        Command::Check { file, json, interp } => gcode_cmds::check(&file, json, interp),
+        Command::Fmt {
+            file,
+            output,
+            dialect,
+            renumber,
+            suppress_modal,
+            units,
+        } => gcode_cmds::fmt(
+            &file,
+            output.as_deref(),
+            dialect,
+            renumber.as_deref(),
+            suppress_modal,
+            units,
+        ),
+        Command::Trace {
+            file,
+            output,
+            json,
+            interp,
+        } => gcode_cmds::trace(&file, output.as_deref(), json, interp),
+    }
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        if e.code == report::QUIET_EXIT {
+            // The reader of our output went away (e.g. `| head`): stop quietly.
+            std::process::exit(0);
+        }
+        if !e.message.is_empty() {
+            eprint!("{}", e.message);
+            if !e.message.ends_with('\n') {
+                eprintln!();
+            }
+        }
+        std::process::exit(e.code);
+    }
+}

@@ -120,7 +120,7 @@ pub enum ErrorKind {
     #[error("canned cycle G{0} is passed through, not expanded into moves")]
     CannedCyclePassedThrough(String),
     /// A macro line whose value a later stage would need.
-    #[error("{0} is not evaluated (macros are kept verbatim, not run)")]
+    #[error("{0} is not evaluated: macros are kept verbatim, not run (statement lines are reported once)")]
     MacroNotEvaluated(&'static str),
     /// A subprogram call not followed.
     #[error("{0}: subprogram calls are not followed; the trace continues after the call")]

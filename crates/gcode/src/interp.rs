@@ -100,6 +100,8 @@ pub struct Move {
     pub line: u32,
     /// Why the move exists.
     pub origin: Origin,
+    /// Axes the program has named so far (bit `i` for `AXES[i]`).
+    pub axes_named: u16,
 }
 
 /// What the interpreter reports.
@@ -135,6 +137,8 @@ pub struct Interpreter {
     extrusion: f64,
     ended: bool,
     warned_after_end: bool,
+    axes_named: u16,
+    warned_macro: bool,
 }
 
 /// Words of one block, looked up by letter.
@@ -190,6 +194,8 @@ impl Interpreter {
             extrusion: 0.0,
             ended: false,
             warned_after_end: false,
+            axes_named: 0,
+            warned_macro: false,
         }
     }
 
@@ -231,7 +237,11 @@ impl Interpreter {
         match b.kind {
             BlockKind::Percent => return Ok(()),
             BlockKind::Macro(k) => {
-                if !self.ended {
+                // Statement lines (`#…`) are reported once; lines whose motion or flow
+                // depends on macro values each time.
+                let statement = b.raw.trim_start().starts_with('#');
+                if !self.ended && !(statement && self.warned_macro) {
+                    self.warned_macro |= statement;
                     out(Event::Diagnostic(diag(
                         b,
                         Severity::Warning,
@@ -259,6 +269,11 @@ impl Interpreter {
             return Ok(());
         }
         let w = self.collect(b)?;
+        for (i, &l) in AXES.iter().enumerate() {
+            if w.word(l).is_some() {
+                self.axes_named |= 1 << i;
+            }
+        }
         self.execute(b, &w, out)
     }
 
@@ -575,7 +590,10 @@ impl Interpreter {
                 _ => {}
             }
         }
-        if !axes_used && w.has_axes() {
+        // An explicit motion code with no axis words still runs its motion, to where
+        // the tool already is (as LinuxCNC does: `G0` alone is a zero-length rapid).
+        let explicit_motion = w.gs.iter().any(|g| g.2 == GGroup::Motion && g.1 != 800);
+        if !axes_used && (w.has_axes() || explicit_motion) {
             let probe = w.has_g(310) || w.has_g(311);
             self.motion(b, w, g53, probe, out)?;
         }
@@ -651,6 +669,7 @@ impl Interpreter {
                 modal: this.modal,
                 line: b.line,
                 origin: Origin::Home,
+                axes_named: this.axes_named,
             }));
         };
         if any {
@@ -703,6 +722,7 @@ impl Interpreter {
             modal: self.modal,
             line: b.line,
             origin,
+            axes_named: self.axes_named,
         }));
         self.pos = end;
     }
@@ -737,7 +757,6 @@ impl Interpreter {
         }
         let radius_word = w.word(b'R').or(w.registers[0]);
         let has_ijk = w.word(centre_letter(u)).is_some() || w.word(centre_letter(v)).is_some();
-        let feed = self.feed_for(b, w)?;
         let turns = match w.word(b'P') {
             Some(p) if p.value >= 1.0 && p.value.fract() == 0.0 => p.value as u32,
             Some(p) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: p.display(), why: "the number of turns P is a whole number of at least 1" }, Some(p.span))),
@@ -795,6 +814,7 @@ impl Interpreter {
                 (su + du / 2.0 + side * h * lu, sv + dv / 2.0 + side * h * lv)
             }
         };
+        let feed = self.feed_for(b, w)?;
         let mut center = [self.pos[0], self.pos[1], self.pos[2]];
         center[u] = cu;
         center[v] = cv;
@@ -851,7 +871,7 @@ impl Interpreter {
         if passthrough {
             self.warn(b, out, ErrorKind::CannedCyclePassedThrough(name), None);
         }
-        for rep in 0..repeats {
+        for _ in 0..repeats {
             let mut xy = self.pos;
             for a in [0usize, 1] {
                 if let Some(v) = w.get(AXES[a]) {
@@ -863,7 +883,6 @@ impl Interpreter {
                 self.pos = xy;
                 continue;
             }
-            let _ = rep;
             let at = |p: Position, z: f64| {
                 let mut q = p;
                 q[Z] = z;
@@ -919,10 +938,7 @@ impl Interpreter {
                     self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                 }
             }
-            if !incremental {
-                // Absolute repeats drill the same hole again.
-                continue;
-            }
+            // Absolute repeats drill the same hole again; incremental ones step on.
         }
         Ok(())
     }
