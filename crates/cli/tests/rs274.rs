@@ -41,6 +41,7 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
     let dir = shared.join("corpus/linuxcnc");
     let mut files: Vec<_> = std::fs::read_dir(&dir).expect("corpus").flatten().map(|e| e.path()).collect();
     files.sort();
+    files.push(root().join("fixtures/programs/features.ngc"));
     assert!(!files.is_empty());
     for path in files {
         let text = std::fs::read_to_string(&path).expect("read");

@@ -1,10 +1,13 @@
 //! The modal interpreter: blocks in, resolved absolute moves out.
 //!
-//! Positions are absolute, in the program's units, in the frame where every work
-//! offset the program itself sets (G10, G92, G52) is applied and every offset stored
-//! only in the controller is zero. For an ordinary CAM program, that is the
-//! program's own coordinates. Tool length offsets are recorded, not applied: the
-//! trace is of the controlled point the program names.
+//! Positions are absolute *program* coordinates, in the program's units: the
+//! coordinates of the work coordinate system in force (G54…, FADAL E…) at the time of
+//! the move, as LinuxCNC's canonical interface reports them. Offsets the program sets
+//! itself (G10 L2/L20, G92, G52) are tracked, so switching systems or shifting with G92
+//! moves the reported coordinates exactly as on the machine; offsets held only in the
+//! controller are unknown here and taken as zero (that matters only for G53 moves).
+//! Tool length offsets are recorded, not applied: the trace is of the controlled point
+//! the program names.
 
 use serde::Serialize;
 
@@ -662,8 +665,8 @@ impl Interpreter {
         let mut mv = |s: Position, e: Position, this: &mut Self| {
             out(Event::Move(Move {
                 kind: MoveKind::Rapid,
-                start: s,
-                end: e,
+                start: this.to_program(s),
+                end: this.to_program(e),
                 feed: 0.0,
                 extrusion: this.extrusion_now(),
                 modal: this.modal,
@@ -712,11 +715,28 @@ impl Interpreter {
         }
     }
 
+    /// `p` (machine frame) in the coordinates of the work system in force.
+    fn to_program(&self, p: Position) -> Position {
+        let off = self.offset();
+        let mut q = p;
+        for a in 0..9 {
+            q[a] -= off[a];
+        }
+        q
+    }
+
     fn emit(&mut self, b: &Block<'_>, kind: MoveKind, end: Position, feed: f64, origin: Origin, out: &mut impl FnMut(Event)) {
+        let kind = match kind {
+            MoveKind::Arc { clockwise, center, plane, turns } => {
+                let off = self.offset();
+                MoveKind::Arc { clockwise, center: [center[0] - off[0], center[1] - off[1], center[2] - off[2]], plane, turns }
+            }
+            k => k,
+        };
         out(Event::Move(Move {
             kind,
-            start: self.pos,
-            end,
+            start: self.to_program(self.pos),
+            end: self.to_program(end),
             feed,
             extrusion: self.extrusion_now(),
             modal: self.modal,
@@ -920,15 +940,21 @@ impl Interpreter {
                     let t = at(self.pos, clear);
                     self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                 }
-                840 | 850 | 890 => {
+                840 | 850 => {
+                    // Feed in, feed out to R, then rapid to the clearance level.
                     let t = at(self.pos, bottom);
                     self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                     let t = at(self.pos, r_abs);
                     self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
-                    if clear > r_abs {
-                        let t = at(self.pos, clear);
-                        self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
-                    }
+                    let t = at(self.pos, clear);
+                    self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                }
+                890 => {
+                    // Feed in, dwell, feed all the way out to the clearance level.
+                    let t = at(self.pos, bottom);
+                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    let t = at(self.pos, clear);
+                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                 }
                 _ => {
                     // 81, 82 (dwell at the bottom), 86 (spindle stops at the bottom).
