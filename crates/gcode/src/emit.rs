@@ -101,7 +101,7 @@ pub fn format_value(dialect: Dialect, units: Units, letter: u8, register: Option
             trim_decimals(&mut s, false);
             return s;
         }
-        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' if value.fract() == 0.0 => {
+        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' | b'E' if value.fract() == 0.0 && register.is_none() => {
             return format!("{}", value as i64);
         }
         b'F' | b'S' | b'P' | b'E' | b'R' => {

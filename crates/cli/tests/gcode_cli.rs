@@ -1,0 +1,124 @@
+//! `lampost check`, `fmt` and `trace` as a user runs them.
+
+mod common;
+
+use common::*;
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Each bad input: exit 1, and a message naming the file, line and column.
+#[test]
+fn bad_input_gets_located_errors() {
+    let dir = tempdir("bad");
+    let cases: Vec<(&str, Vec<u8>, &str, &str)> = vec![
+        ("unterminated", b"G0 X1\nG1 X2 (oops\n".to_vec(), ":2:7", "comment is not closed"),
+        ("letter", b"G1 X Y2 F10\n".to_vec(), ":1:4", "the letter X has no number"),
+        ("number", b"G1 X1 12.5\n".to_vec(), ":1:7", "has no address letter"),
+        ("axis-twice", b"G0 X1 Y2 X3\n".to_vec(), ":1:10", "X appears twice"),
+        ("group", b"G0 G1 X1\n".to_vec(), ":1:4", "G0 and G1 are both in the motion group"),
+        ("unknown-g", b"G0 X0\nG7.5 X1\n".to_vec(), ":2:1", "unknown G-code"),
+        ("radii", b"G0 X0 Y0\nG2 X10 Y0 I4 J0 F100\n".to_vec(), ":2:1", "differ by"),
+        ("no-centre", b"G0 X0 Y0\nG2 X10 Y0 F100\n".to_vec(), ":2:1", "neither I/J/K"),
+        ("utf8", b"G0 X1\nG1 X\xff\xfe2\n".to_vec(), ":2:5", "not UTF-8"),
+        ("empty", Vec::new(), "", "the program is empty"),
+        ("blank", b"\n   \n".to_vec(), "", "the program is empty"),
+    ];
+    for (name, text, at, msg) in cases {
+        let p = dir.join(format!("{name}.nc"));
+        std::fs::write(&p, &text).expect("write");
+        let ps = p.to_str().expect("utf8");
+        for cmd in ["check", "trace"] {
+            let o = lampost(&[cmd, ps]);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{cmd} {name}: {e}");
+            assert!(e.contains(&format!("{ps}{at}")), "{cmd} {name}: no location {at} in\n{e}");
+            assert!(e.contains(msg), "{cmd} {name}: no `{msg}` in\n{e}");
+            assert!(e.contains("help:"), "{cmd} {name}: no hint");
+            assert!(!e.contains("panicked"), "{name}");
+        }
+    }
+}
+
+#[test]
+fn check_json_lists_every_problem() {
+    let o = lampost_stdin(&["check", "--json", "-"], b"G1 X Y1\nG0 G1 X1\nG0 X1\n#V1 = 2\n");
+    assert_eq!(o.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["errors"], 2);
+    assert_eq!(v["warnings"], 1);
+    let d = &v["diagnostics"][0];
+    assert_eq!(d["line"], 1);
+    assert_eq!(d["column"], 4);
+    assert_eq!(d["file"], "<stdin>");
+    assert!(d["hint"].as_str().expect("hint").len() > 5);
+}
+
+#[test]
+fn a_single_hundred_megabyte_line_is_refused_not_read() {
+    let mut text = b"G0 X1\n".to_vec();
+    text.extend(std::iter::repeat_n(b'X', 100 * 1024 * 1024));
+    text.push(b'\n');
+    let o = lampost_stdin(&["check", "-"], &text);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("<stdin>:2:1") && e.contains("bytes long"), "{e}");
+    assert!(e.len() < 4000, "the snippet is cut to a window");
+}
+
+#[test]
+fn fmt_writes_nothing_when_input_has_errors() {
+    let dir = tempdir("atomic");
+    let out = dir.join("out.nc");
+    std::fs::write(&out, "old content\n").expect("write");
+    let o = lampost_stdin(&["fmt", "-", "-o", out.to_str().expect("utf8")], b"G0 X1\nG1 X\n");
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&out).expect("read"), "old content\n");
+    let left: Vec<_> = std::fs::read_dir(&dir).expect("dir").flatten().collect();
+    assert_eq!(left.len(), 1, "no temporary file left behind");
+    let o = lampost_stdin(&["fmt", "-", "-o", out.to_str().expect("utf8"), "--renumber", "10,5"], b"G0 X1\nN7 G1 X2 F3\n");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&out).expect("read"), "N10 G0 X1\nN15 G1 X2 F3\n");
+}
+
+#[test]
+fn fmt_keeps_digits_and_normalises_only_when_asked() {
+    let src = b"g1x-.25 Y1.50000 f100\nG0 X+1. (keep)\n";
+    let o = lampost_stdin(&["fmt", "-"], src);
+    assert_eq!(String::from_utf8_lossy(&o.stdout), "G1 X-.25 Y1.50000 F100\nG0 X+1. (keep)\n");
+    let o = lampost_stdin(&["fmt", "-", "--dialect", "fadal", "--units", "inch"], src);
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        "%\nG1 X-0.2500 Y1.5000 F100.\nG0 X1.0000 (keep)\n%\n"
+    );
+    let o = lampost_stdin(&["fmt", "-", "--renumber", "10,x"], src);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("START,STEP"));
+}
+
+#[test]
+fn trace_reads_stdin_and_reports_macros() {
+    let o = lampost_stdin(&["trace", "-"], b"G21 G0 X1 Y2 Z3\nG1 G31 X+R6. F+R4. P1\nG1 X4 F50\n");
+    assert!(o.status.success());
+    assert_eq!(String::from_utf8_lossy(&o.stdout), "G0 X1 Y2 Z3\nG1 X4 Y2 Z3 F50\n");
+    assert!(stderr(&o).contains("register (R) values is not evaluated"));
+}
+
+fn fixture(name: &str) -> String {
+    root().join("fixtures/programs").join(name).to_string_lossy().into_owned()
+}
+
+#[test]
+fn snapshot_trace_of_feature_fixture() {
+    let o = lampost(&["trace", &fixture("features.ngc")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    insta::assert_snapshot!("trace_features", String::from_utf8_lossy(&o.stdout));
+}
+
+#[test]
+fn snapshot_fmt_fadal_of_probe_fixture() {
+    let o = lampost(&["fmt", &fixture("fadal-probe-touch.nc"), "--dialect", "fadal", "--units", "inch", "--renumber", "10,10"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    insta::assert_snapshot!("fmt_fadal_probe", String::from_utf8_lossy(&o.stdout));
+}
