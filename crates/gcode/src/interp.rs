@@ -142,6 +142,7 @@ pub struct Interpreter {
     warned_after_end: bool,
     axes_named: u16,
     warned_macro: bool,
+    offset_cache: Position,
 }
 
 /// Words of one block, looked up by letter.
@@ -149,6 +150,7 @@ struct Words<'b, 'a> {
     by_letter: [Option<&'b Word<'a>>; 26],
     registers: [Option<&'b Word<'a>>; 10],
     gs: smallvec::SmallVec<[(&'b Word<'a>, u16, GGroup); 4]>,
+    by_group: [u8; GROUPS],
     ms: smallvec::SmallVec<[(&'b Word<'a>, u16); 4]>,
 }
 
@@ -163,7 +165,10 @@ impl<'b, 'a> Words<'b, 'a> {
         self.gs.iter().any(|g| g.1 == code)
     }
     fn g_in(&self, group: GGroup) -> Option<(&'b Word<'a>, u16)> {
-        self.gs.iter().find(|g| g.2 == group).map(|g| (g.0, g.1))
+        match self.by_group[group as usize] {
+            0 => None,
+            i => self.gs.get(usize::from(i - 1)).map(|g| (g.0, g.1)),
+        }
     }
     fn has_axes(&self) -> bool {
         AXES.iter().any(|&a| self.by_letter[usize::from(a - b'A')].is_some())
@@ -171,6 +176,9 @@ impl<'b, 'a> Words<'b, 'a> {
 }
 
 type Res<T> = Result<T, Diagnostic>;
+
+/// Number of [`GGroup`] variants.
+const GROUPS: usize = 18;
 
 fn diag(b: &Block<'_>, sev: Severity, kind: ErrorKind, span: Option<crate::ast::Span>) -> Diagnostic {
     let (s, e) = match span {
@@ -199,6 +207,7 @@ impl Interpreter {
             warned_after_end: false,
             axes_named: 0,
             warned_macro: false,
+            offset_cache: [0.0; 9],
         }
     }
 
@@ -218,6 +227,15 @@ impl Interpreter {
     }
 
     fn offset(&self) -> Position {
+        self.offset_cache
+    }
+
+    /// Recompute the cached effective offset after any offset or work system change.
+    fn refresh_offset(&mut self) {
+        self.offset_cache = self.compute_offset();
+    }
+
+    fn compute_offset(&self) -> Position {
         let base = match self.modal.work_offset {
             WorkOffset::G5x(i) => self.g5x[usize::from(i)],
             WorkOffset::Fixture(i) => self.fixture[usize::from(i)],
@@ -285,6 +303,7 @@ impl Interpreter {
             by_letter: [None; 26],
             registers: [None; 10],
             gs: smallvec::SmallVec::new(),
+            by_group: [0; GROUPS],
             ms: smallvec::SmallVec::new(),
         };
         for item in &b.items {
@@ -319,6 +338,10 @@ impl Interpreter {
                         }
                     }
                     w.gs.push((word, code, group));
+                    let slot = &mut w.by_group[group as usize];
+                    if *slot == 0 || (group == GGroup::Motion && code != 800) {
+                        *slot = u8::try_from(w.gs.len()).unwrap_or(u8::MAX);
+                    }
                 }
                 b'M' => {
                     let code = word.code().ok_or_else(|| {
@@ -534,6 +557,14 @@ impl Interpreter {
                 self.canned = CannedParams::default();
             }
         }
+        // Offsets change only through E, G54…, units and the non-modal codes.
+        let offsets_may_change = w.word(b'E').is_some()
+            || w.by_group[GGroup::CoordSystem as usize] != 0
+            || w.by_group[GGroup::Units as usize] != 0
+            || w.by_group[GGroup::NonModal as usize] != 0;
+        if offsets_may_change {
+            self.refresh_offset();
+        }
         let g53 = w.has_g(530);
         // Non-modal codes.
         let mut axes_used = false;
@@ -596,6 +627,9 @@ impl Interpreter {
         // An explicit motion code with no axis words still runs its motion, to where
         // the tool already is (as LinuxCNC does: `G0` alone is a zero-length rapid).
         let explicit_motion = w.gs.iter().any(|g| g.2 == GGroup::Motion && g.1 != 800);
+        if offsets_may_change {
+            self.refresh_offset();
+        }
         if !axes_used && (w.has_axes() || explicit_motion) {
             let probe = w.has_g(310) || w.has_g(311);
             self.motion(b, w, g53, probe, out)?;

@@ -24,6 +24,7 @@
 pub mod ast;
 pub mod diag;
 pub mod emit;
+pub mod generate;
 pub mod interp;
 pub mod lines;
 pub mod modal;

@@ -87,6 +87,58 @@ pub fn parse_number(text: &str) -> Option<f64> {
     cleaned.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// The common spelling of a number (`[+-]digits[.digits]` or `[+-].digits`, at most 15
+/// significant digits, no inner spaces) scanned and valued in one pass. `None` when the
+/// text is anything else, which then goes to the nom grammar [`number`]; the two agree
+/// wherever this one answers (property-tested).
+pub fn fast_number(b: &[u8]) -> Option<(usize, f64)> {
+    const POW10: [f64; 16] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+    ];
+    let mut i = 0;
+    let negative = match b.first() {
+        Some(b'-') => {
+            i = 1;
+            true
+        }
+        Some(b'+') => {
+            i = 1;
+            false
+        }
+        _ => false,
+    };
+    let mut mantissa: u64 = 0;
+    let mut digits = 0usize;
+    let int_start = i;
+    while i < b.len() && b[i].is_ascii_digit() {
+        mantissa = mantissa * 10 + u64::from(b[i] - b'0');
+        digits += 1;
+        i += 1;
+        if digits > 15 {
+            return None;
+        }
+    }
+    let int_digits = i - int_start;
+    let mut decimals = 0usize;
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        while i < b.len() && b[i].is_ascii_digit() {
+            mantissa = mantissa * 10 + u64::from(b[i] - b'0');
+            digits += 1;
+            decimals += 1;
+            i += 1;
+            if digits > 15 {
+                return None;
+            }
+        }
+    }
+    if int_digits == 0 && decimals == 0 {
+        return None;
+    }
+    let v = mantissa as f64 / POW10[decimals];
+    Some((i, if negative { -v } else { v }))
+}
+
 const OWORD_KEYWORDS: [&str; 15] = [
     "sub", "endsub", "call", "if", "elseif", "else", "endif", "while", "endwhile", "do",
     "return", "repeat", "endrepeat", "break", "continue",
@@ -241,12 +293,25 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
                         return Ok(block);
                     }
                 }
-                match number(&text[j..]) {
-                    Ok((rest, num)) => {
-                        let end = bytes.len() - rest.len();
-                        let value = parse_number(num).ok_or_else(|| {
-                            err(ErrorKind::BadNumber(num.to_string()), start, end)
-                        })?;
+                let scanned = match fast_number(&bytes[j..]) {
+                    Some((len, value)) => Ok((j + len, value)),
+                    None => match number(&text[j..]) {
+                        Ok((rest, num)) => {
+                            let end = bytes.len() - rest.len();
+                            parse_number(num)
+                                .map(|v| (end, v))
+                                .ok_or_else(|| err(ErrorKind::BadNumber(num.to_string()), start, end))
+                        }
+                        Err(_) => Err(err(
+                            ErrorKind::LetterWithoutNumber(char::from(letter)),
+                            start,
+                            start + 1,
+                        )),
+                    },
+                };
+                match scanned {
+                    Ok((end, value)) => {
+                        let num = &text[j..end];
                         // Duplicate check (G and M may repeat).
                         if letter != b'G' && letter != b'M' {
                             let dup = match register {
@@ -280,13 +345,7 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
                         }));
                         i = end;
                     }
-                    Err(_) => {
-                        return Err(err(
-                            ErrorKind::LetterWithoutNumber(char::from(letter)),
-                            start,
-                            start + 1,
-                        ))
-                    }
+                    Err(e) => return Err(e),
                 }
             }
             b'0'..=b'9' | b'+' | b'-' | b'.' => {
@@ -338,6 +397,17 @@ mod tests {
         assert_eq!(words("X-34.78")[0].2, -34.78);
         assert_eq!(words("F9991300.0")[0].2, 9991300.0);
         assert_eq!(words("X12345678901234567890.5")[0].2, 12345678901234567890.5);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fast_number_agrees_with_nom_grammar(s in "[+-]?[0-9]{0,9}(\\.[0-9]{0,9})?[ XYG]?") {
+            if let Some((len, v)) = fast_number(s.as_bytes()) {
+                let (rest, text) = number(&s).expect("nom accepts what the fast path accepts");
+                proptest::prop_assert_eq!(s.len() - rest.len(), len);
+                proptest::prop_assert_eq!(parse_number(text), Some(v));
+            }
+        }
     }
 
     #[test]
