@@ -1,1 +1,226 @@
-fn main() {}
+//! `cargo xtask`: benchmarks and fuzzing for lampost.
+//!
+//! - `cargo xtask bench gcode`: parse + interpret throughput against the `gcode` crate
+//!   (criterion-free harness in `crates/gcode/benches/throughput.rs`, best of 5 runs,
+//!   both measured in the same process), then `lampost fmt` on a generated 1,000,000-line
+//!   program: time and peak resident memory (VmHWM of the child process).
+//! - `cargo xtask fuzz [--seconds N]`: a mutation fuzzer over parse + interpret, seeded
+//!   with the corpus and fixtures; reports inputs run and any panic.
+
+use std::io::Write;
+use std::panic;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::time::{Duration, Instant};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn cargo() -> Command {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root());
+    c
+}
+
+fn run(mut c: Command) -> Result<(), String> {
+    let status = c.status().map_err(|e| format!("cannot run {c:?}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{c:?} failed: {status}"))
+    }
+}
+
+/// Run `cmd`, polling its peak resident set size (VmHWM) until it exits.
+fn peak_memory(mut cmd: Command) -> Result<(Duration, u64), String> {
+    let t = Instant::now();
+    let mut child = cmd.spawn().map_err(|e| format!("cannot run {cmd:?}: {e}"))?;
+    let status_path = format!("/proc/{}/status", child.id());
+    let mut peak_kb = 0u64;
+    loop {
+        if let Ok(s) = std::fs::read_to_string(&status_path) {
+            if let Some(l) = s.lines().find(|l| l.starts_with("VmHWM:")) {
+                let kb = l
+                    .split_whitespace()
+                    .nth(1)
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(0);
+                peak_kb = peak_kb.max(kb);
+            }
+        }
+        match child.try_wait() {
+            Ok(Some(st)) if st.success() => break,
+            Ok(Some(st)) => return Err(format!("{cmd:?} failed: {st}")),
+            Ok(None) => std::thread::sleep(Duration::from_millis(2)),
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+    Ok((t.elapsed(), peak_kb))
+}
+
+fn bench_gcode() -> Result<(), String> {
+    println!("== parse + interpret throughput (one core), against the gcode crate, same run");
+    let mut c = cargo();
+    c.args(["bench", "-p", "lampost-gcode", "--bench", "throughput"]);
+    run(c)?;
+    println!("\n== lampost fmt on a generated 1,000,000-line program (streaming)");
+    let mut c = cargo();
+    c.args(["build", "--release", "-q", "-p", "lampost-cli"]);
+    run(c)?;
+    let dir = root().join("target/xtask");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let input = dir.join("planar-1m.nc");
+    let text = lampost_gcode::generate::planar_program(1_000_000, 42);
+    std::fs::write(&input, &text).map_err(|e| e.to_string())?;
+    let bin = root().join("target/release/lampost");
+    for extra in [&[][..], &["--dialect", "fadal"][..]] {
+        let out = dir.join("planar-1m.out.nc");
+        let mut cmd = Command::new(&bin);
+        cmd.arg("fmt").arg(&input).arg("-o").arg(&out).args(extra);
+        let (t, kb) = peak_memory(cmd)?;
+        println!(
+            "lampost fmt {}: {:.1} MB in {:.0} ms ({:.0} MB/s), peak memory {:.1} MB (target < 50 MB)",
+            extra.join(" "),
+            text.len() as f64 / 1e6,
+            t.as_secs_f64() * 1e3,
+            text.len() as f64 / 1e6 / t.as_secs_f64(),
+            kb as f64 / 1024.0
+        );
+    }
+    let mut cmd = Command::new(&bin);
+    cmd.arg("trace").arg(&input).arg("-o").arg(dir.join("planar-1m.trace"));
+    let (t, kb) = peak_memory(cmd)?;
+    println!(
+        "lampost trace: {:.0} ms, peak memory {:.1} MB",
+        t.as_secs_f64() * 1e3,
+        kb as f64 / 1024.0
+    );
+    Ok(())
+}
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+const TOKENS: &[&str] = &[
+    "G0", "G1", "G2", "G3", "G4", "G10", "G17", "G18", "G19", "G20", "G21", "G28", "G30", "G31",
+    "G31.1", "G38.2", "G40", "G41", "G43", "G49", "G52", "G53", "G54", "G59.3", "G73", "G80",
+    "G81", "G83", "G84", "G85", "G86", "G89", "G90", "G90.1", "G91", "G91.1", "G92", "G92.1",
+    "G93", "G94", "G98", "G99", "M2", "M3", "M6", "M30", "M98", "M99", "L2", "L20", "L9101",
+    "R1+1.", "R0-.5", "R-5", "P0", "P2", "Q-1", "Q.5", "E0", "E49", "E1.5", "H1", "T1", "F0",
+    "F-1", "X", "Y-", ".", "-.", "1e999", "99999999999999999999", "(", ")", ";", "#V1=2",
+    "X+R6.", "[", "#<a>", "o100 sub", "%", "/", "\n", "\r\n", " ", "\t", "\u{ff}", "\0",
+    "I0", "J0", "K0", "A360", "B-90", "C1e3", "Z-0", "X1e-300",
+];
+
+fn fuzz(seconds: u64) -> Result<(), String> {
+    let mut seeds: Vec<Vec<u8>> = Vec::new();
+    for dir in [
+        root().join("../shared/corpus/linuxcnc"),
+        root().join("../shared/corpus/fadal-probekit"),
+        root().join("fixtures/programs"),
+    ] {
+        if let Ok(rd) = std::fs::read_dir(&dir) {
+            for e in rd.flatten() {
+                if let Ok(b) = std::fs::read(e.path()) {
+                    // Seeds of a few hundred lines keep each run short.
+                    for chunk in b.split(|&c| c == b'\n').collect::<Vec<_>>().chunks(40) {
+                        seeds.push(chunk.join(&b'\n'));
+                    }
+                }
+            }
+        }
+    }
+    if seeds.is_empty() {
+        seeds.push(b"G0 X1 Y2\nG1 Z-1 F10\nG2 X3 Y4 R2\n".to_vec());
+    }
+    panic::set_hook(Box::new(|_| {}));
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let deadline = Instant::now() + Duration::from_secs(seconds);
+    let mut inputs = 0u64;
+    let mut bytes = 0u64;
+    let mut slowest = Duration::ZERO;
+    let mut failures = Vec::new();
+    while Instant::now() < deadline {
+        let mut input = seeds[rng.below(seeds.len())].clone();
+        for _ in 0..=rng.below(8) {
+            let at = rng.below(input.len() + 1);
+            match rng.below(5) {
+                0 => input.insert(at, rng.next() as u8),
+                1 if !input.is_empty() => {
+                    let end = (at + rng.below(8)).min(input.len());
+                    input.drain(at.min(end)..end);
+                }
+                2 if !input.is_empty() => {
+                    let i = rng.below(input.len());
+                    input[i] ^= 1 << rng.below(8);
+                }
+                _ => {
+                    let t = TOKENS[rng.below(TOKENS.len())].as_bytes();
+                    input.splice(at..at, t.iter().copied());
+                }
+            }
+        }
+        let t = Instant::now();
+        let data = input.clone();
+        let r = panic::catch_unwind(move || {
+            let opts = lampost_gcode::Options::default();
+            lampost_gcode::Stream::from_bytes(&data, opts, false).count()
+        });
+        slowest = slowest.max(t.elapsed());
+        inputs += 1;
+        bytes += input.len() as u64;
+        if r.is_err() && failures.len() < 5 {
+            failures.push(input);
+        }
+    }
+    let _ = panic::take_hook();
+    println!(
+        "fuzz: {inputs} inputs ({:.1} MB) in {seconds} s, slowest input {:.2} ms, {} panics",
+        bytes as f64 / 1e6,
+        slowest.as_secs_f64() * 1e3,
+        failures.len()
+    );
+    for (i, f) in failures.iter().enumerate() {
+        let p = root().join(format!("target/xtask/fuzz-crash-{i}.nc"));
+        let _ = std::fs::create_dir_all(root().join("target/xtask"));
+        let _ = std::fs::write(&p, f);
+        println!("  crash input written to {}", p.display());
+    }
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err("the fuzzer found panics".into())
+    }
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let a: Vec<&str> = args.iter().map(String::as_str).collect();
+    let r = match a.as_slice() {
+        ["bench", "gcode"] | ["bench"] => bench_gcode(),
+        ["fuzz"] => fuzz(60),
+        ["fuzz", "--seconds", n] => match n.parse() {
+            Ok(s) => fuzz(s),
+            Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
+        },
+        _ => Err("usage: cargo xtask bench gcode | cargo xtask fuzz [--seconds N]".into()),
+    };
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let _ = writeln!(std::io::stderr(), "xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -177,6 +177,9 @@ impl<'b, 'a> Words<'b, 'a> {
 
 type Res<T> = Result<T, Diagnostic>;
 
+/// The most canned-cycle repeats (L) or arc turns (P) one block may ask for.
+const MAX_REPEATS: u32 = 10_000;
+
 /// Number of [`GGroup`] variants.
 const GROUPS: usize = 18;
 
@@ -812,6 +815,9 @@ impl Interpreter {
         let radius_word = w.word(b'R').or(w.registers[0]);
         let has_ijk = w.word(centre_letter(u)).is_some() || w.word(centre_letter(v)).is_some();
         let turns = match w.word(b'P') {
+            Some(p) if p.value > f64::from(MAX_REPEATS) => {
+                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: p.display(), why: "more than 10000 turns" }, Some(p.span)))
+            }
             Some(p) if p.value >= 1.0 && p.value.fract() == 0.0 => p.value as u32,
             Some(p) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: p.display(), why: "the number of turns P is a whole number of at least 1" }, Some(p.span))),
             None => 1,
@@ -900,6 +906,9 @@ impl Interpreter {
             return Err(diag(b, Severity::Error, ErrorKind::CannedCycleIncomplete { code: name, what: "a positive peck depth Q" }, None));
         }
         let repeats = match w.word(b'L') {
+            Some(l) if l.value > f64::from(MAX_REPEATS) => {
+                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: l.display(), why: "more than 10000 repeats; split the pattern" }, Some(l.span)))
+            }
             Some(l) if l.value >= 1.0 && l.value.fract() == 0.0 => l.value as u32,
             Some(l) if l.value == 0.0 => 0,
             Some(l) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: l.display(), why: "the repeat count L is a whole number" }, Some(l.span))),
