@@ -35,7 +35,9 @@ fn run(mut c: Command) -> Result<(), String> {
 /// Run `cmd`, polling its peak resident set size (VmHWM) until it exits.
 fn peak_memory(mut cmd: Command) -> Result<(Duration, u64), String> {
     let t = Instant::now();
-    let mut child = cmd.spawn().map_err(|e| format!("cannot run {cmd:?}: {e}"))?;
+    let mut child = cmd
+        .spawn()
+        .map_err(|e| format!("cannot run {cmd:?}: {e}"))?;
     let status_path = format!("/proc/{}/status", child.id());
     let mut peak_kb = 0u64;
     loop {
@@ -89,7 +91,10 @@ fn bench_gcode() -> Result<(), String> {
         );
     }
     let mut cmd = Command::new(&bin);
-    cmd.arg("trace").arg(&input).arg("-o").arg(dir.join("planar-1m.trace"));
+    cmd.arg("trace")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.join("planar-1m.trace"));
     let (t, kb) = peak_memory(cmd)?;
     println!(
         "lampost trace: {:.0} ms, peak memory {:.1} MB",
@@ -113,14 +118,101 @@ impl Rng {
 }
 
 const TOKENS: &[&str] = &[
-    "G0", "G1", "G2", "G3", "G4", "G10", "G17", "G18", "G19", "G20", "G21", "G28", "G30", "G31",
-    "G31.1", "G38.2", "G40", "G41", "G43", "G49", "G52", "G53", "G54", "G59.3", "G73", "G80",
-    "G81", "G83", "G84", "G85", "G86", "G89", "G90", "G90.1", "G91", "G91.1", "G92", "G92.1",
-    "G93", "G94", "G98", "G99", "M2", "M3", "M6", "M30", "M98", "M99", "L2", "L20", "L9101",
-    "R1+1.", "R0-.5", "R-5", "P0", "P2", "Q-1", "Q.5", "E0", "E49", "E1.5", "H1", "T1", "F0",
-    "F-1", "X", "Y-", ".", "-.", "1e999", "99999999999999999999", "(", ")", ";", "#V1=2",
-    "X+R6.", "[", "#<a>", "o100 sub", "%", "/", "\n", "\r\n", " ", "\t", "\u{ff}", "\0",
-    "I0", "J0", "K0", "A360", "B-90", "C1e3", "Z-0", "X1e-300",
+    "G0",
+    "G1",
+    "G2",
+    "G3",
+    "G4",
+    "G10",
+    "G17",
+    "G18",
+    "G19",
+    "G20",
+    "G21",
+    "G28",
+    "G30",
+    "G31",
+    "G31.1",
+    "G38.2",
+    "G40",
+    "G41",
+    "G43",
+    "G49",
+    "G52",
+    "G53",
+    "G54",
+    "G59.3",
+    "G73",
+    "G80",
+    "G81",
+    "G83",
+    "G84",
+    "G85",
+    "G86",
+    "G89",
+    "G90",
+    "G90.1",
+    "G91",
+    "G91.1",
+    "G92",
+    "G92.1",
+    "G93",
+    "G94",
+    "G98",
+    "G99",
+    "M2",
+    "M3",
+    "M6",
+    "M30",
+    "M98",
+    "M99",
+    "L2",
+    "L20",
+    "L9101",
+    "R1+1.",
+    "R0-.5",
+    "R-5",
+    "P0",
+    "P2",
+    "Q-1",
+    "Q.5",
+    "E0",
+    "E49",
+    "E1.5",
+    "H1",
+    "T1",
+    "F0",
+    "F-1",
+    "X",
+    "Y-",
+    ".",
+    "-.",
+    "1e999",
+    "99999999999999999999",
+    "(",
+    ")",
+    ";",
+    "#V1=2",
+    "X+R6.",
+    "[",
+    "#<a>",
+    "o100 sub",
+    "%",
+    "/",
+    "\n",
+    "\r\n",
+    " ",
+    "\t",
+    "\u{ff}",
+    "\0",
+    "I0",
+    "J0",
+    "K0",
+    "A360",
+    "B-90",
+    "C1e3",
+    "Z-0",
+    "X1e-300",
 ];
 
 fn fuzz(seconds: u64) -> Result<(), String> {

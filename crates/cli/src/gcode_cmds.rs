@@ -58,7 +58,7 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
             all.push(report::json(&name, &d));
         } else if printed < MAX_PRINTED {
             printed += 1;
-            let _ = write!(stderr.lock(), "{}\n", report::render(&name, &d));
+            let _ = writeln!(stderr.lock(), "{}", report::render(&name, &d));
         }
     }
     if json {
@@ -72,7 +72,10 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
         println!("{doc}");
     } else {
         if errors + warnings > printed {
-            eprintln!("… and {} more not shown (use --json for all)", errors + warnings - printed);
+            eprintln!(
+                "… and {} more not shown (use --json for all)",
+                errors + warnings - printed
+            );
         }
         eprintln!("{name}: {errors} error(s), {warnings} warning(s)");
     }
@@ -140,7 +143,11 @@ pub fn fmt(
         // Dropping `out` removes the temporary file: no half-written output.
         return Err(CliError::failed(format!(
             "{name}: {errors} error(s); nothing written{}",
-            if output.is_some() { "" } else { " after the first error line" }
+            if output.is_some() {
+                ""
+            } else {
+                " after the first error line"
+            }
         )));
     }
     out.commit()
@@ -167,8 +174,12 @@ fn move_text(m: &Move) -> String {
     s.push_str(match m.kind {
         MoveKind::Rapid => "G0",
         MoveKind::Linear | MoveKind::Probe => "G1",
-        MoveKind::Arc { clockwise: true, .. } => "G2",
-        MoveKind::Arc { clockwise: false, .. } => "G3",
+        MoveKind::Arc {
+            clockwise: true, ..
+        } => "G2",
+        MoveKind::Arc {
+            clockwise: false, ..
+        } => "G3",
     });
     for (i, &l) in AXES.iter().enumerate() {
         if i < 3 || m.axes_named & (1 << i) != 0 {
@@ -186,7 +197,12 @@ fn move_text(m: &Move) -> String {
         s.push_str(&num(e));
     }
     match m.kind {
-        MoveKind::Arc { center, plane, turns, .. } => {
+        MoveKind::Arc {
+            center,
+            plane,
+            turns,
+            ..
+        } => {
             let (u, v, _) = plane.axes();
             let (a, b) = if u < v { (u, v) } else { (v, u) };
             s.push_str(&format!(
@@ -240,7 +256,12 @@ fn move_json(m: &Move) -> serde_json::Value {
     v
 }
 
-pub fn trace(file: &str, output: Option<&str>, json: bool, interp: InterpArgs) -> Result<(), CliError> {
+pub fn trace(
+    file: &str,
+    output: Option<&str>,
+    json: bool,
+    interp: InterpArgs,
+) -> Result<(), CliError> {
     let name = display_name(file);
     let input = open_input(file)?;
     let mut out = Output::create(output)?;

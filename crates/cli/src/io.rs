@@ -19,7 +19,6 @@ pub fn open_input(path: &str) -> Result<Box<dyn BufRead>, CliError> {
     Ok(Box::new(BufReader::with_capacity(1 << 16, f)))
 }
 
-
 /// The name used for `path` in messages.
 pub fn display_name(path: &str) -> String {
     if path == "-" {
@@ -40,7 +39,9 @@ pub struct Output {
 
 impl std::fmt::Debug for Output {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Output").field("target", &self.target).finish()
+        f.debug_struct("Output")
+            .field("target", &self.target)
+            .finish()
     }
 }
 
@@ -49,7 +50,10 @@ impl Output {
     pub fn create(path: Option<&str>) -> Result<Self, CliError> {
         match path {
             None | Some("-") => Ok(Output {
-                writer: Some(BufWriter::with_capacity(1 << 16, Box::new(io::stdout().lock()))),
+                writer: Some(BufWriter::with_capacity(
+                    1 << 16,
+                    Box::new(io::stdout().lock()),
+                )),
                 temp: None,
                 target: None,
             }),

@@ -12,7 +12,11 @@ use clap::{Parser, Subcommand, ValueEnum};
 use report::CliError;
 
 #[derive(Parser, Debug)]
-#[command(name = "lampost", version, about = "CAM post-processor and setup toolkit for hybrid laser-deposition / machining 5-axis machines")]
+#[command(
+    name = "lampost",
+    version,
+    about = "CAM post-processor and setup toolkit for hybrid laser-deposition / machining 5-axis machines"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

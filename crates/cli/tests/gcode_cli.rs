@@ -13,15 +13,60 @@ fn stderr(o: &std::process::Output) -> String {
 fn bad_input_gets_located_errors() {
     let dir = tempdir("bad");
     let cases: Vec<(&str, Vec<u8>, &str, &str)> = vec![
-        ("unterminated", b"G0 X1\nG1 X2 (oops\n".to_vec(), ":2:7", "comment is not closed"),
-        ("letter", b"G1 X Y2 F10\n".to_vec(), ":1:4", "the letter X has no number"),
-        ("number", b"G1 X1 12.5\n".to_vec(), ":1:7", "has no address letter"),
-        ("axis-twice", b"G0 X1 Y2 X3\n".to_vec(), ":1:10", "X appears twice"),
-        ("group", b"G0 G1 X1\n".to_vec(), ":1:4", "G0 and G1 are both in the motion group"),
-        ("unknown-g", b"G0 X0\nG7.5 X1\n".to_vec(), ":2:1", "unknown G-code"),
-        ("radii", b"G0 X0 Y0\nG2 X10 Y0 I4 J0 F100\n".to_vec(), ":2:1", "differ by"),
-        ("no-centre", b"G0 X0 Y0\nG2 X10 Y0 F100\n".to_vec(), ":2:1", "neither I/J/K"),
-        ("utf8", b"G0 X1\nG1 X\xff\xfe2\n".to_vec(), ":2:5", "not UTF-8"),
+        (
+            "unterminated",
+            b"G0 X1\nG1 X2 (oops\n".to_vec(),
+            ":2:7",
+            "comment is not closed",
+        ),
+        (
+            "letter",
+            b"G1 X Y2 F10\n".to_vec(),
+            ":1:4",
+            "the letter X has no number",
+        ),
+        (
+            "number",
+            b"G1 X1 12.5\n".to_vec(),
+            ":1:7",
+            "has no address letter",
+        ),
+        (
+            "axis-twice",
+            b"G0 X1 Y2 X3\n".to_vec(),
+            ":1:10",
+            "X appears twice",
+        ),
+        (
+            "group",
+            b"G0 G1 X1\n".to_vec(),
+            ":1:4",
+            "G0 and G1 are both in the motion group",
+        ),
+        (
+            "unknown-g",
+            b"G0 X0\nG7.5 X1\n".to_vec(),
+            ":2:1",
+            "unknown G-code",
+        ),
+        (
+            "radii",
+            b"G0 X0 Y0\nG2 X10 Y0 I4 J0 F100\n".to_vec(),
+            ":2:1",
+            "differ by",
+        ),
+        (
+            "no-centre",
+            b"G0 X0 Y0\nG2 X10 Y0 F100\n".to_vec(),
+            ":2:1",
+            "neither I/J/K",
+        ),
+        (
+            "utf8",
+            b"G0 X1\nG1 X\xff\xfe2\n".to_vec(),
+            ":2:5",
+            "not UTF-8",
+        ),
         ("empty", Vec::new(), "", "the program is empty"),
         ("blank", b"\n   \n".to_vec(), "", "the program is empty"),
     ];
@@ -33,7 +78,10 @@ fn bad_input_gets_located_errors() {
             let o = lampost(&[cmd, ps]);
             let e = stderr(&o);
             assert_eq!(o.status.code(), Some(1), "{cmd} {name}: {e}");
-            assert!(e.contains(&format!("{ps}{at}")), "{cmd} {name}: no location {at} in\n{e}");
+            assert!(
+                e.contains(&format!("{ps}{at}")),
+                "{cmd} {name}: no location {at} in\n{e}"
+            );
             assert!(e.contains(msg), "{cmd} {name}: no `{msg}` in\n{e}");
             assert!(e.contains("help:"), "{cmd} {name}: no hint");
             assert!(!e.contains("panicked"), "{name}");
@@ -43,7 +91,10 @@ fn bad_input_gets_located_errors() {
 
 #[test]
 fn check_json_lists_every_problem() {
-    let o = lampost_stdin(&["check", "--json", "-"], b"G1 X Y1\nG0 G1 X1\nG0 X1\n#V1 = 2\n");
+    let o = lampost_stdin(
+        &["check", "--json", "-"],
+        b"G1 X Y1\nG0 G1 X1\nG0 X1\n#V1 = 2\n",
+    );
     assert_eq!(o.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     assert_eq!(v["errors"], 2);
@@ -72,21 +123,43 @@ fn fmt_writes_nothing_when_input_has_errors() {
     let dir = tempdir("atomic");
     let out = dir.join("out.nc");
     std::fs::write(&out, "old content\n").expect("write");
-    let o = lampost_stdin(&["fmt", "-", "-o", out.to_str().expect("utf8")], b"G0 X1\nG1 X\n");
+    let o = lampost_stdin(
+        &["fmt", "-", "-o", out.to_str().expect("utf8")],
+        b"G0 X1\nG1 X\n",
+    );
     assert_eq!(o.status.code(), Some(1));
-    assert_eq!(std::fs::read_to_string(&out).expect("read"), "old content\n");
+    assert_eq!(
+        std::fs::read_to_string(&out).expect("read"),
+        "old content\n"
+    );
     let left: Vec<_> = std::fs::read_dir(&dir).expect("dir").flatten().collect();
     assert_eq!(left.len(), 1, "no temporary file left behind");
-    let o = lampost_stdin(&["fmt", "-", "-o", out.to_str().expect("utf8"), "--renumber", "10,5"], b"G0 X1\nN7 G1 X2 F3\n");
+    let o = lampost_stdin(
+        &[
+            "fmt",
+            "-",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--renumber",
+            "10,5",
+        ],
+        b"G0 X1\nN7 G1 X2 F3\n",
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(std::fs::read_to_string(&out).expect("read"), "N10 G0 X1\nN15 G1 X2 F3\n");
+    assert_eq!(
+        std::fs::read_to_string(&out).expect("read"),
+        "N10 G0 X1\nN15 G1 X2 F3\n"
+    );
 }
 
 #[test]
 fn fmt_keeps_digits_and_normalises_only_when_asked() {
     let src = b"g1x-.25 Y1.50000 f100\nG0 X+1. (keep)\n";
     let o = lampost_stdin(&["fmt", "-"], src);
-    assert_eq!(String::from_utf8_lossy(&o.stdout), "G1 X-.25 Y1.50000 F100\nG0 X+1. (keep)\n");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        "G1 X-.25 Y1.50000 F100\nG0 X+1. (keep)\n"
+    );
     let o = lampost_stdin(&["fmt", "-", "--dialect", "fadal", "--units", "inch"], src);
     assert_eq!(
         String::from_utf8_lossy(&o.stdout),
@@ -99,14 +172,24 @@ fn fmt_keeps_digits_and_normalises_only_when_asked() {
 
 #[test]
 fn trace_reads_stdin_and_reports_macros() {
-    let o = lampost_stdin(&["trace", "-"], b"G21 G0 X1 Y2 Z3\nG1 G31 X+R6. F+R4. P1\nG1 X4 F50\n");
+    let o = lampost_stdin(
+        &["trace", "-"],
+        b"G21 G0 X1 Y2 Z3\nG1 G31 X+R6. F+R4. P1\nG1 X4 F50\n",
+    );
     assert!(o.status.success());
-    assert_eq!(String::from_utf8_lossy(&o.stdout), "G0 X1 Y2 Z3\nG1 X4 Y2 Z3 F50\n");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        "G0 X1 Y2 Z3\nG1 X4 Y2 Z3 F50\n"
+    );
     assert!(stderr(&o).contains("register (R) values is not evaluated"));
 }
 
 fn fixture(name: &str) -> String {
-    root().join("fixtures/programs").join(name).to_string_lossy().into_owned()
+    root()
+        .join("fixtures/programs")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
 }
 
 #[test]
@@ -118,7 +201,16 @@ fn snapshot_trace_of_feature_fixture() {
 
 #[test]
 fn snapshot_fmt_fadal_of_probe_fixture() {
-    let o = lampost(&["fmt", &fixture("fadal-probe-touch.nc"), "--dialect", "fadal", "--units", "inch", "--renumber", "10,10"]);
+    let o = lampost(&[
+        "fmt",
+        &fixture("fadal-probe-touch.nc"),
+        "--dialect",
+        "fadal",
+        "--units",
+        "inch",
+        "--renumber",
+        "10,10",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     insta::assert_snapshot!("fmt_fadal_probe", String::from_utf8_lossy(&o.stdout));
 }

@@ -39,7 +39,11 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
     let mut total = 0usize;
     let mut exact = 0usize;
     let dir = shared.join("corpus/linuxcnc");
-    let mut files: Vec<_> = std::fs::read_dir(&dir).expect("corpus").flatten().map(|e| e.path()).collect();
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("corpus")
+        .flatten()
+        .map(|e| e.path())
+        .collect();
     files.sort();
     files.push(root().join("fixtures/programs/features.ngc"));
     assert!(!files.is_empty());
@@ -49,16 +53,33 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
         std::fs::write(&prog, prepare(&text)).expect("write");
         let canon = rs274_motions(&prog, &work);
         let out = lampost(&["trace", "--json", prog.to_str().expect("utf8")]);
-        assert!(out.status.success(), "trace failed on {}: {}", path.display(), String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "trace failed on {}: {}",
+            path.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
         let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
         let moves = doc["moves"].as_array().expect("moves");
-        assert_eq!(moves.len(), canon.len(), "{}: {} moves, rs274 {}", path.display(), moves.len(), canon.len());
+        assert_eq!(
+            moves.len(),
+            canon.len(),
+            "{}: {} moves, rs274 {}",
+            path.display(),
+            moves.len(),
+            canon.len()
+        );
         for (m, c) in moves.iter().zip(&canon) {
             let end = &m["end"];
             let g = m["g"].as_str().expect("g");
             let (ours, theirs): (Vec<f64>, Vec<f64>) = match c.kind.as_str() {
                 "ARC_FEED" => {
-                    assert!(g == "G2" || g == "G3", "{}: line {} is {g}, rs274 ARC_FEED", path.display(), m["line"]);
+                    assert!(
+                        g == "G2" || g == "G3",
+                        "{}: line {} is {g}, rs274 ARC_FEED",
+                        path.display(),
+                        m["line"]
+                    );
                     let plane = m["kind"]["plane"].as_str().expect("plane");
                     let (u, v, n, ui, vi) = match plane {
                         "XY" => ("X", "Y", "Z", 0, 1),
@@ -69,16 +90,35 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
                     let turns = m["kind"]["turns"].as_f64().expect("turns");
                     let rot = if g == "G2" { -turns } else { turns };
                     let ours = vec![
-                        axis(end, u), axis(end, v),
-                        center[ui].as_f64().expect("c"), center[vi].as_f64().expect("c"),
-                        rot, axis(end, n), axis(end, "A"), axis(end, "B"), axis(end, "C"),
+                        axis(end, u),
+                        axis(end, v),
+                        center[ui].as_f64().expect("c"),
+                        center[vi].as_f64().expect("c"),
+                        rot,
+                        axis(end, n),
+                        axis(end, "A"),
+                        axis(end, "B"),
+                        axis(end, "C"),
                     ];
                     (ours, c.args[..9].to_vec())
                 }
                 kind => {
-                    let want = if kind == "STRAIGHT_TRAVERSE" { "G0" } else { "G1" };
-                    assert_eq!(g, want, "{}: our line {} vs rs274 {kind}", path.display(), m["line"]);
-                    let ours = ["X", "Y", "Z", "A", "B", "C"].iter().map(|a| axis(end, a)).collect();
+                    let want = if kind == "STRAIGHT_TRAVERSE" {
+                        "G0"
+                    } else {
+                        "G1"
+                    };
+                    assert_eq!(
+                        g,
+                        want,
+                        "{}: our line {} vs rs274 {kind}",
+                        path.display(),
+                        m["line"]
+                    );
+                    let ours = ["X", "Y", "Z", "A", "B", "C"]
+                        .iter()
+                        .map(|a| axis(end, a))
+                        .collect();
                     (ours, c.args[..6].to_vec())
                 }
             };
@@ -95,6 +135,8 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
             }
         }
     }
-    eprintln!("rs274 comparison: {total} coordinates, {exact} identical after rounding to 4 decimals");
+    eprintln!(
+        "rs274 comparison: {total} coordinates, {exact} identical after rounding to 4 decimals"
+    );
     assert!(total > 10_000);
 }

@@ -61,9 +61,15 @@ fn main() {
     let lines = if quick { 10_000 } else { 1_000_000 };
     let runs = if quick { 1 } else { 5 };
     let text = lampost_gcode::generate::planar_program(lines, 42);
-    report(&format!("generated {lines}-line 3-axis program"), text.len(), runs, &text);
+    report(
+        &format!("generated {lines}-line 3-axis program"),
+        text.len(),
+        runs,
+        &text,
+    );
 
-    let corpus = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/linuxcnc/LHchips4.ngc");
+    let corpus = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/corpus/linuxcnc/LHchips4.ngc");
     match std::fs::read_to_string(&corpus) {
         Ok(one) => {
             // Repeat the file so each run takes long enough to time well.
@@ -78,7 +84,12 @@ fn main() {
                 .map(|l| format!("{l}\n"))
                 .collect();
             let text = body.repeat(reps);
-            report(&format!("LHchips4.ngc (largest corpus file) x{reps}"), text.len(), runs, &text);
+            report(
+                &format!("LHchips4.ngc (largest corpus file) x{reps}"),
+                text.len(),
+                runs,
+                &text,
+            );
         }
         Err(_) => println!("corpus file {} absent: skipped", corpus.display()),
     }

@@ -147,6 +147,18 @@ pub struct Block<'a> {
 }
 
 impl<'a> Block<'a> {
+    /// An empty block (a blank line) at `line`, starting at byte `offset`.
+    pub fn empty(line: u32, offset: usize) -> Self {
+        Block {
+            line,
+            span: Span::new(offset, offset),
+            kind: BlockKind::Words,
+            block_delete: false,
+            items: SmallVec::new(),
+            raw: "",
+        }
+    }
+
     /// The words of the block, in order.
     pub fn words(&self) -> impl Iterator<Item = &Word<'a>> + '_ {
         self.items.iter().filter_map(|i| match i {

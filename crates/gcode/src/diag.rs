@@ -258,7 +258,9 @@ impl Diagnostic {
 fn make_snippet(line: &[u8], start: usize, end: usize) -> Snippet {
     // Window of at most SNIPPET_WINDOW bytes around the span, on char boundaries.
     let lo = start.saturating_sub(SNIPPET_WINDOW / 2);
-    let hi = (lo + SNIPPET_WINDOW).max(end.min(start + SNIPPET_WINDOW / 2)).min(line.len());
+    let hi = (lo + SNIPPET_WINDOW)
+        .max(end.min(start + SNIPPET_WINDOW / 2))
+        .min(line.len());
     let text_full = String::from_utf8_lossy(&line[lo..hi]);
     let prefix = String::from_utf8_lossy(&line[lo..start]).chars().count();
     let width = String::from_utf8_lossy(&line[start..end.min(hi).max(start)])
@@ -271,7 +273,7 @@ fn make_snippet(line: &[u8], start: usize, end: usize) -> Snippet {
         .collect();
     let mut caret = prefix;
     if lo > 0 {
-        text.insert_str(0, "…");
+        text.insert(0, '…');
         caret += 1;
     }
     if hi < line.len() {

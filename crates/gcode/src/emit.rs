@@ -82,14 +82,22 @@ pub fn fixed(value: f64, decimals: usize) -> String {
 }
 
 /// The number text of a word in a dialect.
-pub fn format_value(dialect: Dialect, units: Units, letter: u8, register: Option<u8>, value: f64) -> String {
+pub fn format_value(
+    dialect: Dialect,
+    units: Units,
+    letter: u8,
+    register: Option<u8>,
+    value: f64,
+) -> String {
     let forced = dialect == Dialect::Fadal;
     let linear_dec = match units {
         Units::Inch => 4,
         Units::Mm => 3,
     };
     let mut s = match letter {
-        b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' => fixed(value, linear_dec),
+        b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' => {
+            fixed(value, linear_dec)
+        }
         b'R' if register.is_none() => fixed(value, linear_dec),
         b'A' | b'B' | b'C' => fixed(value, 3),
         b'G' | b'M' => {
@@ -101,7 +109,9 @@ pub fn format_value(dialect: Dialect, units: Units, letter: u8, register: Option
             trim_decimals(&mut s, false);
             return s;
         }
-        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' | b'E' if value.fract() == 0.0 && register.is_none() => {
+        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' | b'E'
+            if value.fract() == 0.0 && register.is_none() =>
+        {
             return format!("{}", value as i64);
         }
         b'F' | b'S' | b'P' | b'E' | b'R' => {
@@ -172,8 +182,16 @@ impl<W: Write> Emitter<W> {
         }
         match (self.opts.dialect, text) {
             (None, Some(t)) => self.line.push_str(t),
-            (Some(d), _) => self.line.push_str(&format_value(d, self.units, letter, register, value)),
-            (None, None) => self.line.push_str(&format_value(Dialect::Iso, self.units, letter, register, value)),
+            (Some(d), _) => self
+                .line
+                .push_str(&format_value(d, self.units, letter, register, value)),
+            (None, None) => self.line.push_str(&format_value(
+                Dialect::Iso,
+                self.units,
+                letter,
+                register,
+                value,
+            )),
         }
     }
 
@@ -254,7 +272,9 @@ impl<W: Write> Emitter<W> {
         if numbered {
             let n = self.next_n;
             self.push_word(b'N', None, n as f64, None);
-            self.next_n = self.next_n.saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+            self.next_n = self
+                .next_n
+                .saturating_add(self.opts.renumber.map_or(1, |r| r.1));
         }
         for item in &b.items {
             match item {
@@ -299,7 +319,9 @@ impl<W: Write> Emitter<W> {
         if self.opts.renumber.is_some() && !words.is_empty() {
             let n = self.next_n;
             self.push_word(b'N', None, n as f64, None);
-            self.next_n = self.next_n.saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+            self.next_n = self
+                .next_n
+                .saturating_add(self.opts.renumber.map_or(1, |r| r.1));
         }
         for &(l, v) in words {
             self.track(l, v);

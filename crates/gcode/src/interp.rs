@@ -171,7 +171,8 @@ impl<'b, 'a> Words<'b, 'a> {
         }
     }
     fn has_axes(&self) -> bool {
-        AXES.iter().any(|&a| self.by_letter[usize::from(a - b'A')].is_some())
+        AXES.iter()
+            .any(|&a| self.by_letter[usize::from(a - b'A')].is_some())
     }
 }
 
@@ -183,7 +184,12 @@ const MAX_REPEATS: u32 = 10_000;
 /// Number of [`GGroup`] variants.
 const GROUPS: usize = 18;
 
-fn diag(b: &Block<'_>, sev: Severity, kind: ErrorKind, span: Option<crate::ast::Span>) -> Diagnostic {
+fn diag(
+    b: &Block<'_>,
+    sev: Severity,
+    kind: ErrorKind,
+    span: Option<crate::ast::Span>,
+) -> Diagnostic {
     let (s, e) = match span {
         Some(sp) => (sp.start - b.span.start, sp.end - b.span.start),
         None => (0, b.raw.len()),
@@ -264,7 +270,7 @@ impl Interpreter {
                 // Statement lines (`#…`) are reported once; lines whose motion or flow
                 // depends on macro values each time.
                 let statement = b.raw.trim_start().starts_with('#');
-                if !self.ended && !(statement && self.warned_macro) {
+                if !(self.ended || statement && self.warned_macro) {
                     self.warned_macro |= statement;
                     out(Event::Diagnostic(diag(
                         b,
@@ -292,7 +298,14 @@ impl Interpreter {
             }
             return Ok(());
         }
-        let w = self.collect(b)?;
+        let mut w = Words {
+            by_letter: [None; 26],
+            registers: [None; 10],
+            gs: smallvec::SmallVec::new(),
+            by_group: [0; GROUPS],
+            ms: smallvec::SmallVec::new(),
+        };
+        self.collect(b, &mut w)?;
         for (i, &l) in AXES.iter().enumerate() {
             if w.word(l).is_some() {
                 self.axes_named |= 1 << i;
@@ -301,23 +314,26 @@ impl Interpreter {
         self.execute(b, &w, out)
     }
 
-    fn collect<'b, 'a>(&self, b: &'b Block<'a>) -> Res<Words<'b, 'a>> {
-        let mut w = Words {
-            by_letter: [None; 26],
-            registers: [None; 10],
-            gs: smallvec::SmallVec::new(),
-            by_group: [0; GROUPS],
-            ms: smallvec::SmallVec::new(),
-        };
+    fn collect<'b, 'a>(&self, b: &'b Block<'a>, w: &mut Words<'b, 'a>) -> Res<()> {
         for item in &b.items {
             let Item::Word(word) = item else { continue };
             match word.letter {
                 b'G' => {
                     let code = word.code().ok_or_else(|| {
-                        diag(b, Severity::Error, ErrorKind::BadCodeNumber(word.display()), Some(word.span))
+                        diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::BadCodeNumber(word.display()),
+                            Some(word.span),
+                        )
                     })?;
                     let group = g_group(code).ok_or_else(|| {
-                        diag(b, Severity::Error, ErrorKind::UnknownGCode(code_text(code)), Some(word.span))
+                        diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::UnknownGCode(code_text(code)),
+                            Some(word.span),
+                        )
                     })?;
                     for &(other, oc, og) in &w.gs {
                         let conflict = og == group
@@ -348,10 +364,17 @@ impl Interpreter {
                 }
                 b'M' => {
                     let code = word.code().ok_or_else(|| {
-                        diag(b, Severity::Error, ErrorKind::BadCodeNumber(word.display()), Some(word.span))
+                        diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::BadCodeNumber(word.display()),
+                            Some(word.span),
+                        )
                     })?;
                     if let Some(g) = m_group(code) {
-                        if let Some(&(other, _)) = w.ms.iter().find(|(_, oc)| m_group(*oc) == Some(g)) {
+                        if let Some(&(other, _)) =
+                            w.ms.iter().find(|(_, oc)| m_group(*oc) == Some(g))
+                        {
                             return Err(diag(
                                 b,
                                 Severity::Error,
@@ -372,10 +395,16 @@ impl Interpreter {
                 },
             }
         }
-        Ok(w)
+        Ok(())
     }
 
-    fn warn(&self, b: &Block<'_>, out: &mut impl FnMut(Event), kind: ErrorKind, span: Option<crate::ast::Span>) {
+    fn warn(
+        &self,
+        b: &Block<'_>,
+        out: &mut impl FnMut(Event),
+        kind: ErrorKind,
+        span: Option<crate::ast::Span>,
+    ) {
         out(Event::Diagnostic(diag(b, Severity::Warning, kind, span)));
     }
 
@@ -408,7 +437,12 @@ impl Interpreter {
         self.modal.units = units;
     }
 
-    fn execute(&mut self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) -> Res<()> {
+    fn execute(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
         let m = &mut self.modal;
         // Feed mode, F, S, T.
         if let Some((_, c)) = w.g_in(GGroup::FeedMode) {
@@ -420,7 +454,15 @@ impl Interpreter {
         }
         if let Some(f) = w.word(b'F') {
             if f.value < 0.0 {
-                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: f.display(), why: "feed rate cannot be negative" }, Some(f.span)));
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: f.display(),
+                        why: "feed rate cannot be negative",
+                    },
+                    Some(f.span),
+                ));
             }
             m.feed = f.value;
         }
@@ -429,7 +471,15 @@ impl Interpreter {
         }
         if let Some(t) = w.word(b'T') {
             if t.value < 0.0 || t.value.fract() != 0.0 {
-                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: t.display(), why: "tool numbers are whole and not negative" }, Some(t.span)));
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: t.display(),
+                        why: "tool numbers are whole and not negative",
+                    },
+                    Some(t.span),
+                ));
             }
             m.selected_tool = t.value as u32;
         }
@@ -455,8 +505,17 @@ impl Interpreter {
                 }
                 20 | 300 => stop_after = true,
                 980 => {
-                    let what = format!("{} {}", mw.display_code(), w.word(b'P').map(|p| p.display()).unwrap_or_default());
-                    out(Event::Diagnostic(diag(b, Severity::Warning, ErrorKind::SubprogramNotFollowed(what.trim().to_string()), Some(mw.span))));
+                    let what = format!(
+                        "{} {}",
+                        mw.display_code(),
+                        w.word(b'P').map(|p| p.display()).unwrap_or_default()
+                    );
+                    out(Event::Diagnostic(diag(
+                        b,
+                        Severity::Warning,
+                        ErrorKind::SubprogramNotFollowed(what.trim().to_string()),
+                        Some(mw.span),
+                    )));
                 }
                 _ => {}
             }
@@ -467,7 +526,15 @@ impl Interpreter {
             match self.opts.e_word {
                 EWord::FixtureOffset => {
                     if e.value < 0.0 || e.value > 48.0 || e.value.fract() != 0.0 {
-                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: e.display(), why: "FADAL fixture offsets are E0 to E48" }, Some(e.span)));
+                        return Err(diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::BadValue {
+                                word: e.display(),
+                                why: "FADAL fixture offsets are E0 to E48",
+                            },
+                            Some(e.span),
+                        ));
                     }
                     m.work_offset = WorkOffset::Fixture(e.value as u8);
                 }
@@ -475,10 +542,19 @@ impl Interpreter {
             }
         }
         // FADAL L words outside canned cycles call subroutines.
-        let canned_block = w.g_in(GGroup::Motion).map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| matches!(c, 730 | 740 | 760 | 810..=890));
+        let canned_block = w
+            .g_in(GGroup::Motion)
+            .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {
+                matches!(c, 730 | 740 | 760 | 810..=890)
+            });
         if let Some(l) = w.word(b'L') {
             if !canned_block && !w.has_g(100) {
-                self.warn(b, out, ErrorKind::SubprogramNotFollowed(l.display()), Some(l.span));
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::SubprogramNotFollowed(l.display()),
+                    Some(l.span),
+                );
             }
         }
         let m = &mut self.modal;
@@ -491,7 +567,11 @@ impl Interpreter {
             };
         }
         if let Some((_, c)) = w.g_in(GGroup::Units) {
-            self.set_units(if c == 200 || c == 700 { Units::Inch } else { Units::Mm });
+            self.set_units(if c == 200 || c == 700 {
+                Units::Inch
+            } else {
+                Units::Mm
+            });
         }
         let m = &mut self.modal;
         if let Some((gw, c)) = w.g_in(GGroup::CutterComp) {
@@ -502,7 +582,15 @@ impl Interpreter {
                 _ => CutterComp::Off,
             };
             if m.cutter_comp != CutterComp::Off && before == CutterComp::Off {
-                self.warn(b, out, ErrorKind::NotSimulated(format!("cutter radius compensation {}", gw.display_code())), Some(gw.span));
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "cutter radius compensation {}",
+                        gw.display_code()
+                    )),
+                    Some(gw.span),
+                );
             }
         }
         let m = &mut self.modal;
@@ -514,7 +602,11 @@ impl Interpreter {
             };
         } else if let Some(h) = w.get(b'H') {
             // FADAL: an H word alone applies that length offset.
-            m.tool_length = if h == 0.0 { None } else { Some(h.max(0.0) as u32) };
+            m.tool_length = if h == 0.0 {
+                None
+            } else {
+                Some(h.max(0.0) as u32)
+            };
         }
         if let Some((_, c)) = w.g_in(GGroup::CoordSystem) {
             m.work_offset = WorkOffset::G5x(match c {
@@ -525,23 +617,55 @@ impl Interpreter {
             });
         }
         if let Some((_, c)) = w.g_in(GGroup::Distance) {
-            m.distance = if c == 910 { Distance::Incremental } else { Distance::Absolute };
+            m.distance = if c == 910 {
+                Distance::Incremental
+            } else {
+                Distance::Absolute
+            };
         }
         if let Some((_, c)) = w.g_in(GGroup::ArcDistance) {
-            m.arc_distance = if c == 911 { Distance::Incremental } else { Distance::Absolute };
+            m.arc_distance = if c == 911 {
+                Distance::Incremental
+            } else {
+                Distance::Absolute
+            };
         }
         if let Some((_, c)) = w.g_in(GGroup::Retract) {
-            m.retract = if c == 990 { Retract::RPlane } else { Retract::InitialZ };
+            m.retract = if c == 990 {
+                Retract::RPlane
+            } else {
+                Retract::InitialZ
+            };
         }
-        for group in [GGroup::Polar, GGroup::Scaling, GGroup::Mirror, GGroup::Rotation] {
+        for group in [
+            GGroup::Polar,
+            GGroup::Scaling,
+            GGroup::Mirror,
+            GGroup::Rotation,
+        ] {
             if let Some((gw, c)) = w.g_in(group) {
                 if !matches!(c, 150 | 500 | 501 | 690) {
-                    self.warn(b, out, ErrorKind::NotSimulated(format!("{} ({})", gw.display_code(), group.name())), Some(gw.span));
+                    self.warn(
+                        b,
+                        out,
+                        ErrorKind::NotSimulated(format!(
+                            "{} ({})",
+                            gw.display_code(),
+                            group.name()
+                        )),
+                        Some(gw.span),
+                    );
                 }
             }
         }
         // Motion mode change.
-        if let Some((gw, c)) = w.gs.iter().filter(|g| g.2 == GGroup::Motion).map(|g| (g.0, g.1)).find(|g| g.1 != 800).or_else(|| w.g_in(GGroup::Motion)) {
+        if let Some((gw, c)) =
+            w.gs.iter()
+                .filter(|g| g.2 == GGroup::Motion)
+                .map(|g| (g.0, g.1))
+                .find(|g| g.1 != 800)
+                .or_else(|| w.g_in(GGroup::Motion))
+        {
             let m = &mut self.modal;
             m.motion = match c {
                 0 => Motion::Rapid,
@@ -554,7 +678,15 @@ impl Interpreter {
                 c => Motion::Canned(c),
             };
             if matches!(c, 330 | 331) {
-                self.warn(b, out, ErrorKind::NotSimulated(format!("spindle synchronisation of {}", gw.display_code())), Some(gw.span));
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "spindle synchronisation of {}",
+                        gw.display_code()
+                    )),
+                    Some(gw.span),
+                );
             }
             if !matches!(c, 730 | 740 | 760 | 810..=890) {
                 self.canned = CannedParams::default();
@@ -576,10 +708,16 @@ impl Interpreter {
                 continue;
             }
             match c {
-                40 => {
-                    if w.get(b'P').is_none() && w.get(b'X').is_none() {
-                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: gw.display_code(), why: "dwell needs its time in P" }, Some(gw.span)));
-                    }
+                40 if w.get(b'P').is_none() && w.get(b'X').is_none() => {
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::BadValue {
+                            word: gw.display_code(),
+                            why: "dwell needs its time in P",
+                        },
+                        Some(gw.span),
+                    ));
                 }
                 100 => {
                     axes_used = true;
@@ -602,7 +740,15 @@ impl Interpreter {
                 920 => {
                     axes_used = true;
                     if !w.has_axes() {
-                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: gw.display_code(), why: "G92 needs at least one axis word" }, Some(gw.span)));
+                        return Err(diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::BadValue {
+                                word: gw.display_code(),
+                                why: "G92 needs at least one axis word",
+                            },
+                            Some(gw.span),
+                        ));
                     }
                     let off = self.offset();
                     for (a, &l) in AXES.iter().enumerate() {
@@ -613,16 +759,41 @@ impl Interpreter {
                     }
                 }
                 921 | 922 => self.g92 = [0.0; 9],
-                923 => self.warn(b, out, ErrorKind::NotSimulated("G92.3 (restore saved G92 offsets)".into()), Some(gw.span)),
+                923 => self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated("G92.3 (restore saved G92 offsets)".into()),
+                    Some(gw.span),
+                ),
                 290 => {
                     axes_used = true;
-                    self.warn(b, out, ErrorKind::NotSimulated("G29 (return from reference point)".into()), Some(gw.span));
+                    self.warn(
+                        b,
+                        out,
+                        ErrorKind::NotSimulated("G29 (return from reference point)".into()),
+                        Some(gw.span),
+                    );
                 }
-                450..=480 => self.warn(b, out, ErrorKind::NotSimulated(format!("{} (tool offset adjust)", gw.display_code())), Some(gw.span)),
-                310 | 311 => {
-                    if w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 10) || (w.g_in(GGroup::Motion).is_none() && self.modal.motion != Motion::Linear) {
-                        return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: gw.display_code(), why: "a probe move must be a G1 move" }, Some(gw.span)));
-                    }
+                450..=480 => self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!("{} (tool offset adjust)", gw.display_code())),
+                    Some(gw.span),
+                ),
+                310 | 311
+                    if w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 10)
+                        || (w.g_in(GGroup::Motion).is_none()
+                            && self.modal.motion != Motion::Linear) =>
+                {
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::BadValue {
+                            word: gw.display_code(),
+                            why: "a probe move must be a G1 move",
+                        },
+                        Some(gw.span),
+                    ));
                 }
                 _ => {}
             }
@@ -655,8 +826,18 @@ impl Interpreter {
         }
         let p = w.get(b'P').unwrap_or(0.0);
         if !(0.0..=9.0).contains(&p) || p.fract() != 0.0 {
-            let pw = w.word(b'P').map_or_else(|| gw.display_code(), |p| p.display());
-            return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: pw, why: "G10 L2/L20 takes P0 to P9" }, w.word(b'P').map(|p| p.span)));
+            let pw = w
+                .word(b'P')
+                .map_or_else(|| gw.display_code(), |p| p.display());
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::BadValue {
+                    word: pw,
+                    why: "G10 L2/L20 takes P0 to P9",
+                },
+                w.word(b'P').map(|p| p.span),
+            ));
         }
         let idx = if p == 0.0 {
             match self.modal.work_offset {
@@ -680,7 +861,11 @@ impl Interpreter {
     }
 
     fn home(&mut self, b: &Block<'_>, w: &Words<'_, '_>, code: u16, out: &mut impl FnMut(Event)) {
-        let home = if code == 280 { self.home28 } else { self.home30 };
+        let home = if code == 280 {
+            self.home28
+        } else {
+            self.home30
+        };
         let start = self.pos;
         let mut inter = self.pos;
         let mut target = self.pos;
@@ -747,7 +932,9 @@ impl Interpreter {
                 Some(f) if f > 0.0 => Ok(f),
                 _ => Err(diag(b, Severity::Error, ErrorKind::InverseTimeNeedsF, None)),
             },
-            _ if self.modal.feed <= 0.0 => Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None)),
+            _ if self.modal.feed <= 0.0 => {
+                Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None))
+            }
             _ => Ok(self.modal.feed),
         }
     }
@@ -762,11 +949,29 @@ impl Interpreter {
         q
     }
 
-    fn emit(&mut self, b: &Block<'_>, kind: MoveKind, end: Position, feed: f64, origin: Origin, out: &mut impl FnMut(Event)) {
+    fn emit(
+        &mut self,
+        b: &Block<'_>,
+        kind: MoveKind,
+        end: Position,
+        feed: f64,
+        origin: Origin,
+        out: &mut impl FnMut(Event),
+    ) {
         let kind = match kind {
-            MoveKind::Arc { clockwise, center, plane, turns } => {
+            MoveKind::Arc {
+                clockwise,
+                center,
+                plane,
+                turns,
+            } => {
                 let off = self.offset();
-                MoveKind::Arc { clockwise, center: [center[0] - off[0], center[1] - off[1], center[2] - off[2]], plane, turns }
+                MoveKind::Arc {
+                    clockwise,
+                    center: [center[0] - off[0], center[1] - off[1], center[2] - off[2]],
+                    plane,
+                    turns,
+                }
             }
             k => k,
         };
@@ -784,17 +989,35 @@ impl Interpreter {
         self.pos = end;
     }
 
-    fn motion(&mut self, b: &Block<'_>, w: &Words<'_, '_>, g53: bool, probe: bool, out: &mut impl FnMut(Event)) -> Res<()> {
+    fn motion(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        g53: bool,
+        probe: bool,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
         let target = self.target(w, g53);
         match self.modal.motion {
-            Motion::None => Err(diag(b, Severity::Error, ErrorKind::NoMotionMode, w.gs.first().map(|g| g.0.span).or(b.words().next().map(|x| x.span)))),
+            Motion::None => Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::NoMotionMode,
+                w.gs.first()
+                    .map(|g| g.0.span)
+                    .or(b.words().next().map(|x| x.span)),
+            )),
             Motion::Rapid if !probe => {
                 self.emit(b, MoveKind::Rapid, target, 0.0, Origin::Block, out);
                 Ok(())
             }
             Motion::Rapid | Motion::Linear | Motion::Thread | Motion::Probe => {
                 let feed = self.feed_for(b, w)?;
-                let kind = if probe || self.modal.motion == Motion::Probe { MoveKind::Probe } else { MoveKind::Linear };
+                let kind = if probe || self.modal.motion == Motion::Probe {
+                    MoveKind::Probe
+                } else {
+                    MoveKind::Linear
+                };
                 self.emit(b, kind, target, feed, Origin::Block, out);
                 Ok(())
             }
@@ -803,31 +1026,69 @@ impl Interpreter {
         }
     }
 
-    fn arc(&mut self, b: &Block<'_>, w: &Words<'_, '_>, target: Position, out: &mut impl FnMut(Event)) -> Res<()> {
+    fn arc(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        target: Position,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
         let cw = self.modal.motion == Motion::ArcCw;
         let plane = self.modal.plane;
         let (u, v, n) = plane.axes();
         let centre_letter = |axis: usize| [b'I', b'J', b'K'][axis];
         // A centre word of the plane's normal axis is a mistake.
         if let Some(word) = w.word(centre_letter(n)) {
-            return Err(diag(b, Severity::Error, ErrorKind::ArcWrongPlaneWord(word.letter_char()), Some(word.span)));
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::ArcWrongPlaneWord(word.letter_char()),
+                Some(word.span),
+            ));
         }
         let radius_word = w.word(b'R').or(w.registers[0]);
         let has_ijk = w.word(centre_letter(u)).is_some() || w.word(centre_letter(v)).is_some();
         let turns = match w.word(b'P') {
             Some(p) if p.value > f64::from(MAX_REPEATS) => {
-                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: p.display(), why: "more than 10000 turns" }, Some(p.span)))
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: p.display(),
+                        why: "more than 10000 turns",
+                    },
+                    Some(p.span),
+                ))
             }
             Some(p) if p.value >= 1.0 && p.value.fract() == 0.0 => p.value as u32,
-            Some(p) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: p.display(), why: "the number of turns P is a whole number of at least 1" }, Some(p.span))),
+            Some(p) => {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: p.display(),
+                        why: "the number of turns P is a whole number of at least 1",
+                    },
+                    Some(p.span),
+                ))
+            }
             None => 1,
         };
         let tol = self.opts.arc_tolerance_inch * 25.4 / self.modal.units.mm();
         let (su, sv) = (self.pos[u], self.pos[v]);
         let (eu, ev) = (target[u], target[v]);
         let (cu, cv) = match (has_ijk, radius_word) {
-            (true, Some(r)) => return Err(diag(b, Severity::Error, ErrorKind::ArcBothForms, Some(r.span))),
-            (false, None) => return Err(diag(b, Severity::Error, ErrorKind::ArcWithoutCenter, None)),
+            (true, Some(r)) => {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::ArcBothForms,
+                    Some(r.span),
+                ))
+            }
+            (false, None) => {
+                return Err(diag(b, Severity::Error, ErrorKind::ArcWithoutCenter, None))
+            }
             (true, None) => {
                 let iu = w.get(centre_letter(u)).unwrap_or(0.0);
                 let iv = w.get(centre_letter(v)).unwrap_or(0.0);
@@ -845,7 +1106,17 @@ impl Interpreter {
                 }
                 let diff = (r1 - r2).abs();
                 if diff > tol {
-                    return Err(diag(b, Severity::Error, ErrorKind::ArcRadiusMismatch { start: r1, end: r2, diff, tolerance: tol }, None));
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::ArcRadiusMismatch {
+                            start: r1,
+                            end: r2,
+                            diff,
+                            tolerance: tol,
+                        },
+                        None,
+                    ));
                 }
                 (cu, cv)
             }
@@ -854,10 +1125,20 @@ impl Interpreter {
                 let (du, dv) = (eu - su, ev - sv);
                 let d = du.hypot(dv);
                 if r == 0.0 {
-                    return Err(diag(b, Severity::Error, ErrorKind::ArcZeroRadius, Some(rw.span)));
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::ArcZeroRadius,
+                        Some(rw.span),
+                    ));
                 }
                 if d <= 1e-12 {
-                    return Err(diag(b, Severity::Error, ErrorKind::ArcRadiusFullCircle, Some(rw.span)));
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::ArcRadiusFullCircle,
+                        Some(rw.span),
+                    ));
                 }
                 let half = d / 2.0;
                 let h2 = r * r - half * half;
@@ -866,7 +1147,15 @@ impl Interpreter {
                 } else if half - r.abs() <= tol {
                     0.0
                 } else {
-                    return Err(diag(b, Severity::Error, ErrorKind::ArcRadiusTooSmall { radius: r.abs(), half_chord: half }, Some(rw.span)));
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::ArcRadiusTooSmall {
+                            radius: r.abs(),
+                            half_chord: half,
+                        },
+                        Some(rw.span),
+                    ));
                 };
                 // Left normal of the chord; a short CCW arc has its centre on the left.
                 let (lu, lv) = (-dv / d, du / d);
@@ -878,11 +1167,29 @@ impl Interpreter {
         let mut center = [self.pos[0], self.pos[1], self.pos[2]];
         center[u] = cu;
         center[v] = cv;
-        self.emit(b, MoveKind::Arc { clockwise: cw, center, plane, turns }, target, feed, Origin::Block, out);
+        self.emit(
+            b,
+            MoveKind::Arc {
+                clockwise: cw,
+                center,
+                plane,
+                turns,
+            },
+            target,
+            feed,
+            Origin::Block,
+            out,
+        );
         Ok(())
     }
 
-    fn canned_cycle(&mut self, b: &Block<'_>, w: &Words<'_, '_>, code: u16, out: &mut impl FnMut(Event)) -> Res<()> {
+    fn canned_cycle(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        code: u16,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
         let name = code_text(code);
         if let Some(z) = w.get(b'Z') {
             self.canned.z = Some(z);
@@ -897,21 +1204,55 @@ impl Interpreter {
             self.canned.p = p;
         }
         let (Some(zv), Some(rv)) = (self.canned.z, self.canned.r) else {
-            return Err(diag(b, Severity::Error, ErrorKind::CannedCycleIncomplete { code: name, what: "Z (depth) and R (retract plane)" }, None));
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::CannedCycleIncomplete {
+                    code: name,
+                    what: "Z (depth) and R (retract plane)",
+                },
+                None,
+            ));
         };
         let passthrough = matches!(code, 740 | 760 | 870 | 880) || self.modal.plane != Plane::XY;
         let needs_q = matches!(code, 730 | 830);
         let q = self.canned.q.unwrap_or(0.0);
         if needs_q && q <= 0.0 {
-            return Err(diag(b, Severity::Error, ErrorKind::CannedCycleIncomplete { code: name, what: "a positive peck depth Q" }, None));
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::CannedCycleIncomplete {
+                    code: name,
+                    what: "a positive peck depth Q",
+                },
+                None,
+            ));
         }
         let repeats = match w.word(b'L') {
             Some(l) if l.value > f64::from(MAX_REPEATS) => {
-                return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: l.display(), why: "more than 10000 repeats; split the pattern" }, Some(l.span)))
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: l.display(),
+                        why: "more than 10000 repeats; split the pattern",
+                    },
+                    Some(l.span),
+                ))
             }
             Some(l) if l.value >= 1.0 && l.value.fract() == 0.0 => l.value as u32,
             Some(l) if l.value == 0.0 => 0,
-            Some(l) => return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: l.display(), why: "the repeat count L is a whole number" }, Some(l.span))),
+            Some(l) => {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: l.display(),
+                        why: "the repeat count L is a whole number",
+                    },
+                    Some(l.span),
+                ))
+            }
             None => 1,
         };
         let off = self.offset();
@@ -923,9 +1264,21 @@ impl Interpreter {
             (rv + off[Z], zv + off[Z])
         };
         if bottom > r_abs {
-            return Err(diag(b, Severity::Error, ErrorKind::BadValue { word: format!("G{name} Z"), why: "the hole bottom Z is above the R plane" }, w.word(b'Z').map(|z| z.span)));
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::BadValue {
+                    word: format!("G{name} Z"),
+                    why: "the hole bottom Z is above the R plane",
+                },
+                w.word(b'Z').map(|z| z.span),
+            ));
         }
-        let feed = if passthrough { 0.0 } else { self.feed_for(b, w)? };
+        let feed = if passthrough {
+            0.0
+        } else {
+            self.feed_for(b, w)?
+        };
         let clear = match self.modal.retract {
             Retract::InitialZ => self.pos[Z].max(r_abs),
             Retract::RPlane => r_abs,
@@ -938,7 +1291,11 @@ impl Interpreter {
             let mut xy = self.pos;
             for a in [0usize, 1] {
                 if let Some(v) = w.get(AXES[a]) {
-                    xy[a] = if incremental { self.pos[a] + v } else { v + off[a] };
+                    xy[a] = if incremental {
+                        self.pos[a] + v
+                    } else {
+                        v + off[a]
+                    };
                 }
             }
             if passthrough {

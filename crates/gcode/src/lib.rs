@@ -37,5 +37,5 @@ pub use emit::{Dialect, EmitOptions, Emitter};
 pub use interp::{EWord, Event, Interpreter, Move, MoveKind, Options, Origin};
 pub use lines::{Line, LineReader, Lines};
 pub use modal::{Modal, Plane, Position, Units, AXES};
-pub use parse::parse_line;
+pub use parse::{parse_line, parse_line_into};
 pub use stream::{check, LineSource, Stream};

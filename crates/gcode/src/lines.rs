@@ -114,7 +114,9 @@ mod tests {
     #[test]
     fn both_splitters_agree() {
         let text = b"G0 X1\r\nG1 Y2\n\nM30";
-        let a: Vec<_> = Lines::new(text).map(|l| (l.number, l.offset, l.bytes.to_vec())).collect();
+        let a: Vec<_> = Lines::new(text)
+            .map(|l| (l.number, l.offset, l.bytes.to_vec()))
+            .collect();
         let mut r = LineReader::new(&text[..]);
         let mut b = Vec::new();
         while let Some(l) = r.next_line().expect("reads") {

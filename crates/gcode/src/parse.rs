@@ -10,7 +10,6 @@ use nom::character::complete::{char as nchar, digit0, digit1, one_of};
 use nom::combinator::{opt, recognize};
 use nom::sequence::{pair, tuple};
 use nom::IResult;
-use smallvec::SmallVec;
 
 use crate::ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Word};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
@@ -70,8 +69,8 @@ pub fn parse_number(text: &str) -> Option<f64> {
     // Exact fast path: both the integer mantissa and the power of ten are exact
     // doubles, so one correctly rounded division gives the correctly rounded value.
     const POW10: [f64; 23] = [
-        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-        1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
     ];
     if simple && digits <= 15 && (decimals as usize) < POW10.len() {
         let v = mantissa as f64 / POW10[decimals as usize];
@@ -140,8 +139,21 @@ pub fn fast_number(b: &[u8]) -> Option<(usize, f64)> {
 }
 
 const OWORD_KEYWORDS: [&str; 15] = [
-    "sub", "endsub", "call", "if", "elseif", "else", "endif", "while", "endwhile", "do",
-    "return", "repeat", "endrepeat", "break", "continue",
+    "sub",
+    "endsub",
+    "call",
+    "if",
+    "elseif",
+    "else",
+    "endif",
+    "while",
+    "endwhile",
+    "do",
+    "return",
+    "repeat",
+    "endrepeat",
+    "break",
+    "continue",
 ];
 
 fn is_oword(rest: &str) -> bool {
@@ -170,9 +182,28 @@ fn is_oword(rest: &str) -> bool {
 /// `line_no` is 1-based; `offset` is the byte offset of the line's first byte in the
 /// whole input, so spans point into the input. At most one error is reported per line.
 pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>, Diagnostic> {
+    let mut block = Block::empty(line_no, offset);
+    parse_line_into(line, line_no, offset, &mut block)?;
+    Ok(block)
+}
+
+/// [`parse_line`] into a caller's block (which is reset first), so the block is built
+/// where it will be used instead of being moved there: the streaming path uses this.
+pub fn parse_line_into<'a>(
+    line: &'a [u8],
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+) -> Result<(), Diagnostic> {
     let err = |kind: ErrorKind, start: usize, end: usize| {
         Diagnostic::at(Severity::Error, kind, line_no, offset, line, start, end)
     };
+    block.line = line_no;
+    block.span = Span::new(offset, offset + line.len());
+    block.kind = BlockKind::Words;
+    block.block_delete = false;
+    block.items.clear();
+    block.raw = "";
     if line.len() > MAX_LINE_BYTES {
         return Err(err(ErrorKind::LineTooLong(line.len()), 0, 1));
     }
@@ -180,30 +211,26 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
         Ok(t) => t,
         Err(e) => {
             let at = e.valid_up_to();
-            return Err(err(ErrorKind::InvalidUtf8, at, at + e.error_len().unwrap_or(1)));
+            return Err(err(
+                ErrorKind::InvalidUtf8,
+                at,
+                at + e.error_len().unwrap_or(1),
+            ));
         }
     };
-    let span = Span::new(offset, offset + line.len());
-    let mut block = Block {
-        line: line_no,
-        span,
-        kind: BlockKind::Words,
-        block_delete: false,
-        items: SmallVec::new(),
-        raw: text,
-    };
+    block.raw = text;
     let bytes = text.as_bytes();
     let mut i = 0;
     while i < bytes.len() && (bytes[i] == b' ' || bytes[i] == b'\t') {
         i += 1;
     }
     if i == bytes.len() {
-        return Ok(block);
+        return Ok(());
     }
     match bytes[i] {
         b'%' => {
             block.kind = BlockKind::Percent;
-            return Ok(block);
+            return Ok(());
         }
         b'#' => {
             let next = bytes.get(i + 1).copied().unwrap_or(b' ');
@@ -212,7 +239,7 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
             } else {
                 BlockKind::Macro(MacroKind::FadalStatement)
             };
-            return Ok(block);
+            return Ok(());
         }
         b'/' => {
             block.block_delete = true;
@@ -222,7 +249,7 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
     }
     if is_oword(text[i..].trim_start()) {
         block.kind = BlockKind::Macro(MacroKind::LinuxCncOWord);
-        return Ok(block);
+        return Ok(());
     }
     // Letters seen so far (bit per letter) and FADAL R registers seen.
     let mut seen: u32 = 0;
@@ -254,7 +281,7 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
             b'#' | b'[' => {
                 block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
                 block.items.clear();
-                return Ok(block);
+                return Ok(());
             }
             b'a'..=b'z' | b'A'..=b'Z' => {
                 let letter = c.to_ascii_uppercase();
@@ -283,14 +310,14 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
                     if v == b'#' || v == b'[' {
                         block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
                         block.items.clear();
-                        return Ok(block);
+                        return Ok(());
                     }
                     if (v == b'R' || v == b'r' || v == b'V' || v == b'v')
                         && bytes.get(k + 1).is_some_and(u8::is_ascii_digit)
                     {
                         block.kind = BlockKind::Macro(MacroKind::FadalRegisterWords);
                         block.items.clear();
-                        return Ok(block);
+                        return Ok(());
                     }
                 }
                 let scanned = match fast_number(&bytes[j..]) {
@@ -298,9 +325,9 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
                     None => match number(&text[j..]) {
                         Ok((rest, num)) => {
                             let end = bytes.len() - rest.len();
-                            parse_number(num)
-                                .map(|v| (end, v))
-                                .ok_or_else(|| err(ErrorKind::BadNumber(num.to_string()), start, end))
+                            parse_number(num).map(|v| (end, v)).ok_or_else(|| {
+                                err(ErrorKind::BadNumber(num.to_string()), start, end)
+                            })
                         }
                         Err(_) => Err(err(
                             ErrorKind::LetterWithoutNumber(char::from(letter)),
@@ -369,7 +396,7 @@ pub fn parse_line(line: &[u8], line_no: u32, offset: usize) -> Result<Block<'_>,
             }
         }
     }
-    Ok(block)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -396,7 +423,10 @@ mod tests {
         assert_eq!(words("X0.1")[0].2, 0.1);
         assert_eq!(words("X-34.78")[0].2, -34.78);
         assert_eq!(words("F9991300.0")[0].2, 9991300.0);
-        assert_eq!(words("X12345678901234567890.5")[0].2, 12345678901234567890.5);
+        assert_eq!(
+            words("X12345678901234567890.5")[0].2,
+            12345678901234567890.5
+        );
     }
 
     proptest::proptest! {
@@ -412,7 +442,14 @@ mod tests {
 
     #[test]
     fn fast_path_is_correctly_rounded() {
-        for s in ["0.1", "-34.788", "123.4567", "0.0001", "99999.9999", "1.000000000000001"] {
+        for s in [
+            "0.1",
+            "-34.788",
+            "123.4567",
+            "0.0001",
+            "99999.9999",
+            "1.000000000000001",
+        ] {
             assert_eq!(parse_number(s), s.parse::<f64>().ok(), "{s}");
         }
     }
@@ -423,7 +460,10 @@ mod tests {
         assert_eq!(w[1], ('R', Some(1), 1.0, "+1.".into()));
         assert_eq!(w[2], ('R', Some(2), 0.4, "+.4".into()));
         // ISO radius is an ordinary R word.
-        assert_eq!(words("G2 X1 Y1 R11.605")[3], ('R', None, 11.605, "11.605".into()));
+        assert_eq!(
+            words("G2 X1 Y1 R11.605")[3],
+            ('R', None, 11.605, "11.605".into())
+        );
     }
 
     #[test]
@@ -469,7 +509,13 @@ mod tests {
         ];
         for (s, col) in cases {
             let e = parse_line(s, 1, 0).expect_err("fails");
-            assert_eq!(e.column, col, "{:?}: {}", String::from_utf8_lossy(s), e.kind);
+            assert_eq!(
+                e.column,
+                col,
+                "{:?}: {}",
+                String::from_utf8_lossy(s),
+                e.kind
+            );
         }
     }
 

@@ -3,10 +3,11 @@
 use std::collections::VecDeque;
 use std::io::{self, BufRead};
 
+use crate::ast::Block;
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::interp::{Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
-use crate::parse::parse_line;
+use crate::parse::parse_line_into;
 
 /// Anything that hands out lines one at a time.
 pub trait LineSource {
@@ -106,8 +107,9 @@ impl<S: LineSource> Iterator for Stream<S> {
                 self.any_content = true;
             }
             let queue = &mut self.queue;
-            let failed = match parse_line(line.bytes, line.number, line.offset) {
-                Ok(block) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
+            let mut block = Block::empty(line.number, line.offset);
+            let failed = match parse_line_into(line.bytes, line.number, line.offset, &mut block) {
+                Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
                     Ok(()) => false,
                     Err(d) => {
                         queue.push_back(Event::Diagnostic(d));

@@ -6,8 +6,12 @@ use lampost_gcode::{
 use proptest::prelude::*;
 
 fn blocks_equal(a: &[u8], b: &[u8]) -> Result<(), String> {
-    let pa: Vec<_> = Lines::new(a).map(|l| parse_line(l.bytes, l.number, l.offset)).collect();
-    let pb: Vec<_> = Lines::new(b).map(|l| parse_line(l.bytes, l.number, l.offset)).collect();
+    let pa: Vec<_> = Lines::new(a)
+        .map(|l| parse_line(l.bytes, l.number, l.offset))
+        .collect();
+    let pb: Vec<_> = Lines::new(b)
+        .map(|l| parse_line(l.bytes, l.number, l.offset))
+        .collect();
     if pa.len() != pb.len() {
         return Err(format!("{} blocks vs {}", pa.len(), pb.len()));
     }
@@ -145,7 +149,10 @@ fn corpus_files() -> Vec<std::path::PathBuf> {
             v.extend(rd.flatten().map(|e| e.path()));
         }
     }
-    v.push(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/programs/features.ngc"));
+    v.push(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/programs/features.ngc"),
+    );
     v.sort();
     v
 }
@@ -166,8 +173,14 @@ fn corpus_parses_and_fmt_keeps_the_trace() {
         let before = moves(&text);
         for opts in [
             EmitOptions::default(),
-            EmitOptions { renumber: Some((10, 10)), ..EmitOptions::default() },
-            EmitOptions { dialect: Some(Dialect::Iso), ..EmitOptions::default() },
+            EmitOptions {
+                renumber: Some((10, 10)),
+                ..EmitOptions::default()
+            },
+            EmitOptions {
+                dialect: Some(Dialect::Iso),
+                ..EmitOptions::default()
+            },
         ] {
             let out = emit(&text, opts);
             if opts.renumber.is_none() && opts.dialect.is_none() {
@@ -178,7 +191,12 @@ fn corpus_parses_and_fmt_keeps_the_trace() {
             for (a, b) in before.iter().zip(&after) {
                 for i in 0..9 {
                     // 3 decimals in mm: the dialect rounds to 0.0005 at most.
-                    assert!((a.end[i] - b.end[i]).abs() <= 5e-4 + 1e-9, "{}: line {}", path.display(), a.line);
+                    assert!(
+                        (a.end[i] - b.end[i]).abs() <= 5e-4 + 1e-9,
+                        "{}: line {}",
+                        path.display(),
+                        a.line
+                    );
                 }
                 if opts.dialect.is_none() {
                     assert_eq!(a.end, b.end, "{}: line {}", path.display(), a.line);

@@ -117,7 +117,12 @@ pub fn rs274_motions(program: &Path, work: &Path) -> Vec<Canon> {
     );
     let mut v = Vec::new();
     for (i, l) in text.lines().enumerate() {
-        for kind in ["STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "ARC_FEED", "STRAIGHT_PROBE"] {
+        for kind in [
+            "STRAIGHT_TRAVERSE",
+            "STRAIGHT_FEED",
+            "ARC_FEED",
+            "STRAIGHT_PROBE",
+        ] {
             if let Some(pos) = l.find(&format!("{kind}(")) {
                 let inner = &l[pos + kind.len() + 1..l.rfind(')').unwrap_or(l.len())];
                 let args = inner
