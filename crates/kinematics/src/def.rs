@@ -1,0 +1,243 @@
+//! The machine definition file (TOML): what users copy, edit and recalibrate.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::KinError;
+
+/// Length units of a machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Units {
+    /// Inches.
+    Inch,
+    /// Millimetres.
+    Mm,
+}
+
+/// Which part moves when a linear axis moves in +.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Moves {
+    /// The tool moves + relative to the machine frame.
+    Tool,
+    /// The table moves +, so the tool moves − relative to the part.
+    Table,
+}
+
+/// A named parameter: a scalar or a vector.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ParamValue {
+    /// A scalar (e.g. H).
+    Scalar(f64),
+    /// A vector (e.g. R, L).
+    Vector([f64; 3]),
+}
+
+/// A vector given literally or from a parameter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum VecExpr {
+    /// `[x, y, z]`
+    Literal([f64; 3]),
+    // `Along` first: an untagged map with `along` must not be read as `Scaled`.
+    /// `{ param = "H", along = [0, 0, -1] }`: a scalar parameter along a vector.
+    Along {
+        /// Parameter name.
+        param: String,
+        /// Direction and scale.
+        along: [f64; 3],
+    },
+    /// `{ param = "R", scale = -1.0 }`: a vector parameter times a scale.
+    Scaled {
+        /// Parameter name.
+        param: String,
+        /// Factor (default 1).
+        #[serde(default = "one")]
+        scale: f64,
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A linear axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearDef {
+    /// Axis name (X, Y, Z).
+    pub name: String,
+    /// Unit direction in the machine frame.
+    pub direction: [f64; 3],
+    /// Whether + moves the tool or the table.
+    pub moves: Moves,
+    /// Travel `[min, max]` in machine units.
+    pub limits: [f64; 2],
+    /// Output resolution (smallest step the control takes).
+    pub resolution: f64,
+}
+
+/// A rotary axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotaryDef {
+    /// Axis name (A, B, C).
+    pub name: String,
+    /// Unit direction of positive rotation (right-hand rule), machine frame at home.
+    pub axis: [f64; 3],
+    /// A point on the axis, machine frame at home.
+    pub pivot: VecExpr,
+    /// Place in the chain from the workpiece outward: 1 carries the workpiece.
+    pub order: u32,
+    /// Travel `[min, max]` in degrees (absent for a continuous axis).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<[f64; 2]>,
+    /// Turns without end (and is unwound by the post).
+    #[serde(default)]
+    pub continuous: bool,
+    /// Output resolution in degrees.
+    pub resolution: f64,
+}
+
+/// A head: spindle, probe, laser, sensor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadDef {
+    /// Head name.
+    pub name: String,
+    /// Offset of the head's tool point from the spindle point, machine frame.
+    pub offset: VecExpr,
+}
+
+/// A whole machine file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineDef {
+    /// Machine name.
+    pub name: String,
+    /// One line about it.
+    #[serde(default)]
+    pub description: String,
+    /// inch or mm.
+    pub units: Units,
+    /// Unit vector from the tool tip into the head, machine frame.
+    #[serde(default = "z_axis")]
+    pub tool_axis: [f64; 3],
+    /// What the numbers in this file assume where the papers are silent.
+    #[serde(default)]
+    pub assumptions: Vec<String>,
+    /// Named parameters users recalibrate (R, L, H, …).
+    #[serde(default)]
+    pub parameters: BTreeMap<String, ParamValue>,
+    /// Linear axes.
+    pub linear: Vec<LinearDef>,
+    /// Rotary axes.
+    pub rotary: Vec<RotaryDef>,
+    /// Heads.
+    #[serde(rename = "head")]
+    pub heads: Vec<HeadDef>,
+}
+
+fn z_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+/// The built-in machines: name and TOML text.
+pub const BUILTINS: [(&str, &str); 2] = [
+    ("fadal-lamp", include_str!("../../../fixtures/machines/fadal-lamp.toml")),
+    ("nrc-lc", include_str!("../../../fixtures/machines/nrc-lc.toml")),
+];
+
+/// The TOML text of a built-in machine.
+pub fn builtin_text(name: &str) -> Option<&'static str> {
+    BUILTINS.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize, String) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    let col = text[start..offset].chars().count() + 1;
+    let end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    (line, col, text[start..end].to_string())
+}
+
+/// Find a bare `nan` or `inf` (TOML allows them; a machine file must not have them).
+fn find_non_finite(text: &str) -> Option<usize> {
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let code = line.split('#').next().unwrap_or("");
+        let mut in_str = false;
+        let b = code.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            let c = b[i];
+            if c == b'"' {
+                in_str = !in_str;
+            } else if !in_str && (c == b'n' || c == b'i') {
+                let word_start = i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_');
+                let rest = &code[i..];
+                let is = |w: &str| {
+                    rest.starts_with(w)
+                        && !rest[w.len()..]
+                            .bytes()
+                            .next()
+                            .is_some_and(|n| n.is_ascii_alphanumeric() || n == b'_')
+                };
+                if word_start && (is("nan") || is("inf")) {
+                    // Only where a value stands (after `=`, `[` or `,`).
+                    let before = code[..i].trim_end_matches([' ', '+', '-']);
+                    if before.ends_with('=') || before.ends_with('[') || before.ends_with(',') {
+                        return Some(offset + i);
+                    }
+                }
+            }
+            i += 1;
+        }
+        offset += line.len();
+    }
+    None
+}
+
+impl MachineDef {
+    /// Read a machine file's text; `file` names it in errors.
+    pub fn from_toml(text: &str, file: &str) -> Result<Self, KinError> {
+        if let Some(at) = find_non_finite(text) {
+            let (line, column, t) = line_col(text, at);
+            return Err(KinError::MachineFile {
+                file: file.to_string(),
+                line,
+                column,
+                message: "NaN or infinity where a number belongs".into(),
+                text: t,
+            });
+        }
+        toml::from_str::<MachineDef>(text).map_err(|e| {
+            let (line, column, t) = match e.span() {
+                Some(sp) => line_col(text, sp.start),
+                None => (0, 0, String::new()),
+            };
+            KinError::MachineFile {
+                file: file.to_string(),
+                line,
+                column,
+                message: e.message().trim().to_string(),
+                text: t,
+            }
+        })
+    }
+
+    /// The file as TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot write: {e}\n"))
+    }
+
+    /// A built-in machine by name.
+    pub fn builtin(name: &str) -> Option<Self> {
+        builtin_text(name).and_then(|t| MachineDef::from_toml(t, &format!("<built-in {name}>")).ok())
+    }
+}

@@ -1,0 +1,629 @@
+//! A resolved machine: forward and inverse kinematics of a table-table 5-axis chain.
+//!
+//! Model: three orthogonal linear axes place the head in the *machine frame* (the frame
+//! of the rotary table's base: fixed for a moving-column machine, carried by the table
+//! axes when they move the table); two rotary axes, each a direction and a point, turn
+//! the part about them, the inner one (order 1) riding on the outer one. A part point `p`
+//! sits in the machine frame at `T(p) = R₂(θ₂)·(R₁(θ₁)·(p − c₁) + c₁ − c₂) + c₂`; the
+//! head's tool point sits at `q = h + Σ sₖ·Xₖ·dₖ` (sₖ = −1 when + moves the table).
+//! Forward: tip = T⁻¹(q), axis = (R₂R₁)⁻¹·t. Inverse: solve R₁(θ₁)·v = R₂(−θ₂)·t for the
+//! two cones' intersections (two branches), then X from `T(tip)`.
+
+use nalgebra::Vector3;
+
+use crate::def::{MachineDef, Moves, ParamValue, Units, VecExpr};
+use crate::error::KinError;
+
+/// Below this, a vector is taken as parallel to a rotary axis (singular).
+const SINGULAR: f64 = 1e-9;
+
+/// A linear axis, resolved.
+#[derive(Debug, Clone)]
+pub struct Linear {
+    /// Name.
+    pub name: String,
+    /// Unit direction.
+    pub dir: Vector3<f64>,
+    /// +1 when + moves the tool, −1 when it moves the table.
+    pub sign: f64,
+    /// Travel.
+    pub limits: (f64, f64),
+    /// Output resolution.
+    pub resolution: f64,
+}
+
+/// A rotary axis, resolved.
+#[derive(Debug, Clone)]
+pub struct Rotary {
+    /// Name.
+    pub name: String,
+    /// Unit direction of positive rotation.
+    pub axis: Vector3<f64>,
+    /// A point on the axis.
+    pub pivot: Vector3<f64>,
+    /// Travel in degrees (`None`: unlimited).
+    pub limits: Option<(f64, f64)>,
+    /// Continuous (wraps).
+    pub continuous: bool,
+    /// Output resolution in degrees.
+    pub resolution: f64,
+}
+
+impl Rotary {
+    /// Whether `deg` is within the travel.
+    pub fn within(&self, deg: f64) -> bool {
+        self.limits.is_none_or(|(lo, hi)| deg >= lo - 1e-9 && deg <= hi + 1e-9)
+    }
+}
+
+/// A head.
+#[derive(Debug, Clone)]
+pub struct Head {
+    /// Name.
+    pub name: String,
+    /// Offset from the spindle point.
+    pub offset: Vector3<f64>,
+}
+
+/// Joint values: linear axes then rotary axes, each in file order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Joints {
+    /// Linear positions in machine units.
+    pub linear: [f64; 3],
+    /// Rotary positions in degrees.
+    pub rotary: [f64; 2],
+}
+
+impl Joints {
+    /// All joints, linear first.
+    pub fn values(&self) -> [f64; 5] {
+        [
+            self.linear[0],
+            self.linear[1],
+            self.linear[2],
+            self.rotary[0],
+            self.rotary[1],
+        ]
+    }
+}
+
+/// Tool tip and tool axis in the part frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Tool tip.
+    pub tip: Vector3<f64>,
+    /// Unit vector from the tip into the head.
+    pub axis: Vector3<f64>,
+}
+
+/// One inverse-kinematics solution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solution {
+    /// The joints.
+    pub joints: Joints,
+    /// Every joint within its travel.
+    pub within_limits: bool,
+    /// Which of the two orientation branches (+1, −1; 0 where they coincide).
+    pub branch: i8,
+    /// The tool axis is parallel to a rotary axis; that axis kept its previous value.
+    pub singular: bool,
+}
+
+/// Up to two solutions, best first, without allocating.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solutions {
+    sols: [Solution; 2],
+    n: usize,
+}
+
+impl Solutions {
+    /// The solutions, best first.
+    pub fn as_slice(&self) -> &[Solution] {
+        &self.sols[..self.n]
+    }
+}
+
+/// The chooser's pick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Choice {
+    /// The chosen solution.
+    pub solution: Solution,
+    /// The previous branch had no solution within limits: the branch flips here, so
+    /// the tool must retract and re-approach.
+    pub branch_flip: bool,
+}
+
+/// A machine ready for kinematics.
+#[derive(Debug, Clone)]
+pub struct Machine {
+    /// Name.
+    pub name: String,
+    /// Units.
+    pub units: Units,
+    /// Linear axes in file order.
+    pub linear: [Linear; 3],
+    /// Rotary axes in file order.
+    pub rotary: [Rotary; 2],
+    /// Index in `rotary` of the inner axis (order 1).
+    pub inner: usize,
+    /// Index in `rotary` of the outer axis (order 2).
+    pub outer: usize,
+    /// Heads.
+    pub heads: Vec<Head>,
+    /// Unit vector from tip into head, machine frame.
+    pub tool_axis: Vector3<f64>,
+    /// The definition it was built from (with any `--set` applied).
+    pub def: MachineDef,
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+
+/// Rotate `p` about the unit axis `u` by the angle with sine `s` and cosine `c`.
+#[inline]
+fn rot(u: &Vector3<f64>, s: f64, c: f64, p: &Vector3<f64>) -> Vector3<f64> {
+    p * c + u.cross(p) * s + u * (u.dot(p) * (1.0 - c))
+}
+
+/// Wrap degrees to (−180, 180].
+fn wrap180(d: f64) -> f64 {
+    let mut x = d % 360.0;
+    if x > 180.0 {
+        x -= 360.0;
+    } else if x <= -180.0 {
+        x += 360.0;
+    }
+    x
+}
+
+impl Machine {
+    /// Build from a definition, applying parameter overrides (`--set`).
+    pub fn new(mut def: MachineDef, overrides: &[(String, ParamValue)]) -> Result<Self, KinError> {
+        let bad = |what: String| KinError::InvalidMachine {
+            machine: def.name.clone(),
+            what,
+        };
+        let known = if def.parameters.is_empty() {
+            "none".to_string()
+        } else {
+            def.parameters.keys().cloned().collect::<Vec<_>>().join(", ")
+        };
+        for (name, value) in overrides {
+            let slot = def.parameters.get_mut(name).ok_or_else(|| KinError::Parameter {
+                name: name.clone(),
+                why: format!("this machine has no such parameter (it has {known})"),
+            })?;
+            match (&*slot, value) {
+                (ParamValue::Scalar(_), ParamValue::Scalar(_)) | (ParamValue::Vector(_), ParamValue::Vector(_)) => *slot = *value,
+                (ParamValue::Scalar(_), _) => {
+                    return Err(KinError::Parameter { name: name.clone(), why: "is a scalar: give one value".into() })
+                }
+                (ParamValue::Vector(_), _) => {
+                    return Err(KinError::Parameter { name: name.clone(), why: "is a vector: give x,y,z".into() })
+                }
+            }
+        }
+        for (name, v) in &def.parameters {
+            let ok = match v {
+                ParamValue::Scalar(x) => x.is_finite(),
+                ParamValue::Vector(a) => a.iter().all(|x| x.is_finite()),
+            };
+            if !ok {
+                return Err(KinError::NotFinite(format!("parameter {name}")));
+            }
+        }
+        let params = def.parameters.clone();
+        let resolve = |e: &VecExpr, what: &str| -> Result<Vector3<f64>, KinError> {
+            match e {
+                VecExpr::Literal(a) => Ok(v3(*a)),
+                VecExpr::Scaled { param, scale } => match params.get(param) {
+                    Some(ParamValue::Vector(a)) => Ok(v3(*a) * *scale),
+                    Some(ParamValue::Scalar(_)) => Err(KinError::Parameter {
+                        name: param.clone(),
+                        why: format!("{what} uses it as a vector, but it is a scalar (use `along`)"),
+                    }),
+                    None => Err(KinError::Parameter { name: param.clone(), why: format!("{what} refers to it, but it is not defined under [parameters]") }),
+                },
+                VecExpr::Along { param, along } => match params.get(param) {
+                    Some(ParamValue::Scalar(x)) => Ok(v3(*along) * *x),
+                    Some(ParamValue::Vector(_)) => Err(KinError::Parameter {
+                        name: param.clone(),
+                        why: format!("{what} uses it as a scalar, but it is a vector (use `scale`)"),
+                    }),
+                    None => Err(KinError::Parameter { name: param.clone(), why: format!("{what} refers to it, but it is not defined under [parameters]") }),
+                },
+            }
+        };
+        let unit = |a: [f64; 3], what: String| -> Result<Vector3<f64>, KinError> {
+            let v = v3(a);
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(KinError::NotFinite(what));
+            }
+            let n = v.norm();
+            if n < 1e-12 {
+                return Err(KinError::InvalidMachine { machine: String::new(), what: format!("{what} has zero length") });
+            }
+            if (n - 1.0).abs() > 1e-9 {
+                return Err(KinError::InvalidMachine { machine: String::new(), what: format!("{what} is not a unit vector (length {n})") });
+            }
+            Ok(v)
+        };
+        let named = |e: KinError| match e {
+            KinError::InvalidMachine { what, .. } => KinError::InvalidMachine { machine: def.name.clone(), what },
+            other => other,
+        };
+        if def.linear.len() != 3 {
+            return Err(bad(format!("has {} linear axes; this model needs exactly 3", def.linear.len())));
+        }
+        if def.rotary.len() != 2 {
+            return Err(bad(format!("has {} rotary axes; this model needs exactly 2", def.rotary.len())));
+        }
+        let mut names: Vec<&str> = Vec::new();
+        for n in def.linear.iter().map(|l| l.name.as_str()).chain(def.rotary.iter().map(|r| r.name.as_str())) {
+            if n.is_empty() || names.contains(&n) {
+                return Err(bad(format!("axis name `{n}` is empty or used twice")));
+            }
+            names.push(n);
+        }
+        let mut linear = Vec::with_capacity(3);
+        for l in &def.linear {
+            let dir = unit(l.direction, format!("linear axis {} direction", l.name)).map_err(named)?;
+            if !(l.limits[0].is_finite() && l.limits[1].is_finite() && l.limits[0] < l.limits[1]) {
+                return Err(bad(format!("linear axis {} limits must be finite with min < max", l.name)));
+            }
+            if !(l.resolution.is_finite() && l.resolution > 0.0) {
+                return Err(bad(format!("linear axis {} resolution must be positive", l.name)));
+            }
+            linear.push(Linear {
+                name: l.name.clone(),
+                dir,
+                sign: match l.moves {
+                    Moves::Tool => 1.0,
+                    Moves::Table => -1.0,
+                },
+                limits: (l.limits[0], l.limits[1]),
+                resolution: l.resolution,
+            });
+        }
+        for i in 0..3 {
+            for j in i + 1..3 {
+                if linear[i].dir.dot(&linear[j].dir).abs() > 1e-9 {
+                    return Err(bad(format!("linear axes {} and {} are not orthogonal", linear[i].name, linear[j].name)));
+                }
+            }
+        }
+        let mut rotary = Vec::with_capacity(2);
+        for r in &def.rotary {
+            let axis = unit(r.axis, format!("rotary axis {} axis", r.name)).map_err(named)?;
+            let pivot = resolve(&r.pivot, &format!("rotary axis {} pivot", r.name))?;
+            if !pivot.iter().all(|x| x.is_finite()) {
+                return Err(KinError::NotFinite(format!("rotary axis {} pivot", r.name)));
+            }
+            let limits = match r.limits {
+                Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Some((lo, hi)),
+                Some(_) => return Err(bad(format!("rotary axis {} limits must be finite with min < max", r.name))),
+                None if r.continuous => None,
+                None => return Err(bad(format!("rotary axis {} needs limits unless it is continuous", r.name))),
+            };
+            if !(r.resolution.is_finite() && r.resolution > 0.0) {
+                return Err(bad(format!("rotary axis {} resolution must be positive", r.name)));
+            }
+            rotary.push(Rotary { name: r.name.clone(), axis, pivot, limits, continuous: r.continuous, resolution: r.resolution });
+        }
+        let inner = def.rotary.iter().position(|r| r.order == 1).ok_or_else(|| bad("no rotary axis has order = 1 (the one carrying the workpiece)".into()))?;
+        let outer = def.rotary.iter().position(|r| r.order == 2).ok_or_else(|| bad("no rotary axis has order = 2".into()))?;
+        if rotary[0].axis.cross(&rotary[1].axis).norm() < 1e-6 {
+            return Err(bad("the two rotary axes are parallel".into()));
+        }
+        let tool_axis = unit(def.tool_axis, "tool_axis".into()).map_err(named)?;
+        if def.heads.is_empty() {
+            return Err(bad("has no [[head]]".into()));
+        }
+        let mut heads = Vec::new();
+        for h in &def.heads {
+            if heads.iter().any(|x: &Head| x.name == h.name) {
+                return Err(bad(format!("head `{}` is defined twice", h.name)));
+            }
+            let offset = resolve(&h.offset, &format!("head {} offset", h.name))?;
+            heads.push(Head { name: h.name.clone(), offset });
+        }
+        let [l0, l1, l2]: [Linear; 3] = linear.try_into().map_err(|_| bad("needs 3 linear axes".into()))?;
+        let [r0, r1]: [Rotary; 2] = rotary.try_into().map_err(|_| bad("needs 2 rotary axes".into()))?;
+        Ok(Machine {
+            name: def.name.clone(),
+            units: def.units,
+            linear: [l0, l1, l2],
+            rotary: [r0, r1],
+            inner,
+            outer,
+            heads,
+            tool_axis,
+            def,
+        })
+    }
+
+    /// A built-in machine with overrides.
+    pub fn builtin(name: &str, overrides: &[(String, ParamValue)]) -> Result<Self, KinError> {
+        let text = crate::def::builtin_text(name).ok_or_else(|| KinError::MachineFile {
+            file: name.to_string(),
+            line: 0,
+            column: 0,
+            message: format!("no built-in machine named {name}"),
+            text: String::new(),
+        })?;
+        Machine::new(MachineDef::from_toml(text, &format!("<built-in {name}>"))?, overrides)
+    }
+
+    /// Axis names: linear then rotary, file order.
+    pub fn axis_names(&self) -> [&str; 5] {
+        [
+            &self.linear[0].name,
+            &self.linear[1].name,
+            &self.linear[2].name,
+            &self.rotary[0].name,
+            &self.rotary[1].name,
+        ]
+    }
+
+    /// Index of a head by name.
+    pub fn head(&self, name: &str) -> Result<usize, KinError> {
+        self.heads.iter().position(|h| h.name.eq_ignore_ascii_case(name)).ok_or_else(|| KinError::UnknownHead {
+            name: name.to_string(),
+            known: self.heads.iter().map(|h| h.name.as_str()).collect::<Vec<_>>().join(", "),
+        })
+    }
+
+    /// Check every joint against its travel.
+    pub fn check_limits(&self, j: &Joints) -> Result<(), KinError> {
+        for (l, &v) in self.linear.iter().zip(&j.linear) {
+            if !v.is_finite() {
+                return Err(KinError::NotFinite(format!("axis {}", l.name)));
+            }
+            if v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
+                return Err(KinError::JointOutOfLimit { axis: l.name.clone(), value: v, lo: l.limits.0, hi: l.limits.1 });
+            }
+        }
+        for (r, &v) in self.rotary.iter().zip(&j.rotary) {
+            if !v.is_finite() {
+                return Err(KinError::NotFinite(format!("axis {}", r.name)));
+            }
+            if let Some((lo, hi)) = r.limits {
+                if !r.within(v) {
+                    return Err(KinError::JointOutOfLimit { axis: r.name.clone(), value: v, lo, hi });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn linear_within(&self, x: &[f64; 3]) -> bool {
+        self.linear.iter().zip(x).all(|(l, &v)| v >= l.limits.0 - 1e-9 && v <= l.limits.1 + 1e-9)
+    }
+
+    /// Part → machine: where the part point `p` sits with the table at `rotary`.
+    pub fn part_to_machine(&self, rotary: &[f64; 2], p: &Vector3<f64>) -> Vector3<f64> {
+        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
+        let (si, ci) = rotary[self.inner].to_radians().sin_cos();
+        let (so, co) = rotary[self.outer].to_radians().sin_cos();
+        let a = rot(&ri.axis, si, ci, &(p - ri.pivot)) + ri.pivot;
+        rot(&ro.axis, so, co, &(a - ro.pivot)) + ro.pivot
+    }
+
+    /// Machine → part: the inverse of [`Machine::part_to_machine`].
+    pub fn machine_to_part(&self, rotary: &[f64; 2], q: &Vector3<f64>) -> Vector3<f64> {
+        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
+        let (si, ci) = rotary[self.inner].to_radians().sin_cos();
+        let (so, co) = rotary[self.outer].to_radians().sin_cos();
+        let a = rot(&ro.axis, -so, co, &(q - ro.pivot)) + ro.pivot;
+        rot(&ri.axis, -si, ci, &(a - ri.pivot)) + ri.pivot
+    }
+
+    /// The head's tool point in the machine frame for linear positions `x`.
+    pub fn head_point(&self, x: &[f64; 3], head: usize) -> Vector3<f64> {
+        let mut q = self.heads[head].offset;
+        for (l, &v) in self.linear.iter().zip(x) {
+            q += l.dir * (l.sign * v);
+        }
+        q
+    }
+
+    /// Linear positions that put the head's tool point at machine point `q`.
+    pub fn linear_for(&self, q: &Vector3<f64>, head: usize) -> [f64; 3] {
+        let d = q - self.heads[head].offset;
+        [
+            self.linear[0].sign * d.dot(&self.linear[0].dir),
+            self.linear[1].sign * d.dot(&self.linear[1].dir),
+            self.linear[2].sign * d.dot(&self.linear[2].dir),
+        ]
+    }
+
+    /// Forward kinematics: joints and head → tool tip and tool axis in the part frame.
+    pub fn forward(&self, j: &Joints, head: usize) -> Pose {
+        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
+        let (si, ci) = j.rotary[self.inner].to_radians().sin_cos();
+        let (so, co) = j.rotary[self.outer].to_radians().sin_cos();
+        let q = self.head_point(&j.linear, head);
+        let a = rot(&ro.axis, -so, co, &(q - ro.pivot)) + ro.pivot;
+        let tip = rot(&ri.axis, -si, ci, &(a - ri.pivot)) + ri.pivot;
+        let t = rot(&ro.axis, -so, co, &self.tool_axis);
+        let axis = rot(&ri.axis, -si, ci, &t);
+        Pose { tip, axis }
+    }
+
+    /// Rotary angles (degrees, in file order) that turn the part-frame tool axis `v`
+    /// (unit) to the machine's tool axis: up to two branches. `near` fills a singular
+    /// axis. Returns `None` when no rotation of these axes reaches `v`.
+    pub fn orient(&self, v: &Vector3<f64>, near: &[f64; 2]) -> Option<([([f64; 2], i8, bool); 2], usize)> {
+        let u1 = &self.rotary[self.inner].axis;
+        let u2 = &self.rotary[self.outer].axis;
+        let t = &self.tool_axis;
+        let a = u1.dot(v);
+        let b = u2.dot(t);
+        let k = u1.dot(u2);
+        let det = 1.0 - k * k;
+        let alpha = (a - k * b) / det;
+        let beta = (b - k * a) / det;
+        let base = u1 * alpha + u2 * beta;
+        let n = u1.cross(u2);
+        let g2 = (1.0 - base.norm_squared()) / det;
+        if g2 < -1e-12 {
+            return None;
+        }
+        let g = g2.max(0.0).sqrt();
+        let v_perp = v - u1 * a;
+        let t_perp = t - u2 * b;
+        let s1 = v_perp.norm() < SINGULAR;
+        let s2 = t_perp.norm() < SINGULAR;
+        let mut out = [([0.0; 2], 0i8, false); 2];
+        let count = if g < 1e-12 { 1 } else { 2 };
+        for (i, sign) in [1.0, -1.0].into_iter().take(count).enumerate() {
+            let w = base + n * (sign * g);
+            let mut ang = [0.0; 2];
+            ang[self.inner] = if s1 {
+                near[self.inner]
+            } else {
+                let w_perp = w - u1 * u1.dot(&w);
+                u1.dot(&v_perp.cross(&w_perp)).atan2(v_perp.dot(&w_perp)).to_degrees()
+            };
+            ang[self.outer] = if s2 {
+                near[self.outer]
+            } else {
+                let w_perp = w - u2 * u2.dot(&w);
+                -u2.dot(&t_perp.cross(&w_perp)).atan2(t_perp.dot(&w_perp)).to_degrees()
+            };
+            let branch = if count == 1 { 0 } else if sign > 0.0 { 1 } else { -1 };
+            out[i] = (ang, branch, s1 || s2);
+        }
+        Some((out, count))
+    }
+
+    /// The representative of `deg` (mod 360) nearest `near` that lies within the axis'
+    /// travel, or the nearest one when none does.
+    fn place(&self, axis: usize, deg: f64, near: f64) -> (f64, bool) {
+        let r = &self.rotary[axis];
+        let base = near + wrap180(deg - near);
+        match r.limits {
+            None => (base, true),
+            Some(_) => {
+                let mut best: Option<f64> = None;
+                for k in -2..=2 {
+                    let c = base + 360.0 * f64::from(k);
+                    if r.within(c) && best.is_none_or(|b| (c - near).abs() < (b - near).abs()) {
+                        best = Some(c);
+                    }
+                }
+                match best {
+                    Some(b) => (b, true),
+                    None => (base, false),
+                }
+            }
+        }
+    }
+
+    /// Inverse kinematics: every joint solution that puts `head`'s tool point at `tip`
+    /// with tool axis `axis` (part frame), best first: within limits first, then the
+    /// smallest rotary move from `near` (continuous axes wrap, limited ones don't).
+    pub fn inverse(&self, tip: &Vector3<f64>, axis: &Vector3<f64>, head: usize, near: &[f64; 2]) -> Result<Solutions, KinError> {
+        if !tip.iter().chain(axis.iter()).all(|x| x.is_finite()) {
+            return Err(KinError::NotFinite("the position or tool axis".into()));
+        }
+        let n = axis.norm();
+        if n < 1e-12 {
+            return Err(KinError::ZeroToolAxis);
+        }
+        let v = axis / n;
+        let Some((raw, count)) = self.orient(&v, near) else {
+            return Err(KinError::Unreachable {
+                what: format!(
+                    "no rotation of {} and {} turns the tool axis to ({:.6}, {:.6}, {:.6}): the axes' geometry cannot reach it",
+                    self.rotary[0].name, self.rotary[1].name, v.x, v.y, v.z
+                ),
+            });
+        };
+        let empty = Solution { joints: Joints { linear: [0.0; 3], rotary: [0.0; 2] }, within_limits: false, branch: 0, singular: false };
+        let mut sols = Solutions { sols: [empty; 2], n: 0 };
+        for &(ang, branch, singular) in raw.iter().take(count) {
+            let (r0, ok0) = self.place(0, ang[0], near[0]);
+            let (r1, ok1) = self.place(1, ang[1], near[1]);
+            let rotary = [r0, r1];
+            let q = self.part_to_machine(&rotary, tip);
+            let linear = self.linear_for(&q, head);
+            let within_limits = ok0 && ok1 && self.linear_within(&linear);
+            sols.sols[sols.n] = Solution { joints: Joints { linear, rotary }, within_limits, branch, singular };
+            sols.n += 1;
+        }
+        if sols.n == 2 {
+            let cost = |s: &Solution| (s.joints.rotary[0] - near[0]).abs() + (s.joints.rotary[1] - near[1]).abs();
+            let (a, b) = (sols.sols[0], sols.sols[1]);
+            let swap = match (a.within_limits, b.within_limits) {
+                (false, true) => true,
+                (true, false) => false,
+                _ => cost(&b) < cost(&a),
+            };
+            if swap {
+                sols.sols.swap(0, 1);
+            }
+        }
+        Ok(sols)
+    }
+
+    /// Pick a solution: within limits, on `previous_branch` when one there is within
+    /// limits (a flip is never chosen when the same branch can do it), else the best
+    /// within limits on the other branch, flagged as a flip. An error names what blocks
+    /// the pose and the nearest reachable orientation when none is within limits.
+    pub fn choose(&self, sols: &Solutions, previous_branch: Option<i8>, requested_axis: &Vector3<f64>, head: usize) -> Result<Choice, KinError> {
+        let s = sols.as_slice();
+        let same = |x: &Solution| match previous_branch {
+            None | Some(0) => true,
+            Some(b) => x.branch == 0 || x.branch == b,
+        };
+        if let Some(x) = s.iter().find(|x| x.within_limits && same(x)) {
+            return Ok(Choice { solution: *x, branch_flip: false });
+        }
+        if let Some(x) = s.iter().find(|x| x.within_limits) {
+            return Ok(Choice { solution: *x, branch_flip: true });
+        }
+        Err(self.unreachable(s, requested_axis, head))
+    }
+
+    fn unreachable(&self, s: &[Solution], requested_axis: &Vector3<f64>, head: usize) -> KinError {
+        let mut parts = Vec::new();
+        let mut best: Option<(f64, [f64; 2])> = None;
+        for sol in s {
+            let mut blocked = Vec::new();
+            let mut clamped = sol.joints.rotary;
+            for (i, r) in self.rotary.iter().enumerate() {
+                if let Some((lo, hi)) = r.limits {
+                    let v = sol.joints.rotary[i];
+                    if !r.within(v) {
+                        blocked.push(format!("{} = {:.3}° is beyond its limits [{lo}, {hi}]", r.name, v));
+                        clamped[i] = v.clamp(lo, hi);
+                    }
+                }
+            }
+            for (l, &v) in self.linear.iter().zip(&sol.joints.linear) {
+                if v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
+                    blocked.push(format!("{} = {:.4} is beyond its travel [{}, {}]", l.name, v, l.limits.0, l.limits.1));
+                }
+            }
+            if !blocked.is_empty() {
+                parts.push(blocked.join(" and "));
+            }
+            let j = Joints { linear: sol.joints.linear, rotary: clamped };
+            let reached = self.forward(&j, head).axis;
+            let ang = reached.dot(&requested_axis.normalize()).clamp(-1.0, 1.0).acos().to_degrees();
+            if best.is_none_or(|(a, _)| ang < a) {
+                best = Some((ang, clamped));
+            }
+        }
+        let nearest = match best {
+            Some((ang, r)) => format!(
+                "; the nearest reachable orientation is {} = {:.3}°, {} = {:.3}°, {:.3}° from the requested tool axis",
+                self.rotary[0].name, r[0], self.rotary[1].name, r[1], ang
+            ),
+            None => String::new(),
+        };
+        KinError::Unreachable { what: format!("no solution within limits: {}{}", parts.join("; or "), nearest) }
+    }
+}
