@@ -1,1 +1,73 @@
-fn main() {}
+//! IK + FK pairs per second on one core (`cargo xtask bench kin`). A baseline in the
+//! same run: the same poses through nalgebra's general `Rotation3` (matrix) products
+//! for FK only, so the ratio shows what the hand-written Rodrigues form saves.
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use lampost_kinematics::{Joints, Machine, Vector3};
+use nalgebra::Rotation3;
+
+fn best_of(runs: usize, mut f: impl FnMut() -> f64) -> Duration {
+    let mut best = Duration::MAX;
+    for _ in 0..runs {
+        let t = Instant::now();
+        black_box(f());
+        best = best.min(t.elapsed());
+    }
+    best
+}
+
+fn main() {
+    let quick = !std::env::args().any(|a| a == "--bench");
+    let n = if quick { 10_000 } else { 2_000_000 };
+    let runs = if quick { 1 } else { 5 };
+    for name in ["fadal-lamp", "nrc-lc"] {
+        let Ok(m) = Machine::builtin(name, &[]) else { return };
+        // Poses from random joints within limits.
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let poses: Vec<(Vector3<f64>, Vector3<f64>, [f64; 2])> = (0..4096)
+            .map(|_| {
+                let j = Joints {
+                    linear: [rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0],
+                    rotary: [rnd() * 200.0 - 100.0, rnd() * 200.0 - 100.0],
+                };
+                let p = m.forward(&j, 0);
+                (p.tip, p.axis, j.rotary)
+            })
+            .collect();
+        let t = best_of(runs, || {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let (tip, axis, near) = &poses[i & 4095];
+                if let Ok(s) = m.inverse(tip, axis, 0, near) {
+                    let best = s.as_slice()[0];
+                    acc += m.forward(&best.joints, 0).tip.x;
+                }
+            }
+            acc
+        });
+        let t_base = best_of(runs, || {
+            let mut acc = 0.0;
+            let (ri, ro) = (&m.rotary[m.inner], &m.rotary[m.outer]);
+            for i in 0..n {
+                let (tip, _, near) = &poses[i & 4095];
+                let r = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(ro.axis), near[m.outer].to_radians())
+                    * Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(ri.axis), near[m.inner].to_radians());
+                acc += (r.transpose() * (tip - ri.pivot)).x;
+            }
+            acc
+        });
+        println!(
+            "{name}: IK + FK {:.1} M pairs/s ({:.1} ns a pair); baseline nalgebra Rotation3 FK alone {:.1} M/s; ratio (IK+FK)/FK-baseline time {:.2}",
+            n as f64 / t.as_secs_f64() / 1e6,
+            t.as_secs_f64() * 1e9 / n as f64,
+            n as f64 / t_base.as_secs_f64() / 1e6,
+            t.as_secs_f64() / t_base.as_secs_f64()
+        );
+    }
+}

@@ -22,5 +22,7 @@ pub mod machine;
 
 pub use def::{MachineDef, Moves, ParamValue, Units, VecExpr, BUILTINS};
 pub use error::KinError;
-pub use machine::{Choice, Head, Joints, Linear, Machine, Pose, Rotary, Solution, Solutions};
+pub use machine::{
+    Choice, Head, Joints, Linear, Machine, Orientation, Pose, Rotary, Solution, Solutions,
+};
 pub use nalgebra::Vector3;

@@ -96,6 +96,19 @@ pub struct Pose {
     pub axis: Vector3<f64>,
 }
 
+/// A rotary solution of the orientation alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orientation {
+    /// Angles in degrees, file order, in (−180, 180] (or the kept value when singular).
+    pub degrees: [f64; 2],
+    /// (sin, cos) of each angle.
+    pub sin_cos: [(f64, f64); 2],
+    /// +1 or −1 for the two branches, 0 where they coincide.
+    pub branch: i8,
+    /// The tool axis is parallel to a rotary axis.
+    pub singular: bool,
+}
+
 /// One inverse-kinematics solution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Solution {
@@ -168,7 +181,8 @@ fn rot(u: &Vector3<f64>, s: f64, c: f64, p: &Vector3<f64>) -> Vector3<f64> {
 
 /// Wrap degrees to (−180, 180].
 fn wrap180(d: f64) -> f64 {
-    let mut x = d % 360.0;
+    // `d - 360·round(d/360)` instead of `%`, which is a slow libm call.
+    let mut x = d - 360.0 * (d / 360.0).round();
     if x > 180.0 {
         x -= 360.0;
     } else if x <= -180.0 {
@@ -410,6 +424,15 @@ impl Machine {
         rot(&ro.axis, so, co, &(a - ro.pivot)) + ro.pivot
     }
 
+    /// [`Machine::part_to_machine`] with each rotary given as (sin, cos).
+    pub fn part_to_machine_sc(&self, sc: &[(f64, f64); 2], p: &Vector3<f64>) -> Vector3<f64> {
+        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
+        let (si, ci) = sc[self.inner];
+        let (so, co) = sc[self.outer];
+        let a = rot(&ri.axis, si, ci, &(p - ri.pivot)) + ri.pivot;
+        rot(&ro.axis, so, co, &(a - ro.pivot)) + ro.pivot
+    }
+
     /// Machine → part: the inverse of [`Machine::part_to_machine`].
     pub fn machine_to_part(&self, rotary: &[f64; 2], q: &Vector3<f64>) -> Vector3<f64> {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
@@ -454,7 +477,7 @@ impl Machine {
     /// Rotary angles (degrees, in file order) that turn the part-frame tool axis `v`
     /// (unit) to the machine's tool axis: up to two branches. `near` fills a singular
     /// axis. Returns `None` when no rotation of these axes reaches `v`.
-    pub fn orient(&self, v: &Vector3<f64>, near: &[f64; 2]) -> Option<([([f64; 2], i8, bool); 2], usize)> {
+    pub fn orient(&self, v: &Vector3<f64>, near: &[f64; 2]) -> Option<([Orientation; 2], usize)> {
         let u1 = &self.rotary[self.inner].axis;
         let u2 = &self.rotary[self.outer].axis;
         let t = &self.tool_axis;
@@ -475,25 +498,42 @@ impl Machine {
         let t_perp = t - u2 * b;
         let s1 = v_perp.norm() < SINGULAR;
         let s2 = t_perp.norm() < SINGULAR;
-        let mut out = [([0.0; 2], 0i8, false); 2];
+        let empty = Orientation { degrees: [0.0; 2], sin_cos: [(0.0, 1.0); 2], branch: 0, singular: false };
+        let mut out = [empty; 2];
         let count = if g < 1e-12 { 1 } else { 2 };
+        // The rotation taking a to b about u, as (sin, cos), from products alone.
+        let turn = |u: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| {
+            let sn = u.dot(&a.cross(b));
+            let cs = a.dot(b);
+            // Unit-scale values: no overflow to guard against, so no `hypot`.
+            let r = (sn * sn + cs * cs).sqrt();
+            (sn / r, cs / r)
+        };
         for (i, sign) in [1.0, -1.0].into_iter().take(count).enumerate() {
             let w = base + n * (sign * g);
-            let mut ang = [0.0; 2];
-            ang[self.inner] = if s1 {
-                near[self.inner]
+            let mut o = empty;
+            if s1 {
+                o.degrees[self.inner] = near[self.inner];
+                o.sin_cos[self.inner] = near[self.inner].to_radians().sin_cos();
             } else {
                 let w_perp = w - u1 * u1.dot(&w);
-                u1.dot(&v_perp.cross(&w_perp)).atan2(v_perp.dot(&w_perp)).to_degrees()
-            };
-            ang[self.outer] = if s2 {
-                near[self.outer]
+                let (sn, cs) = turn(u1, &v_perp, &w_perp);
+                o.degrees[self.inner] = sn.atan2(cs).to_degrees();
+                o.sin_cos[self.inner] = (sn, cs);
+            }
+            if s2 {
+                o.degrees[self.outer] = near[self.outer];
+                o.sin_cos[self.outer] = near[self.outer].to_radians().sin_cos();
             } else {
                 let w_perp = w - u2 * u2.dot(&w);
-                -u2.dot(&t_perp.cross(&w_perp)).atan2(t_perp.dot(&w_perp)).to_degrees()
-            };
-            let branch = if count == 1 { 0 } else if sign > 0.0 { 1 } else { -1 };
-            out[i] = (ang, branch, s1 || s2);
+                // R₂(−θ₂) turns t to w, so θ₂ is minus that turn.
+                let (sn, cs) = turn(u2, &t_perp, &w_perp);
+                o.degrees[self.outer] = -sn.atan2(cs).to_degrees();
+                o.sin_cos[self.outer] = (-sn, cs);
+            }
+            o.branch = if count == 1 { 0 } else if sign > 0.0 { 1 } else { -1 };
+            o.singular = s1 || s2;
+            out[i] = o;
         }
         Some((out, count))
     }
@@ -543,11 +583,13 @@ impl Machine {
         };
         let empty = Solution { joints: Joints { linear: [0.0; 3], rotary: [0.0; 2] }, within_limits: false, branch: 0, singular: false };
         let mut sols = Solutions { sols: [empty; 2], n: 0 };
-        for &(ang, branch, singular) in raw.iter().take(count) {
-            let (r0, ok0) = self.place(0, ang[0], near[0]);
-            let (r1, ok1) = self.place(1, ang[1], near[1]);
+        for o in raw.iter().take(count) {
+            let (r0, ok0) = self.place(0, o.degrees[0], near[0]);
+            let (r1, ok1) = self.place(1, o.degrees[1], near[1]);
             let rotary = [r0, r1];
-            let q = self.part_to_machine(&rotary, tip);
+            let (branch, singular) = (o.branch, o.singular);
+            // Whole turns do not change sine and cosine: no trigonometry here.
+            let q = self.part_to_machine_sc(&o.sin_cos, tip);
             let linear = self.linear_for(&q, head);
             let within_limits = ok0 && ok1 && self.linear_within(&linear);
             sols.sols[sols.n] = Solution { joints: Joints { linear, rotary }, within_limits, branch, singular };
