@@ -4,6 +4,7 @@
 //!   (criterion-free harness in `crates/gcode/benches/throughput.rs`, best of 5 runs,
 //!   both measured in the same process), then `lampost fmt` on a generated 1,000,000-line
 //!   program: time and peak resident memory (VmHWM of the child process).
+//! - `cargo xtask bench kin`: IK + FK pairs per second on both built-in machines.
 //! - `cargo xtask fuzz [--seconds N]`: a mutation fuzzer over parse + interpret, seeded
 //!   with the corpus and fixtures; reports inputs run and any panic.
 
@@ -102,6 +103,13 @@ fn bench_gcode() -> Result<(), String> {
         kb as f64 / 1024.0
     );
     Ok(())
+}
+
+fn bench_kin() -> Result<(), String> {
+    println!("== IK + FK pairs per second (one core)");
+    let mut c = cargo();
+    c.args(["bench", "-p", "lampost-kinematics", "--bench", "ikfk"]);
+    run(c)
 }
 
 struct Rng(u64);
@@ -300,13 +308,15 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let a: Vec<&str> = args.iter().map(String::as_str).collect();
     let r = match a.as_slice() {
-        ["bench", "gcode"] | ["bench"] => bench_gcode(),
+        ["bench", "gcode"] => bench_gcode(),
+        ["bench", "kin"] => bench_kin(),
+        ["bench"] => bench_gcode().and_then(|()| bench_kin()),
         ["fuzz"] => fuzz(60),
         ["fuzz", "--seconds", n] => match n.parse() {
             Ok(s) => fuzz(s),
             Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
         },
-        _ => Err("usage: cargo xtask bench gcode | cargo xtask fuzz [--seconds N]".into()),
+        _ => Err("usage: cargo xtask bench [gcode|kin] | cargo xtask fuzz [--seconds N]".into()),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,6 +5,8 @@
 
 mod gcode_cmds;
 mod io;
+mod kin_cmds;
+mod points;
 mod report;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -63,8 +65,82 @@ pub struct InterpArgs {
     block_delete: bool,
 }
 
+/// `lampost machines` subcommands.
+#[derive(Subcommand, Debug)]
+enum MachinesCmd {
+    /// Print a built-in machine's TOML, to copy and edit.
+    Show {
+        /// Built-in machine name.
+        name: String,
+    },
+}
+
+/// Options every kinematics command takes.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MachineArgs {
+    /// Built-in machine name (see `lampost machines`) or the path of a machine file.
+    #[arg(long)]
+    machine: String,
+    /// Head: spindle, probe, laser, sensor… (as the machine defines; default its first head).
+    #[arg(long)]
+    head: Option<String>,
+    /// Override a parameter: NAME=x,y,z or NAME=value (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Write JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `lampost kin` subcommands.
+#[derive(Subcommand, Debug)]
+enum KinCmd {
+    /// Forward kinematics: joints → tool tip and tool axis in the part frame.
+    Fk {
+        /// Every axis: X=..,Y=..,Z=..,A=..,B=..
+        #[arg(long)]
+        joints: String,
+        #[command(flatten)]
+        m: MachineArgs,
+    },
+    /// Inverse kinematics: tool tip and axis in the part frame → every joint solution, best first.
+    Ik {
+        /// Tool tip x,y,z in the part frame.
+        #[arg(long, allow_hyphen_values = true)]
+        position: String,
+        /// Tool axis i,j,k (from the tip into the head), part frame.
+        #[arg(long, allow_hyphen_values = true)]
+        axis: String,
+        /// Previous rotary position, e.g. A=0,B=0 (default all 0).
+        #[arg(long, allow_hyphen_values = true)]
+        near: Option<String>,
+        #[command(flatten)]
+        m: MachineArgs,
+    },
+    /// Part points rotated by the table, as the machine sees them (the repair-patch transform).
+    Rotate {
+        /// Rotary axes: A=..,B=..
+        #[arg(long, allow_hyphen_values = true)]
+        joints: String,
+        /// Point file (x y z per line), or - for standard input.
+        file: String,
+        #[command(flatten)]
+        m: MachineArgs,
+    },
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// List the built-in machines, or print one with `show NAME`.
+    Machines {
+        #[command(subcommand)]
+        cmd: Option<MachinesCmd>,
+    },
+    /// Machine kinematics: fk, ik, rotate.
+    Kin {
+        #[command(subcommand)]
+        cmd: KinCmd,
+    },
     /// Check a program: every problem with file:line:col, the line, a caret and a hint.
     Check {
         /// Program file, or - for standard input.
@@ -112,6 +188,40 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Machines { cmd: None } => kin_cmds::machines(None),
+        Command::Machines {
+            cmd: Some(MachinesCmd::Show { name }),
+        } => kin_cmds::machines(Some(&name)),
+        Command::Kin {
+            cmd: KinCmd::Fk { joints, m },
+        } => kin_cmds::fk(&m.machine, &joints, m.head.as_deref(), &m.set, m.json),
+        Command::Kin {
+            cmd:
+                KinCmd::Ik {
+                    position,
+                    axis,
+                    near,
+                    m,
+                },
+        } => kin_cmds::ik(
+            &m.machine,
+            &position,
+            &axis,
+            m.head.as_deref(),
+            near.as_deref(),
+            &m.set,
+            m.json,
+        ),
+        Command::Kin {
+            cmd: KinCmd::Rotate { joints, file, m },
+        } => kin_cmds::rotate(
+            &m.machine,
+            &joints,
+            m.head.as_deref(),
+            &m.set,
+            &file,
+            m.json,
+        ),
         Command::Check { file, json, interp } => gcode_cmds::check(&file, json, interp),
         Command::Fmt {
             file,

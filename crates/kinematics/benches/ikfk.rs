@@ -23,11 +23,15 @@ fn main() {
     let n = if quick { 10_000 } else { 2_000_000 };
     let runs = if quick { 1 } else { 5 };
     for name in ["fadal-lamp", "nrc-lc"] {
-        let Ok(m) = Machine::builtin(name, &[]) else { return };
+        let Ok(m) = Machine::builtin(name, &[]) else {
+            return;
+        };
         // Poses from random joints within limits.
         let mut seed = 7u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         let poses: Vec<(Vector3<f64>, Vector3<f64>, [f64; 2])> = (0..4096)
@@ -56,8 +60,13 @@ fn main() {
             let (ri, ro) = (&m.rotary[m.inner], &m.rotary[m.outer]);
             for i in 0..n {
                 let (tip, _, near) = &poses[i & 4095];
-                let r = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(ro.axis), near[m.outer].to_radians())
-                    * Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(ri.axis), near[m.inner].to_radians());
+                let r = Rotation3::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(ro.axis),
+                    near[m.outer].to_radians(),
+                ) * Rotation3::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(ri.axis),
+                    near[m.inner].to_radians(),
+                );
                 acc += (r.transpose() * (tip - ri.pivot)).x;
             }
             acc

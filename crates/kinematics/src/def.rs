@@ -147,8 +147,14 @@ fn z_axis() -> [f64; 3] {
 
 /// The built-in machines: name and TOML text.
 pub const BUILTINS: [(&str, &str); 2] = [
-    ("fadal-lamp", include_str!("../../../fixtures/machines/fadal-lamp.toml")),
-    ("nrc-lc", include_str!("../../../fixtures/machines/nrc-lc.toml")),
+    (
+        "fadal-lamp",
+        include_str!("../../../fixtures/machines/fadal-lamp.toml"),
+    ),
+    (
+        "nrc-lc",
+        include_str!("../../../fixtures/machines/nrc-lc.toml"),
+    ),
 ];
 
 /// The TOML text of a built-in machine.
@@ -238,6 +244,7 @@ impl MachineDef {
 
     /// A built-in machine by name.
     pub fn builtin(name: &str) -> Option<Self> {
-        builtin_text(name).and_then(|t| MachineDef::from_toml(t, &format!("<built-in {name}>")).ok())
+        builtin_text(name)
+            .and_then(|t| MachineDef::from_toml(t, &format!("<built-in {name}>")).ok())
     }
 }

@@ -52,7 +52,8 @@ pub struct Rotary {
 impl Rotary {
     /// Whether `deg` is within the travel.
     pub fn within(&self, deg: f64) -> bool {
-        self.limits.is_none_or(|(lo, hi)| deg >= lo - 1e-9 && deg <= hi + 1e-9)
+        self.limits
+            .is_none_or(|(lo, hi)| deg >= lo - 1e-9 && deg <= hi + 1e-9)
     }
 }
 
@@ -201,20 +202,34 @@ impl Machine {
         let known = if def.parameters.is_empty() {
             "none".to_string()
         } else {
-            def.parameters.keys().cloned().collect::<Vec<_>>().join(", ")
+            def.parameters
+                .keys()
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", ")
         };
         for (name, value) in overrides {
-            let slot = def.parameters.get_mut(name).ok_or_else(|| KinError::Parameter {
-                name: name.clone(),
-                why: format!("this machine has no such parameter (it has {known})"),
-            })?;
+            let slot = def
+                .parameters
+                .get_mut(name)
+                .ok_or_else(|| KinError::Parameter {
+                    name: name.clone(),
+                    why: format!("this machine has no such parameter (it has {known})"),
+                })?;
             match (&*slot, value) {
-                (ParamValue::Scalar(_), ParamValue::Scalar(_)) | (ParamValue::Vector(_), ParamValue::Vector(_)) => *slot = *value,
+                (ParamValue::Scalar(_), ParamValue::Scalar(_))
+                | (ParamValue::Vector(_), ParamValue::Vector(_)) => *slot = *value,
                 (ParamValue::Scalar(_), _) => {
-                    return Err(KinError::Parameter { name: name.clone(), why: "is a scalar: give one value".into() })
+                    return Err(KinError::Parameter {
+                        name: name.clone(),
+                        why: "is a scalar: give one value".into(),
+                    })
                 }
                 (ParamValue::Vector(_), _) => {
-                    return Err(KinError::Parameter { name: name.clone(), why: "is a vector: give x,y,z".into() })
+                    return Err(KinError::Parameter {
+                        name: name.clone(),
+                        why: "is a vector: give x,y,z".into(),
+                    })
                 }
             }
         }
@@ -235,17 +250,31 @@ impl Machine {
                     Some(ParamValue::Vector(a)) => Ok(v3(*a) * *scale),
                     Some(ParamValue::Scalar(_)) => Err(KinError::Parameter {
                         name: param.clone(),
-                        why: format!("{what} uses it as a vector, but it is a scalar (use `along`)"),
+                        why: format!(
+                            "{what} uses it as a vector, but it is a scalar (use `along`)"
+                        ),
                     }),
-                    None => Err(KinError::Parameter { name: param.clone(), why: format!("{what} refers to it, but it is not defined under [parameters]") }),
+                    None => Err(KinError::Parameter {
+                        name: param.clone(),
+                        why: format!(
+                            "{what} refers to it, but it is not defined under [parameters]"
+                        ),
+                    }),
                 },
                 VecExpr::Along { param, along } => match params.get(param) {
                     Some(ParamValue::Scalar(x)) => Ok(v3(*along) * *x),
                     Some(ParamValue::Vector(_)) => Err(KinError::Parameter {
                         name: param.clone(),
-                        why: format!("{what} uses it as a scalar, but it is a vector (use `scale`)"),
+                        why: format!(
+                            "{what} uses it as a scalar, but it is a vector (use `scale`)"
+                        ),
                     }),
-                    None => Err(KinError::Parameter { name: param.clone(), why: format!("{what} refers to it, but it is not defined under [parameters]") }),
+                    None => Err(KinError::Parameter {
+                        name: param.clone(),
+                        why: format!(
+                            "{what} refers to it, but it is not defined under [parameters]"
+                        ),
+                    }),
                 },
             }
         };
@@ -256,25 +285,45 @@ impl Machine {
             }
             let n = v.norm();
             if n < 1e-12 {
-                return Err(KinError::InvalidMachine { machine: String::new(), what: format!("{what} has zero length") });
+                return Err(KinError::InvalidMachine {
+                    machine: String::new(),
+                    what: format!("{what} has zero length"),
+                });
             }
             if (n - 1.0).abs() > 1e-9 {
-                return Err(KinError::InvalidMachine { machine: String::new(), what: format!("{what} is not a unit vector (length {n})") });
+                return Err(KinError::InvalidMachine {
+                    machine: String::new(),
+                    what: format!("{what} is not a unit vector (length {n})"),
+                });
             }
             Ok(v)
         };
         let named = |e: KinError| match e {
-            KinError::InvalidMachine { what, .. } => KinError::InvalidMachine { machine: def.name.clone(), what },
+            KinError::InvalidMachine { what, .. } => KinError::InvalidMachine {
+                machine: def.name.clone(),
+                what,
+            },
             other => other,
         };
         if def.linear.len() != 3 {
-            return Err(bad(format!("has {} linear axes; this model needs exactly 3", def.linear.len())));
+            return Err(bad(format!(
+                "has {} linear axes; this model needs exactly 3",
+                def.linear.len()
+            )));
         }
         if def.rotary.len() != 2 {
-            return Err(bad(format!("has {} rotary axes; this model needs exactly 2", def.rotary.len())));
+            return Err(bad(format!(
+                "has {} rotary axes; this model needs exactly 2",
+                def.rotary.len()
+            )));
         }
         let mut names: Vec<&str> = Vec::new();
-        for n in def.linear.iter().map(|l| l.name.as_str()).chain(def.rotary.iter().map(|r| r.name.as_str())) {
+        for n in def
+            .linear
+            .iter()
+            .map(|l| l.name.as_str())
+            .chain(def.rotary.iter().map(|r| r.name.as_str()))
+        {
             if n.is_empty() || names.contains(&n) {
                 return Err(bad(format!("axis name `{n}` is empty or used twice")));
             }
@@ -282,12 +331,19 @@ impl Machine {
         }
         let mut linear = Vec::with_capacity(3);
         for l in &def.linear {
-            let dir = unit(l.direction, format!("linear axis {} direction", l.name)).map_err(named)?;
+            let dir =
+                unit(l.direction, format!("linear axis {} direction", l.name)).map_err(named)?;
             if !(l.limits[0].is_finite() && l.limits[1].is_finite() && l.limits[0] < l.limits[1]) {
-                return Err(bad(format!("linear axis {} limits must be finite with min < max", l.name)));
+                return Err(bad(format!(
+                    "linear axis {} limits must be finite with min < max",
+                    l.name
+                )));
             }
             if !(l.resolution.is_finite() && l.resolution > 0.0) {
-                return Err(bad(format!("linear axis {} resolution must be positive", l.name)));
+                return Err(bad(format!(
+                    "linear axis {} resolution must be positive",
+                    l.name
+                )));
             }
             linear.push(Linear {
                 name: l.name.clone(),
@@ -303,7 +359,10 @@ impl Machine {
         for i in 0..3 {
             for j in i + 1..3 {
                 if linear[i].dir.dot(&linear[j].dir).abs() > 1e-9 {
-                    return Err(bad(format!("linear axes {} and {} are not orthogonal", linear[i].name, linear[j].name)));
+                    return Err(bad(format!(
+                        "linear axes {} and {} are not orthogonal",
+                        linear[i].name, linear[j].name
+                    )));
                 }
             }
         }
@@ -316,17 +375,47 @@ impl Machine {
             }
             let limits = match r.limits {
                 Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Some((lo, hi)),
-                Some(_) => return Err(bad(format!("rotary axis {} limits must be finite with min < max", r.name))),
+                Some(_) => {
+                    return Err(bad(format!(
+                        "rotary axis {} limits must be finite with min < max",
+                        r.name
+                    )))
+                }
                 None if r.continuous => None,
-                None => return Err(bad(format!("rotary axis {} needs limits unless it is continuous", r.name))),
+                None => {
+                    return Err(bad(format!(
+                        "rotary axis {} needs limits unless it is continuous",
+                        r.name
+                    )))
+                }
             };
             if !(r.resolution.is_finite() && r.resolution > 0.0) {
-                return Err(bad(format!("rotary axis {} resolution must be positive", r.name)));
+                return Err(bad(format!(
+                    "rotary axis {} resolution must be positive",
+                    r.name
+                )));
             }
-            rotary.push(Rotary { name: r.name.clone(), axis, pivot, limits, continuous: r.continuous, resolution: r.resolution });
+            rotary.push(Rotary {
+                name: r.name.clone(),
+                axis,
+                pivot,
+                limits,
+                continuous: r.continuous,
+                resolution: r.resolution,
+            });
         }
-        let inner = def.rotary.iter().position(|r| r.order == 1).ok_or_else(|| bad("no rotary axis has order = 1 (the one carrying the workpiece)".into()))?;
-        let outer = def.rotary.iter().position(|r| r.order == 2).ok_or_else(|| bad("no rotary axis has order = 2".into()))?;
+        let inner = def
+            .rotary
+            .iter()
+            .position(|r| r.order == 1)
+            .ok_or_else(|| {
+                bad("no rotary axis has order = 1 (the one carrying the workpiece)".into())
+            })?;
+        let outer = def
+            .rotary
+            .iter()
+            .position(|r| r.order == 2)
+            .ok_or_else(|| bad("no rotary axis has order = 2".into()))?;
         if rotary[0].axis.cross(&rotary[1].axis).norm() < 1e-6 {
             return Err(bad("the two rotary axes are parallel".into()));
         }
@@ -340,10 +429,17 @@ impl Machine {
                 return Err(bad(format!("head `{}` is defined twice", h.name)));
             }
             let offset = resolve(&h.offset, &format!("head {} offset", h.name))?;
-            heads.push(Head { name: h.name.clone(), offset });
+            heads.push(Head {
+                name: h.name.clone(),
+                offset,
+            });
         }
-        let [l0, l1, l2]: [Linear; 3] = linear.try_into().map_err(|_| bad("needs 3 linear axes".into()))?;
-        let [r0, r1]: [Rotary; 2] = rotary.try_into().map_err(|_| bad("needs 2 rotary axes".into()))?;
+        let [l0, l1, l2]: [Linear; 3] = linear
+            .try_into()
+            .map_err(|_| bad("needs 3 linear axes".into()))?;
+        let [r0, r1]: [Rotary; 2] = rotary
+            .try_into()
+            .map_err(|_| bad("needs 2 rotary axes".into()))?;
         Ok(Machine {
             name: def.name.clone(),
             units: def.units,
@@ -366,7 +462,10 @@ impl Machine {
             message: format!("no built-in machine named {name}"),
             text: String::new(),
         })?;
-        Machine::new(MachineDef::from_toml(text, &format!("<built-in {name}>"))?, overrides)
+        Machine::new(
+            MachineDef::from_toml(text, &format!("<built-in {name}>"))?,
+            overrides,
+        )
     }
 
     /// Axis names: linear then rotary, file order.
@@ -382,10 +481,18 @@ impl Machine {
 
     /// Index of a head by name.
     pub fn head(&self, name: &str) -> Result<usize, KinError> {
-        self.heads.iter().position(|h| h.name.eq_ignore_ascii_case(name)).ok_or_else(|| KinError::UnknownHead {
-            name: name.to_string(),
-            known: self.heads.iter().map(|h| h.name.as_str()).collect::<Vec<_>>().join(", "),
-        })
+        self.heads
+            .iter()
+            .position(|h| h.name.eq_ignore_ascii_case(name))
+            .ok_or_else(|| KinError::UnknownHead {
+                name: name.to_string(),
+                known: self
+                    .heads
+                    .iter()
+                    .map(|h| h.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
     }
 
     /// Check every joint against its travel.
@@ -395,7 +502,12 @@ impl Machine {
                 return Err(KinError::NotFinite(format!("axis {}", l.name)));
             }
             if v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
-                return Err(KinError::JointOutOfLimit { axis: l.name.clone(), value: v, lo: l.limits.0, hi: l.limits.1 });
+                return Err(KinError::JointOutOfLimit {
+                    axis: l.name.clone(),
+                    value: v,
+                    lo: l.limits.0,
+                    hi: l.limits.1,
+                });
             }
         }
         for (r, &v) in self.rotary.iter().zip(&j.rotary) {
@@ -404,7 +516,12 @@ impl Machine {
             }
             if let Some((lo, hi)) = r.limits {
                 if !r.within(v) {
-                    return Err(KinError::JointOutOfLimit { axis: r.name.clone(), value: v, lo, hi });
+                    return Err(KinError::JointOutOfLimit {
+                        axis: r.name.clone(),
+                        value: v,
+                        lo,
+                        hi,
+                    });
                 }
             }
         }
@@ -412,7 +529,10 @@ impl Machine {
     }
 
     fn linear_within(&self, x: &[f64; 3]) -> bool {
-        self.linear.iter().zip(x).all(|(l, &v)| v >= l.limits.0 - 1e-9 && v <= l.limits.1 + 1e-9)
+        self.linear
+            .iter()
+            .zip(x)
+            .all(|(l, &v)| v >= l.limits.0 - 1e-9 && v <= l.limits.1 + 1e-9)
     }
 
     /// Part → machine: where the part point `p` sits with the table at `rotary`.
@@ -498,7 +618,12 @@ impl Machine {
         let t_perp = t - u2 * b;
         let s1 = v_perp.norm() < SINGULAR;
         let s2 = t_perp.norm() < SINGULAR;
-        let empty = Orientation { degrees: [0.0; 2], sin_cos: [(0.0, 1.0); 2], branch: 0, singular: false };
+        let empty = Orientation {
+            degrees: [0.0; 2],
+            sin_cos: [(0.0, 1.0); 2],
+            branch: 0,
+            singular: false,
+        };
         let mut out = [empty; 2];
         let count = if g < 1e-12 { 1 } else { 2 };
         // The rotation taking a to b about u, as (sin, cos), from products alone.
@@ -531,7 +656,13 @@ impl Machine {
                 o.degrees[self.outer] = -sn.atan2(cs).to_degrees();
                 o.sin_cos[self.outer] = (-sn, cs);
             }
-            o.branch = if count == 1 { 0 } else if sign > 0.0 { 1 } else { -1 };
+            o.branch = if count == 1 {
+                0
+            } else if sign > 0.0 {
+                1
+            } else {
+                -1
+            };
             o.singular = s1 || s2;
             out[i] = o;
         }
@@ -564,7 +695,13 @@ impl Machine {
     /// Inverse kinematics: every joint solution that puts `head`'s tool point at `tip`
     /// with tool axis `axis` (part frame), best first: within limits first, then the
     /// smallest rotary move from `near` (continuous axes wrap, limited ones don't).
-    pub fn inverse(&self, tip: &Vector3<f64>, axis: &Vector3<f64>, head: usize, near: &[f64; 2]) -> Result<Solutions, KinError> {
+    pub fn inverse(
+        &self,
+        tip: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        head: usize,
+        near: &[f64; 2],
+    ) -> Result<Solutions, KinError> {
         if !tip.iter().chain(axis.iter()).all(|x| x.is_finite()) {
             return Err(KinError::NotFinite("the position or tool axis".into()));
         }
@@ -581,8 +718,19 @@ impl Machine {
                 ),
             });
         };
-        let empty = Solution { joints: Joints { linear: [0.0; 3], rotary: [0.0; 2] }, within_limits: false, branch: 0, singular: false };
-        let mut sols = Solutions { sols: [empty; 2], n: 0 };
+        let empty = Solution {
+            joints: Joints {
+                linear: [0.0; 3],
+                rotary: [0.0; 2],
+            },
+            within_limits: false,
+            branch: 0,
+            singular: false,
+        };
+        let mut sols = Solutions {
+            sols: [empty; 2],
+            n: 0,
+        };
         for o in raw.iter().take(count) {
             let (r0, ok0) = self.place(0, o.degrees[0], near[0]);
             let (r1, ok1) = self.place(1, o.degrees[1], near[1]);
@@ -592,11 +740,18 @@ impl Machine {
             let q = self.part_to_machine_sc(&o.sin_cos, tip);
             let linear = self.linear_for(&q, head);
             let within_limits = ok0 && ok1 && self.linear_within(&linear);
-            sols.sols[sols.n] = Solution { joints: Joints { linear, rotary }, within_limits, branch, singular };
+            sols.sols[sols.n] = Solution {
+                joints: Joints { linear, rotary },
+                within_limits,
+                branch,
+                singular,
+            };
             sols.n += 1;
         }
         if sols.n == 2 {
-            let cost = |s: &Solution| (s.joints.rotary[0] - near[0]).abs() + (s.joints.rotary[1] - near[1]).abs();
+            let cost = |s: &Solution| {
+                (s.joints.rotary[0] - near[0]).abs() + (s.joints.rotary[1] - near[1]).abs()
+            };
             let (a, b) = (sols.sols[0], sols.sols[1]);
             let swap = match (a.within_limits, b.within_limits) {
                 (false, true) => true,
@@ -614,17 +769,29 @@ impl Machine {
     /// limits (a flip is never chosen when the same branch can do it), else the best
     /// within limits on the other branch, flagged as a flip. An error names what blocks
     /// the pose and the nearest reachable orientation when none is within limits.
-    pub fn choose(&self, sols: &Solutions, previous_branch: Option<i8>, requested_axis: &Vector3<f64>, head: usize) -> Result<Choice, KinError> {
+    pub fn choose(
+        &self,
+        sols: &Solutions,
+        previous_branch: Option<i8>,
+        requested_axis: &Vector3<f64>,
+        head: usize,
+    ) -> Result<Choice, KinError> {
         let s = sols.as_slice();
         let same = |x: &Solution| match previous_branch {
             None | Some(0) => true,
             Some(b) => x.branch == 0 || x.branch == b,
         };
         if let Some(x) = s.iter().find(|x| x.within_limits && same(x)) {
-            return Ok(Choice { solution: *x, branch_flip: false });
+            return Ok(Choice {
+                solution: *x,
+                branch_flip: false,
+            });
         }
         if let Some(x) = s.iter().find(|x| x.within_limits) {
-            return Ok(Choice { solution: *x, branch_flip: true });
+            return Ok(Choice {
+                solution: *x,
+                branch_flip: true,
+            });
         }
         Err(self.unreachable(s, requested_axis, head))
     }
@@ -639,22 +806,35 @@ impl Machine {
                 if let Some((lo, hi)) = r.limits {
                     let v = sol.joints.rotary[i];
                     if !r.within(v) {
-                        blocked.push(format!("{} = {:.3}° is beyond its limits [{lo}, {hi}]", r.name, v));
+                        blocked.push(format!(
+                            "{} = {:.3}° is beyond its limits [{lo}, {hi}]",
+                            r.name, v
+                        ));
                         clamped[i] = v.clamp(lo, hi);
                     }
                 }
             }
             for (l, &v) in self.linear.iter().zip(&sol.joints.linear) {
                 if v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
-                    blocked.push(format!("{} = {:.4} is beyond its travel [{}, {}]", l.name, v, l.limits.0, l.limits.1));
+                    blocked.push(format!(
+                        "{} = {:.4} is beyond its travel [{}, {}]",
+                        l.name, v, l.limits.0, l.limits.1
+                    ));
                 }
             }
             if !blocked.is_empty() {
                 parts.push(blocked.join(" and "));
             }
-            let j = Joints { linear: sol.joints.linear, rotary: clamped };
+            let j = Joints {
+                linear: sol.joints.linear,
+                rotary: clamped,
+            };
             let reached = self.forward(&j, head).axis;
-            let ang = reached.dot(&requested_axis.normalize()).clamp(-1.0, 1.0).acos().to_degrees();
+            let ang = reached
+                .dot(&requested_axis.normalize())
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
             if best.is_none_or(|(a, _)| ang < a) {
                 best = Some((ang, clamped));
             }
@@ -666,6 +846,12 @@ impl Machine {
             ),
             None => String::new(),
         };
-        KinError::Unreachable { what: format!("no solution within limits: {}{}", parts.join("; or "), nearest) }
+        KinError::Unreachable {
+            what: format!(
+                "no solution within limits: {}{}",
+                parts.join("; or "),
+                nearest
+            ),
+        }
     }
 }

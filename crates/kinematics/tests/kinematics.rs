@@ -12,12 +12,23 @@ fn nrc() -> Machine {
     Machine::builtin("nrc-lc", &[]).expect("built-in")
 }
 fn trt() -> Machine {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/machines/xyzac-trt.toml")).expect("fixture");
-    Machine::new(MachineDef::from_toml(&text, "xyzac-trt.toml").expect("parses"), &[]).expect("valid")
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/machines/xyzac-trt.toml"
+    ))
+    .expect("fixture");
+    Machine::new(
+        MachineDef::from_toml(&text, "xyzac-trt.toml").expect("parses"),
+        &[],
+    )
+    .expect("valid")
 }
 
 fn j(x: f64, y: f64, z: f64, r0: f64, r1: f64) -> Joints {
-    Joints { linear: [x, y, z], rotary: [r0, r1] }
+    Joints {
+        linear: [x, y, z],
+        rotary: [r0, r1],
+    }
 }
 
 /// Paper 002, Table 1: the 1 in patch "rotated 45° in A and B". Seed notes: reproduced
@@ -33,13 +44,17 @@ fn table_1_of_paper_002() {
     ];
     let s2 = 2f64.sqrt();
     for p0 in [[2.0 - s2, 0.0, 4.0], [0.0, -s2, 4.0 - s2]] {
-        let m = Machine::builtin("fadal-lamp", &[("R".into(), ParamValue::Vector(p0))]).expect("machine");
+        let m = Machine::builtin("fadal-lamp", &[("R".into(), ParamValue::Vector(p0))])
+            .expect("machine");
         let spindle = m.head("spindle").expect("head");
         for (p, want) in table {
             let q = m.part_to_machine(&[45.0, -45.0], &Vector3::from(p));
             let x = m.linear_for(&q, spindle);
             for i in 0..3 {
-                assert!((x[i] - want[i]).abs() <= 5e-5, "P0 {p0:?} point {p:?}: {x:?} vs {want:?}");
+                assert!(
+                    (x[i] - want[i]).abs() <= 5e-5,
+                    "P0 {p0:?} point {p:?}: {x:?} vs {want:?}"
+                );
             }
         }
     }
@@ -54,11 +69,19 @@ fn fadal_forward_is_the_papers_formula() {
     let l = Vector3::new(-10.10308, 0.03632, -8.72762);
     let mut seed = 1u64;
     let mut rnd = |lo: f64, hi: f64| {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         lo + (hi - lo) * ((seed >> 11) as f64 / (1u64 << 53) as f64)
     };
     for _ in 0..1000 {
-        let (x, y, z, a, b) = (rnd(-20.0, 20.0), rnd(-10.0, 10.0), rnd(-12.0, 12.0), rnd(-720.0, 720.0), rnd(-120.0, 120.0));
+        let (x, y, z, a, b) = (
+            rnd(-20.0, 20.0),
+            rnd(-10.0, 10.0),
+            rnd(-12.0, 12.0),
+            rnd(-720.0, 720.0),
+            rnd(-120.0, 120.0),
+        );
         let mm = Rotation3::from_axis_angle(&Vector3::y_axis(), (-b).to_radians())
             * Rotation3::from_axis_angle(&Vector3::z_axis(), a.to_radians());
         for (head, h) in [("spindle", Vector3::zeros()), ("laser", l)] {
@@ -82,13 +105,22 @@ fn nrc_forward_is_equation_3() {
     let m = Machine::new(def, &[]).expect("valid");
     let laser = m.head("laser").expect("head");
     let xt = Vector3::from(xt);
-    for &(x, y, z, b, c) in &[(0.0, 0.0, 0.0, 0.0, 0.0), (10.0, -20.0, 5.0, -90.0, -85.466), (2.1745, -0.0288, -2.0702, 30.0, 400.0), (-100.0, 50.0, -7.0, 115.0, -33.0)] {
+    for &(x, y, z, b, c) in &[
+        (0.0, 0.0, 0.0, 0.0, 0.0),
+        (10.0, -20.0, 5.0, -90.0, -85.466),
+        (2.1745, -0.0288, -2.0702, 30.0, 400.0),
+        (-100.0, 50.0, -7.0, 115.0, -33.0),
+    ] {
         let (sb, cb) = f64::to_radians(b).sin_cos();
         let (sc, cc) = f64::to_radians(c).sin_cos();
         let rot = nalgebra::Matrix3::new(cc * cb, sc, -cc * sb, -sc * cb, cc, sc * sb, sb, 0.0, cb);
         let want = rot * (xt + Vector3::new(-x, -y, z + h)) - Vector3::new(0.0, 0.0, h);
         let pose = m.forward(&j(x, y, z, b, c), laser);
-        assert!((pose.tip - want).norm() < 1e-11, "{:?} vs {want:?}", pose.tip);
+        assert!(
+            (pose.tip - want).norm() < 1e-11,
+            "{:?} vs {want:?}",
+            pose.tip
+        );
         if (x, y, z, b, c) == (0.0, 0.0, 0.0, 0.0, 0.0) {
             assert!((pose.tip - xt).norm() < 1e-15, "identity at home");
         }
@@ -106,30 +138,57 @@ fn nrc_forward_is_equation_3() {
 #[test]
 fn levelling_brings_the_normal_to_z() {
     let m = fadal();
-    for n in [[0.3, -0.2, 0.93], [-0.5, 0.5, 0.7], [0.0, 0.6, 0.8], [1.0, 0.0, 0.0], [0.1, 0.2, -0.97]] {
+    for n in [
+        [0.3, -0.2, 0.93],
+        [-0.5, 0.5, 0.7],
+        [0.0, 0.6, 0.8],
+        [1.0, 0.0, 0.0],
+        [0.1, 0.2, -0.97],
+    ] {
         let n = Vector3::from(n).normalize();
-        let sols = m.inverse(&Vector3::zeros(), &n, 0, &[0.0, 0.0]).expect("reachable");
+        let sols = m
+            .inverse(&Vector3::zeros(), &n, 0, &[0.0, 0.0])
+            .expect("reachable");
         let a = -n.y.atan2(n.x).to_degrees();
         let b = (n.x.hypot(n.y)).atan2(n.z).to_degrees();
         let mut found = false;
         for s in sols.as_slice() {
-            let mm = Rotation3::from_axis_angle(&Vector3::y_axis(), (-s.joints.rotary[1]).to_radians())
-                * Rotation3::from_axis_angle(&Vector3::z_axis(), s.joints.rotary[0].to_radians());
+            let mm =
+                Rotation3::from_axis_angle(&Vector3::y_axis(), (-s.joints.rotary[1]).to_radians())
+                    * Rotation3::from_axis_angle(
+                        &Vector3::z_axis(),
+                        s.joints.rotary[0].to_radians(),
+                    );
             assert!((mm * n - Vector3::z()).norm() < 1e-12);
             let da = ((s.joints.rotary[0] - a) % 360.0 + 540.0) % 360.0 - 180.0;
             if da.abs() < 1e-9 && (s.joints.rotary[1] - b).abs() < 1e-9 {
                 found = true;
             }
         }
-        assert!(found || b > 120.0, "closed form ({a}, {b}) not among {:?}", sols.as_slice());
-        assert_eq!(sols.as_slice().len(), 2, "two branches: (a, b) and (a + 180, −b)");
+        assert!(
+            found || b > 120.0,
+            "closed form ({a}, {b}) not among {:?}",
+            sols.as_slice()
+        );
+        assert_eq!(
+            sols.as_slice().len(),
+            2,
+            "two branches: (a, b) and (a + 180, −b)"
+        );
     }
 }
 
 #[test]
 fn singular_axis_keeps_its_previous_value() {
     let m = fadal();
-    let sols = m.inverse(&Vector3::new(1.0, 2.0, 3.0), &Vector3::z(), 0, &[73.5, 10.0]).expect("reachable");
+    let sols = m
+        .inverse(
+            &Vector3::new(1.0, 2.0, 3.0),
+            &Vector3::z(),
+            0,
+            &[73.5, 10.0],
+        )
+        .expect("reachable");
     let s = sols.as_slice();
     assert_eq!(s.len(), 1);
     assert!(s[0].singular);
@@ -141,10 +200,15 @@ fn unreachable_tilt_names_the_limit() {
     let m = fadal();
     // 150° of tilt: beyond B's ±120° on both branches.
     let v = Vector3::new(150f64.to_radians().sin(), 0.0, 150f64.to_radians().cos());
-    let sols = m.inverse(&Vector3::zeros(), &v, 0, &[0.0, 0.0]).expect("geometry reaches it");
+    let sols = m
+        .inverse(&Vector3::zeros(), &v, 0, &[0.0, 0.0])
+        .expect("geometry reaches it");
     let e = m.choose(&sols, None, &v, 0).expect_err("limits block it");
     let msg = e.to_string();
-    assert!(msg.contains("B = ") && msg.contains("[-120, 120]") && msg.contains("nearest reachable"), "{msg}");
+    assert!(
+        msg.contains("B = ") && msg.contains("[-120, 120]") && msg.contains("nearest reachable"),
+        "{msg}"
+    );
     assert!(msg.contains("30.000° from the requested"), "{msg}");
 }
 
@@ -152,11 +216,29 @@ fn unreachable_tilt_names_the_limit() {
 fn bad_machine_files_are_refused_with_a_place() {
     let good = lampost_kinematics::def::builtin_text("fadal-lamp").expect("text");
     let cases = [
-        (good.replace("axis = [0.0, 0.0, 1.0]", "axis = [0.0, 0.0, 0.0]"), "zero length"),
-        (good.replace("axis = [0.0, -1.0, 0.0]", "axis = [0.0, -1.0, 0.5]"), "not a unit vector"),
-        (good.replace("limits = [-10.0, 10.0]", "limits = [-10.0, nan]"), ":35:"),
-        (good.replace("limits = [-10.0, 10.0]", "limits = [-10.0, \"ten\"]"), ":35:"),
-        (good.replace("pivot = { param = \"R\", scale = -1.0 }\norder = 2", "pivot = { param = \"Q\", scale = -1.0 }\norder = 2"), "parameter Q"),
+        (
+            good.replace("axis = [0.0, 0.0, 1.0]", "axis = [0.0, 0.0, 0.0]"),
+            "zero length",
+        ),
+        (
+            good.replace("axis = [0.0, -1.0, 0.0]", "axis = [0.0, -1.0, 0.5]"),
+            "not a unit vector",
+        ),
+        (
+            good.replace("limits = [-10.0, 10.0]", "limits = [-10.0, nan]"),
+            ":35:",
+        ),
+        (
+            good.replace("limits = [-10.0, 10.0]", "limits = [-10.0, \"ten\"]"),
+            ":35:",
+        ),
+        (
+            good.replace(
+                "pivot = { param = \"R\", scale = -1.0 }\norder = 2",
+                "pivot = { param = \"Q\", scale = -1.0 }\norder = 2",
+            ),
+            "parameter Q",
+        ),
     ];
     for (text, want) in cases {
         let r = MachineDef::from_toml(&text, "m.toml").and_then(|d| Machine::new(d, &[]));
@@ -179,7 +261,10 @@ fn random_joints(m: &Machine, u: [f64; 5]) -> Joints {
         Some((lo, hi)) => lo + (hi - lo) * u[3 + i],
         None => -540.0 + 1080.0 * u[3 + i],
     };
-    Joints { linear: [lin(0), lin(1), lin(2)], rotary: [rot(0), rot(1)] }
+    Joints {
+        linear: [lin(0), lin(1), lin(2)],
+        rotary: [rot(0), rot(1)],
+    }
 }
 
 proptest! {

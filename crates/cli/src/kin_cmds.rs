@@ -1,0 +1,386 @@
+//! `lampost machines` and `lampost kin fk|ik|rotate`.
+
+use lampost_kinematics::{def, Joints, KinError, Machine, MachineDef, ParamValue, Vector3};
+
+use crate::io::{display_name, open_input, Output};
+use crate::points::parse_points;
+use crate::report::CliError;
+
+/// Render a kinematics error for people.
+pub fn kin_error(e: KinError) -> CliError {
+    let hint = e.hint();
+    match &e {
+        KinError::MachineFile {
+            file,
+            line,
+            column,
+            message,
+            text,
+        } if *line > 0 => {
+            let num = line.to_string();
+            let pad = " ".repeat(num.len());
+            CliError::failed(format!(
+                "error: {message}\n{pad}--> {file}:{line}:{column}\n{pad} |\n{num} | {text}\n{pad} | {}^\n  = help: {hint}\n",
+                " ".repeat(column.saturating_sub(1))
+            ))
+        }
+        _ => CliError::failed(format!("error: {e}\n  = help: {hint}\n")),
+    }
+}
+
+fn usage(flag: &str, msg: String, hint: &str) -> CliError {
+    CliError::usage(format!("error: {flag}: {msg}\n  = help: {hint}\n"))
+}
+
+fn number(flag: &str, item: &str, text: &str) -> Result<f64, CliError> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(usage(
+            flag,
+            format!("in `{item}`, `{}` is not a finite number", text.trim()),
+            "give plain decimal numbers, e.g. 1.25",
+        )),
+    }
+}
+
+/// `x,y,z`
+pub fn vector(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != 3 {
+        return Err(usage(
+            flag,
+            format!("`{text}` has {} values; expected x,y,z", parts.len()),
+            "give three comma-separated numbers, e.g. 0,0,1",
+        ));
+    }
+    Ok(Vector3::new(
+        number(flag, text, parts[0])?,
+        number(flag, text, parts[1])?,
+        number(flag, text, parts[2])?,
+    ))
+}
+
+/// `NAME=x,y,z` or `NAME=value`, repeatable.
+pub fn overrides(sets: &[String]) -> Result<Vec<(String, ParamValue)>, CliError> {
+    let mut out = Vec::new();
+    for s in sets {
+        let (name, value) = s.split_once('=').ok_or_else(|| {
+            usage(
+                "--set",
+                format!("`{s}` is not NAME=value"),
+                "e.g. --set R=-4.877,1.4798,7.0918 or --set H=150",
+            )
+        })?;
+        let parts: Vec<&str> = value.split(',').collect();
+        let v = match parts.len() {
+            1 => ParamValue::Scalar(number("--set", s, parts[0])?),
+            3 => ParamValue::Vector([
+                number("--set", s, parts[0])?,
+                number("--set", s, parts[1])?,
+                number("--set", s, parts[2])?,
+            ]),
+            n => {
+                return Err(usage(
+                    "--set",
+                    format!("`{s}` has {n} values"),
+                    "give one value or three (x,y,z)",
+                ))
+            }
+        };
+        out.push((name.trim().to_string(), v));
+    }
+    Ok(out)
+}
+
+/// Load a machine by built-in name or path.
+pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
+    let ov = overrides(sets)?;
+    if def::builtin_text(spec).is_some() {
+        return Machine::builtin(spec, &ov).map_err(kin_error);
+    }
+    let text = std::fs::read_to_string(spec).map_err(|e| {
+        let names: Vec<&str> = def::BUILTINS.iter().map(|(n, _)| *n).collect();
+        CliError::usage(format!(
+            "error: --machine {spec}: not a built-in machine and not a readable file ({e})\n  = help: built-in machines: {}; or give the path of a machine file\n",
+            names.join(", ")
+        ))
+    })?;
+    let d = MachineDef::from_toml(&text, spec).map_err(kin_error)?;
+    Machine::new(d, &ov).map_err(kin_error)
+}
+
+/// `A=1,B=2` against the machine's axis names; `need` lists the indices (0–4) that must
+/// be given, `allowed` those that may.
+fn joints_arg(
+    m: &Machine,
+    flag: &str,
+    text: &str,
+    allowed: &[usize],
+    need: &[usize],
+) -> Result<[Option<f64>; 5], CliError> {
+    let names = m.axis_names();
+    let mut vals = [None; 5];
+    for item in text.split(',').filter(|s| !s.trim().is_empty()) {
+        let (n, v) = item.split_once('=').ok_or_else(|| {
+            usage(
+                flag,
+                format!("`{item}` is not NAME=value"),
+                "e.g. X=0,Y=0,Z=0,A=30,B=-45",
+            )
+        })?;
+        let n = n.trim();
+        let idx = names
+            .iter()
+            .position(|a| a.eq_ignore_ascii_case(n))
+            .ok_or_else(|| {
+                kin_error(KinError::UnknownAxis {
+                    name: n.to_string(),
+                    known: names.join(", "),
+                })
+            })?;
+        if !allowed.contains(&idx) {
+            let ok: Vec<&str> = allowed.iter().map(|&i| names[i]).collect();
+            return Err(usage(
+                flag,
+                format!("axis {n} does not belong here"),
+                &format!("this takes {}", ok.join(", ")),
+            ));
+        }
+        if vals[idx].is_some() {
+            return Err(usage(
+                flag,
+                format!("axis {n} is given twice"),
+                "give each axis once",
+            ));
+        }
+        vals[idx] = Some(number(flag, item, v)?);
+    }
+    for &i in need {
+        if vals[i].is_none() {
+            return Err(kin_error(KinError::MissingJoint(names[i].to_string())));
+        }
+    }
+    Ok(vals)
+}
+
+/// The named head, or the machine's first head.
+fn head_index(m: &Machine, head: Option<&str>) -> Result<usize, CliError> {
+    match head {
+        Some(h) => m.head(h).map_err(kin_error),
+        None => Ok(0),
+    }
+}
+
+fn fmt6(v: f64) -> String {
+    let s = format!("{v:.6}");
+    if s.starts_with('-') && s[1..].bytes().all(|c| c == b'0' || c == b'.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+fn write_out(output: &mut Output, text: &str) -> Result<(), CliError> {
+    output
+        .writer()
+        .write_all(text.as_bytes())
+        .map_err(|e| CliError::write(&e))
+}
+
+pub fn machines(show: Option<&str>) -> Result<(), CliError> {
+    let mut out = Output::create(None)?;
+    match show {
+        None => {
+            let mut s = String::new();
+            for (name, _) in def::BUILTINS {
+                let d = MachineDef::builtin(name)
+                    .map(|d| d.description)
+                    .unwrap_or_default();
+                s.push_str(&format!("{name:<12} {d}\n"));
+            }
+            write_out(&mut out, &s)?;
+        }
+        Some(name) => {
+            let text = def::builtin_text(name).ok_or_else(|| {
+                let names: Vec<&str> = def::BUILTINS.iter().map(|(n, _)| *n).collect();
+                CliError::usage(format!(
+                    "error: no built-in machine named {name}\n  = help: built-in machines: {}\n",
+                    names.join(", ")
+                ))
+            })?;
+            write_out(&mut out, text)?;
+        }
+    }
+    out.commit()
+}
+
+pub fn fk(
+    machine: &str,
+    joints: &str,
+    head: Option<&str>,
+    sets: &[String],
+    json: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let h = head_index(&m, head)?;
+    let v = joints_arg(&m, "--joints", joints, &[0, 1, 2, 3, 4], &[0, 1, 2, 3, 4])?;
+    let j = Joints {
+        linear: [
+            v[0].unwrap_or(0.0),
+            v[1].unwrap_or(0.0),
+            v[2].unwrap_or(0.0),
+        ],
+        rotary: [v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)],
+    };
+    m.check_limits(&j).map_err(kin_error)?;
+    let pose = m.forward(&j, h);
+    let mut out = Output::create(None)?;
+    let text = if json {
+        format!(
+            "{}\n",
+            serde_json::json!({"position": [pose.tip.x, pose.tip.y, pose.tip.z], "axis": [pose.axis.x, pose.axis.y, pose.axis.z]})
+        )
+    } else {
+        format!(
+            "position {} {} {}\naxis {} {} {}\n",
+            fmt6(pose.tip.x),
+            fmt6(pose.tip.y),
+            fmt6(pose.tip.z),
+            fmt6(pose.axis.x),
+            fmt6(pose.axis.y),
+            fmt6(pose.axis.z)
+        )
+    };
+    write_out(&mut out, &text)?;
+    out.commit()
+}
+
+pub fn ik(
+    machine: &str,
+    position: &str,
+    axis: &str,
+    head: Option<&str>,
+    near: Option<&str>,
+    sets: &[String],
+    json: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let h = head_index(&m, head)?;
+    let p = vector("--position", position)?;
+    let a = vector("--axis", axis)?;
+    let near = match near {
+        Some(t) => {
+            let v = joints_arg(&m, "--near", t, &[3, 4], &[])?;
+            [v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)]
+        }
+        None => [0.0, 0.0],
+    };
+    let sols = m.inverse(&p, &a, h, &near).map_err(kin_error)?;
+    if !sols.as_slice().iter().any(|s| s.within_limits) {
+        return Err(kin_error(match m.choose(&sols, None, &a, h) {
+            Err(e) => e,
+            Ok(_) => KinError::Unreachable {
+                what: "no solution within limits".into(),
+            },
+        }));
+    }
+    let names = m.axis_names();
+    let mut out = Output::create(None)?;
+    let text = if json {
+        let list: Vec<serde_json::Value> = sols
+            .as_slice()
+            .iter()
+            .map(|s| {
+                let mut j = serde_json::Map::new();
+                for (n, v) in names.iter().zip(s.joints.values()) {
+                    j.insert((*n).to_string(), serde_json::json!(v));
+                }
+                serde_json::json!({"joints": j, "within_limits": s.within_limits, "branch": s.branch, "singular": s.singular})
+            })
+            .collect();
+        format!("{}\n", serde_json::json!({ "solutions": list }))
+    } else {
+        let mut s = String::new();
+        for sol in sols.as_slice() {
+            let parts: Vec<String> = names
+                .iter()
+                .zip(sol.joints.values())
+                .map(|(n, v)| format!("{n}={}", fmt6(v)))
+                .collect();
+            s.push_str(&parts.join(" "));
+            s.push_str(if sol.within_limits {
+                "  within limits"
+            } else {
+                "  OUTSIDE LIMITS"
+            });
+            if sol.singular {
+                s.push_str("  (singular: an axis kept its --near value)");
+            }
+            s.push('\n');
+        }
+        s
+    };
+    write_out(&mut out, &text)?;
+    out.commit()
+}
+
+pub fn rotate(
+    machine: &str,
+    joints: &str,
+    head: Option<&str>,
+    sets: &[String],
+    file: &str,
+    json: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let h = head_index(&m, head)?;
+    let v = joints_arg(&m, "--joints", joints, &[3, 4], &[3, 4])?;
+    let rotary = [v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)];
+    let probe = Joints {
+        linear: [0.0; 3],
+        rotary,
+    };
+    // Rotary limits only: the linear travel is checked point by point below.
+    for (i, r) in m.rotary.iter().enumerate() {
+        if let Some((lo, hi)) = r.limits {
+            if !r.within(rotary[i]) {
+                return Err(kin_error(KinError::JointOutOfLimit {
+                    axis: r.name.clone(),
+                    value: probe.rotary[i],
+                    lo,
+                    hi,
+                }));
+            }
+        }
+    }
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {file}: {e}\n")))?;
+    let name = display_name(file);
+    let pts = parse_points(&text, &name)?;
+    let mut moved = Vec::with_capacity(pts.len());
+    for pt in &pts {
+        let q = m.part_to_machine(&rotary, &Vector3::from(pt.p));
+        let x = m.linear_for(&q, h);
+        for (l, &val) in m.linear.iter().zip(&x) {
+            if val < l.limits.0 || val > l.limits.1 {
+                return Err(CliError::failed(format!(
+                    "error: the point on {name}:{} needs {} = {val:.4}, outside its travel [{}, {}]\n  = help: move the part or the origin, or check the machine's limits\n",
+                    pt.line, l.name, l.limits.0, l.limits.1
+                )));
+            }
+        }
+        moved.push(x);
+    }
+    let mut out = Output::create(None)?;
+    let s = if json {
+        format!("{}\n", serde_json::json!({ "points": moved }))
+    } else {
+        moved
+            .iter()
+            .map(|x| format!("{} {} {}\n", fmt6(x[0]), fmt6(x[1]), fmt6(x[2])))
+            .collect()
+    };
+    write_out(&mut out, &s)?;
+    out.commit()
+}
