@@ -1,0 +1,47 @@
+//! The align crate's typed errors.
+
+/// What can go wrong with a fit or an alignment.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AlignError {
+    /// Fewer points than the fit needs.
+    #[error("{fit} needs at least {need} points, got {got}")]
+    TooFewPoints {
+        /// The fit.
+        fit: &'static str,
+        /// How many it needs.
+        need: usize,
+        /// How many it got.
+        got: usize,
+    },
+    /// The same point twice.
+    #[error("points {first} and {second} are the same point")]
+    DuplicatePoints {
+        /// 1-based index of the first.
+        first: usize,
+        /// 1-based index of the second.
+        second: usize,
+    },
+    /// The points do not fix the shape (coplanar, collinear…).
+    #[error("{0}")]
+    Degenerate(String),
+    /// NaN or infinity in the input.
+    #[error("point {0} is not finite")]
+    NotFinite(usize),
+    /// The iteration did not settle.
+    #[error("the {0} fit did not converge")]
+    NoConvergence(&'static str),
+}
+
+impl AlignError {
+    /// What the user can do about it.
+    pub fn hint(&self) -> &'static str {
+        match self {
+            AlignError::TooFewPoints { .. } => "probe more points",
+            AlignError::DuplicatePoints { .. } => "remove the repeated point, or probe a different place",
+            AlignError::Degenerate(_) => "spread the points: a sphere needs points off one plane, a plane points off one line",
+            AlignError::NotFinite(_) => "check the point file",
+            AlignError::NoConvergence(_) => "check the points for outliers; the shape may not fit them",
+        }
+    }
+}

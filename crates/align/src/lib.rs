@@ -1,0 +1,16 @@
+//! # lampost-align
+//!
+//! The measuring half of the repair workflow (papers 000 and 002): fits of probed points
+//! (sphere, plane, circle), levelling, CAD alignment.
+//!
+//! ## Why these dependencies
+//! - `nalgebra`: SVD, Cholesky and small dense algebra for the fits;
+//! - `lampost-kinematics`: the machines for levelling;
+//! - `serde`: fit results serialise to JSON for `lampost fit --json`;
+//! - `thiserror`: the typed [`AlignError`].
+
+pub mod error;
+pub mod fit;
+
+pub use error::AlignError;
+pub use fit::{circle3d, plane, sphere, sphere4, CircleFit, PlaneFit, SphereFit, P3};
