@@ -88,7 +88,11 @@ pub fn check_points(pts: &[P3], fit: &'static str, need: usize) -> Result<(), Al
         return Err(AlignError::NotFinite(i + 1));
     }
     if pts.len() < need {
-        return Err(AlignError::TooFewPoints { fit, need, got: pts.len() });
+        return Err(AlignError::TooFewPoints {
+            fit,
+            need,
+            got: pts.len(),
+        });
     }
     let mut idx: Vec<usize> = (0..pts.len()).collect();
     idx.sort_by(|&a, &b| {
@@ -102,7 +106,10 @@ pub fn check_points(pts: &[P3], fit: &'static str, need: usize) -> Result<(), Al
     for w in idx.windows(2) {
         if pts[w[0]] == pts[w[1]] {
             let (a, b) = (w[0].min(w[1]), w[0].max(w[1]));
-            return Err(AlignError::DuplicatePoints { first: a + 1, second: b + 1 });
+            return Err(AlignError::DuplicatePoints {
+                first: a + 1,
+                second: b + 1,
+            });
         }
     }
     Ok(())
@@ -113,7 +120,10 @@ fn centroid(pts: &[P3]) -> P3 {
 }
 
 fn scale(pts: &[P3], m: &P3) -> f64 {
-    pts.iter().map(|p| (p - m).norm()).fold(0.0, f64::max).max(f64::MIN_POSITIVE)
+    pts.iter()
+        .map(|p| (p - m).norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE)
 }
 
 fn arr(v: &P3) -> [f64; 3] {
@@ -138,7 +148,10 @@ pub fn orient_normal(n: P3) -> P3 {
 
 fn rms_max(r: &[f64]) -> (f64, f64) {
     let ss: f64 = r.iter().map(|x| x * x).sum();
-    ((ss / r.len() as f64).sqrt(), r.iter().fold(0.0, |m, x| f64::max(m, x.abs())))
+    (
+        (ss / r.len() as f64).sqrt(),
+        r.iter().fold(0.0, |m, x| f64::max(m, x.abs())),
+    )
 }
 
 /// Levenberg–Marquardt on `p` parameters. `eval` fills residuals and the Jacobian.
@@ -234,7 +247,8 @@ pub fn sphere4(pts: &[P3]) -> Result<SphereFit, AlignError> {
     let det4 = |rows: [[f64; 4]; 4]| nalgebra::Matrix4::from_fn(|i, k| rows[i][k]).determinant();
     let row = |p: &P3, f: &dyn Fn(&P3) -> [f64; 4]| f(p);
     let s2 = |p: &P3| p.norm_squared();
-    let build = |f: &dyn Fn(&P3) -> [f64; 4]| [row(&q[0], f), row(&q[1], f), row(&q[2], f), row(&q[3], f)];
+    let build =
+        |f: &dyn Fn(&P3) -> [f64; 4]| [row(&q[0], f), row(&q[1], f), row(&q[2], f), row(&q[3], f)];
     let m11 = det4(build(&|p| [p.x, p.y, p.z, 1.0]));
     if m11.abs() < 1e-10 {
         return Err(AlignError::Degenerate(
@@ -251,7 +265,16 @@ pub fn sphere4(pts: &[P3]) -> Result<SphereFit, AlignError> {
     let center = c * s + m;
     let residuals: Vec<f64> = pts.iter().map(|p| (p - center).norm() - radius).collect();
     let (rms, max_abs_residual) = rms_max(&residuals);
-    Ok(SphereFit { center: arr(&center), radius, rms, max_abs_residual, n: 4, u_center: None, u_radius: None, residuals })
+    Ok(SphereFit {
+        center: arr(&center),
+        radius,
+        rms,
+        max_abs_residual,
+        n: 4,
+        u_center: None,
+        u_radius: None,
+        residuals,
+    })
 }
 
 /// Geometric least-squares sphere: minimise Σ(|p − c| − r)², from the algebraic fit.
@@ -262,7 +285,9 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
     check_points(pts, "a sphere", need)?;
     if let Some(r) = fixed_radius {
         if !(r.is_finite() && r > 0.0) {
-            return Err(AlignError::Degenerate(format!("the fixed radius {r} must be positive")));
+            return Err(AlignError::Degenerate(format!(
+                "the fixed radius {r} must be positive"
+            )));
         }
     }
     let m = centroid(pts);
@@ -293,7 +318,9 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
         start_c = (-nrm * h) / s;
         start_r = rr / s;
     } else {
-        let x = svd.solve(&b, 1e-14).map_err(|_| AlignError::Degenerate("the algebraic sphere fit failed".into()))?;
+        let x = svd
+            .solve(&b, 1e-14)
+            .map_err(|_| AlignError::Degenerate("the algebraic sphere fit failed".into()))?;
         start_c = P3::new(x[0], x[1], x[2]);
         start_r = (x[3] + start_c.norm_squared()).max(0.0).sqrt();
     }
@@ -334,7 +361,10 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
     let u = uncertainties(&j, &r);
     let center_w = center * s + m;
     let radius_w = radius * s;
-    let residuals: Vec<f64> = pts.iter().map(|p| (p - center_w).norm() - radius_w).collect();
+    let residuals: Vec<f64> = pts
+        .iter()
+        .map(|p| (p - center_w).norm() - radius_w)
+        .collect();
     let (rms, max_abs_residual) = rms_max(&residuals);
     Ok(SphereFit {
         center: arr(&center_w),
@@ -343,7 +373,11 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
         max_abs_residual,
         n,
         u_center: u.as_ref().map(|u| [u[0] * s, u[1] * s, u[2] * s]),
-        u_radius: if fixed_radius.is_none() { u.as_ref().map(|u| u[3] * s) } else { None },
+        u_radius: if fixed_radius.is_none() {
+            u.as_ref().map(|u| u[3] * s)
+        } else {
+            None
+        },
         residuals,
     })
 }
@@ -356,7 +390,9 @@ pub fn plane(pts: &[P3]) -> Result<PlaneFit, AlignError> {
     // The SVD of the N×3 centred matrix, for accuracy with thin point sets.
     let a = DMatrix::from_fn(n, 3, |i, k| pts[i][k] - m[k]);
     let svd = a.svd(false, true);
-    let vt = svd.v_t.ok_or_else(|| AlignError::Degenerate("the plane fit failed".into()))?;
+    let vt = svd
+        .v_t
+        .ok_or_else(|| AlignError::Degenerate("the plane fit failed".into()))?;
     let sv = svd.singular_values;
     let mut order = [0usize, 1, 2];
     order.sort_by(|&x, &y| sv[y].total_cmp(&sv[x]));
@@ -374,11 +410,24 @@ pub fn plane(pts: &[P3]) -> Result<PlaneFit, AlignError> {
     let hi = residuals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (u_offset, u_tilt) = if n > 3 {
         let s = (residuals.iter().map(|r| r * r).sum::<f64>() / (n - 3) as f64).sqrt();
-        (Some(s / (n as f64).sqrt()), Some([s / sv[i_big], s / sv[i_mid]]))
+        (
+            Some(s / (n as f64).sqrt()),
+            Some([s / sv[i_big], s / sv[i_mid]]),
+        )
     } else {
         (None, None)
     };
-    Ok(PlaneFit { point: arr(&m), normal: arr(&normal), rms, max_abs_residual, flatness: hi - lo, n, u_offset, u_tilt, residuals })
+    Ok(PlaneFit {
+        point: arr(&m),
+        normal: arr(&normal),
+        rms,
+        max_abs_residual,
+        flatness: hi - lo,
+        n,
+        u_offset,
+        u_tilt,
+        residuals,
+    })
 }
 
 /// A circle in 3D: the total-least-squares plane, then a geometric 2D circle fit of the
@@ -393,7 +442,10 @@ pub fn circle3d(pts: &[P3]) -> Result<CircleFit, AlignError> {
     let e1 = (helper - nrm * nrm.dot(&helper)).normalize();
     let e2 = nrm.cross(&e1);
     let s = scale(pts, &m);
-    let uv: Vec<(f64, f64)> = pts.iter().map(|p| ((p - m).dot(&e1) / s, (p - m).dot(&e2) / s)).collect();
+    let uv: Vec<(f64, f64)> = pts
+        .iter()
+        .map(|p| ((p - m).dot(&e1) / s, (p - m).dot(&e2) / s))
+        .collect();
     let n = uv.len();
     let a = DMatrix::from_fn(n, 3, |i, k| match k {
         0 => 2.0 * uv[i].0,
@@ -403,9 +455,13 @@ pub fn circle3d(pts: &[P3]) -> Result<CircleFit, AlignError> {
     let b = DVector::from_fn(n, |i, _| uv[i].0 * uv[i].0 + uv[i].1 * uv[i].1);
     let svd = a.svd(true, true);
     if svd.singular_values.min() <= 1e-9 * svd.singular_values.max() {
-        return Err(AlignError::Degenerate("the points are collinear: no circle passes through them".into()));
+        return Err(AlignError::Degenerate(
+            "the points are collinear: no circle passes through them".into(),
+        ));
     }
-    let x = svd.solve(&b, 1e-14).map_err(|_| AlignError::Degenerate("the algebraic circle fit failed".into()))?;
+    let x = svd
+        .solve(&b, 1e-14)
+        .map_err(|_| AlignError::Degenerate("the algebraic circle fit failed".into()))?;
     let r0 = (x[2] + x[0] * x[0] + x[1] * x[1]).max(0.0).sqrt();
     let x0 = DVector::from_vec(vec![x[0], x[1], r0]);
     let (x, r, j) = levenberg_marquardt(x0, n, "circle", |x, res, jac| {

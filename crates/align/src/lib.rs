@@ -11,6 +11,8 @@
 
 pub mod error;
 pub mod fit;
+pub mod setup;
 
 pub use error::AlignError;
 pub use fit::{circle3d, plane, sphere, sphere4, CircleFit, PlaneFit, SphereFit, P3};
+pub use setup::{level, plane_angle, Level, PlaneAngle, Setup};

@@ -17,7 +17,10 @@ fn read_ds(p: &Path) -> Vec<P3> {
     let n: usize = lines.next().expect("count").trim().parse().expect("count");
     let pts: Vec<P3> = lines
         .map(|l| {
-            let v: Vec<f64> = l.split('\t').map(|x| x.trim().parse().expect("num")).collect();
+            let v: Vec<f64> = l
+                .split('\t')
+                .map(|x| x.trim().parse().expect("num"))
+                .collect();
             P3::new(v[0], v[1], v[2])
         })
         .collect();
@@ -26,7 +29,11 @@ fn read_ds(p: &Path) -> Vec<P3> {
 }
 
 fn read_fit(p: &Path) -> Vec<f64> {
-    std::fs::read_to_string(p).expect("fit").lines().map(|l| l.trim().parse().expect("num")).collect()
+    std::fs::read_to_string(p)
+        .expect("fit")
+        .lines()
+        .map(|l| l.trim().parse().expect("num"))
+        .collect()
 }
 
 fn size(pts: &[P3]) -> f64 {
@@ -72,7 +79,11 @@ fn certified_nist_fits() {
         let got = sphere(&pts, None).expect("fits");
         let dc = (P3::from(got.center) - P3::new(want[0], want[1], want[2])).norm();
         let dd = (2.0 * got.radius - want[3]).abs();
-        assert!(dc <= tol && dd <= tol, "{}: centre off by {dc}, diameter by {dd} (tol {tol})", ds.display());
+        assert!(
+            dc <= tol && dd <= tol,
+            "{}: centre off by {dc}, diameter by {dd} (tol {tol})",
+            ds.display()
+        );
         worst[0] = worst[0].max(dc / size(&pts)).max(dd / size(&pts));
     }
     for (ds, fit) in sets(&root.join("Plane")) {
@@ -83,8 +94,14 @@ fn certified_nist_fits() {
         let wn = P3::new(want[3], want[4], want[5]);
         let a = angle(&P3::from(got.normal), &wn);
         // The certified point must lie on our plane (it is the centroid to 1.6e-13).
-        let d = (P3::new(want[0], want[1], want[2]) - P3::from(got.point)).dot(&P3::from(got.normal)).abs();
-        assert!(a <= 1e-9 && d <= tol, "{}: normal off by {a} rad, point by {d}", ds.display());
+        let d = (P3::new(want[0], want[1], want[2]) - P3::from(got.point))
+            .dot(&P3::from(got.normal))
+            .abs();
+        assert!(
+            a <= 1e-9 && d <= tol,
+            "{}: normal off by {a} rad, point by {d}",
+            ds.display()
+        );
         worst[1] = worst[1].max(a);
     }
     for (ds, fit) in sets(&root.join("Circle3d")) {
@@ -95,7 +112,11 @@ fn certified_nist_fits() {
         let dc = (P3::from(got.center) - P3::new(want[0], want[1], want[2])).norm();
         let a = angle(&P3::from(got.normal), &P3::new(want[3], want[4], want[5]));
         let dd = (2.0 * got.radius - want[6]).abs();
-        assert!(dc <= tol && dd <= tol && a <= 1e-9, "{}: centre {dc}, diameter {dd}, normal {a} rad", ds.display());
+        assert!(
+            dc <= tol && dd <= tol && a <= 1e-9,
+            "{}: centre {dc}, diameter {dd}, normal {a} rad",
+            ds.display()
+        );
         worst[2] = worst[2].max(dc / size(&pts)).max(dd / size(&pts));
     }
     eprintln!("NIST: worst sphere {:.1e} of part size, plane normal {:.1e} rad, circle {:.1e} of part size", worst[0], worst[1], worst[2]);

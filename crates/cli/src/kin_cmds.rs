@@ -163,6 +163,17 @@ fn joints_arg(
     Ok(vals)
 }
 
+/// `--near A=..,B=..` (default all 0) as rotary values in file order.
+pub fn near_rotary(m: &Machine, near: Option<&str>) -> Result<[f64; 2], CliError> {
+    match near {
+        Some(t) => {
+            let v = joints_arg(m, "--near", t, &[3, 4], &[])?;
+            Ok([v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)])
+        }
+        None => Ok([0.0, 0.0]),
+    }
+}
+
 /// The named head, or the machine's first head.
 fn head_index(m: &Machine, head: Option<&str>) -> Result<usize, CliError> {
     match head {

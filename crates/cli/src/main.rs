@@ -3,6 +3,7 @@
 //! The binary is thin: it parses arguments (clap), opens files, renders diagnostics and
 //! JSON; the work is done in the library crates.
 
+mod align_cmds;
 mod gcode_cmds;
 mod io;
 mod kin_cmds;
@@ -129,8 +130,75 @@ enum KinCmd {
     },
 }
 
+/// `lampost align` subcommands.
+#[derive(Subcommand, Debug)]
+enum AlignCmd {
+    /// Levelling: the rotary positions that make a probed surface's outward normal the tool axis.
+    Level {
+        /// Probed points on the surface.
+        file: String,
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Previous rotary position, e.g. A=0,B=0.
+        #[arg(long, allow_hyphen_values = true)]
+        near: Option<String>,
+        /// A direction pointing out of the material (default: the +Z side).
+        #[arg(long, allow_hyphen_values = true)]
+        outward: Option<String>,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The angle between a probed plane and a CAD plane (paper 002, eq. 1), the aligning rotation and setup.
+    Angle {
+        /// Probed points on the plane.
+        file: String,
+        /// The CAD plane's normal i,j,k.
+        #[arg(long, allow_hyphen_values = true)]
+        to_normal: Option<String>,
+        /// Or a second probed plane.
+        #[arg(long)]
+        to_plane: Option<String>,
+        /// Origin of the program frame for the setup (default: the probed plane's centroid).
+        #[arg(long, allow_hyphen_values = true)]
+        origin: Option<String>,
+        /// Write the setup file `lampost post --setup` reads.
+        #[arg(long)]
+        write_setup: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Levelling and CAD alignment.
+    Align {
+        #[command(subcommand)]
+        cmd: AlignCmd,
+    },
+    /// Fit a sphere, plane or circle to probed points (x y z per line, or a NIST .ds file).
+    Fit {
+        /// What to fit.
+        #[arg(value_enum)]
+        kind: align_cmds::FitKind,
+        /// Point file, or - for standard input.
+        file: String,
+        /// Sphere: fix the radius (stylus-centre points on a gage ball: ball + stylus radius).
+        #[arg(long)]
+        radius: Option<f64>,
+        /// Sphere: the gage ball's radius, to report the effective probe radius.
+        #[arg(long)]
+        ball_radius: Option<f64>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// List the built-in machines, or print one with `show NAME`.
     Machines {
         #[command(subcommand)]
@@ -188,6 +256,49 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Align {
+            cmd:
+                AlignCmd::Level {
+                    file,
+                    machine,
+                    near,
+                    outward,
+                    set,
+                    json,
+                },
+        } => align_cmds::level(
+            &file,
+            &machine,
+            &set,
+            near.as_deref(),
+            outward.as_deref(),
+            json,
+        ),
+        Command::Align {
+            cmd:
+                AlignCmd::Angle {
+                    file,
+                    to_normal,
+                    to_plane,
+                    origin,
+                    write_setup,
+                    json,
+                },
+        } => align_cmds::angle(
+            &file,
+            to_normal.as_deref(),
+            to_plane.as_deref(),
+            origin.as_deref(),
+            write_setup.as_deref(),
+            json,
+        ),
+        Command::Fit {
+            kind,
+            file,
+            radius,
+            ball_radius,
+            json,
+        } => align_cmds::fit(kind, &file, radius, ball_radius, json),
         Command::Machines { cmd: None } => kin_cmds::machines(None),
         Command::Machines {
             cmd: Some(MachinesCmd::Show { name }),

@@ -26,6 +26,7 @@ fn located(file: &str, line: usize, col: usize, text: &str, what: &str, hint: &s
 pub fn parse_points(text: &str, file: &str) -> Result<Vec<Point>, CliError> {
     let mut out = Vec::new();
     let mut first_data = true;
+    let mut expected: Option<(usize, usize)> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let code = raw.split('#').next().unwrap_or("");
@@ -50,6 +51,12 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<Point>, CliError> {
             fields.push((s, &code[s..]));
         }
         let parsed: Vec<Option<f64>> = fields.iter().map(|(_, f)| f.parse::<f64>().ok()).collect();
+        // A NIST `.ds` file starts with the number of points alone on its line.
+        if first_data && fields.len() == 1 && fields[0].1.bytes().all(|b| b.is_ascii_digit()) {
+            first_data = false;
+            expected = fields[0].1.parse::<usize>().ok().map(|n| (n, line));
+            continue;
+        }
         if first_data
             && parsed.iter().all(Option::is_none)
             && fields
@@ -92,6 +99,19 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<Point>, CliError> {
         }
         out.push(Point { p, line });
     }
+    if let Some((n, line)) = expected {
+        if n != out.len() {
+            let first = text.lines().nth(line - 1).unwrap_or("");
+            return Err(located(
+                file,
+                line,
+                1,
+                first,
+                &format!("the count line says {n} points, the file has {}", out.len()),
+                "correct the count, or remove the line",
+            ));
+        }
+    }
     Ok(out)
 }
 
@@ -106,6 +126,14 @@ mod tests {
         assert_eq!(pts.len(), 3);
         assert_eq!(pts[2].p, [7.0, 8.0, 9.0]);
         assert_eq!(pts[2].line, 6);
+    }
+
+    #[test]
+    fn nist_count_line() {
+        let pts = parse_points("2\n1\t2\t3\n4\t5\t6\n", "f.ds").expect("reads");
+        assert_eq!(pts.len(), 2);
+        let e = parse_points("3\n1\t2\t3\n", "f.ds").expect_err("count");
+        assert!(e.message.contains("says 3 points"), "{}", e.message);
     }
 
     #[test]

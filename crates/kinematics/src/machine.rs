@@ -692,6 +692,41 @@ impl Machine {
         }
     }
 
+    /// The rotary positions that turn the part-frame direction `v` to the tool axis
+    /// (levelling: `v` a surface's outward normal), placed nearest `near` and within
+    /// limits where possible: (angles in file order, within limits, branch), best first.
+    pub fn orientations(
+        &self,
+        v: &Vector3<f64>,
+        near: &[f64; 2],
+    ) -> Result<Vec<([f64; 2], bool, i8, bool)>, KinError> {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(KinError::NotFinite("the direction".into()));
+        }
+        if v.norm() < 1e-12 {
+            return Err(KinError::ZeroToolAxis);
+        }
+        let v = v.normalize();
+        let (raw, count) = self.orient(&v, near).ok_or_else(|| KinError::Unreachable {
+            what: format!(
+                "no rotation of {} and {} turns ({:.6}, {:.6}, {:.6}) to the tool axis",
+                self.rotary[0].name, self.rotary[1].name, v.x, v.y, v.z
+            ),
+        })?;
+        let mut out: Vec<([f64; 2], bool, i8, bool)> = raw
+            .iter()
+            .take(count)
+            .map(|o| {
+                let (r0, ok0) = self.place(0, o.degrees[0], near[0]);
+                let (r1, ok1) = self.place(1, o.degrees[1], near[1]);
+                ([r0, r1], ok0 && ok1, o.branch, o.singular)
+            })
+            .collect();
+        let cost = |r: &[f64; 2]| (r[0] - near[0]).abs() + (r[1] - near[1]).abs();
+        out.sort_by(|a, b| b.1.cmp(&a.1).then(cost(&a.0).total_cmp(&cost(&b.0))));
+        Ok(out)
+    }
+
     /// Inverse kinematics: every joint solution that puts `head`'s tool point at `tip`
     /// with tool axis `axis` (part frame), best first: within limits first, then the
     /// smallest rotary move from `near` (continuous axes wrap, limited ones don't).

@@ -1,0 +1,319 @@
+//! `lampost fit` and `lampost align`.
+
+use lampost_align::{AlignError, P3};
+
+use crate::io::{display_name, open_input, Output};
+use crate::points::{parse_points, Point};
+use crate::report::CliError;
+
+/// Render an align error for people, naming the file.
+pub fn align_error(file: &str, e: AlignError) -> CliError {
+    let at = match &e {
+        AlignError::DuplicatePoints { .. } | AlignError::NotFinite(_) => format!(" ({file})"),
+        _ => format!(" ({file})"),
+    };
+    CliError::failed(format!("error: {e}{at}\n  = help: {}\n", e.hint()))
+}
+
+/// Read a point file (or stdin).
+pub fn read_points(file: &str) -> Result<(String, Vec<Point>), CliError> {
+    let name = display_name(file);
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut open_input(file)?, &mut text).map_err(|e| {
+        CliError::usage(format!(
+            "error: cannot read {name}: {e}\n  = help: point files are text: x y z per line\n"
+        ))
+    })?;
+    let pts = parse_points(&text, &name)?;
+    if pts.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {name} holds no points\n  = help: write one point per line: x y z\n"
+        )));
+    }
+    Ok((name, pts))
+}
+
+fn p3(pts: &[Point]) -> Vec<P3> {
+    pts.iter().map(|p| P3::from(p.p)).collect()
+}
+
+/// With duplicates, name the lines rather than the indices.
+fn with_lines(name: &str, pts: &[Point], e: AlignError) -> CliError {
+    match e {
+        AlignError::DuplicatePoints { first, second } => CliError::failed(format!(
+            "error: {name}:{} and {name}:{} are the same point\n  = help: {}\n",
+            pts[first - 1].line,
+            pts[second - 1].line,
+            e.hint()
+        )),
+        AlignError::NotFinite(i) => CliError::failed(format!(
+            "error: {name}:{}: the point is not finite\n  = help: {}\n",
+            pts[i - 1].line,
+            e.hint()
+        )),
+        e => align_error(name, e),
+    }
+}
+
+fn write_json(v: serde_json::Value) -> Result<(), CliError> {
+    let mut out = Output::create(None)?;
+    out.writer()
+        .write_all(format!("{v}\n").as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    out.commit()
+}
+
+fn write_text(s: String) -> Result<(), CliError> {
+    let mut out = Output::create(None)?;
+    out.writer()
+        .write_all(s.as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    out.commit()
+}
+
+fn g(v: f64) -> String {
+    format!("{v:.6}")
+}
+
+fn opt3(u: Option<[f64; 3]>) -> String {
+    u.map_or("n/a".into(), |u| {
+        format!("{:.2e} {:.2e} {:.2e}", u[0], u[1], u[2])
+    })
+}
+
+/// Which fit.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum FitKind {
+    /// Geometric least-squares sphere (N ≥ 4; with --radius, centre only).
+    Sphere,
+    /// Sphere through exactly 4 points (paper 000's determinant method).
+    Sphere4,
+    /// Total-least-squares plane.
+    Plane,
+    /// Circle in 3D (plane, then a 2D geometric circle).
+    Circle,
+}
+
+pub fn fit(
+    kind: FitKind,
+    file: &str,
+    radius: Option<f64>,
+    ball_radius: Option<f64>,
+    json: bool,
+) -> Result<(), CliError> {
+    let (name, pts) = read_points(file)?;
+    let v = p3(&pts);
+    for (flag, val) in [("--radius", radius), ("--ball-radius", ball_radius)] {
+        if let Some(r) = val {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(CliError::usage(format!("error: {flag} {r}: must be a positive number\n  = help: give the radius in the points' units\n")));
+            }
+        }
+    }
+    match kind {
+        FitKind::Sphere | FitKind::Sphere4 => {
+            let f = match kind {
+                FitKind::Sphere4 => lampost_align::sphere4(&v),
+                _ => lampost_align::sphere(&v, radius),
+            }
+            .map_err(|e| with_lines(&name, &pts, e))?;
+            let probe = ball_radius.map(|b| f.radius - b);
+            if json {
+                let mut j = serde_json::json!({
+                    "center": f.center, "radius": f.radius, "rms": f.rms, "max_abs_residual": f.max_abs_residual, "n": f.n,
+                    "u_center": f.u_center, "u_radius": f.u_radius, "radius_fixed": radius.is_some(),
+                });
+                if let Some(p) = probe {
+                    j["probe_radius"] = serde_json::json!(p);
+                }
+                write_json(j)
+            } else {
+                let mut s = format!(
+                    "center {} {} {}\nradius {}{}\nrms {:.3e}\nmax_abs_residual {:.3e}\nn {}\nu_center {}\nu_radius {}\n",
+                    g(f.center[0]), g(f.center[1]), g(f.center[2]), g(f.radius), if radius.is_some() { " (fixed)" } else { "" },
+                    f.rms, f.max_abs_residual, f.n, opt3(f.u_center), f.u_radius.map_or("n/a".into(), |u| format!("{u:.2e}"))
+                );
+                if let Some(p) = probe {
+                    s.push_str(&format!("probe_radius {}\n", g(p)));
+                }
+                write_text(s)
+            }
+        }
+        FitKind::Plane => {
+            let f = lampost_align::plane(&v).map_err(|e| with_lines(&name, &pts, e))?;
+            if json {
+                write_json(serde_json::json!({
+                    "point": f.point, "normal": f.normal, "rms": f.rms, "flatness": f.flatness,
+                    "max_abs_residual": f.max_abs_residual, "n": f.n, "u_offset": f.u_offset, "u_tilt_rad": f.u_tilt,
+                }))
+            } else {
+                write_text(format!(
+                    "point {} {} {}\nnormal {} {} {}\nrms {:.3e}\nflatness {:.3e}\nmax_abs_residual {:.3e}\nn {}\nu_offset {}\nu_tilt_rad {}\n",
+                    g(f.point[0]), g(f.point[1]), g(f.point[2]), g(f.normal[0]), g(f.normal[1]), g(f.normal[2]),
+                    f.rms, f.flatness, f.max_abs_residual, f.n,
+                    f.u_offset.map_or("n/a".into(), |u| format!("{u:.2e}")),
+                    f.u_tilt.map_or("n/a".into(), |u| format!("{:.2e} {:.2e}", u[0], u[1]))
+                ))
+            }
+        }
+        FitKind::Circle => {
+            let f = lampost_align::circle3d(&v).map_err(|e| with_lines(&name, &pts, e))?;
+            if json {
+                write_json(serde_json::json!({
+                    "center": f.center, "normal": f.normal, "radius": f.radius, "rms": f.rms,
+                    "max_abs_residual": f.max_abs_residual, "rms_out_of_plane": f.rms_out_of_plane, "n": f.n,
+                    "u_center": f.u_center, "u_radius": f.u_radius,
+                }))
+            } else {
+                write_text(format!(
+                    "center {} {} {}\nnormal {} {} {}\nradius {}\nrms {:.3e}\nrms_out_of_plane {:.3e}\nn {}\nu_center {}\nu_radius {}\n",
+                    g(f.center[0]), g(f.center[1]), g(f.center[2]), g(f.normal[0]), g(f.normal[1]), g(f.normal[2]), g(f.radius),
+                    f.rms, f.rms_out_of_plane, f.n, opt3(f.u_center), f.u_radius.map_or("n/a".into(), |u| format!("{u:.2e}"))
+                ))
+            }
+        }
+    }
+}
+
+fn outward(n: P3, hint: Option<&str>) -> Result<P3, CliError> {
+    match hint {
+        None => Ok(n),
+        Some(t) => {
+            let h = crate::kin_cmds::vector("--outward", t)?;
+            Ok(if n.dot(&h) < 0.0 { -n } else { n })
+        }
+    }
+}
+
+pub fn level(
+    file: &str,
+    machine: &str,
+    sets: &[String],
+    near: Option<&str>,
+    outward_hint: Option<&str>,
+    json: bool,
+) -> Result<(), CliError> {
+    let m = crate::kin_cmds::load_machine(machine, sets)?;
+    let (name, pts) = read_points(file)?;
+    let pl = lampost_align::plane(&p3(&pts)).map_err(|e| with_lines(&name, &pts, e))?;
+    let n = outward(P3::from(pl.normal), outward_hint)?;
+    let near = crate::kin_cmds::near_rotary(&m, near)?;
+    let sols = lampost_align::level(&m, &n, &near).map_err(crate::kin_cmds::kin_error)?;
+    if !sols.iter().any(|s| s.within_limits) {
+        let detail: Vec<String> = sols
+            .iter()
+            .map(|s| {
+                format!(
+                    "{} = {:.3}°, {} = {:.3}°",
+                    m.rotary[0].name, s.rotary[0], m.rotary[1].name, s.rotary[1]
+                )
+            })
+            .collect();
+        return Err(CliError::failed(format!(
+            "error: no levelling solution within the rotary limits ({}); candidates: {}\n  = help: re-fixture the part, or check the surface's outward direction (--outward)\n",
+            m.rotary.iter().filter_map(|r| r.limits.map(|(lo, hi)| format!("{} [{lo}, {hi}]", r.name))).collect::<Vec<_>>().join(", "),
+            detail.join("; ")
+        )));
+    }
+    let names = m.axis_names();
+    if json {
+        let list: Vec<serde_json::Value> = sols
+            .iter()
+            .map(|s| {
+                let mut j = serde_json::Map::new();
+                j.insert(names[3].to_string(), serde_json::json!(s.rotary[0]));
+                j.insert(names[4].to_string(), serde_json::json!(s.rotary[1]));
+                serde_json::json!({"joints": j, "within_limits": s.within_limits, "branch": s.branch, "singular": s.singular, "residual_tilt_deg": s.residual_tilt_deg})
+            })
+            .collect();
+        write_json(
+            serde_json::json!({"normal": [n.x, n.y, n.z], "point": pl.point, "flatness": pl.flatness, "rms": pl.rms, "solutions": list}),
+        )
+    } else {
+        let mut s = format!(
+            "normal {} {} {}\nflatness {:.3e}\n",
+            g(n.x),
+            g(n.y),
+            g(n.z),
+            pl.flatness
+        );
+        for l in &sols {
+            s.push_str(&format!(
+                "{}={} {}={}  {}  residual tilt after rounding {:.2e}°\n",
+                names[3],
+                g(l.rotary[0]),
+                names[4],
+                g(l.rotary[1]),
+                if l.within_limits {
+                    "within limits"
+                } else {
+                    "OUTSIDE LIMITS"
+                },
+                l.residual_tilt_deg
+            ));
+        }
+        write_text(s)
+    }
+}
+
+pub fn angle(
+    file: &str,
+    to_normal: Option<&str>,
+    to_plane: Option<&str>,
+    origin: Option<&str>,
+    write_setup: Option<&str>,
+    json: bool,
+) -> Result<(), CliError> {
+    let (name, pts) = read_points(file)?;
+    let pl = lampost_align::plane(&p3(&pts)).map_err(|e| with_lines(&name, &pts, e))?;
+    let cad = match (to_normal, to_plane) {
+        (Some(t), None) => {
+            let v = crate::kin_cmds::vector("--to-normal", t)?;
+            if v.norm() < 1e-12 {
+                return Err(CliError::usage("error: --to-normal: the normal has zero length\n  = help: give the CAD plane's normal i,j,k\n".to_string()));
+            }
+            v
+        }
+        (None, Some(f)) => {
+            let (n2, p2) = read_points(f)?;
+            P3::from(lampost_align::plane(&p3(&p2)).map_err(|e| with_lines(&n2, &p2, e))?.normal)
+        }
+        _ => return Err(CliError::usage("error: give exactly one of --to-normal i,j,k or --to-plane FILE\n  = help: the CAD plane's normal, or probed points on the plane to compare with\n".to_string())),
+    };
+    let r = lampost_align::plane_angle(&P3::from(pl.normal), &cad);
+    let origin = match origin {
+        Some(o) => crate::kin_cmds::vector("--origin", o)?,
+        None => P3::from(pl.point),
+    };
+    let setup = lampost_align::Setup::from_rotation_about_z(
+        origin,
+        r.rotation_about_z_deg.unwrap_or(0.0),
+        &format!(
+            "lampost align angle {name}: model rotated about the tool axis to the probed plane"
+        ),
+    );
+    if let Some(path) = write_setup {
+        let mut out = Output::create(Some(path))?;
+        out.writer()
+            .write_all(setup.to_toml().as_bytes())
+            .map_err(|e| CliError::write(&e))?;
+        out.commit()?;
+    }
+    if json {
+        write_json(serde_json::json!({
+            "angle_deg": r.angle_deg, "rotation_axis": r.rotation_axis, "rotation_deg": r.rotation_deg,
+            "rotation_about_z_deg": r.rotation_about_z_deg, "probed_normal": pl.normal, "setup": setup,
+        }))
+    } else {
+        write_text(format!(
+            "angle_deg {}\nrotation axis {} {} {} by {} deg\nrotation_about_z_deg {}\n",
+            g(r.angle_deg),
+            g(r.rotation_axis[0]),
+            g(r.rotation_axis[1]),
+            g(r.rotation_axis[2]),
+            g(r.rotation_deg),
+            r.rotation_about_z_deg
+                .map_or("n/a (a normal is along Z)".into(), g)
+        ))
+    }
+}
