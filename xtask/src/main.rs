@@ -5,6 +5,7 @@
 //!   both measured in the same process), then `lampost fmt` on a generated 1,000,000-line
 //!   program: time and peak resident memory (VmHWM of the child process).
 //! - `cargo xtask bench kin`: IK + FK pairs per second on both built-in machines.
+//! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit.
 //! - `cargo xtask fuzz [--seconds N]`: a mutation fuzzer over parse + interpret, seeded
 //!   with the corpus and fixtures; reports inputs run and any panic.
 
@@ -110,6 +111,27 @@ fn bench_kin() -> Result<(), String> {
     let mut c = cargo();
     c.args(["bench", "-p", "lampost-kinematics", "--bench", "ikfk"]);
     run(c)
+}
+
+fn accuracy() -> Result<(), String> {
+    println!("== Sphere fits: 25 mm ball, 120° cap, σ = 1 µm per coordinate, 1000 trials");
+    let (f4, fnp) = lampost_align::study::four_vs_n(1000, 30, 12.5, 60.0, 0.001, 2026);
+    for (name, s) in [
+        ("four-point (eqs. 1-7)", f4),
+        ("30-point geometric LS", fnp),
+    ] {
+        println!(
+            "{name:<24} centre std x/y/z {:.2}/{:.2}/{:.2} µm, RMS error {:.2} µm, max {:.2} µm, radius std {:.2} µm{}",
+            s.std_center[0] * 1e3, s.std_center[1] * 1e3, s.std_center[2] * 1e3,
+            s.rms_center_error * 1e3, s.max_center_error * 1e3, s.std_radius * 1e3,
+            s.coverage_2u.map_or(String::new(), |c| format!(", 2u covers the true error in {:.1} % of coordinates", c * 100.0))
+        );
+    }
+    println!(
+        "ratio of RMS centre errors (four-point / N-point): {:.1}",
+        f4.rms_center_error / fnp.rms_center_error
+    );
+    Ok(())
 }
 
 struct Rng(u64);
@@ -311,12 +333,13 @@ fn main() -> ExitCode {
         ["bench", "gcode"] => bench_gcode(),
         ["bench", "kin"] => bench_kin(),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()),
+        ["accuracy"] => accuracy(),
         ["fuzz"] => fuzz(60),
         ["fuzz", "--seconds", n] => match n.parse() {
             Ok(s) => fuzz(s),
             Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
         },
-        _ => Err("usage: cargo xtask bench [gcode|kin] | cargo xtask fuzz [--seconds N]".into()),
+        _ => Err("usage: cargo xtask bench [gcode|kin] | cargo xtask accuracy | cargo xtask fuzz [--seconds N]".into()),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -154,13 +154,16 @@ fn rms_max(r: &[f64]) -> (f64, f64) {
     )
 }
 
+/// Parameters, residuals and Jacobian at the solution.
+type Solved = (DVector<f64>, DVector<f64>, DMatrix<f64>);
+
 /// Levenberg–Marquardt on `p` parameters. `eval` fills residuals and the Jacobian.
 fn levenberg_marquardt(
     mut x: DVector<f64>,
     n: usize,
     name: &'static str,
     eval: impl Fn(&DVector<f64>, &mut DVector<f64>, &mut DMatrix<f64>),
-) -> Result<(DVector<f64>, DVector<f64>, DMatrix<f64>), AlignError> {
+) -> Result<Solved, AlignError> {
     let p = x.len();
     let mut r = DVector::zeros(n);
     let mut j = DMatrix::zeros(n, p);

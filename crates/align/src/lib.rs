@@ -6,12 +6,15 @@
 //! ## Why these dependencies
 //! - `nalgebra`: SVD, Cholesky and small dense algebra for the fits;
 //! - `lampost-kinematics`: the machines for levelling;
+//! - `lampost-gcode`: the FADAL emitter for probing programs;
 //! - `serde`: fit results serialise to JSON for `lampost fit --json`;
 //! - `thiserror`: the typed [`AlignError`].
 
 pub mod error;
 pub mod fit;
+pub mod probe;
 pub mod setup;
+pub mod study;
 
 pub use error::AlignError;
 pub use fit::{circle3d, plane, sphere, sphere4, CircleFit, PlaneFit, SphereFit, P3};

@@ -29,7 +29,9 @@ pub fn level(machine: &Machine, normal: &P3, near: &[f64; 2]) -> Result<Vec<Leve
     let sols = machine.orientations(&n, near)?;
     Ok(sols
         .into_iter()
-        .map(|(rotary, within_limits, branch, singular)| {
+        .map(|p| {
+            let (rotary, within_limits, branch, singular) =
+                (p.rotary, p.within_limits, p.branch, p.singular);
             let mut rounded = rotary;
             for (i, r) in machine.rotary.iter().enumerate() {
                 rounded[i] = (rotary[i] / r.resolution).round() * r.resolution;

@@ -317,3 +317,152 @@ pub fn angle(
         ))
     }
 }
+
+fn pos(flag: &str, v: f64) -> Result<f64, CliError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(CliError::usage(format!("error: {flag} {v}: must be a positive number\n  = help: give a length in the program's units\n")))
+    }
+}
+
+fn probe_opts(units: crate::UnitsArg, number: u32) -> lampost_align::probe::ProbeOptions {
+    let u = match units {
+        crate::UnitsArg::Inch => lampost_gcode::Units::Inch,
+        crate::UnitsArg::Mm => lampost_gcode::Units::Mm,
+    };
+    let mut o = lampost_align::probe::ProbeOptions::defaults(u);
+    o.program_number = number;
+    o
+}
+
+fn write_program(text: &str, output: Option<&str>) -> Result<(), CliError> {
+    // Check our own output with our own reader before anyone runs it.
+    let diags = lampost_gcode::check(text.as_bytes(), lampost_gcode::Options::default());
+    if let Some(d) = diags.iter().find(|d| d.is_error()) {
+        return Err(CliError::failed(format!(
+            "error: internal: the generated program does not check: {d}\n"
+        )));
+    }
+    let mut out = Output::create(output)?;
+    out.writer()
+        .write_all(text.as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    out.commit()
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn probe_sphere(
+    center: &str,
+    radius: f64,
+    stylus: f64,
+    points: usize,
+    cap_deg: f64,
+    units: crate::UnitsArg,
+    number: u32,
+    output: Option<&str>,
+) -> Result<(), CliError> {
+    let c = crate::kin_cmds::vector("--center", center)?;
+    let radius = pos("--radius", radius)?;
+    let stylus = pos("--stylus-radius", stylus)?;
+    if points < 4 {
+        return Err(CliError::usage(format!("error: --points {points}: a sphere fit needs at least 4 touches\n  = help: 30 spread over the cap is a good default\n")));
+    }
+    if !(cap_deg > 0.0 && cap_deg <= 120.0) {
+        return Err(CliError::usage(format!("error: --cap-deg {cap_deg}: must be in (0, 120]\n  = help: the polar angle from +Z the touches may reach; keep clear of the stem\n")));
+    }
+    let o = probe_opts(units, number);
+    let t = lampost_align::probe::sphere_touches(c, radius, stylus, points, cap_deg, &o);
+    let safe = c.z + radius + stylus + 3.0 * o.clearance;
+    let text = lampost_align::probe::program(
+        &t,
+        safe,
+        &format!("LAMPOST SPHERE PROBE {points} TOUCHES"),
+        &o,
+    )
+    .map_err(|e| CliError::write(&e))?;
+    write_program(&text, output)
+}
+
+pub fn probe_plane(
+    corner: &str,
+    size: &str,
+    grid: &str,
+    safe_z: Option<f64>,
+    units: crate::UnitsArg,
+    number: u32,
+    output: Option<&str>,
+) -> Result<(), CliError> {
+    let c = crate::kin_cmds::vector("--corner", corner)?;
+    let bad_pair = |flag: &str, t: &str| {
+        CliError::usage(format!(
+            "error: {flag} {t}: expected two values a,b\n  = help: e.g. --size 2,1 --grid 3,3\n"
+        ))
+    };
+    let (su, sv) = size
+        .split_once(',')
+        .ok_or_else(|| bad_pair("--size", size))?;
+    let (u, v) = (
+        pos(
+            "--size",
+            su.trim().parse().map_err(|_| bad_pair("--size", size))?,
+        )?,
+        pos(
+            "--size",
+            sv.trim().parse().map_err(|_| bad_pair("--size", size))?,
+        )?,
+    );
+    let (gm, gn) = grid
+        .split_once(',')
+        .ok_or_else(|| bad_pair("--grid", grid))?;
+    let m: usize = gm.trim().parse().map_err(|_| bad_pair("--grid", grid))?;
+    let n: usize = gn.trim().parse().map_err(|_| bad_pair("--grid", grid))?;
+    if m == 0 || n == 0 || m * n < 3 || m * n > 10_000 {
+        return Err(CliError::usage(format!("error: --grid {grid}: needs at least 3 touches (and at most 10000)\n  = help: e.g. --grid 3,3\n")));
+    }
+    let o = probe_opts(units, number);
+    let t = lampost_align::probe::plane_touches(c, (u, v), (m, n), &o);
+    let safe = safe_z.unwrap_or(c.z + 10.0 * o.clearance);
+    if safe <= c.z + o.clearance {
+        return Err(CliError::usage(format!(
+            "error: --safe-z {safe}: must be above the face plus the clearance ({})\n",
+            c.z + o.clearance
+        )));
+    }
+    let text = lampost_align::probe::program(&t, safe, &format!("LAMPOST PLANE PROBE {m}X{n}"), &o)
+        .map_err(|e| CliError::write(&e))?;
+    write_program(&text, output)
+}
+
+pub fn probe_read(log: &str, output: Option<&str>, json: bool) -> Result<(), CliError> {
+    let name = display_name(log);
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut open_input(log)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
+    let pts = lampost_align::probe::read_log(&text).map_err(|e| match e {
+        lampost_align::probe::LogError::Malformed { line, text: t, why } => CliError::failed(format!(
+            "error: {name}:{line}: `{t}` looks like a touch point but {why}\n  = help: fix or delete the line; touch lines read X… Y… Z…\n"
+        )),
+        lampost_align::probe::LogError::NoTouches => CliError::failed(format!(
+            "error: {name} has no touch lines (X… Y… Z…)\n  = help: check that the log was captured from the RS-232 port while the probing program ran\n"
+        )),
+    })?;
+    let s = if json {
+        let list: Vec<serde_json::Value> = pts
+            .iter()
+            .map(|(l, p)| serde_json::json!({"line": l, "point": p}))
+            .collect();
+        format!("{}\n", serde_json::json!({ "points": list }))
+    } else {
+        let mut s = format!("# touch points from {name}\nx y z\n");
+        for (_, p) in &pts {
+            s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+        }
+        s
+    };
+    let mut out = Output::create(output)?;
+    out.writer()
+        .write_all(s.as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    out.commit()
+}

@@ -175,8 +175,80 @@ enum AlignCmd {
     },
 }
 
+/// `lampost probe` subcommands.
+#[derive(Subcommand, Debug)]
+enum ProbeCmd {
+    /// A FADAL program that touches a gage ball at N points and prints each touch.
+    Sphere {
+        /// Estimated ball centre x,y,z.
+        #[arg(long, allow_hyphen_values = true)]
+        center: String,
+        /// Ball radius.
+        #[arg(long)]
+        radius: f64,
+        /// Stylus ball radius.
+        #[arg(long)]
+        stylus_radius: f64,
+        /// Number of touches.
+        #[arg(long, default_value_t = 30)]
+        points: usize,
+        /// Largest polar angle from +Z the touches reach (clear of the stem).
+        #[arg(long, default_value_t = 90.0)]
+        cap_deg: f64,
+        /// Program units.
+        #[arg(long, value_enum, default_value = "inch")]
+        units: UnitsArg,
+        /// Program number.
+        #[arg(long, default_value_t = 9500)]
+        program_number: u32,
+        /// Output file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+    },
+    /// A FADAL program that touches a grid over a rectangle on a +Z face.
+    Plane {
+        /// One corner x,y,z of the rectangle on the face.
+        #[arg(long, allow_hyphen_values = true)]
+        corner: String,
+        /// Size u,v along X and Y.
+        #[arg(long)]
+        size: String,
+        /// Grid m,n (touches along X and Y).
+        #[arg(long)]
+        grid: String,
+        /// Height for moves between touches (default 10 clearances above the face).
+        #[arg(long, allow_hyphen_values = true)]
+        safe_z: Option<f64>,
+        /// Program units.
+        #[arg(long, value_enum, default_value = "inch")]
+        units: UnitsArg,
+        /// Program number.
+        #[arg(long, default_value_t = 9501)]
+        program_number: u32,
+        /// Output file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+    },
+    /// Turn the controller's RS-232 log into a point file.
+    Read {
+        /// The log, or - for standard input.
+        log: String,
+        /// Output file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// FADAL probing programs, and reading their logs.
+    Probe {
+        #[command(subcommand)]
+        cmd: ProbeCmd,
+    },
     /// Levelling and CAD alignment.
     Align {
         #[command(subcommand)]
@@ -190,10 +262,10 @@ enum Command {
         /// Point file, or - for standard input.
         file: String,
         /// Sphere: fix the radius (stylus-centre points on a gage ball: ball + stylus radius).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         radius: Option<f64>,
         /// Sphere: the gage ball's radius, to report the effective probe radius.
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         ball_radius: Option<f64>,
         /// Write JSON.
         #[arg(long)]
@@ -256,6 +328,51 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Probe {
+            cmd:
+                ProbeCmd::Sphere {
+                    center,
+                    radius,
+                    stylus_radius,
+                    points,
+                    cap_deg,
+                    units,
+                    program_number,
+                    output,
+                },
+        } => align_cmds::probe_sphere(
+            &center,
+            radius,
+            stylus_radius,
+            points,
+            cap_deg,
+            units,
+            program_number,
+            output.as_deref(),
+        ),
+        Command::Probe {
+            cmd:
+                ProbeCmd::Plane {
+                    corner,
+                    size,
+                    grid,
+                    safe_z,
+                    units,
+                    program_number,
+                    output,
+                },
+        } => align_cmds::probe_plane(
+            &corner,
+            &size,
+            &grid,
+            safe_z,
+            units,
+            program_number,
+            output.as_deref(),
+        ),
+        Command::Probe {
+            cmd: ProbeCmd::Read { log, output, json },
+        } => align_cmds::probe_read(&log, output.as_deref(), json),
         Command::Align {
             cmd:
                 AlignCmd::Level {

@@ -342,6 +342,14 @@ impl<W: Write> Emitter<W> {
         self.flush_line()
     }
 
+    /// Write a line verbatim (a macro statement such as `#PRINT …`, or a comment line).
+    pub fn raw_line(&mut self, text: &str) -> io::Result<()> {
+        self.frame_start(false)?;
+        self.last_percent = false;
+        self.out.write_all(text.trim_end().as_bytes())?;
+        self.out.write_all(b"\n")
+    }
+
     /// Close the program (FADAL: a final `%` if the last line was not one) and hand
     /// back the writer.
     pub fn finish(mut self) -> io::Result<W> {

@@ -23,6 +23,6 @@ pub mod machine;
 pub use def::{MachineDef, Moves, ParamValue, Units, VecExpr, BUILTINS};
 pub use error::KinError;
 pub use machine::{
-    Choice, Head, Joints, Linear, Machine, Orientation, Pose, Rotary, Solution, Solutions,
+    Choice, Head, Joints, Linear, Machine, Orientation, Placed, Pose, Rotary, Solution, Solutions,
 };
 pub use nalgebra::Vector3;

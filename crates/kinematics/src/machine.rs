@@ -110,6 +110,19 @@ pub struct Orientation {
     pub singular: bool,
 }
 
+/// A rotary orientation placed against the limits (see [`Machine::orientations`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placed {
+    /// Angles in file order.
+    pub rotary: [f64; 2],
+    /// Within the rotary limits.
+    pub within_limits: bool,
+    /// Branch (+1/−1, 0 where they coincide).
+    pub branch: i8,
+    /// A rotary axis kept its `near` value.
+    pub singular: bool,
+}
+
 /// One inverse-kinematics solution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Solution {
@@ -695,11 +708,7 @@ impl Machine {
     /// The rotary positions that turn the part-frame direction `v` to the tool axis
     /// (levelling: `v` a surface's outward normal), placed nearest `near` and within
     /// limits where possible: (angles in file order, within limits, branch), best first.
-    pub fn orientations(
-        &self,
-        v: &Vector3<f64>,
-        near: &[f64; 2],
-    ) -> Result<Vec<([f64; 2], bool, i8, bool)>, KinError> {
+    pub fn orientations(&self, v: &Vector3<f64>, near: &[f64; 2]) -> Result<Vec<Placed>, KinError> {
         if !v.iter().all(|x| x.is_finite()) {
             return Err(KinError::NotFinite("the direction".into()));
         }
@@ -713,17 +722,26 @@ impl Machine {
                 self.rotary[0].name, self.rotary[1].name, v.x, v.y, v.z
             ),
         })?;
-        let mut out: Vec<([f64; 2], bool, i8, bool)> = raw
+        let mut out: Vec<Placed> = raw
             .iter()
             .take(count)
             .map(|o| {
                 let (r0, ok0) = self.place(0, o.degrees[0], near[0]);
                 let (r1, ok1) = self.place(1, o.degrees[1], near[1]);
-                ([r0, r1], ok0 && ok1, o.branch, o.singular)
+                Placed {
+                    rotary: [r0, r1],
+                    within_limits: ok0 && ok1,
+                    branch: o.branch,
+                    singular: o.singular,
+                }
             })
             .collect();
         let cost = |r: &[f64; 2]| (r[0] - near[0]).abs() + (r[1] - near[1]).abs();
-        out.sort_by(|a, b| b.1.cmp(&a.1).then(cost(&a.0).total_cmp(&cost(&b.0))));
+        out.sort_by(|a, b| {
+            b.within_limits
+                .cmp(&a.within_limits)
+                .then(cost(&a.rotary).total_cmp(&cost(&b.rotary)))
+        });
         Ok(out)
     }
 

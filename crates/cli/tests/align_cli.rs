@@ -1,0 +1,235 @@
+//! `lampost fit`, `align`, `probe` as a user runs them.
+
+mod common;
+
+use common::*;
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &std::process::Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).expect("json")
+}
+
+fn sphere_points(c: [f64; 3], r: f64, n: usize) -> String {
+    let mut s = String::from("x y z\n");
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    for i in 0..n {
+        let z = 1.0 - 0.5 * (i as f64 + 0.5) / n as f64;
+        let rho = (1.0 - z * z).sqrt();
+        let phi = golden * i as f64;
+        s.push_str(&format!(
+            "{} {} {}\n",
+            c[0] + r * rho * phi.cos(),
+            c[1] + r * rho * phi.sin(),
+            c[2] + r * z
+        ));
+    }
+    s
+}
+
+#[test]
+fn fits_from_files_and_stdin() {
+    let pts = sphere_points([1.0, 2.0, 3.0], 12.75, 30);
+    let v = json(&lampost_stdin(
+        &["fit", "sphere", "-", "--json", "--ball-radius", "12.5"],
+        pts.as_bytes(),
+    ));
+    for (k, w) in [1.0, 2.0, 3.0].iter().enumerate() {
+        assert!(
+            (v["center"][k].as_f64().expect("c") - w).abs() < 1e-9,
+            "{v}"
+        );
+    }
+    assert!((v["radius"].as_f64().expect("r") - 12.75).abs() < 1e-9);
+    assert!((v["probe_radius"].as_f64().expect("p") - 0.25).abs() < 1e-9);
+    assert_eq!(v["n"], 30);
+    let v = json(&lampost_stdin(
+        &["fit", "sphere", "-", "--json", "--radius", "12.75"],
+        pts.as_bytes(),
+    ));
+    assert_eq!(v["radius_fixed"], true);
+    assert!((v["center"][2].as_f64().expect("c") - 3.0).abs() < 1e-9);
+    let four: String = pts.lines().take(5).map(|l| format!("{l}\n")).collect();
+    let v = json(&lampost_stdin(
+        &["fit", "sphere4", "-", "--json"],
+        four.as_bytes(),
+    ));
+    assert!((v["radius"].as_f64().expect("r") - 12.75).abs() < 1e-9);
+    let v = json(&lampost_stdin(
+        &["fit", "plane", "-", "--json"],
+        b"0 0 0\n1 0 0\n0 1 0\n1 1 0.001\n",
+    ));
+    assert!(v["flatness"].as_f64().expect("f") > 0.0);
+    let v = json(&lampost_stdin(
+        &["fit", "circle", "-", "--json"],
+        b"1 0 5\n0 1 5\n-1 0 5\n0 -1 5\n",
+    ));
+    assert!((v["radius"].as_f64().expect("r") - 1.0).abs() < 1e-12);
+    if let Some(shared) = shared() {
+        let ds = shared.join("testdata/nist/Sphere/sph20.ds");
+        let v = json(&lampost(&[
+            "fit",
+            "sphere",
+            ds.to_str().expect("utf8"),
+            "--json",
+        ]));
+        assert!((v["radius"].as_f64().expect("r") * 2.0 - 21.826_658_487_094_81).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn fit_bad_input() {
+    let cases: Vec<(Vec<&str>, &[u8], &str)> = vec![
+        (
+            vec!["fit", "sphere", "-"],
+            b"0 0 0\n1 0 0\n0 1 0\n",
+            "needs at least 4 points",
+        ),
+        (
+            vec!["fit", "sphere", "-"],
+            b"0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 3 0\n",
+            "lie on one plane",
+        ),
+        (
+            vec!["fit", "sphere4", "-"],
+            b"0 0 0\n1 0 0\n2 0 0\n0 1 1\n",
+            "points 1, 2 and 3 are collinear",
+        ),
+        (
+            vec!["fit", "sphere4", "-"],
+            b"0 0 0\n1 0 0\n0 1 0\n1 1 0\n",
+            "coplanar",
+        ),
+        (
+            vec!["fit", "plane", "-"],
+            b"0 0 0\n1 1 1\n2 2 2\n",
+            "collinear",
+        ),
+        (
+            vec!["fit", "plane", "-"],
+            b"0 0 0\n1 0 0\n# c\n0 1 0\n1 0 0\n",
+            "<stdin>:2 and <stdin>:5 are the same point",
+        ),
+        (vec!["fit", "plane", "-"], b"0 0 0\n1 0 zz\n", "<stdin>:2:5"),
+        (vec!["fit", "plane", "-"], b"", "holds no points"),
+        (
+            vec!["fit", "sphere", "-", "--radius", "-1"],
+            b"0 0 0\n",
+            "must be a positive number",
+        ),
+    ];
+    for (args, input, want) in cases {
+        let o = lampost_stdin(&args, input);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(e.contains(want), "{args:?}: `{want}` not in\n{e}");
+        assert!(e.contains("help:"), "{args:?}");
+    }
+}
+
+#[test]
+fn level_and_angle() {
+    let plane = b"0 0 0\n1 0 0.1\n0 1 0.05\n1 1 0.15\n";
+    let v = json(&lampost_stdin(
+        &["align", "level", "-", "--machine", "fadal-lamp", "--json"],
+        plane,
+    ));
+    let sols = v["solutions"].as_array().expect("solutions");
+    assert_eq!(sols.len(), 2);
+    // Seed notes' closed form: a = −atan2(ny, nx), b = atan2(√(nx²+ny²), nz).
+    let n: Vec<f64> = v["normal"]
+        .as_array()
+        .expect("n")
+        .iter()
+        .map(|x| x.as_f64().expect("f"))
+        .collect();
+    let a = -n[1].atan2(n[0]).to_degrees();
+    let b = n[0].hypot(n[1]).atan2(n[2]).to_degrees();
+    assert!(
+        sols.iter()
+            .any(|s| (s["joints"]["A"].as_f64().expect("A") - a).abs() < 1e-9
+                && (s["joints"]["B"].as_f64().expect("B") - b).abs() < 1e-9),
+        "{v}"
+    );
+    assert!(sols[0]["residual_tilt_deg"].as_f64().expect("t") < 1e-3);
+    let dir = tempdir("angle");
+    let setup = dir.join("setup.toml");
+    let v = json(&lampost_stdin(
+        &[
+            "align",
+            "angle",
+            "-",
+            "--to-normal",
+            "0,0,1",
+            "--write-setup",
+            setup.to_str().expect("utf8"),
+            "--json",
+        ],
+        plane,
+    ));
+    let want = (n[2].acos()).to_degrees();
+    assert!((v["angle_deg"].as_f64().expect("a") - want).abs() < 1e-9);
+    let text = std::fs::read_to_string(&setup).expect("setup written");
+    assert!(text.contains("origin = [") && text.contains("x_axis") && text.contains("z_axis"));
+    let o = lampost_stdin(&["align", "angle", "-"], plane);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("exactly one of"));
+}
+
+#[test]
+fn probe_programs_check_and_their_logs_read_back() {
+    let o = lampost(&[
+        "probe",
+        "sphere",
+        "--center",
+        "1,2,3",
+        "--radius",
+        "0.5",
+        "--stylus-radius",
+        "0.0625",
+        "--points",
+        "12",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let prog = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(prog.starts_with("%\nO9500"));
+    assert!(prog.contains("M64") && prog.contains("G31") && prog.contains("#PRINT \"X\",PX1"));
+    assert_eq!(prog.matches("G1 G31").count(), 12);
+    // Our own checker accepts it, and the trace shows 12 probing moves.
+    let t = lampost_stdin(&["trace", "-", "--units", "inch"], prog.as_bytes());
+    assert!(t.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&t.stdout)
+            .matches("(probe)")
+            .count(),
+        12
+    );
+    let o = lampost(&[
+        "probe", "plane", "--corner", "0,0,-1", "--size", "2,1", "--grid", "3,2", "--units", "mm",
+    ]);
+    let prog = String::from_utf8_lossy(&o.stdout);
+    assert!(prog.contains("G71") && prog.matches("G1 G31").count() == 6);
+    // A log with noise and touch lines.
+    let log = b"DNC READY\nX1.0 Y2.0 Z3.0\nTOUCH: X1.5 Y2.0 Z3.1\n\nEND\n";
+    let o = lampost_stdin(&["probe", "read", "-"], log);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("1.5 2 3.1"));
+    let o = lampost_stdin(&["probe", "read", "-"], b"X1.0 Y2.0 Z3.0\nX1.0 Y Z3\n");
+    assert!(stderr(&o).contains("<stdin>:2"), "{}", stderr(&o));
+    let o = lampost_stdin(&["probe", "read", "-"], b"nothing here\n");
+    assert!(stderr(&o).contains("no touch lines"));
+    let o = lampost(&[
+        "probe",
+        "sphere",
+        "--center",
+        "1,2",
+        "--radius",
+        "0.5",
+        "--stylus-radius",
+        "0.06",
+    ]);
+    assert!(stderr(&o).contains("expected x,y,z"));
+}
