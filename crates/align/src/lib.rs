@@ -7,12 +7,15 @@
 //! - `nalgebra`: SVD, Cholesky and small dense algebra for the fits;
 //! - `lampost-kinematics`: the machines for levelling;
 //! - `lampost-gcode`: the FADAL emitter for probing programs;
+//! - `parry3d-f64`: closest points on a triangle mesh (BVH) for registration, in f64;
 //! - `serde`: fit results serialise to JSON for `lampost fit --json`;
 //! - `thiserror`: the typed [`AlignError`].
 
 pub mod error;
 pub mod fit;
+pub mod mesh;
 pub mod probe;
+pub mod register;
 pub mod setup;
 pub mod study;
 

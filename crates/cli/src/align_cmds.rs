@@ -466,3 +466,81 @@ pub fn probe_read(log: &str, output: Option<&str>, json: bool) -> Result<(), Cli
         .map_err(|e| CliError::write(&e))?;
     out.commit()
 }
+
+pub fn register(
+    file: &str,
+    mesh_path: &str,
+    lock: Option<&str>,
+    write_setup: Option<&str>,
+    json: bool,
+) -> Result<(), CliError> {
+    let (name, pts) = read_points(file)?;
+    let bytes = std::fs::read(mesh_path).map_err(|e| {
+        CliError::usage(format!(
+            "error: cannot read {mesh_path}: {e}\n  = help: give an STL file (ASCII or binary)\n"
+        ))
+    })?;
+    let mesh = lampost_align::mesh::read_stl(&bytes).map_err(|e| {
+        CliError::failed(format!(
+            "error: {mesh_path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
+        ))
+    })?;
+    let report = lampost_align::mesh::manifold_report(&mesh);
+    let mut warnings = Vec::new();
+    if !report.closed() {
+        let w = format!(
+            "{mesh_path} is not a closed manifold ({} boundary edges, {} edges shared by more than two triangles, {} degenerate triangles); registering against its faces anyway",
+            report.boundary_edges, report.non_manifold_edges, report.degenerate_triangles
+        );
+        eprintln!("warning: {w}");
+        warnings.push(w);
+    }
+    let locks = match lock {
+        Some(l) => lampost_align::register::Locks::parse(l).map_err(|e| {
+            CliError::usage(format!(
+                "error: --lock {l}: {e}\n  = help: e.g. --lock z,tilt\n"
+            ))
+        })?,
+        None => lampost_align::register::Locks::default(),
+    };
+    let reg = lampost_align::register::register(&mesh, &p3(&pts), locks)
+        .map_err(|e| with_lines(&name, &pts, e))?;
+    if let Some(path) = write_setup {
+        let r = &reg.rotation;
+        let setup = lampost_align::Setup {
+            origin: reg.translation,
+            x_axis: [r[0][0], r[1][0], r[2][0]],
+            z_axis: [r[0][2], r[1][2], r[2][2]],
+            note: format!(
+                "lampost align register {name} --mesh {mesh_path}: CAD frame placed on the part"
+            ),
+        };
+        let mut out = Output::create(Some(path))?;
+        out.writer()
+            .write_all(setup.to_toml().as_bytes())
+            .map_err(|e| CliError::write(&e))?;
+        out.commit()?;
+    }
+    if json {
+        let per_point: Vec<serde_json::Value> = pts
+            .iter()
+            .zip(&reg.residuals)
+            .map(|(p, r)| serde_json::json!({"line": p.line, "residual": r}))
+            .collect();
+        write_json(serde_json::json!({
+            "rotation": reg.rotation, "translation": reg.translation, "axis": reg.axis, "angle_deg": reg.angle_deg,
+            "rms": reg.rms, "max_abs_residual": reg.max_abs_residual, "iterations": reg.iterations,
+            "residuals": per_point, "warnings": warnings,
+        }))
+    } else {
+        let mut s = format!(
+            "translation {} {} {}\nrotation axis {} {} {} by {} deg\nrms {:.3e}\nmax_abs_residual {:.3e}\n",
+            g(reg.translation[0]), g(reg.translation[1]), g(reg.translation[2]),
+            g(reg.axis[0]), g(reg.axis[1]), g(reg.axis[2]), g(reg.angle_deg), reg.rms, reg.max_abs_residual
+        );
+        for (p, r) in pts.iter().zip(&reg.residuals) {
+            s.push_str(&format!("line {} residual {:+.3e}\n", p.line, r));
+        }
+        write_text(s)
+    }
+}

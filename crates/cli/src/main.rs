@@ -133,6 +133,23 @@ enum KinCmd {
 /// `lampost align` subcommands.
 #[derive(Subcommand, Debug)]
 enum AlignCmd {
+    /// 6-DOF best-fit registration of probed points to an STL mesh (point-to-plane).
+    Register {
+        /// Probed points (part frame).
+        file: String,
+        /// The part's STL (CAD frame), ASCII or binary.
+        #[arg(long)]
+        mesh: String,
+        /// Hold degrees of freedom: x, y, z, rx, ry, rz, tilt (= rx, ry), e.g. z,tilt.
+        #[arg(long)]
+        lock: Option<String>,
+        /// Write the setup (CAD frame on the part) for `lampost post --setup`.
+        #[arg(long)]
+        write_setup: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Levelling: the rotary positions that make a probed surface's outward normal the tool axis.
     Level {
         /// Probed points on the surface.
@@ -373,6 +390,16 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Probe {
             cmd: ProbeCmd::Read { log, output, json },
         } => align_cmds::probe_read(&log, output.as_deref(), json),
+        Command::Align {
+            cmd:
+                AlignCmd::Register {
+                    file,
+                    mesh,
+                    lock,
+                    write_setup,
+                    json,
+                },
+        } => align_cmds::register(&file, &mesh, lock.as_deref(), write_setup.as_deref(), json),
         Command::Align {
             cmd:
                 AlignCmd::Level {

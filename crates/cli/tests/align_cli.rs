@@ -233,3 +233,82 @@ fn probe_programs_check_and_their_logs_read_back() {
     ]);
     assert!(stderr(&o).contains("expected x,y,z"));
 }
+
+#[test]
+fn register_to_a_mesh() {
+    let pts = root().join("fixtures/points/block-probed.txt");
+    let stl = root().join("fixtures/meshes/block.stl");
+    let (ps, ss) = (pts.to_str().expect("utf8"), stl.to_str().expect("utf8"));
+    let dir = tempdir("register");
+    let setup = dir.join("setup.toml");
+    let v = json(&lampost(&[
+        "align",
+        "register",
+        ps,
+        "--mesh",
+        ss,
+        "--json",
+        "--write-setup",
+        setup.to_str().expect("utf8"),
+    ]));
+    assert!(v["rms"].as_f64().expect("rms") < 1e-8, "{v}");
+    for (k, w) in [0.4, -0.3, 0.25].iter().enumerate() {
+        assert!(
+            (v["translation"][k].as_f64().expect("t") - w).abs() < 1e-7,
+            "{v}"
+        );
+    }
+    assert!((v["angle_deg"].as_f64().expect("a") - 1.5).abs() < 1e-7);
+    assert_eq!(v["residuals"].as_array().expect("r").len(), 48);
+    assert!(std::fs::read_to_string(&setup)
+        .expect("setup")
+        .contains("x_axis"));
+    // Top-face points alone leave rotation about z and in-plane translation unobservable.
+    let text = std::fs::read_to_string(&pts).expect("read");
+    let top: String = text
+        .lines()
+        .filter(|l| {
+            l.split_whitespace()
+                .nth(2)
+                .and_then(|z| z.parse::<f64>().ok())
+                .is_some_and(|z| z > 45.0)
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let o = lampost_stdin(&["align", "register", "-", "--mesh", ss], top.as_bytes());
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("unobservable"), "{}", stderr(&o));
+    // An open mesh: warned, still registered against its faces.
+    let stl_text = std::fs::read_to_string(&stl).expect("stl");
+    let cut = stl_text.find("  facet normal 0 0 1").expect("top facet");
+    let end = stl_text[cut..].find("endfacet").expect("end") + cut + "endfacet\n".len();
+    let open = dir.join("open.stl");
+    std::fs::write(&open, format!("{}{}", &stl_text[..cut], &stl_text[end..])).expect("write");
+    let o = lampost(&[
+        "align",
+        "register",
+        ps,
+        "--mesh",
+        open.to_str().expect("utf8"),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a closed manifold"));
+    // Bad mesh, bad lock.
+    let bad = dir.join("bad.stl");
+    std::fs::write(
+        &bad,
+        "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zz\nendloop\nendfacet\nendsolid\n",
+    )
+    .expect("write");
+    let o = lampost(&[
+        "align",
+        "register",
+        ps,
+        "--mesh",
+        bad.to_str().expect("utf8"),
+    ]);
+    assert!(stderr(&o).contains("line 4"), "{}", stderr(&o));
+    let o = lampost(&["align", "register", ps, "--mesh", ss, "--lock", "q"]);
+    assert!(stderr(&o).contains("unknown lock `q`"));
+}
