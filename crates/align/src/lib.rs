@@ -11,6 +11,7 @@
 //! - `serde`: fit results serialise to JSON for `lampost fit --json`;
 //! - `thiserror`: the typed [`AlignError`].
 
+pub mod calib;
 pub mod error;
 pub mod fit;
 pub mod mesh;
