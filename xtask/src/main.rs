@@ -5,7 +5,8 @@
 //!   both measured in the same process), then `lampost fmt` on a generated 1,000,000-line
 //!   program: time and peak resident memory (VmHWM of the child process).
 //! - `cargo xtask bench kin`: IK + FK pairs per second on both built-in machines.
-//! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit.
+//! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
+//!   the calibration table (`cargo xtask calibration` alone).
 //! - `cargo xtask fuzz [--seconds N]`: a mutation fuzzer over parse + interpret, seeded
 //!   with the corpus and fixtures; reports inputs run and any panic.
 
@@ -111,6 +112,46 @@ fn bench_kin() -> Result<(), String> {
     let mut c = cargo();
     c.args(["bench", "-p", "lampost-kinematics", "--bench", "ikfk"]);
     run(c)
+}
+
+fn calibration(trials: usize) -> Result<(), String> {
+    // One micrometre in inches.
+    let um = 1e-3 / 25.4;
+    for (offset_um, tilt) in [(0.0, 0.0), (5.0, 0.005)] {
+        println!(
+            "\n== Rotary-centre calibration, simulated FADAL (inch), σ = 1 µm per touch coordinate, 30 touches per ball, {trials} trials; B line {offset_um} µm off A, A tilted {tilt}°"
+        );
+        println!(
+            "{:<38} {:>5} {:>8} {:>14} {:>12} {:>14}",
+            "method", "poses", "R fixed", "RMS |ΔR| µm", "max µm", "2u coverage"
+        );
+        for c in lampost_align::study::calibration_table(
+            trials,
+            0.001 / 25.4,
+            offset_um * 1e-3 / 25.4,
+            tilt,
+            99,
+        ) {
+            let cell = |v: f64| {
+                if c.solved == 0 {
+                    "line only".to_string()
+                } else {
+                    format!("{:.3}", v / um)
+                }
+            };
+            println!(
+                "{:<38} {:>5} {:>8} {:>14} {:>12} {:>14}",
+                c.method,
+                c.poses,
+                format!("{}/{}", c.solved, c.trials),
+                cell(c.rms_error),
+                cell(c.max_error),
+                c.coverage_2u
+                    .map_or("n/a".into(), |v| format!("{:.1} %", v * 100.0))
+            );
+        }
+    }
+    Ok(())
 }
 
 fn accuracy() -> Result<(), String> {
@@ -333,13 +374,14 @@ fn main() -> ExitCode {
         ["bench", "gcode"] => bench_gcode(),
         ["bench", "kin"] => bench_kin(),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()),
-        ["accuracy"] => accuracy(),
+        ["accuracy"] => accuracy().and_then(|()| calibration(200)),
+        ["calibration"] => calibration(200),
         ["fuzz"] => fuzz(60),
         ["fuzz", "--seconds", n] => match n.parse() {
             Ok(s) => fuzz(s),
             Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
         },
-        _ => Err("usage: cargo xtask bench [gcode|kin] | cargo xtask accuracy | cargo xtask fuzz [--seconds N]".into()),
+        _ => Err("usage: cargo xtask bench [gcode|kin] | cargo xtask accuracy | cargo xtask calibration | cargo xtask fuzz [--seconds N]".into()),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -24,6 +24,15 @@ pub struct Pose {
     pub center: P3,
     /// Source row (1-based line).
     pub row: usize,
+    /// Standard uncertainty of the measured centre per coordinate (from its sphere fit);
+    /// `None` weighs every pose alike.
+    pub sigma: Option<[f64; 3]>,
+}
+
+impl Pose {
+    fn weight(&self, k: usize) -> f64 {
+        self.sigma.map_or(1.0, |s| 1.0 / s[k].max(1e-300))
+    }
 }
 
 /// Which method.
@@ -115,7 +124,10 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
         for (i, r) in m.rotary.iter().enumerate() {
             if !r.within(p.rotary[i]) {
                 let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                return Err(AlignError::Degenerate(format!("row {}: {} = {} is outside its limits [{lo}, {hi}]", p.row, r.name, p.rotary[i])));
+                return Err(AlignError::Degenerate(format!(
+                    "row {}: {} = {} is outside its limits [{lo}, {hi}]",
+                    p.row, r.name, p.rotary[i]
+                )));
             }
         }
         if !p.center.iter().all(|x| x.is_finite()) {
@@ -123,7 +135,11 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
         }
     }
     if poses.len() < need {
-        return Err(AlignError::TooFewPoints { fit: "this calibration method (poses)", need, got: poses.len() });
+        return Err(AlignError::TooFewPoints {
+            fit: "this calibration method (poses)",
+            need,
+            got: poses.len(),
+        });
     }
     Ok(())
 }
@@ -137,37 +153,68 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     for (i, p) in poses.iter().enumerate() {
         let mk = rot(m, &p.rotary);
         for r in 0..3 {
+            let w = p.weight(r);
             for c in 0..3 {
-                a[(3 * i + r, c)] = mk[(r, c)];
+                a[(3 * i + r, c)] = mk[(r, c)] * w;
             }
-            a[(3 * i + r, 3 + r)] = 1.0;
-            b[3 * i + r] = p.center[r];
+            a[(3 * i + r, 3 + r)] = w;
+            b[3 * i + r] = p.center[r] * w;
         }
     }
     let svd = a.clone().svd(true, true);
     let sv = svd.singular_values.clone();
     let smax = sv.max();
     let smin = sv.min();
-    let condition = if smin > 0.0 { smax / smin } else { f64::INFINITY };
-    let x = svd.solve(&b, 1e-9 * smax).map_err(|_| AlignError::Degenerate("the Method III solve failed".into()))?;
+    let condition = if smin > 0.0 {
+        smax / smin
+    } else {
+        f64::INFINITY
+    };
+    let x = svd
+        .solve(&b, 1e-9 * smax)
+        .map_err(|_| AlignError::Degenerate("the Method III solve failed".into()))?;
     let r = P3::new(x[0], x[1], x[2]);
     let c = P3::new(x[3], x[4], x[5]);
     let per_pose: Vec<PoseResidual> = poses
         .iter()
         .map(|p| {
             let d = p.center - (rot(m, &p.rotary) * r + c);
-            PoseResidual { row: p.row, residual: [d.x, d.y, d.z], norm: d.norm() }
+            PoseResidual {
+                row: p.row,
+                residual: [d.x, d.y, d.z],
+                norm: d.norm(),
+            }
         })
         .collect();
     let ss: f64 = per_pose.iter().map(|p| p.norm * p.norm).sum();
     let rms = (ss / (3 * k) as f64).sqrt();
-    let notes = vec!["assumes the two rotary axes intersect (R is from their common point)".to_string()];
+    // Weighted sum of squares, for the uncertainties.
+    let wss: f64 = poses
+        .iter()
+        .zip(&per_pose)
+        .map(|(p, r)| {
+            (0..3)
+                .map(|c| (r.residual[c] * p.weight(c)).powi(2))
+                .sum::<f64>()
+        })
+        .sum();
+    let notes =
+        vec!["assumes the two rotary axes intersect (R is from their common point)".to_string()];
     if smin <= 1e-9 * smax {
         // The null direction: R and c move oppositely along the poses' common axis.
-        let vt = svd.v_t.as_ref().ok_or_else(|| AlignError::Degenerate("the SVD failed".into()))?;
-        let j = (0..sv.len()).min_by(|&p, &q| sv[p].total_cmp(&sv[q])).unwrap_or(0);
+        let vt = svd
+            .v_t
+            .as_ref()
+            .ok_or_else(|| AlignError::Degenerate("the SVD failed".into()))?;
+        let j = (0..sv.len())
+            .min_by(|&p, &q| sv[p].total_cmp(&sv[q]))
+            .unwrap_or(0);
         let dir = P3::new(vt[(j, 0)], vt[(j, 1)], vt[(j, 2)]);
-        let dir = if dir.norm() > 0.0 { dir.normalize() } else { dir };
+        let dir = if dir.norm() > 0.0 {
+            dir.normalize()
+        } else {
+            dir
+        };
         let advice = if k == 1 {
             "one pose fixes R only up to a line (eq. 21's matrix I − M has the rotation axis in its null space); add a second pose that turns about a different axis".to_string()
         } else {
@@ -185,15 +232,26 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
             rms,
             condition,
             per_pose,
-            line: Some(SolutionLine { r_point: [r.x, r.y, r.z], pivot_point: [c.x, c.y, c.z], direction: [dir.x, dir.y, dir.z], advice }),
+            line: Some(SolutionLine {
+                r_point: [r.x, r.y, r.z],
+                pivot_point: [c.x, c.y, c.z],
+                direction: [dir.x, dir.y, dir.z],
+                advice,
+            }),
             axes: None,
             notes,
         });
     }
     let dof = 3 * k - 6;
     let u_r = if dof > 0 {
-        let s2 = ss / dof as f64;
-        (a.transpose() * &a).try_inverse().map(|cov| [(s2 * cov[(0, 0)]).sqrt(), (s2 * cov[(1, 1)]).sqrt(), (s2 * cov[(2, 2)]).sqrt()])
+        let s2 = wss / dof as f64;
+        (a.transpose() * &a).try_inverse().map(|cov| {
+            [
+                (s2 * cov[(0, 0)]).sqrt(),
+                (s2 * cov[(1, 1)]).sqrt(),
+                (s2 * cov[(2, 2)]).sqrt(),
+            ]
+        })
     } else {
         None
     };
@@ -233,13 +291,19 @@ pub fn method_i(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError> 
         .iter()
         .map(|p| {
             let d = p.center - (rot(m, &p.rotary) * r + c);
-            PoseResidual { row: p.row, residual: [d.x, d.y, d.z], norm: d.norm() }
+            PoseResidual {
+                row: p.row,
+                residual: [d.x, d.y, d.z],
+                norm: d.norm(),
+            }
         })
         .collect();
     let ss: f64 = per_pose.iter().map(|p| p.norm * p.norm).sum();
     let home = r + c;
     // The condition of the sphere fit's centre: its uncertainty relative to the noise.
-    let condition = method_iii(m, poses).map(|x| x.condition).unwrap_or(f64::INFINITY);
+    let condition = method_iii(m, poses)
+        .map(|x| x.condition)
+        .unwrap_or(f64::INFINITY);
     Ok(PivotResult {
         method: Method::I,
         r: Some([r.x, r.y, r.z]),
@@ -282,7 +346,9 @@ impl General<'_> {
         let b0 = P3::new(x[0], x[1], x[2]);
         let ax = self.axes(x);
         let (ii, oo) = (self.m.inner, self.m.outer);
-        let turn = |p: P3, (d, c): (P3, P3), deg: f64| Rotation3::from_axis_angle(&Unit::new_normalize(d), deg.to_radians()) * (p - c) + c;
+        let turn = |p: P3, (d, c): (P3, P3), deg: f64| {
+            Rotation3::from_axis_angle(&Unit::new_normalize(d), deg.to_radians()) * (p - c) + c
+        };
         let p = turn(b0, ax[ii], rotary[ii]);
         turn(p, ax[oo], rotary[oo])
     }
@@ -291,7 +357,13 @@ impl General<'_> {
 /// Closest points of two lines (point, direction): (on the first, on the second).
 fn closest(p1: P3, d1: P3, p2: P3, d2: P3) -> (P3, P3) {
     let w = p1 - p2;
-    let (a, b, c, d, e) = (d1.dot(&d1), d1.dot(&d2), d2.dot(&d2), d1.dot(&w), d2.dot(&w));
+    let (a, b, c, d, e) = (
+        d1.dot(&d1),
+        d1.dot(&d2),
+        d2.dot(&d2),
+        d1.dot(&w),
+        d2.dot(&w),
+    );
     let den = a * c - b * b;
     if den.abs() < 1e-15 {
         return (p1, p2 + d2 * (e / c));
@@ -319,7 +391,11 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         let e1 = (h - n * n.dot(&h)).normalize();
         (n, e1, n.cross(&e1))
     };
-    let g = General { m, bases: [basis(m.rotary[0].axis), basis(m.rotary[1].axis)], c0: [c0, c0] };
+    let g = General {
+        m,
+        bases: [basis(m.rotary[0].axis), basis(m.rotary[1].axis)],
+        c0: [c0, c0],
+    };
     let k = poses.len();
     let np = 11;
     let mut x = DVector::zeros(np);
@@ -331,7 +407,7 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         for (i, p) in poses.iter().enumerate() {
             let d = g.predict(x, &p.rotary) - p.center;
             for c in 0..3 {
-                r[3 * i + c] = d[c];
+                r[3 * i + c] = d[c] * p.weight(c);
             }
         }
         r
@@ -340,7 +416,11 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     let jac = |x: &DVector<f64>| -> DMatrix<f64> {
         let mut j = DMatrix::zeros(3 * k, np);
         for q in 0..np {
-            let h = if q < 3 || (q - 3) % 4 >= 2 { 1e-7 * scale } else { 1e-7 };
+            let h = if q < 3 || (q - 3) % 4 >= 2 {
+                1e-7 * scale
+            } else {
+                1e-7
+            };
             let mut xp = x.clone();
             xp[q] += h;
             let mut xm = x.clone();
@@ -356,7 +436,9 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         let j = jac(&x);
         let r = resid(&x);
         let svd = j.svd(true, true);
-        let step = svd.solve(&(-&r), 1e-12 * svd.singular_values.max()).map_err(|_| AlignError::Degenerate("the axis fit failed".into()))?;
+        let step = svd
+            .solve(&(-&r), 1e-12 * svd.singular_values.max())
+            .map_err(|_| AlignError::Degenerate("the axis fit failed".into()))?;
         x += &step;
         if step.norm() < 1e-13 * scale {
             converged = true;
@@ -391,7 +473,11 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
             // Propagate to R numerically.
             let mut jr = DMatrix::zeros(3, np);
             for q in 0..np {
-                let h = if q < 3 || (q - 3) % 4 >= 2 { 1e-7 * scale } else { 1e-7 };
+                let h = if q < 3 || (q - 3) % 4 >= 2 {
+                    1e-7 * scale
+                } else {
+                    1e-7
+                };
                 let mut xp = x.clone();
                 xp[q] += h;
                 let mut xm = x.clone();
@@ -409,16 +495,24 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     };
     let per_pose: Vec<PoseResidual> = poses
         .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let d = P3::new(-r[3 * i], -r[3 * i + 1], -r[3 * i + 2]);
-            PoseResidual { row: p.row, residual: [d.x, d.y, d.z], norm: d.norm() }
+        .map(|p| {
+            let d = p.center - g.predict(&x, &p.rotary);
+            PoseResidual {
+                row: p.row,
+                residual: [d.x, d.y, d.z],
+                norm: d.norm(),
+            }
         })
         .collect();
+    let plain_ss: f64 = per_pose.iter().map(|p| p.norm * p.norm).sum();
     let line = |i: usize| {
         let (d, c) = ax[i];
         let foot = c + d * d.dot(&(b0 - c));
-        AxisLine { name: if i == 0 { "first" } else { "second" }, direction: [d.x, d.y, d.z], point: [foot.x, foot.y, foot.z] }
+        AxisLine {
+            name: if i == 0 { "first" } else { "second" },
+            direction: [d.x, d.y, d.z],
+            point: [foot.x, foot.y, foot.z],
+        }
     };
     let (p, q) = closest(ax[0].1, ax[0].0, ax[1].1, ax[1].0);
     let mid = (p + q) / 2.0;
@@ -428,7 +522,7 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         u_r,
         pivot: Some([mid.x, mid.y, mid.z]),
         ball_home: Some([b0.x, b0.y, b0.z]),
-        rms: (ss / (3 * k) as f64).sqrt(),
+        rms: (plain_ss / (3 * k) as f64).sqrt(),
         condition,
         per_pose,
         line: None,
@@ -477,7 +571,10 @@ pub fn axes_from_circles(m: &Machine, poses: &[Pose]) -> Result<AxisErrors, Alig
         let other = 1 - moving;
         let mut groups: Vec<(f64, Vec<&Pose>)> = Vec::new();
         for p in poses {
-            match groups.iter_mut().find(|(v, _)| (v - p.rotary[other]).abs() < 1e-9) {
+            match groups
+                .iter_mut()
+                .find(|(v, _)| (v - p.rotary[other]).abs() < 1e-9)
+            {
                 Some((_, g)) => g.push(p),
                 None => groups.push((p.rotary[other], vec![p])),
             }
@@ -497,7 +594,11 @@ pub fn axes_from_circles(m: &Machine, poses: &[Pose]) -> Result<AxisErrors, Alig
             if dir.dot(&m.rotary[moving].axis) < 0.0 {
                 dir = -dir;
             }
-            let id = if moving == m.inner && v.abs() > 1e-12 { moving + 10 } else { moving };
+            let id = if moving == m.inner && v.abs() > 1e-12 {
+                moving + 10
+            } else {
+                moving
+            };
             lines.push((id, P3::from(c.center), dir, v, c.rms));
             break;
         }
@@ -514,7 +615,10 @@ pub fn axes_from_circles(m: &Machine, poses: &[Pose]) -> Result<AxisErrors, Alig
         }
     }
     let (Some(a0), Some(a1)) = (found[0], found[1]) else {
-        let missing: Vec<&str> = (0..2).filter(|&i| found[i].is_none()).map(|i| m.rotary[i].name.as_str()).collect();
+        let missing: Vec<&str> = (0..2)
+            .filter(|&i| found[i].is_none())
+            .map(|i| m.rotary[i].name.as_str())
+            .collect();
         return Err(AlignError::Degenerate(format!(
             "no group of at least three poses moves {} alone (the other axis fixed): add such poses",
             missing.join(" or ")
@@ -572,25 +676,53 @@ pub struct FactorialFit {
 /// Fit eq. 18 to measured variations at the design's centres: rows (centre, variation).
 pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
     if rows.len() < 4 {
-        return Err(AlignError::TooFewPoints { fit: "the factorial regression (runs)", need: 4, got: rows.len() });
+        return Err(AlignError::TooFewPoints {
+            fit: "the factorial regression (runs)",
+            need: 4,
+            got: rows.len(),
+        });
     }
     let mean = rows.iter().fold(P3::zeros(), |a, r| a + r.0) / rows.len() as f64;
-    let half = rows.iter().map(|r| (r.0 - mean).abs().max()).fold(0.0, f64::max);
+    let half = rows
+        .iter()
+        .map(|r| (r.0 - mean).abs().max())
+        .fold(0.0, f64::max);
     if half <= 0.0 {
-        return Err(AlignError::Degenerate("all runs use the same centre".into()));
+        return Err(AlignError::Degenerate(
+            "all runs use the same centre".into(),
+        ));
     }
-    let a = DMatrix::from_fn(rows.len(), 4, |i, k| if k == 0 { 1.0 } else { (rows[i].0[k - 1] - mean[k - 1]) / half });
+    let a = DMatrix::from_fn(rows.len(), 4, |i, k| {
+        if k == 0 {
+            1.0
+        } else {
+            (rows[i].0[k - 1] - mean[k - 1]) / half
+        }
+    });
     let b = DVector::from_fn(rows.len(), |i, _| rows[i].1);
     let svd = a.clone().svd(true, true);
     if svd.singular_values.min() <= 1e-9 * svd.singular_values.max() {
-        return Err(AlignError::Degenerate("the runs do not vary x, y and z independently: use the full 2³ design".into()));
+        return Err(AlignError::Degenerate(
+            "the runs do not vary x, y and z independently: use the full 2³ design".into(),
+        ));
     }
-    let beta = svd.solve(&b, 1e-12).map_err(|_| AlignError::Degenerate("the regression failed".into()))?;
+    let beta = svd
+        .solve(&b, 1e-12)
+        .map_err(|_| AlignError::Degenerate("the regression failed".into()))?;
     let res = &a * &beta - &b;
     let g = P3::new(beta[1], beta[2], beta[3]);
-    let u = if g.norm_squared() > 0.0 { -g * (beta[0] / g.norm_squared()) } else { P3::zeros() };
+    let u = if g.norm_squared() > 0.0 {
+        -g * (beta[0] / g.norm_squared())
+    } else {
+        P3::zeros()
+    };
     let proposed = mean + u * half;
-    let (bi, br) = rows.iter().enumerate().min_by(|x, y| x.1 .1.total_cmp(&y.1 .1)).map(|(i, r)| (i, r.0)).unwrap_or((0, mean));
+    let (bi, br) = rows
+        .iter()
+        .enumerate()
+        .min_by(|x, y| x.1 .1.total_cmp(&y.1 .1))
+        .map(|(i, r)| (i, r.0))
+        .unwrap_or((0, mean));
     Ok(FactorialFit {
         coefficients: [beta[0], beta[1], beta[2], beta[3]],
         best_run: bi + 1,
@@ -604,9 +736,16 @@ pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
 /// spread (standard deviation per component; `None` with one pair).
 pub fn laser_offset(pairs: &[(P3, P3)]) -> Result<([f64; 3], Option<[f64; 3]>), AlignError> {
     if pairs.is_empty() {
-        return Err(AlignError::TooFewPoints { fit: "the laser offset (burn marks)", need: 1, got: 0 });
+        return Err(AlignError::TooFewPoints {
+            fit: "the laser offset (burn marks)",
+            need: 1,
+            got: 0,
+        });
     }
-    let ls: Vec<P3> = pairs.iter().map(|(burned, probed)| probed - burned).collect();
+    let ls: Vec<P3> = pairs
+        .iter()
+        .map(|(burned, probed)| probed - burned)
+        .collect();
     let mean = ls.iter().fold(P3::zeros(), |a, l| a + l) / ls.len() as f64;
     let spread = if ls.len() > 1 {
         let mut v = P3::zeros();
@@ -624,11 +763,16 @@ pub fn laser_offset(pairs: &[(P3, P3)]) -> Result<([f64; 3], Option<[f64; 3]>), 
 /// The machine file with a calibration written into it: R (intersecting-axes methods, as
 /// the parameter the pivots use) or both axis lines (the fit), relative to the ball
 /// centre at home (the machine frame's origin).
-pub fn updated_machine(m: &Machine, res: &PivotResult) -> Result<lampost_kinematics::MachineDef, AlignError> {
+pub fn updated_machine(
+    m: &Machine,
+    res: &PivotResult,
+) -> Result<lampost_kinematics::MachineDef, AlignError> {
     use lampost_kinematics::{ParamValue, VecExpr};
     let mut def = m.def.clone();
     let (Some(r), Some(home)) = (res.r, res.ball_home) else {
-        return Err(AlignError::Degenerate("the poses do not fix R; nothing to write".into()));
+        return Err(AlignError::Degenerate(
+            "the poses do not fix R; nothing to write".into(),
+        ));
     };
     match &res.axes {
         Some(axes) => {
@@ -653,9 +797,13 @@ pub fn updated_machine(m: &Machine, res: &PivotResult) -> Result<lampost_kinemat
             }
         }
     }
-    def.assumptions.push(format!("Rotary pivots calibrated by lampost calibrate pivot (method {:?}), rms {:.3e}.", res.method, res.rms));
+    def.assumptions.push(format!(
+        "Rotary pivots calibrated by lampost calibrate pivot (method {:?}), rms {:.3e}.",
+        res.method, res.rms
+    ));
     // Check it builds.
-    Machine::new(def.clone(), &[]).map_err(|e| AlignError::Degenerate(format!("the updated machine is not valid: {e}")))?;
+    Machine::new(def.clone(), &[])
+        .map_err(|e| AlignError::Degenerate(format!("the updated machine is not valid: {e}")))?;
     Ok(def)
 }
 
@@ -667,7 +815,12 @@ pub fn pose_conditioning(m: &Machine, rotary: &[[f64; 2]]) -> (f64, Option<[f64;
         .enumerate()
         .map(|(i, r)| {
             let c = m.part_to_machine(r, &P3::zeros());
-            Pose { rotary: *r, center: c, row: i + 1 }
+            Pose {
+                rotary: *r,
+                center: c,
+                row: i + 1,
+                sigma: None,
+            }
         })
         .collect();
     match method_iii(m, &poses) {
@@ -680,7 +833,9 @@ pub fn pose_conditioning(m: &Machine, rotary: &[[f64; 2]]) -> (f64, Option<[f64;
 /// file order), ball centre `b0` at home: the centre at each pose.
 pub fn simulate_centres(m: &Machine, truth: &[(P3, P3); 2], b0: P3, rotary: &[f64; 2]) -> P3 {
     let (ii, oo) = (m.inner, m.outer);
-    let turn = |p: P3, (d, c): (P3, P3), deg: f64| Rotation3::from_axis_angle(&Unit::new_normalize(d), deg.to_radians()) * (p - c) + c;
+    let turn = |p: P3, (d, c): (P3, P3), deg: f64| {
+        Rotation3::from_axis_angle(&Unit::new_normalize(d), deg.to_radians()) * (p - c) + c
+    };
     turn(turn(b0, truth[ii], rotary[ii]), truth[oo], rotary[oo])
 }
 
@@ -704,7 +859,15 @@ mod tests {
     }
 
     fn exact(m: &Machine, truth: &[(P3, P3); 2], b0: P3, set: &[[f64; 2]]) -> Vec<Pose> {
-        set.iter().enumerate().map(|(i, r)| Pose { rotary: *r, center: simulate_centres(m, truth, b0, r), row: i + 1 }).collect()
+        set.iter()
+            .enumerate()
+            .map(|(i, r)| Pose {
+                rotary: *r,
+                center: simulate_centres(m, truth, b0, r),
+                row: i + 1,
+                sigma: None,
+            })
+            .collect()
     }
 
     #[test]
@@ -715,7 +878,11 @@ mod tests {
         let c = b0 - r;
         let truth = [(m.rotary[0].axis, c), (m.rotary[1].axis, c)];
         let poses = exact(&m, &truth, b0, &poses8());
-        for res in [method_i(&m, &poses).expect("I"), method_iii(&m, &poses).expect("III"), method_fit(&m, &poses).expect("fit")] {
+        for res in [
+            method_i(&m, &poses).expect("I"),
+            method_iii(&m, &poses).expect("III"),
+            method_fit(&m, &poses).expect("fit"),
+        ] {
             let got = P3::from(res.r.expect("fixed"));
             assert!((got - r).norm() < 1e-9, "{:?}: {got:?}", res.method);
             assert!((P3::from(res.pivot.expect("pivot")) - c).norm() < 1e-9);
@@ -752,14 +919,21 @@ mod tests {
         let c = b0 - r;
         // A tilted 0.02 deg, B's line 0.0004 in (10 µm) away from A's.
         let tilt = Rotation3::from_axis_angle(&P3::x_axis(), 0.02f64.to_radians());
-        let truth = [(tilt * m.rotary[0].axis, c), (m.rotary[1].axis, c + P3::new(0.0004, 0.0, 0.0))];
+        let truth = [
+            (tilt * m.rotary[0].axis, c),
+            (m.rotary[1].axis, c + P3::new(0.0004, 0.0, 0.0)),
+        ];
         let poses = exact(&m, &truth, b0, &poses8());
         let fit = method_fit(&m, &poses).expect("fit");
         assert!(fit.rms < 1e-10, "{}", fit.rms);
         let axes = fit.axes.expect("axes");
         assert!((P3::from(axes[0].direction) - truth[0].0).norm() < 1e-9);
         let iii = method_iii(&m, &poses).expect("iii");
-        assert!(iii.rms > 1e-5, "the intersecting model cannot fit offset axes: {}", iii.rms);
+        assert!(
+            iii.rms > 1e-5,
+            "the intersecting model cannot fit offset axes: {}",
+            iii.rms
+        );
         // Identification by circles.
         let mut set = poses8();
         set.extend([[0.0, -45.0], [0.0, 30.0]]);
@@ -792,7 +966,10 @@ mod tests {
             let u = fit.u_r.expect("u");
             covered += (0..3).filter(|&k| err[k].abs() <= 2.0 * u[k]).count();
         }
-        assert!(covered as f64 / (3.0 * f64::from(trials)) > 0.85, "{covered}");
+        assert!(
+            covered as f64 / (3.0 * f64::from(trials)) > 0.85,
+            "{covered}"
+        );
     }
 
     #[test]
@@ -802,13 +979,20 @@ mod tests {
         assert_eq!(runs[0].1, [1, 1, 1]);
         assert_eq!(runs[7].1, [-1, -1, -1]);
         // Variation linear in x, y as eq. 18, zero at x = -4.905.
-        let rows: Vec<(P3, f64)> = runs.iter().map(|(_, _, c)| (*c, 0.4 * (c.x + 4.905) / 0.01 + 0.13 * (c.y - 1.5) / 0.01)).collect();
+        let rows: Vec<(P3, f64)> = runs
+            .iter()
+            .map(|(_, _, c)| (*c, 0.4 * (c.x + 4.905) / 0.01 + 0.13 * (c.y - 1.5) / 0.01))
+            .collect();
         let f = factorial_fit(&rows).expect("fits");
         let [x, y, _] = f.proposed_center;
         let predicted = 0.4 * (x + 4.905) / 0.01 + 0.13 * (y - 1.5) / 0.01;
         assert!(predicted.abs() < 1e-9, "{f:?}");
         assert!((f.coefficients[1] - 0.4).abs() < 1e-9 && f.coefficients[3].abs() < 1e-9);
-        let (l, spread) = laser_offset(&[(P3::new(0.0, 0.0, 0.0), P3::new(-10.1, 0.04, -8.7)), (P3::new(1.0, 1.0, 0.0), P3::new(-9.1, 1.02, -8.72))]).expect("l");
+        let (l, spread) = laser_offset(&[
+            (P3::new(0.0, 0.0, 0.0), P3::new(-10.1, 0.04, -8.7)),
+            (P3::new(1.0, 1.0, 0.0), P3::new(-9.1, 1.02, -8.72)),
+        ])
+        .expect("l");
         assert!((l[0] + 10.1).abs() < 1e-12 && spread.is_some());
     }
 }

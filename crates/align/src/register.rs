@@ -44,9 +44,11 @@ impl Locks {
                 }
                 "translation" => l.translate = [true; 3],
                 "rotation" => l.rotate = [true; 3],
-                other => return Err(format!(
+                other => {
+                    return Err(format!(
                     "unknown lock `{other}` (use x, y, z, rx, ry, rz, tilt, translation, rotation)"
-                )),
+                ))
+                }
             }
         }
         Ok(l)

@@ -142,3 +142,157 @@ mod tests {
         assert!(fnp.coverage_2u.expect("coverage") > 0.9, "{fnp:?}");
     }
 }
+
+/// One cell of the calibration accuracy table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibCell {
+    /// Method label.
+    pub method: &'static str,
+    /// Number of poses.
+    pub poses: usize,
+    /// Trials that gave a number for R.
+    pub solved: usize,
+    /// Trials run.
+    pub trials: usize,
+    /// RMS of |R − truth|.
+    pub rms_error: f64,
+    /// Largest |R − truth|.
+    pub max_error: f64,
+    /// Fraction of R's coordinates whose 2·u covered the true error.
+    pub coverage_2u: Option<f64>,
+}
+
+/// The full chain on a simulated FADAL whose table has axis errors: `b_line_offset`
+/// moves B's line off A's (in inches), `a_tilt_deg` tilts A; 30 noisy touches (σ per
+/// coordinate, inches) on the gage ball at each pose → free sphere fits → each method.
+/// Returns the table and the truth's R (ball at home to the midpoint of the axes' common
+/// perpendicular).
+pub fn calibration_table(
+    trials: usize,
+    sigma: f64,
+    b_line_offset: f64,
+    a_tilt_deg: f64,
+    seed: u64,
+) -> Vec<CalibCell> {
+    use crate::calib::{method_fit, method_i, method_iii, simulate_centres, Pose};
+    use lampost_kinematics::Machine;
+    use nalgebra::Rotation3;
+    let Ok(m) = Machine::builtin("fadal-lamp", &[]) else {
+        return Vec::new();
+    };
+    let r_nominal = P3::new(-4.877, 1.4798, 7.0918);
+    let b0 = P3::new(2.0, -1.0, -4.0);
+    let c = b0 - r_nominal;
+    let tilt = Rotation3::from_axis_angle(&P3::x_axis(), a_tilt_deg.to_radians());
+    let truth = [
+        (tilt * m.rotary[0].axis, c),
+        (m.rotary[1].axis, c + P3::new(b_line_offset, 0.0, 0.0)),
+    ];
+    // The truth's R, as method `fit` defines it.
+    let r_true = {
+        let (d1, p1, d2, p2) = (truth[0].0, truth[0].1, truth[1].0, truth[1].1);
+        let w = p1 - p2;
+        let (a, b, cc, d, e) = (
+            d1.dot(&d1),
+            d1.dot(&d2),
+            d2.dot(&d2),
+            d1.dot(&w),
+            d2.dot(&w),
+        );
+        let den = a * cc - b * b;
+        let s = (b * e - cc * d) / den;
+        let t = (a * e - b * d) / den;
+        b0 - ((p1 + d1 * s) + (p2 + d2 * t)) / 2.0
+    };
+    let sets: Vec<(usize, Vec<[f64; 2]>)> = vec![
+        (1, vec![[0.0, 0.0], [45.0, -45.0]]),
+        (2, vec![[0.0, 0.0], [90.0, 45.0]]),
+        (
+            4,
+            vec![[0.0, 0.0], [90.0, 0.0], [180.0, 45.0], [270.0, -45.0]],
+        ),
+        (
+            8,
+            (0..8)
+                .map(|i| [90.0 * f64::from(i % 4), if i < 4 { 0.0 } else { 45.0 }])
+                .collect(),
+        ),
+    ];
+    let ball = 0.5;
+    let stylus = 0.0625;
+    let touches = cap_points(30, ball + stylus, 80.0);
+    let mut rng = Rng::new(seed);
+    let mut cells = Vec::new();
+    for (label, set) in &sets {
+        let methods: &[(&'static str, u8)] = if *label == 1 {
+            &[("paper Method III (home + one pose)", 3)]
+        } else {
+            &[
+                ("Method I (sphere of centres)", 1),
+                ("Method III, least squares", 3),
+                ("axis-line fit", 4),
+            ]
+        };
+        for &(name, which) in methods {
+            let mut errs = Vec::new();
+            let mut covered = 0usize;
+            let mut with_u = 0usize;
+            for _ in 0..trials {
+                let poses: Vec<Pose> = set
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        let centre = simulate_centres(&m, &truth, b0, r);
+                        let pts: Vec<P3> = touches
+                            .iter()
+                            .map(|t| {
+                                centre
+                                    + t
+                                    + P3::new(rng.normal(), rng.normal(), rng.normal()) * sigma
+                            })
+                            .collect();
+                        let (fitted, u) = crate::fit::sphere(&pts, None)
+                            .map(|s| (P3::from(s.center), s.u_center))
+                            .unwrap_or((centre, None));
+                        Pose {
+                            rotary: *r,
+                            center: fitted,
+                            row: i + 1,
+                            sigma: u,
+                        }
+                    })
+                    .collect();
+                let res = match which {
+                    1 => method_i(&m, &poses),
+                    3 => method_iii(&m, &poses),
+                    _ => method_fit(&m, &poses),
+                };
+                let Ok(res) = res else { continue };
+                let r = match (res.r, &res.line) {
+                    (Some(r), _) => P3::from(r),
+                    // The paper solved its rank-deficient system anyway: take the
+                    // minimum-norm point of the line to show what that gives.
+                    (None, Some(l)) if *label == 1 => P3::from(l.r_point),
+                    _ => continue,
+                };
+                let e = r - r_true;
+                errs.push(e.norm());
+                if let Some(u) = res.u_r {
+                    with_u += 3;
+                    covered += (0..3).filter(|&k| e[k].abs() <= 2.0 * u[k]).count();
+                }
+            }
+            let n = errs.len().max(1) as f64;
+            cells.push(CalibCell {
+                method: name,
+                poses: if *label == 1 { 2 } else { *label },
+                solved: errs.len(),
+                trials,
+                rms_error: (errs.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+                max_error: errs.iter().copied().fold(0.0, f64::max),
+                coverage_2u: (with_u > 0).then(|| covered as f64 / with_u as f64),
+            });
+        }
+    }
+    cells
+}
