@@ -148,6 +148,24 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
 pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError> {
     check_poses(m, poses, 1)?;
     let k = poses.len();
+    if k < 2 {
+        // Three equations, six unknowns: R can be anything and the centre follows.
+        return Ok(PivotResult {
+            method: Method::Iii,
+            r: None,
+            u_r: None,
+            pivot: None,
+            ball_home: None,
+            rms: 0.0,
+            condition: f64::MAX,
+            per_pose: poses.iter().map(|p| PoseResidual { row: p.row, residual: [0.0; 3], norm: 0.0 }).collect(),
+            line: None,
+            axes: None,
+            notes: vec![
+                "one measured pose fixes nothing: any R fits it, with the centre following; measure the ball at home (A = B = 0) too for the paper's one-pose case (a line of solutions), and at poses turning about both axes to fix R".into(),
+            ],
+        });
+    }
     let mut a = DMatrix::zeros(3 * k, 6);
     let mut b = DVector::zeros(3 * k);
     for (i, p) in poses.iter().enumerate() {
@@ -242,7 +260,7 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
             notes,
         });
     }
-    let dof = 3 * k - 6;
+    let dof = (3 * k).saturating_sub(6);
     let u_r = if dof > 0 {
         let s2 = wss / dof as f64;
         (a.transpose() * &a).try_inverse().map(|cov| {
@@ -466,7 +484,7 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     };
     let rv = r_of(&x);
     let ss = r.norm_squared();
-    let dof = 3 * k - np;
+    let dof = (3 * k).saturating_sub(np);
     let u_r = if dof > 0 {
         (j.transpose() * &j).try_inverse().map(|cov| {
             let s2 = ss / dof as f64;
@@ -994,5 +1012,53 @@ mod tests {
         ])
         .expect("l");
         assert!((l[0] + 10.1).abs() < 1e-12 && spread.is_some());
+    }
+}
+
+#[cfg(test)]
+mod edge_tests {
+    use super::*;
+
+    #[test]
+    fn one_pose_is_a_line_not_a_panic() {
+        let m = Machine::builtin("fadal-lamp", &[]).expect("machine");
+        let r = method_iii(
+            &m,
+            &[Pose {
+                rotary: [45.0, -45.0],
+                center: P3::new(1.0, 2.0, 3.0),
+                row: 1,
+                sigma: None,
+            }],
+        )
+        .expect("runs");
+        assert!(r.r.is_none() && r.line.is_none());
+        let two = [
+            Pose {
+                rotary: [0.0, 0.0],
+                center: P3::new(1.0, 2.0, 3.0),
+                row: 1,
+                sigma: None,
+            },
+            Pose {
+                rotary: [45.0, -45.0],
+                center: P3::new(1.5, 2.5, 2.0),
+                row: 2,
+                sigma: None,
+            },
+        ];
+        let r = method_iii(&m, &two).expect("runs");
+        assert!(r.r.is_none() && r.line.is_some());
+        let r = method_iii(
+            &m,
+            &[Pose {
+                rotary: [0.0, 0.0],
+                center: P3::new(1.0, 2.0, 3.0),
+                row: 1,
+                sigma: None,
+            }],
+        )
+        .expect("runs");
+        assert!(r.r.is_none());
     }
 }

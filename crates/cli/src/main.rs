@@ -4,6 +4,7 @@
 //! JSON; the work is done in the library crates.
 
 mod align_cmds;
+mod calib_cmds;
 mod gcode_cmds;
 mod io;
 mod kin_cmds;
@@ -192,9 +193,104 @@ enum AlignCmd {
     },
 }
 
+/// `lampost calibrate` subcommands.
+#[derive(Subcommand, Debug)]
+enum CalibrateCmd {
+    /// The rotation centre / R from ball centres measured at several rotary poses.
+    Pivot {
+        /// Rows `A B x y z [ux uy uz]`: rotary angles and the measured ball centre (machine coordinates).
+        poses: String,
+        /// i (sphere of centres), iii (eq. 21, least squares), fit (both axis lines); default fit (iii under 4 poses).
+        #[arg(long)]
+        method: Option<String>,
+        /// Write the machine file with the calibration applied.
+        #[arg(long)]
+        write: Option<String>,
+        #[command(flatten)]
+        m: CalibMachine,
+    },
+    /// Each rotary axis as a line from poses that move one axis at a time; ISO 230-1 style location errors.
+    Axes {
+        /// Rows `A B x y z`.
+        poses: String,
+        #[command(flatten)]
+        m: CalibMachine,
+    },
+    /// Method II: the 2³ factorial design (--start, --step) or its regression (--fit RESULTS).
+    Factorial {
+        /// Start centre x,y,z.
+        #[arg(long, allow_hyphen_values = true)]
+        start: Option<String>,
+        /// Step (the factor level).
+        #[arg(long)]
+        step: Option<f64>,
+        /// Rows `x y z variation` (or `run x y z variation`).
+        #[arg(long)]
+        fit: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The spindle-to-laser offset L from burn marks.
+    Laser {
+        /// Machine position where a mark was burned (repeatable).
+        #[arg(long, allow_hyphen_values = true)]
+        burned: Vec<String>,
+        /// Probed position of that mark (repeatable, in the same order).
+        #[arg(long, allow_hyphen_values = true)]
+        probed: Vec<String>,
+        /// Or rows `bx by bz px py pz`.
+        file: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Machine options of the calibration commands.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CalibMachine {
+    /// Built-in machine name or machine file.
+    #[arg(long)]
+    machine: String,
+    /// Override a parameter (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Write JSON.
+    #[arg(long)]
+    json: bool,
+}
+
 /// `lampost probe` subcommands.
 #[derive(Subcommand, Debug)]
 enum ProbeCmd {
+    /// A FADAL program that indexes the rotaries through a pose set and probes the gage ball at each.
+    Poses {
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Override a parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Ball centre x,y,z at A = B = 0, machine coordinates.
+        #[arg(long, allow_hyphen_values = true)]
+        ball: String,
+        /// Poses "A=0,B=0;A=90,B=45;…" (default: four platter angles at two tilts).
+        #[arg(long)]
+        poses: Option<String>,
+        /// Ball radius.
+        #[arg(long)]
+        radius: f64,
+        /// Stylus ball radius.
+        #[arg(long)]
+        stylus_radius: f64,
+        /// Touches per pose.
+        #[arg(long, default_value_t = 12)]
+        points: usize,
+        /// Output file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+    },
     /// A FADAL program that touches a gage ball at N points and prints each touch.
     Sphere {
         /// Estimated ball centre x,y,z.
@@ -261,6 +357,11 @@ enum ProbeCmd {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Calibrate the rotary centre (R), the axis lines, and the laser offset (L).
+    Calibrate {
+        #[command(subcommand)]
+        cmd: CalibrateCmd,
+    },
     /// FADAL probing programs, and reading their logs.
     Probe {
         #[command(subcommand)]
@@ -345,6 +446,65 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Calibrate {
+            cmd:
+                CalibrateCmd::Pivot {
+                    poses,
+                    method,
+                    write,
+                    m,
+                },
+        } => calib_cmds::pivot(
+            &m.machine,
+            &m.set,
+            &poses,
+            method.as_deref(),
+            write.as_deref(),
+            m.json,
+        ),
+        Command::Calibrate {
+            cmd: CalibrateCmd::Axes { poses, m },
+        } => calib_cmds::axes(&m.machine, &m.set, &poses, m.json),
+        Command::Calibrate {
+            cmd:
+                CalibrateCmd::Factorial {
+                    start,
+                    step,
+                    fit,
+                    json,
+                },
+        } => calib_cmds::factorial(start.as_deref(), step, fit.as_deref(), json),
+        Command::Calibrate {
+            cmd:
+                CalibrateCmd::Laser {
+                    burned,
+                    probed,
+                    file,
+                    json,
+                },
+        } => calib_cmds::laser(&burned, &probed, file.as_deref(), json),
+        Command::Probe {
+            cmd:
+                ProbeCmd::Poses {
+                    machine,
+                    set,
+                    ball,
+                    poses,
+                    radius,
+                    stylus_radius,
+                    points,
+                    output,
+                },
+        } => calib_cmds::probe_poses(
+            &machine,
+            &set,
+            &ball,
+            poses.as_deref(),
+            radius,
+            stylus_radius,
+            points,
+            output.as_deref(),
+        ),
         Command::Probe {
             cmd:
                 ProbeCmd::Sphere {

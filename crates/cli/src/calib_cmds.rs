@@ -1,0 +1,611 @@
+//! `lampost calibrate …` and `lampost probe poses`.
+
+use lampost_align::calib::{self, Method, PivotResult, Pose};
+use lampost_align::P3;
+use lampost_kinematics::{Machine, Units};
+
+use crate::align_cmds::align_error;
+use crate::io::{display_name, open_input, Output};
+use crate::kin_cmds::{load_machine, vector};
+use crate::report::CliError;
+
+fn located(file: &str, line: usize, text: &str, what: &str, hint: &str) -> CliError {
+    CliError::failed(format!(
+        "error: {what}\n  --> {file}:{line}\n   | {text}\n  = help: {hint}\n"
+    ))
+}
+
+/// The fields of a data row: separated by spaces, tabs or commas.
+fn row_fields(code: &str) -> Vec<&str> {
+    code.split([' ', '\t', ','])
+        .filter(|f| !f.is_empty())
+        .collect()
+}
+
+fn read_text(file: &str) -> Result<(String, String), CliError> {
+    let name = display_name(file);
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
+    Ok((name, text))
+}
+
+/// POSES: `A B x y z [ux uy uz]` per row in the machine's rotary order (or the order a
+/// header names), `#` comments, an optional `# units: mm|inch` line checked against the
+/// machine.
+pub fn read_poses(m: &Machine, file: &str) -> Result<(String, Vec<Pose>), CliError> {
+    let (name, text) = read_text(file)?;
+    let names = [m.rotary[0].name.as_str(), m.rotary[1].name.as_str()];
+    let mut order = [0usize, 1];
+    let mut poses = Vec::new();
+    let mut seen_data = false;
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let (code, comment) = match raw.split_once('#') {
+            Some((c, k)) => (c, Some(k)),
+            None => (raw, None),
+        };
+        if let Some(k) = comment {
+            let k = k.trim().to_ascii_lowercase();
+            if let Some(u) = k.strip_prefix("units:").map(str::trim) {
+                let file_units = match u {
+                    "mm" => Units::Mm,
+                    "inch" | "in" => Units::Inch,
+                    other => {
+                        return Err(located(
+                            &name,
+                            line,
+                            raw,
+                            &format!("unknown units `{other}`"),
+                            "write `# units: mm` or `# units: inch`",
+                        ))
+                    }
+                };
+                if file_units != m.units {
+                    return Err(located(&name, line, raw, &format!("the poses are in {u} but machine {} is in {:?}", m.name, m.units).to_lowercase(), "convert the ball centres to the machine's units, or use the machine file for those units"));
+                }
+            }
+        }
+        let fields: Vec<&str> = row_fields(code);
+        if fields.is_empty() {
+            continue;
+        }
+        if !seen_data && fields.iter().all(|f| f.parse::<f64>().is_err()) {
+            // A header: take the rotary order from it.
+            let pos = |n: &str| fields.iter().position(|f| f.eq_ignore_ascii_case(n));
+            if let (Some(a), Some(b)) = (pos(names[0]), pos(names[1])) {
+                if a < 2 && b < 2 {
+                    order = [a, b];
+                }
+            }
+            seen_data = true;
+            continue;
+        }
+        seen_data = true;
+        if fields.len() != 5 && fields.len() != 8 {
+            return Err(located(
+                &name,
+                line,
+                raw,
+                &format!(
+                    "row {line} has {} columns; expected {} {} x y z (and optionally ux uy uz)",
+                    fields.len(),
+                    names[0],
+                    names[1]
+                ),
+                "write one pose per row: the two rotary angles, then the measured ball centre",
+            ));
+        }
+        let mut v = Vec::with_capacity(fields.len());
+        for (k, f) in fields.iter().enumerate() {
+            match f.parse::<f64>() {
+                Ok(x) if x.is_finite() => v.push(x),
+                _ => {
+                    return Err(located(
+                        &name,
+                        line,
+                        raw,
+                        &format!("row {line}, column {}: `{f}` is not a finite number", k + 1),
+                        "give plain decimal numbers",
+                    ))
+                }
+            }
+        }
+        let mut rotary = [0.0; 2];
+        rotary[0] = v[order[0]];
+        rotary[1] = v[order[1]];
+        let sigma = (v.len() == 8).then(|| [v[5], v[6], v[7]]);
+        if let Some(s) = sigma {
+            if s.iter().any(|x| *x <= 0.0) {
+                return Err(located(
+                    &name,
+                    line,
+                    raw,
+                    &format!("row {line}: uncertainties must be positive"),
+                    "give each coordinate's standard uncertainty, or leave them out",
+                ));
+            }
+        }
+        poses.push(Pose {
+            rotary,
+            center: P3::new(v[2], v[3], v[4]),
+            row: line,
+            sigma,
+        });
+    }
+    if poses.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {name} holds no poses\n  = help: one row per pose: {} {} x y z\n",
+            names[0], names[1]
+        )));
+    }
+    Ok((name, poses))
+}
+
+fn out_text(s: String) -> Result<(), CliError> {
+    let mut o = Output::create(None)?;
+    o.writer()
+        .write_all(s.as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    o.commit()
+}
+
+fn v3(a: [f64; 3]) -> String {
+    format!("{:.6} {:.6} {:.6}", a[0], a[1], a[2])
+}
+
+fn report_pivot(m: &Machine, r: &PivotResult) -> String {
+    let mut s = format!("method {:?}\n", r.method).to_lowercase();
+    match (r.r, r.pivot, &r.line) {
+        (Some(rr), Some(p), _) => {
+            s.push_str(&format!("R {}\npivot {}\n", v3(rr), v3(p)));
+            if let Some(u) = r.u_r {
+                s.push_str(&format!("u_R {:.2e} {:.2e} {:.2e}\n", u[0], u[1], u[2]));
+            }
+        }
+        (_, _, Some(l)) => {
+            s.push_str(&format!(
+                "R not fixed: the poses allow a line of solutions\n  R = ({}) + t·({})\n  pivot = ({}) − t·({})\n  {}\n",
+                v3(l.r_point), v3(l.direction), v3(l.pivot_point), v3(l.direction), l.advice
+            ));
+        }
+        _ => s.push_str("R not fixed: see the note\n"),
+    }
+    s.push_str(&format!(
+        "rms {:.3e}\ncondition {:.3e}\n",
+        r.rms, r.condition
+    ));
+    if let Some(axes) = &r.axes {
+        for (i, a) in axes.iter().enumerate() {
+            s.push_str(&format!(
+                "axis {} direction {} point {}\n",
+                m.rotary[i].name,
+                v3(a.direction),
+                v3(a.point)
+            ));
+        }
+    }
+    for p in &r.per_pose {
+        s.push_str(&format!(
+            "row {} residual {:.3e} {:.3e} {:.3e}\n",
+            p.row, p.residual[0], p.residual[1], p.residual[2]
+        ));
+    }
+    for n in &r.notes {
+        s.push_str(&format!("note: {n}\n"));
+    }
+    s
+}
+
+pub fn pivot(
+    machine: &str,
+    sets: &[String],
+    file: &str,
+    method: Option<&str>,
+    write: Option<&str>,
+    json: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let (name, poses) = read_poses(&m, file)?;
+    let method = match method {
+        Some("i") => Method::I,
+        Some("iii") => Method::Iii,
+        Some("fit") => Method::Fit,
+        Some(other) => {
+            return Err(CliError::usage(format!(
+                "error: --method {other}: use i, iii or fit\n"
+            )))
+        }
+        None if poses.len() < 4 => Method::Iii,
+        None => Method::Fit,
+    };
+    let res = match method {
+        Method::I => calib::method_i(&m, &poses),
+        Method::Iii => calib::method_iii(&m, &poses),
+        Method::Fit => calib::method_fit(&m, &poses),
+    }
+    .map_err(|e| align_error(&name, e))?;
+    if let Some(path) = write {
+        let def = calib::updated_machine(&m, &res).map_err(|e| align_error(&name, e))?;
+        let mut o = Output::create(Some(path))?;
+        let text = format!("# Calibrated by lampost from {name}\n{}", def.to_toml());
+        o.writer()
+            .write_all(text.as_bytes())
+            .map_err(|e| CliError::write(&e))?;
+        o.commit()?;
+    }
+    if json {
+        out_text(format!(
+            "{}\n",
+            serde_json::to_value(&res).map_err(|e| CliError::usage(format!("error: {e}\n")))?
+        ))
+    } else {
+        out_text(report_pivot(&m, &res))
+    }
+}
+
+pub fn axes(machine: &str, sets: &[String], file: &str, json: bool) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let (name, poses) = read_poses(&m, file)?;
+    let e = calib::axes_from_circles(&m, &poses).map_err(|e| align_error(&name, e))?;
+    if json {
+        return out_text(format!(
+            "{}\n",
+            serde_json::to_value(&e).map_err(|x| CliError::usage(format!("error: {x}\n")))?
+        ));
+    }
+    let mut s = String::new();
+    for a in &e.axes {
+        s.push_str(&format!(
+            "{}: direction {} through {}; tilt from nominal {:.6}° ({:.1} µrad); circle rms {:.3e}\n",
+            a.name, v3(a.direction), v3(a.point), a.tilt_deg, a.tilt_deg.to_radians() * 1e6, a.rms
+        ));
+    }
+    s.push_str(&format!(
+        "{} and {}: {} ({:.3e} apart at the closest points {} and {}); squareness error {:.6}° ({:.1} µrad)\n",
+        e.axes[0].name, e.axes[1].name,
+        if e.offset < 1e-9 { "intersect" } else { "do not intersect" },
+        e.offset, v3(e.closest_points[0]), v3(e.closest_points[1]), e.squareness_deg, e.squareness_deg.to_radians() * 1e6
+    ));
+    out_text(s)
+}
+
+pub fn factorial(
+    start: Option<&str>,
+    step: Option<f64>,
+    fit: Option<&str>,
+    json: bool,
+) -> Result<(), CliError> {
+    match (start, step, fit) {
+        (Some(st), Some(d), None) => {
+            let c = vector("--start", st)?;
+            if !(d.is_finite() && d > 0.0) {
+                return Err(CliError::usage(format!(
+                    "error: --step {d}: must be positive\n"
+                )));
+            }
+            let runs = calib::factorial_design(c, d);
+            if json {
+                let v: Vec<serde_json::Value> = runs.iter().map(|(r, l, c)| serde_json::json!({"run": r, "levels": l, "center": [c.x, c.y, c.z]})).collect();
+                return out_text(format!("{}\n", serde_json::json!({ "runs": v })));
+            }
+            let mut s = String::from("run x y z (levels) -> centre\n");
+            for (r, l, c) in runs {
+                s.push_str(&format!(
+                    "{r} {:+} {:+} {:+} -> {:.6} {:.6} {:.6}\n",
+                    l[0], l[1], l[2], c.x, c.y, c.z
+                ));
+            }
+            out_text(s)
+        }
+        (None, None, Some(f)) => {
+            let (name, text) = read_text(f)?;
+            let mut rows = Vec::new();
+            for (i, raw) in text.lines().enumerate() {
+                let code = raw.split('#').next().unwrap_or("");
+                let fields: Vec<&str> = row_fields(code);
+                if fields.is_empty()
+                    || (rows.is_empty()
+                        && fields.iter().any(|x| x.chars().any(char::is_alphabetic)))
+                {
+                    continue;
+                }
+                let nums: Result<Vec<f64>, _> = fields.iter().map(|x| x.parse::<f64>()).collect();
+                let nums = nums.map_err(|_| {
+                    located(
+                        &name,
+                        i + 1,
+                        raw,
+                        "not a number in this row",
+                        "rows are: x y z variation (or run x y z variation)",
+                    )
+                })?;
+                let v = match nums.len() {
+                    4 => nums,
+                    5 => nums[1..].to_vec(),
+                    n => {
+                        return Err(located(
+                            &name,
+                            i + 1,
+                            raw,
+                            &format!("row has {n} columns"),
+                            "rows are: x y z variation (or run x y z variation)",
+                        ))
+                    }
+                };
+                rows.push((P3::new(v[0], v[1], v[2]), v[3]));
+            }
+            let r = calib::factorial_fit(&rows).map_err(|e| align_error(&name, e))?;
+            if json {
+                return out_text(format!(
+                    "{}\n",
+                    serde_json::to_value(&r)
+                        .map_err(|x| CliError::usage(format!("error: {x}\n")))?
+                ));
+            }
+            out_text(format!(
+                "variation = {:.6} + {:.6}x + {:.6}y + {:.6}z (coded levels; eq. 18)\nleast variation: run {} at {}\nproposed next centre (zero predicted variation): {}\nregression rms {:.3e}\nnote: Method II ignores z's coupling and needs drilled test holes; Method III and the axis-line fit measure the centre directly\n",
+                r.coefficients[0], r.coefficients[1], r.coefficients[2], r.coefficients[3], r.best_run, v3(r.best_center), v3(r.proposed_center), r.rms
+            ))
+        }
+        _ => Err(CliError::usage(
+            "error: give --start x,y,z --step d (the design), or --fit RESULTS (the regression)\n"
+                .to_string(),
+        )),
+    }
+}
+
+pub fn laser(
+    burned: &[String],
+    probed: &[String],
+    file: Option<&str>,
+    json: bool,
+) -> Result<(), CliError> {
+    let mut pairs = Vec::new();
+    if burned.len() != probed.len() {
+        return Err(CliError::usage(format!(
+            "error: {} --burned but {} --probed\n  = help: give them in pairs, one --probed for each --burned\n",
+            burned.len(),
+            probed.len()
+        )));
+    }
+    for (b, p) in burned.iter().zip(probed) {
+        pairs.push((vector("--burned", b)?, vector("--probed", p)?));
+    }
+    if let Some(f) = file {
+        let (name, text) = read_text(f)?;
+        for (i, raw) in text.lines().enumerate() {
+            let code = raw.split('#').next().unwrap_or("");
+            let fields: Vec<&str> = row_fields(code);
+            if fields.is_empty() || fields.iter().all(|x| x.parse::<f64>().is_err()) {
+                continue;
+            }
+            let nums: Result<Vec<f64>, _> = fields.iter().map(|x| x.parse::<f64>()).collect();
+            match nums {
+                Ok(v) if v.len() == 6 && v.iter().all(|x| x.is_finite()) => {
+                    pairs.push((P3::new(v[0], v[1], v[2]), P3::new(v[3], v[4], v[5])))
+                }
+                _ => {
+                    return Err(located(
+                        &name,
+                        i + 1,
+                        raw,
+                        "expected six numbers: burned x y z, probed x y z",
+                        "one burn mark per row",
+                    ))
+                }
+            }
+        }
+    }
+    let (l, spread) = calib::laser_offset(&pairs).map_err(|e| align_error("the burn marks", e))?;
+    if json {
+        return out_text(format!(
+            "{}\n",
+            serde_json::json!({"L": l, "spread": spread, "n": pairs.len()})
+        ));
+    }
+    out_text(format!(
+        "L {}\nspread {}\nn {}\nnote: L = probed − burned; to aim the laser at a point q in probe coordinates, command q − L\n",
+        v3(l),
+        spread.map_or("n/a (one mark)".into(), |s| format!("{:.2e} {:.2e} {:.2e}", s[0], s[1], s[2])),
+        pairs.len()
+    ))
+}
+
+/// `A=0,B=0;A=90,B=0;…` or the default 8-pose set.
+fn pose_set(m: &Machine, text: Option<&str>) -> Result<Vec<[f64; 2]>, CliError> {
+    let Some(t) = text else {
+        let (i, o) = (m.inner, m.outer);
+        let tilt = m.rotary[o]
+            .limits
+            .map_or(45.0, |(lo, hi)| 45f64.min(hi).max(lo));
+        let mut v = Vec::new();
+        for b in [0.0, tilt] {
+            for a in [0.0, 90.0, 180.0, 270.0] {
+                let mut r = [0.0; 2];
+                r[i] = a;
+                r[o] = b;
+                v.push(r);
+            }
+        }
+        return Ok(v);
+    };
+    let names = [m.rotary[0].name.as_str(), m.rotary[1].name.as_str()];
+    let mut out = Vec::new();
+    for item in t.split(';').filter(|s| !s.trim().is_empty()) {
+        let mut r = [None, None];
+        for kv in item.split(',') {
+            let (k, v) = kv.split_once('=').ok_or_else(|| CliError::usage(format!("error: --poses: `{kv}` is not NAME=value\n  = help: e.g. --poses \"A=0,B=0;A=90,B=45\"\n")))?;
+            let idx = names
+                .iter()
+                .position(|n| n.eq_ignore_ascii_case(k.trim()))
+                .ok_or_else(|| {
+                    CliError::usage(format!(
+                        "error: --poses: `{}` is not a rotary axis of {} ({})\n",
+                        k.trim(),
+                        m.name,
+                        names.join(", ")
+                    ))
+                })?;
+            let val: f64 = v
+                .trim()
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| {
+                    CliError::usage(format!("error: --poses: `{v}` is not a finite number\n"))
+                })?;
+            r[idx] = Some(val);
+        }
+        out.push([r[0].unwrap_or(0.0), r[1].unwrap_or(0.0)]);
+    }
+    Ok(out)
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn probe_poses(
+    machine: &str,
+    sets: &[String],
+    ball: &str,
+    poses: Option<&str>,
+    radius: f64,
+    stylus: f64,
+    points: usize,
+    output: Option<&str>,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let b0 = vector("--ball", ball)?;
+    let set = pose_set(&m, poses)?;
+    for r in &set {
+        for (i, ax) in m.rotary.iter().enumerate() {
+            if !ax.within(r[i]) {
+                let (lo, hi) = ax.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                return Err(CliError::failed(format!(
+                    "error: pose {}={}: outside its limits [{lo}, {hi}]\n",
+                    ax.name, r[i]
+                )));
+            }
+        }
+    }
+    if points < 4 || !(radius > 0.0 && stylus > 0.0) {
+        return Err(CliError::usage(
+            "error: need --points ≥ 4 and positive --radius and --stylus-radius\n".to_string(),
+        ));
+    }
+    let (cond, line) = calib::pose_conditioning(&m, &set);
+    let units = match m.units {
+        Units::Inch => lampost_gcode::Units::Inch,
+        Units::Mm => lampost_gcode::Units::Mm,
+    };
+    let opts = lampost_align::probe::ProbeOptions::defaults(units);
+    // One program: index, then probe the ball where the nominal model puts it.
+    let mut text = String::new();
+    let mut body = Vec::new();
+    for (k, r) in set.iter().enumerate() {
+        // The ball moves with the table; its stem (table −Z) turns with it. Touch the
+        // upper half of the ball (machine +Z side) away from the stem.
+        let centre = m.part_to_machine(r, &P3::zeros()) + b0;
+        let stem =
+            m.part_to_machine(r, &P3::new(0.0, 0.0, -1.0)) - m.part_to_machine(r, &P3::zeros());
+        let cands =
+            lampost_align::probe::sphere_touches(centre, radius, stylus, points * 4, 90.0, &opts);
+        // Touch directions at least 45° away from the stem.
+        let stem_unit = stem.normalize();
+        let clear = 45f64.to_radians().cos();
+        let ok: Vec<_> = cands
+            .into_iter()
+            .filter(|t| (P3::from(t.expected) - centre).normalize().dot(&stem_unit) < clear)
+            .collect();
+        let step = (ok.len() / points).max(1);
+        let chosen: Vec<_> = ok.into_iter().step_by(step).take(points).collect();
+        if chosen.len() < 4 {
+            return Err(CliError::failed(format!(
+                "error: at pose {k} the stem leaves fewer than 4 reachable touch points\n"
+            )));
+        }
+        body.push((*r, centre, chosen));
+    }
+    let safe = body
+        .iter()
+        .map(|(_, c, _)| c.z)
+        .fold(f64::NEG_INFINITY, f64::max)
+        + radius
+        + stylus
+        + 10.0 * opts.clearance;
+    text.push_str("%\n");
+    text.push_str(&format!(
+        "O9502 (LAMPOST ROTARY CALIBRATION {} POSES)\n",
+        set.len()
+    ));
+    text.push_str(&format!(
+        "(MACHINE {} - PROBE THE GAGE BALL AT EACH A/B POSE)\n",
+        m.name.to_uppercase()
+    ));
+    text.push_str(&format!(
+        "(POSE SET CONDITION NUMBER {cond:.3e}{})\n",
+        if line.is_some() {
+            " - RANK DEFICIENT"
+        } else {
+            ""
+        }
+    ));
+    for (k, (r, _, touches)) in body.iter().enumerate() {
+        let prog = lampost_align::probe::program(touches, safe, &format!("POSE {}", k + 1), &opts)
+            .map_err(|e| CliError::write(&e))?;
+        // Keep the body of each sub-program (between its O line and the end).
+        text.push_str(&format!(
+            "(POSE {} OF {}: {}={} {}={})\n",
+            k + 1,
+            body.len(),
+            m.rotary[0].name,
+            r[0],
+            m.rotary[1].name,
+            r[1]
+        ));
+        text.push_str(&format!("G0 Z{safe:.4}\n"));
+        text.push_str(&format!(
+            "G0 {}{:.3} {}{:.3}\n",
+            m.rotary[0].name, r[0], m.rotary[1].name, r[1]
+        ));
+        text.push_str(&format!(
+            "#SPRINT \"POSE {} {}{:.3} {}{:.3}\"\n",
+            k + 1,
+            m.rotary[0].name,
+            r[0],
+            m.rotary[1].name,
+            r[1]
+        ));
+        for l in prog.lines().skip(2) {
+            if l == "%" || l.starts_with("M30") || l.starts_with("M67") {
+                continue;
+            }
+            text.push_str(l);
+            text.push('\n');
+        }
+    }
+    text.push_str("M67 (PROBE OFF)\nM30\n%\n");
+    let diags = lampost_gcode::check(
+        text.as_bytes(),
+        lampost_gcode::Options {
+            units,
+            ..lampost_gcode::Options::default()
+        },
+    );
+    if let Some(d) = diags.iter().find(|d| d.is_error()) {
+        return Err(CliError::failed(format!(
+            "error: internal: the generated program does not check: {d}\n"
+        )));
+    }
+    match &line {
+        None => eprintln!("pose set: {} poses, condition number {cond:.3e} (Method III design); R and the centre are fixed", set.len()),
+        Some(d) => eprintln!(
+            "warning: this pose set cannot fix R: every pose turns about ({:.4}, {:.4}, {:.4}); add a pose that moves the other axis",
+            d[0], d[1], d[2]
+        ),
+    }
+    let mut o = Output::create(output)?;
+    o.writer()
+        .write_all(text.as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    o.commit()
+}
