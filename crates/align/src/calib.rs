@@ -218,6 +218,25 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         .sum();
     let notes =
         vec!["assumes the two rotary axes intersect (R is from their common point)".to_string()];
+    let nullity =
+        sv.iter().filter(|&&x| x <= 1e-9 * smax).count() + 6usize.saturating_sub(sv.len());
+    if nullity > 1 {
+        return Ok(PivotResult {
+            method: Method::Iii,
+            r: None,
+            u_r: None,
+            pivot: None,
+            ball_home: None,
+            rms,
+            condition: f64::MAX,
+            per_pose,
+            line: None,
+            axes: None,
+            notes: vec![format!(
+                "all {k} poses are at the same rotary angles: they fix nothing about R (a {nullity}-dimensional family fits); measure the ball at poses turning about both axes"
+            )],
+        });
+    }
     if smin <= 1e-9 * smax {
         // The null direction: R and c move oppositely along the poses' common axis.
         let vt = svd
@@ -1049,6 +1068,12 @@ mod edge_tests {
         ];
         let r = method_iii(&m, &two).expect("runs");
         assert!(r.r.is_none() && r.line.is_some());
+        let same = [two[1], Pose { row: 3, ..two[1] }, Pose { row: 4, ..two[1] }];
+        let r = method_iii(&m, &same).expect("runs");
+        assert!(
+            r.r.is_none() && r.line.is_none() && r.notes[0].contains("same rotary angles"),
+            "{r:?}"
+        );
         let r = method_iii(
             &m,
             &[Pose {

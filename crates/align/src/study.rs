@@ -132,6 +132,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn full_calibration_chain_meets_its_target() {
+        // 5 µm between the axis lines and a 0.005° tilt: only the axis-line fit is
+        // unbiased; with 8 poses it is within 2 µm and its uncertainty covers the error.
+        let cells = calibration_table(40, 0.001 / 25.4, 0.005 / 25.4, 0.005, 11);
+        let fit8 = cells
+            .iter()
+            .find(|c| c.method.starts_with("axis-line") && c.poses == 8)
+            .expect("cell");
+        assert_eq!(fit8.solved, 40);
+        assert!(fit8.max_error < 0.002 / 25.4, "{fit8:?}");
+        assert!(fit8.coverage_2u.expect("u") >= 0.85, "{fit8:?}");
+        let two = cells
+            .iter()
+            .filter(|c| c.poses == 2 && !c.method.starts_with("paper"))
+            .collect::<Vec<_>>();
+        assert!(two.iter().all(|c| c.solved == 0), "two poses never fix R");
+    }
+
+    #[test]
     fn n_point_fit_beats_four_points() {
         // 25 mm ball, 120° cap (60° from the pole), σ = 1 µm, 30 points.
         let (f4, fnp) = four_vs_n(200, 30, 12.5, 60.0, 0.001, 7);
