@@ -139,6 +139,61 @@ pub struct MachineDef {
     /// Heads.
     #[serde(rename = "head")]
     pub heads: Vec<HeadDef>,
+    /// Process codes and post settings.
+    #[serde(default)]
+    pub process: ProcessDef,
+}
+
+/// Process codes (blocks of words, e.g. `"M71"` or `"M3 S1200"`) and post settings. The
+/// papers give no laser or powder codes: the defaults are documented assumptions for the
+/// machine's integrator to set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ProcessDef {
+    /// Laser on (the power follows in the `laser_power_word`).
+    pub laser_on: String,
+    /// Laser off.
+    pub laser_off: String,
+    /// The word that carries the laser power with `laser_on` (e.g. S).
+    pub laser_power_word: String,
+    /// Powder feed on.
+    pub powder_on: String,
+    /// Powder feed off.
+    pub powder_off: String,
+    /// Spindle on clockwise (speed follows as S).
+    pub spindle_on: String,
+    /// Spindle off.
+    pub spindle_off: String,
+    /// Coolant on.
+    pub coolant_on: String,
+    /// Coolant off.
+    pub coolant_off: String,
+    /// Tool change (after the T word).
+    pub tool_change: String,
+    /// Machine-frame height of the head's tool point for retracts before any rotary
+    /// move (the table re-indexes only up there).
+    pub clearance_z: f64,
+    /// Program end.
+    pub program_end: String,
+}
+
+impl Default for ProcessDef {
+    fn default() -> Self {
+        ProcessDef {
+            laser_on: "M71".into(),
+            laser_off: "M72".into(),
+            laser_power_word: "S".into(),
+            powder_on: "M73".into(),
+            powder_off: "M74".into(),
+            spindle_on: "M3".into(),
+            spindle_off: "M5".into(),
+            coolant_on: "M8".into(),
+            coolant_off: "M9".into(),
+            tool_change: "M6".into(),
+            clearance_z: 0.0,
+            program_end: "M30".into(),
+        }
+    }
 }
 
 fn z_axis() -> [f64; 3] {

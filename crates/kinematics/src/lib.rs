@@ -20,7 +20,7 @@ pub mod def;
 pub mod error;
 pub mod machine;
 
-pub use def::{MachineDef, Moves, ParamValue, Units, VecExpr, BUILTINS};
+pub use def::{MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS};
 pub use error::KinError;
 pub use machine::{
     Choice, Head, Joints, Linear, Machine, Orientation, Placed, Pose, Rotary, Solution, Solutions,

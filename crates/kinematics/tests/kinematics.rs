@@ -215,6 +215,13 @@ fn unreachable_tilt_names_the_limit() {
 #[test]
 fn bad_machine_files_are_refused_with_a_place() {
     let good = lampost_kinematics::def::builtin_text("fadal-lamp").expect("text");
+    // Where the Y limits stand, so the expected location follows the file.
+    let y_line = good
+        .lines()
+        .position(|l| l == "limits = [-10.0, 10.0]")
+        .expect("Y limits")
+        + 1;
+    let y_limits_at = format!(":{y_line}:");
     let cases = [
         (
             good.replace("axis = [0.0, 0.0, 1.0]", "axis = [0.0, 0.0, 0.0]"),
@@ -226,11 +233,11 @@ fn bad_machine_files_are_refused_with_a_place() {
         ),
         (
             good.replace("limits = [-10.0, 10.0]", "limits = [-10.0, nan]"),
-            ":35:",
+            y_limits_at.as_str(),
         ),
         (
             good.replace("limits = [-10.0, 10.0]", "limits = [-10.0, \"ten\"]"),
-            ":35:",
+            y_limits_at.as_str(),
         ),
         (
             good.replace(
