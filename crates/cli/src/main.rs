@@ -9,6 +9,7 @@ mod gcode_cmds;
 mod io;
 mod kin_cmds;
 mod points;
+mod post_cmds;
 mod report;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -357,6 +358,48 @@ enum ProbeCmd {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Post a planar toolpath into a 5-axis deposition or machining program.
+    Post {
+        /// The planar program (or - for standard input); not with --job.
+        input: Option<String>,
+        #[command(flatten)]
+        args: post_cmds::PostArgs,
+        /// Output file (written to a temporary file, verified, then renamed); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+        /// Split into pieces of at most this many bytes (FADAL: subprograms; others: numbered files).
+        #[arg(long)]
+        max_bytes: Option<usize>,
+        /// Write a JSON report (moves, warnings, limits used, verification, time) to this file.
+        #[arg(long)]
+        json_report: Option<String>,
+    },
+    /// Replay a posted program through forward kinematics and compare it with the intended path.
+    Verify {
+        /// INPUT POSTED: the planar program and the posted program (with --job, POSTED alone).
+        #[arg(num_args = 1..=2, required = true)]
+        files: Vec<String>,
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        #[command(flatten)]
+        place: post_cmds::Placement,
+        /// Head (default: laser for deposit, spindle for machine).
+        #[arg(long)]
+        head: Option<String>,
+        /// deposit or machine (chooses the default head).
+        #[arg(long, default_value = "deposit")]
+        process: String,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Largest allowed distance from the intended path (default 0.001 in / 0.02 mm).
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Calibrate the rotary centre (R), the axis lines, and the laser offset (L).
     Calibrate {
         #[command(subcommand)]
@@ -446,6 +489,50 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Post {
+            input,
+            args,
+            output,
+            max_bytes,
+            json_report,
+        } => post_cmds::post(
+            &args,
+            input.as_deref(),
+            output.as_deref(),
+            max_bytes,
+            json_report.as_deref(),
+        ),
+        Command::Verify {
+            files,
+            machine,
+            place,
+            head,
+            process,
+            set,
+            tolerance,
+            json,
+        } => {
+            let (input, posted) = match files.as_slice() {
+                [p] => (None, p.clone()),
+                [i, p] => (Some(i.clone()), p.clone()),
+                _ => {
+                    return Err(CliError::usage(
+                        "error: give INPUT POSTED (or POSTED with --job)\n".to_string(),
+                    ))
+                }
+            };
+            post_cmds::verify(
+                &machine,
+                &set,
+                &place,
+                head.as_deref(),
+                &process,
+                input.as_deref(),
+                &posted,
+                tolerance,
+                json,
+            )
+        }
         Command::Calibrate {
             cmd:
                 CalibrateCmd::Pivot {

@@ -342,6 +342,11 @@ impl<W: Write> Emitter<W> {
         self.flush_line()
     }
 
+    /// The writer underneath.
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
     /// Write a line verbatim (a macro statement such as `#PRINT …`, or a comment line).
     pub fn raw_line(&mut self, text: &str) -> io::Result<()> {
         self.frame_start(false)?;

@@ -1,0 +1,687 @@
+//! `lampost post` and `lampost verify`.
+
+use std::collections::BTreeMap;
+use std::io::{BufReader, IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use lampost_kinematics::{Machine, Vector3};
+use lampost_post::{
+    Frame, IntendedOptions, LayerSchedule, Orient, PostConfig, PostDialect, PostError, Process,
+    Section, Source,
+};
+
+use crate::io::display_name;
+use crate::kin_cmds::{load_machine, vector};
+use crate::report::CliError;
+
+/// Render a post error for people.
+pub fn post_error(e: PostError) -> CliError {
+    let hint = e.hint();
+    let msg = match &e {
+        PostError::Input { file, diag } => crate::report::render(file, diag),
+        _ => format!("error: {e}\n"),
+    };
+    CliError::failed(format!(
+        "{}  = help: {hint}\n",
+        if msg.ends_with('\n') {
+            msg
+        } else {
+            format!("{msg}\n")
+        }
+    ))
+}
+
+/// Options that place and orient the input.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct Placement {
+    /// Fixed rotary index, e.g. A=45,B=-45 (the program frame is the part frame moved to --origin).
+    #[arg(long, allow_hyphen_values = true)]
+    pub index: Option<String>,
+    /// Setup file (from `lampost align`): the program frame on the part; program +Z becomes the tool axis.
+    #[arg(long)]
+    pub setup: Option<String>,
+    /// Job file with several sections, each with its program, index or setup.
+    #[arg(long)]
+    pub job: Option<String>,
+    /// Program origin in the part frame (with --index, or without a setup).
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+    /// Layer schedule: turn each Z level of the program about this part-frame direction…
+    #[arg(long, allow_hyphen_values = true)]
+    pub layer_axis: Option<String>,
+    /// …through this part-frame point…
+    #[arg(long, allow_hyphen_values = true)]
+    pub layer_point: Option<String>,
+    /// …by this many degrees per layer.
+    #[arg(long, allow_hyphen_values = true)]
+    pub layer_angle: Option<f64>,
+    /// Starting rotary position for choosing solutions, e.g. A=0,B=0.
+    #[arg(long, allow_hyphen_values = true)]
+    pub near: Option<String>,
+    /// Scale a program in other units to the machine's (otherwise an error).
+    #[arg(long)]
+    pub convert_units: bool,
+    /// E words are slicer extrusion: deposit only while E grows.
+    #[arg(long)]
+    pub e_extrusion: bool,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JobFile {
+    section: Vec<JobSection>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JobSection {
+    program: String,
+    index: Option<BTreeMap<String, f64>>,
+    setup: Option<String>,
+    origin: Option<[f64; 3]>,
+    x_axis: Option<[f64; 3]>,
+    z_axis: Option<[f64; 3]>,
+}
+
+fn index_arg(m: &Machine, text: &str) -> Result<[f64; 2], CliError> {
+    let names = [m.rotary[0].name.as_str(), m.rotary[1].name.as_str()];
+    let mut r = [None, None];
+    for item in text.split(',').filter(|s| !s.trim().is_empty()) {
+        let (k, v) = item.split_once('=').ok_or_else(|| {
+            CliError::usage(format!(
+                "error: --index: `{item}` is not NAME=value\n  = help: e.g. --index {}=45,{}=-45\n",
+                names[0], names[1]
+            ))
+        })?;
+        let i = names
+            .iter()
+            .position(|n| n.eq_ignore_ascii_case(k.trim()))
+            .ok_or_else(|| {
+                CliError::usage(format!(
+                    "error: --index: `{}` is not a rotary axis of {} ({})\n",
+                    k.trim(),
+                    m.name,
+                    names.join(", ")
+                ))
+            })?;
+        let val: f64 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite())
+            .ok_or_else(|| {
+                CliError::usage(format!(
+                    "error: --index: `{}` is not a finite number\n",
+                    v.trim()
+                ))
+            })?;
+        r[i] = Some(val);
+    }
+    match r {
+        [Some(a), Some(b)] => Ok([a, b]),
+        _ => Err(CliError::usage(format!(
+            "error: --index needs both {} and {}\n",
+            names[0], names[1]
+        ))),
+    }
+}
+
+fn file_error(file: &str, text: &str, e: &toml::de::Error) -> CliError {
+    let (line, col) = e.span().map_or((0, 0), |sp| {
+        let before = &text[..sp.start.min(text.len())];
+        (
+            before.matches('\n').count() + 1,
+            before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1,
+        )
+    });
+    let shown = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
+    CliError::failed(format!("error: {}\n  --> {file}:{line}:{col}\n   | {shown}\n  = help: see docs/post.md for the file's keys\n", e.message().trim()))
+}
+
+fn setup_frame(path: &str) -> Result<Frame, CliError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::usage(format!("error: cannot read {path}: {e}\n")))?;
+    lampost_post::read_setup(&text, path).map_err(post_error)
+}
+
+fn source(input: &str) -> Result<Source, CliError> {
+    if input == "-" {
+        let mut b = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::stdin(), &mut b)
+            .map_err(|e| CliError::usage(format!("error: cannot read standard input: {e}\n")))?;
+        Ok(Source::Bytes(b))
+    } else {
+        if !Path::new(input).is_file() {
+            return Err(CliError::usage(format!(
+                "error: cannot open {input}\n  = help: check the path; use - for standard input\n"
+            )));
+        }
+        Ok(Source::Path(PathBuf::from(input)))
+    }
+}
+
+/// Build the sections from the placement options and INPUT.
+pub fn sections(
+    m: &Machine,
+    pl: &Placement,
+    input: Option<&str>,
+) -> Result<Vec<Section>, CliError> {
+    let chosen = [pl.index.is_some(), pl.setup.is_some(), pl.job.is_some()]
+        .iter()
+        .filter(|x| **x)
+        .count();
+    if chosen > 1 {
+        return Err(CliError::usage(
+            "error: give one of --index, --setup or --job\n".to_string(),
+        ));
+    }
+    let layers = match (&pl.layer_axis, pl.layer_angle) {
+        (None, None) => None,
+        (Some(a), Some(d)) => {
+            let axis = vector("--layer-axis", a)?;
+            if axis.norm() < 1e-12 {
+                return Err(CliError::usage(
+                    "error: --layer-axis has zero length\n".to_string(),
+                ));
+            }
+            let point = pl
+                .layer_point
+                .as_deref()
+                .map(|p| vector("--layer-point", p))
+                .transpose()?
+                .unwrap_or_else(Vector3::zeros);
+            Some(LayerSchedule {
+                axis,
+                point,
+                deg_per_layer: d,
+            })
+        }
+        _ => {
+            return Err(CliError::usage(
+                "error: a layer schedule needs both --layer-axis and --layer-angle\n".to_string(),
+            ))
+        }
+    };
+    if layers.is_some() && pl.index.is_some() {
+        return Err(CliError::usage("error: a layer schedule re-indexes every layer; use --setup or --origin, not --index\n".to_string()));
+    }
+    let origin = pl
+        .origin
+        .as_deref()
+        .map(|o| vector("--origin", o))
+        .transpose()?
+        .unwrap_or_else(Vector3::zeros);
+    if let Some(job) = &pl.job {
+        let text = std::fs::read_to_string(job)
+            .map_err(|e| CliError::usage(format!("error: cannot read {job}: {e}\n")))?;
+        let jf: JobFile = toml::from_str(&text).map_err(|e| file_error(job, &text, &e))?;
+        let dir = Path::new(job).parent().unwrap_or(Path::new("."));
+        let mut out = Vec::new();
+        for (k, s) in jf.section.iter().enumerate() {
+            let path = dir.join(&s.program);
+            let name = path.to_string_lossy().into_owned();
+            let axes_frame = || {
+                Frame::from_axes(
+                    Vector3::from(s.origin.unwrap_or([0.0; 3])),
+                    Vector3::from(s.x_axis.unwrap_or([1.0, 0.0, 0.0])),
+                    Vector3::from(s.z_axis.unwrap_or([0.0, 0.0, 1.0])),
+                )
+                .map_err(|e| CliError::failed(format!("error: {job}: section {}: {e}\n", k + 1)))
+            };
+            let (frame, orient) = match (&s.index, &s.setup) {
+                (Some(_), Some(_)) => {
+                    return Err(CliError::failed(format!(
+                        "error: {job}: section {} gives both index and setup\n",
+                        k + 1
+                    )))
+                }
+                (Some(ix), None) => {
+                    let text: String = ix
+                        .iter()
+                        .map(|(n, v)| format!("{n}={v}"))
+                        .collect::<Vec<_>>()
+                        .join(",");
+                    (axes_frame()?, Orient::Index(index_arg(m, &text)?))
+                }
+                (None, Some(st)) => (
+                    setup_frame(&dir.join(st).to_string_lossy())?,
+                    Orient::ToolAxis,
+                ),
+                (None, None) => (axes_frame()?, Orient::ToolAxis),
+            };
+            if !path.is_file() {
+                return Err(CliError::failed(format!(
+                    "error: {job}: section {}: cannot open {name}\n",
+                    k + 1
+                )));
+            }
+            out.push(Section {
+                name,
+                source: Source::Path(path),
+                frame,
+                orient,
+                layers,
+            });
+        }
+        if out.is_empty() {
+            return Err(CliError::failed(format!(
+                "error: {job} has no [[section]]\n"
+            )));
+        }
+        return Ok(out);
+    }
+    let input = input
+        .ok_or_else(|| CliError::usage("error: give the INPUT program (or --job)\n".to_string()))?;
+    let (frame, orient) = match (&pl.index, &pl.setup) {
+        (Some(ix), None) => (Frame::translation(origin), Orient::Index(index_arg(m, ix)?)),
+        (None, Some(st)) => (setup_frame(st)?, Orient::ToolAxis),
+        _ => (Frame::translation(origin), Orient::ToolAxis),
+    };
+    Ok(vec![Section {
+        name: display_name(input),
+        source: source(input)?,
+        frame,
+        orient,
+        layers,
+    }])
+}
+
+/// Options of `lampost post`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PostArgs {
+    /// Built-in machine name or machine file.
+    #[arg(long)]
+    pub machine: String,
+    #[command(flatten)]
+    pub place: Placement,
+    /// Head: laser, spindle, … (default: laser for deposit, spindle/probe for machine).
+    #[arg(long)]
+    pub head: Option<String>,
+    /// deposit or machine.
+    #[arg(long, default_value = "deposit")]
+    pub process: String,
+    /// fadal, iso or nrc (default: fadal for an inch machine, nrc for nrc-lc, else iso).
+    #[arg(long)]
+    pub dialect: Option<String>,
+    /// Override a machine parameter (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Laser power for deposition.
+    #[arg(long, default_value_t = 1000.0)]
+    pub power: f64,
+    /// Machining: tool number (T… M6).
+    #[arg(long)]
+    pub tool: Option<u32>,
+    /// Machining: tool length offset register (G43 H…).
+    #[arg(long)]
+    pub length_offset: Option<u32>,
+    /// Machining: work offset, e.g. E1 (FADAL) or G54.
+    #[arg(long)]
+    pub work_offset: Option<String>,
+    /// Machining: spindle speed.
+    #[arg(long, default_value_t = 3000.0)]
+    pub spindle: f64,
+    /// Machining: coolant on.
+    #[arg(long)]
+    pub coolant: bool,
+    /// Chord tolerance for linearised arcs (default 0.0005 in / 0.01 mm).
+    #[arg(long)]
+    pub tolerance: Option<f64>,
+    /// Number blocks: START,STEP.
+    #[arg(long)]
+    pub renumber: Option<String>,
+    /// Program number (FADAL O word).
+    #[arg(long, default_value_t = 1000)]
+    pub program_number: u32,
+}
+
+/// The post configuration from the options.
+pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostConfig, CliError> {
+    let process = match a.process.as_str() {
+        "deposit" => Process::Deposit { power: a.power },
+        "machine" => Process::Machine {
+            tool: a.tool,
+            length_offset: a.length_offset,
+            work_offset: a.work_offset.clone(),
+            spindle: a.spindle,
+            coolant: a.coolant,
+        },
+        other => {
+            return Err(CliError::usage(format!(
+                "error: --process {other}: use deposit or machine\n"
+            )))
+        }
+    };
+    let head_name = a.head.clone().unwrap_or_else(|| {
+        let want = if a.process == "deposit" {
+            "laser"
+        } else {
+            "spindle"
+        };
+        if m.head(want).is_ok() {
+            want.to_string()
+        } else {
+            m.heads[0].name.clone()
+        }
+    });
+    let head = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
+    let dialect = match a.dialect.as_deref() {
+        Some("fadal") => PostDialect::Fadal,
+        Some("iso") => PostDialect::Iso,
+        Some("nrc") => PostDialect::Nrc,
+        Some(other) => {
+            return Err(CliError::usage(format!(
+                "error: --dialect {other}: use fadal, iso or nrc\n"
+            )))
+        }
+        None if m.name.starts_with("fadal") => PostDialect::Fadal,
+        None if m.name.starts_with("nrc") => PostDialect::Nrc,
+        None => PostDialect::Iso,
+    };
+    let tolerance = a.tolerance.unwrap_or(match m.units {
+        lampost_kinematics::Units::Inch => 0.0005,
+        lampost_kinematics::Units::Mm => 0.01,
+    });
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(CliError::usage(format!(
+            "error: --tolerance {tolerance}: must be positive\n"
+        )));
+    }
+    let renumber = a
+        .renumber
+        .as_deref()
+        .map(|r| {
+            let bad = || CliError::usage(format!("error: --renumber {r}: expected START,STEP\n"));
+            let (s, t) = r.split_once(',').ok_or_else(bad)?;
+            Ok::<_, CliError>((
+                s.trim().parse::<u64>().map_err(|_| bad())?,
+                t.trim().parse::<u64>().map_err(|_| bad())?.max(1),
+            ))
+        })
+        .transpose()?;
+    let near = crate::kin_cmds::near_rotary(m, a.place.near.as_deref())?;
+    let mut header = vec![
+        format!("lampost {} post for {}", env!("CARGO_PKG_VERSION"), m.name),
+        format!("head {head_name}, process {}", a.process),
+    ];
+    for s in sections {
+        let f = &s.frame;
+        let place = match s.orient {
+            Orient::Index(r) => format!(
+                "index {}{:.3} {}{:.3}",
+                m.rotary[0].name, r[0], m.rotary[1].name, r[1]
+            ),
+            Orient::ToolAxis => "program +Z as the tool axis".to_string(),
+        };
+        header.push(format!(
+            "{}: {place}; origin {:.4} {:.4} {:.4}; x {:.4} {:.4} {:.4}; z {:.4} {:.4} {:.4}",
+            Path::new(&s.name)
+                .file_name()
+                .map_or(s.name.clone(), |n| n.to_string_lossy().into_owned()),
+            f.origin.x,
+            f.origin.y,
+            f.origin.z,
+            f.rot[(0, 0)],
+            f.rot[(1, 0)],
+            f.rot[(2, 0)],
+            f.rot[(0, 2)],
+            f.rot[(1, 2)],
+            f.rot[(2, 2)]
+        ));
+        if let Some(l) = &s.layers {
+            header.push(format!("layers turned {:.4} deg each about ({:.4} {:.4} {:.4}) through ({:.4} {:.4} {:.4})", l.deg_per_layer, l.axis.x, l.axis.y, l.axis.z, l.point.x, l.point.y, l.point.z));
+        }
+    }
+    Ok(PostConfig {
+        head,
+        process,
+        dialect,
+        renumber,
+        tolerance,
+        intended: IntendedOptions {
+            convert_units: a.place.convert_units,
+            e_extrusion: a.place.e_extrusion,
+        },
+        near,
+        program_number: a.program_number,
+        header,
+    })
+}
+
+/// A temporary file beside `target` (or in the temp folder), removed unless persisted.
+struct Temp {
+    path: PathBuf,
+    keep: bool,
+}
+
+impl Temp {
+    fn beside(target: Option<&str>) -> Self {
+        let dir = target
+            .and_then(|t| {
+                Path::new(t)
+                    .parent()
+                    .filter(|d| !d.as_os_str().is_empty())
+                    .map(Path::to_path_buf)
+            })
+            .unwrap_or_else(std::env::temp_dir);
+        let name = format!(
+            ".lampost-post-{}-{}.tmp",
+            std::process::id(),
+            target.map_or("stdout".into(), |t| Path::new(t)
+                .file_name()
+                .map_or("out".into(), |n| n.to_string_lossy().into_owned()))
+        );
+        Temp {
+            path: dir.join(name),
+            keep: false,
+        }
+    }
+}
+
+impl Drop for Temp {
+    fn drop(&mut self) {
+        if !self.keep {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
+}
+
+fn werr(e: std::io::Error) -> CliError {
+    CliError::write(&e)
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn post(
+    a: &PostArgs,
+    input: Option<&str>,
+    output: Option<&str>,
+    max_bytes: Option<usize>,
+    json_report: Option<&str>,
+) -> Result<(), CliError> {
+    let t0 = std::time::Instant::now();
+    let m = load_machine(&a.machine, &a.set)?;
+    let secs = sections(&m, &a.place, input)?;
+    let cfg = config(&m, a, &secs)?;
+    let tmp = Temp::beside(output);
+    let file = std::fs::File::create(&tmp.path).map_err(|e| {
+        CliError::usage(format!("error: cannot write {}: {e}\n", tmp.path.display()))
+    })?;
+    let show = std::io::stderr().is_terminal();
+    let report = {
+        let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
+        let r = lampost_post::post(&m, &secs, &cfg, &mut bw, |n| {
+            if show && n > 0 {
+                eprint!("\rposting: {n} moves");
+            }
+        })
+        .map_err(post_error)?;
+        bw.flush().map_err(werr)?;
+        if show {
+            eprint!("\r                                \r");
+        }
+        r
+    };
+    // Verify before anything is written where the user asked.
+    let verify_tol = 2.0 * cfg.tolerance;
+    let posted = std::fs::File::open(&tmp.path).map_err(werr)?;
+    let v = lampost_post::verify(
+        &m,
+        &secs,
+        cfg.head,
+        cfg.intended,
+        BufReader::new(posted),
+        verify_tol,
+    )
+    .map_err(post_error)?;
+    if v.max_axis_error_deg > 0.01 {
+        return Err(post_error(PostError::Verify(format!(
+            "the tool axis is off by {:.4}° at posted line {}",
+            v.max_axis_error_deg, v.worst_line
+        ))));
+    }
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    let total = std::fs::metadata(&tmp.path).map_err(werr)?.len();
+    let mut written: Vec<String> = Vec::new();
+    match (max_bytes, output) {
+        (Some(max), _) => {
+            if max < 256 {
+                return Err(CliError::usage(format!(
+                    "error: --max-bytes {max}: too small to hold a program\n"
+                )));
+            }
+            if total as usize <= max {
+                // Fits as it is.
+                written.push(persist(&tmp, output)?);
+            } else {
+                let mut f = std::fs::File::open(&tmp.path).map_err(werr)?;
+                let pieces = lampost_post::split::split(
+                    &mut f,
+                    total,
+                    &report,
+                    cfg.dialect,
+                    cfg.program_number,
+                    max,
+                )
+                .map_err(post_error)?;
+                let Some(out) = output else {
+                    return Err(CliError::usage(
+                        "error: --max-bytes needs -o OUT (the pieces are files)\n".to_string(),
+                    ));
+                };
+                for p in pieces {
+                    let name = if p.number == 0 {
+                        out.to_string()
+                    } else {
+                        numbered(out, p.number)
+                    };
+                    let mut o = crate::io::Output::create(Some(&name))?;
+                    o.writer().write_all(&p.text).map_err(werr)?;
+                    o.commit()?;
+                    written.push(name);
+                }
+            }
+        }
+        (None, _) => written.push(persist(&tmp, output)?),
+    }
+    if let Some(path) = json_report {
+        let limits: Vec<serde_json::Value> = report
+            .limits_used
+            .iter()
+            .map(|(n, lo, hi)| serde_json::json!({"axis": n, "min": lo, "max": hi}))
+            .collect();
+        let j = serde_json::json!({
+            "moves": report.moves, "warnings": report.warnings, "limits_used": limits,
+            "indexes": report.indexes, "verify": v, "bytes": total, "files": written,
+            "time_s": t0.elapsed().as_secs_f64(),
+        });
+        let mut o = crate::io::Output::create(Some(path))?;
+        o.writer()
+            .write_all(format!("{j}\n").as_bytes())
+            .map_err(werr)?;
+        o.commit()?;
+    }
+    Ok(())
+}
+
+fn numbered(out: &str, n: usize) -> String {
+    let p = Path::new(out);
+    let stem = p
+        .file_stem()
+        .map_or("out".into(), |s| s.to_string_lossy().into_owned());
+    let ext = p
+        .extension()
+        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    p.with_file_name(format!("{stem}.{n:03}{ext}"))
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn persist(tmp: &Temp, output: Option<&str>) -> Result<String, CliError> {
+    match output {
+        Some(o) if o != "-" => {
+            std::fs::rename(&tmp.path, o)
+                .map_err(|e| CliError::usage(format!("error: cannot write {o}: {e}\n")))?;
+            Ok(o.to_string())
+        }
+        _ => {
+            let mut f = std::fs::File::open(&tmp.path).map_err(werr)?;
+            let mut out = std::io::stdout().lock();
+            std::io::copy(&mut f, &mut out).map_err(werr)?;
+            out.flush().map_err(werr)?;
+            Ok("<stdout>".into())
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn verify(
+    machine: &str,
+    sets: &[String],
+    place: &Placement,
+    head: Option<&str>,
+    process: &str,
+    input: Option<&str>,
+    posted: &str,
+    tolerance: Option<f64>,
+    json: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let secs = sections(&m, place, input)?;
+    let head_name = head.map(str::to_string).unwrap_or_else(|| {
+        let want = if process == "deposit" {
+            "laser"
+        } else {
+            "spindle"
+        };
+        if m.head(want).is_ok() {
+            want.to_string()
+        } else {
+            m.heads[0].name.clone()
+        }
+    });
+    let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
+    let tol = tolerance.unwrap_or(match m.units {
+        lampost_kinematics::Units::Inch => 0.001,
+        lampost_kinematics::Units::Mm => 0.02,
+    });
+    let f = std::fs::File::open(posted)
+        .map_err(|e| CliError::usage(format!("error: cannot open {posted}: {e}\n")))?;
+    let opts = IntendedOptions {
+        convert_units: place.convert_units,
+        e_extrusion: place.e_extrusion,
+    };
+    let v = lampost_post::verify(&m, &secs, h, opts, BufReader::new(f), tol).map_err(post_error)?;
+    let s = if json {
+        format!(
+            "{}\n",
+            serde_json::json!({"max_position_error": v.max_position_error, "max_axis_error_deg": v.max_axis_error_deg, "moves": v.moves, "compared": v.compared, "ok": true})
+        )
+    } else {
+        format!("ok: {} moves, {} feed points compared\nmax_position_error {:.3e}\nmax_axis_error_deg {:.3e}\n", v.moves, v.compared, v.max_position_error, v.max_axis_error_deg)
+    };
+    let mut o = crate::io::Output::create(None)?;
+    o.writer().write_all(s.as_bytes()).map_err(werr)?;
+    o.commit()
+}

@@ -1,0 +1,351 @@
+//! `lampost post` and `lampost verify` as a user runs them; whole programs snapshotted.
+
+mod common;
+
+use common::*;
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn fx(name: &str) -> String {
+    root()
+        .join("fixtures/post")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn posted(args: &[&str]) -> String {
+    let o = lampost(args);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// The words of a posted line as (letter, value).
+fn words(line: &str) -> Vec<(char, f64)> {
+    line.split_whitespace()
+        .filter(|w| !w.starts_with('('))
+        .filter_map(|w| {
+            let (l, v) = w.split_at(1);
+            v.parse::<f64>()
+                .ok()
+                .map(|v| (l.chars().next().unwrap_or('?'), v))
+        })
+        .collect()
+}
+
+#[test]
+fn table_1_patch_matches_the_paper() {
+    let p = posted(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=45,B=-45",
+        "--set",
+        "R=0.5857864376269049,0,4",
+        "--head",
+        "spindle",
+        &fx("patch-1in.nc"),
+    ]);
+    insta::assert_snapshot!("post_table1_patch", p);
+    // The four corners, in cutting order from (0,0): (0,1), (1,1), (1,0), (0,0).
+    let want = [
+        [2.03553, 1.12132, -0.96447],
+        [2.5355, 1.8284, -1.4645],
+        [3.0355, 1.1213, -1.9645],
+        [2.53553, 0.41421, -1.46447],
+    ];
+    let feeds: Vec<Vec<(char, f64)>> = p
+        .lines()
+        .filter(|l| l.starts_with("G1") || l.starts_with('X'))
+        .map(words)
+        .collect();
+    let corners: Vec<[f64; 3]> = feeds
+        .iter()
+        .filter_map(|w| {
+            let g = |c: char| w.iter().find(|x| x.0 == c).map(|x| x.1);
+            Some([g('X')?, g('Y')?, g('Z')?])
+        })
+        .collect();
+    for w in want {
+        assert!(
+            corners
+                .iter()
+                .any(|c| (0..3).all(|k| (c[k] - w[k]).abs() <= 5e-5)),
+            "{w:?} not among {corners:?}"
+        );
+    }
+}
+
+#[test]
+fn snapshots_of_the_posted_fixtures() {
+    insta::assert_snapshot!(
+        "post_bearing_seat",
+        posted(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--job",
+            &fx("bearing-seat/job.toml")
+        ])
+    );
+    insta::assert_snapshot!(
+        "post_arch_layers",
+        posted(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--layer-axis",
+            "0,1,0",
+            "--layer-point",
+            "0.75,0,-2",
+            "--layer-angle",
+            "3",
+            &fx("wall.nc")
+        ])
+    );
+    insta::assert_snapshot!(
+        "post_facing_machining",
+        posted(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            "--process",
+            "machine",
+            "--tool",
+            "2",
+            "--length-offset",
+            "2",
+            "--work-offset",
+            "E1",
+            "--spindle",
+            "4000",
+            "--coolant",
+            &fx("facing.nc")
+        ])
+    );
+    insta::assert_snapshot!(
+        "post_nrc_patch",
+        posted(&["post", "--machine", "nrc-lc", &fx("patch-20mm.nc")])
+    );
+}
+
+#[test]
+fn verify_reads_back_what_post_wrote() {
+    let dir = tempdir("verify");
+    let out = dir.join("seat.nc");
+    let job = fx("bearing-seat/job.toml");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--job",
+        &job,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--job",
+        &job,
+        out.to_str().expect("utf8"),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert!(v["max_position_error"].as_f64().expect("e") < 1e-4, "{v}");
+    assert!(v["max_axis_error_deg"].as_f64().expect("a") < 1e-3);
+    assert!(v["moves"].as_u64().expect("m") > 10);
+    // A tampered program fails verification.
+    let text = std::fs::read_to_string(&out).expect("read").replacen(
+        "X7.7383 Y0.1637",
+        "X7.7383 Y0.1737",
+        1,
+    );
+    let bad = dir.join("bad.nc");
+    std::fs::write(&bad, text).expect("write");
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--job",
+        &job,
+        bad.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("from the intended path"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_input_is_refused_and_nothing_is_written() {
+    let dir = tempdir("postbad");
+    let out = dir.join("out.nc");
+    let outs = out.to_str().expect("utf8").to_string();
+    let w = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).expect("write");
+        p.to_string_lossy().into_owned()
+    };
+    let mm = w("mm.nc", "G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\n");
+    let far = w("far.nc", "G20 G90\nG0 X0 Y0 Z1\nG1 X30 F10\n");
+    let mac = w("macro.nc", "G20 G90\nG0 X0 Y0 Z1\n#V1 = 2\nG1 X+R1 F10\n");
+    let empty = w("empty.nc", "");
+    let comp = w("comp.nc", "G20\nG41 D1 G1 X1 F10\n");
+    let g18 = w("g18.nc", "G20 G90 G0 X0 Y0 Z0\nG18 G2 X1 Z0 I0.5 K0 F10\n");
+    let setup = w(
+        "setup.toml",
+        "origin = [0, 0, 0]\nx_axis = [1, 0, 0]\nz_axis = [0, 0, \"up\"]\n",
+    );
+    let tilt = w(
+        "tilt.toml",
+        "origin = [0, 0, 0]\nx_axis = [1, 0, 0]\nz_axis = [0.5, 0, -0.866]\n",
+    );
+    let ok = fx("patch-1in.nc");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--index", "A=0,B=0", &mm],
+            "the program is in millimetres but the machine is in inches",
+        ),
+        (
+            vec!["--index", "A=0,B=0", &far],
+            "X = 40.1031 is beyond its travel [-20, 20]",
+        ),
+        (
+            vec!["--index", "A=0,B=0", &mac],
+            "macros would need evaluating",
+        ),
+        (vec!["--index", "A=0,B=0", &empty], "has no moves"),
+        (
+            vec!["--index", "A=0,B=0", &comp],
+            "cutter radius compensation",
+        ),
+        (
+            vec!["--index", "A=0,B=150", &ok],
+            "B = 150.0000 is beyond its travel",
+        ),
+        (vec!["--setup", &setup, &ok], "setup.toml:3:"),
+        (
+            vec!["--setup", &tilt, &ok],
+            "no orientation within the rotary limits",
+        ),
+        (vec!["--index", "A=0", &ok], "needs both A and B"),
+    ];
+    for (extra, want) in cases {
+        let mut args = vec!["post", "--machine", "fadal-lamp", "-o", &outs];
+        args.extend(extra.iter().copied());
+        let o = lampost(&args);
+        assert!(!o.status.success(), "{extra:?} succeeded");
+        assert!(
+            stderr(&o).contains(want),
+            "{extra:?}: `{want}` not in\n{}",
+            stderr(&o)
+        );
+        assert!(!out.exists(), "{extra:?} left an output file");
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .expect("dir")
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with(".lampost"))
+            .collect();
+        assert!(left.is_empty(), "temporary files left: {left:?}");
+    }
+    // Arcs in a plane the index does not keep are linearised, with a warning.
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        &g18,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("linearised"));
+    // A millimetre program posts with --convert-units.
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        "--convert-units",
+        &mm,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn max_bytes_splits_into_pieces_that_fit() {
+    let dir = tempdir("split");
+    let wall = fx("wall.nc");
+    // FADAL: one file of subprograms called from a main program.
+    let out = dir.join("arch.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--layer-axis",
+        "0,1,0",
+        "--layer-angle",
+        "3",
+        &wall,
+        "-o",
+        out.to_str().expect("utf8"),
+        "--max-bytes",
+        "700",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("read");
+    let subs = text.matches("M99").count();
+    assert!(subs >= 2, "{text}");
+    assert_eq!(text.matches("M98 P").count(), subs);
+    for part in text.split("\nO").skip(1) {
+        if part.contains("M99") {
+            assert!(part.len() <= 700, "a subprogram of {} bytes", part.len());
+        }
+    }
+    // Our reader accepts it.
+    let o = lampost(&["check", out.to_str().expect("utf8"), "--units", "inch"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // ISO: numbered files.
+    let out = dir.join("arch-iso.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--dialect",
+        "iso",
+        "--layer-axis",
+        "0,1,0",
+        "--layer-angle",
+        "3",
+        &wall,
+        "-o",
+        out.to_str().expect("utf8"),
+        "--max-bytes",
+        "900",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let first = dir.join("arch-iso.001.nc");
+    assert!(first.exists());
+    let mut n = 0;
+    while dir.join(format!("arch-iso.{:03}.nc", n + 1)).exists() {
+        n += 1;
+        assert!(
+            std::fs::metadata(dir.join(format!("arch-iso.{n:03}.nc")))
+                .expect("meta")
+                .len()
+                <= 900
+        );
+    }
+    assert!(n >= 2);
+}

@@ -1,0 +1,112 @@
+//! The post's typed errors.
+
+use lampost_gcode::Diagnostic;
+use lampost_kinematics::KinError;
+
+/// Everything that stops a post or a verification.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PostError {
+    /// The input program has an error (parse or interpretation).
+    #[error("{file}:{}:{}: {}", .diag.line, .diag.column, .diag.kind)]
+    Input {
+        /// Input name.
+        file: String,
+        /// The diagnostic.
+        diag: Box<Diagnostic>,
+    },
+    /// Something the post cannot turn into 5-axis motion faithfully.
+    #[error("{file}:{line}: {what}")]
+    Unsupported {
+        /// Input name.
+        file: String,
+        /// Line.
+        line: u32,
+        /// What.
+        what: String,
+    },
+    /// Program units differ from the machine's.
+    #[error("{file}:{line}: the program is in {program} but the machine is in {machine}")]
+    Units {
+        /// Input name.
+        file: String,
+        /// Line.
+        line: u32,
+        /// Program units.
+        program: &'static str,
+        /// Machine units.
+        machine: &'static str,
+    },
+    /// A point beyond travel.
+    #[error("{file}:{line}: {axis} = {value:.4} is beyond its travel [{lo}, {hi}]")]
+    Limit {
+        /// Input name.
+        file: String,
+        /// Input line.
+        line: u32,
+        /// Axis.
+        axis: String,
+        /// Value.
+        value: f64,
+        /// Lower limit.
+        lo: f64,
+        /// Upper limit.
+        hi: f64,
+    },
+    /// A kinematic problem (unreachable orientation, bad machine).
+    #[error("{context}{err}")]
+    Kin {
+        /// Where.
+        context: String,
+        /// What.
+        err: KinError,
+    },
+    /// A bad setup or job file.
+    #[error("{file}:{line}:{column}: {message}")]
+    File {
+        /// File.
+        file: String,
+        /// 1-based line (0 when unknown).
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The input has no motion.
+    #[error("{0}: the program has no moves")]
+    Empty(String),
+    /// Reading or writing failed.
+    #[error("{0}")]
+    Io(String),
+    /// The posted program does not follow the intended path.
+    #[error("verification failed: {0}")]
+    Verify(String),
+    /// Options that do not fit together.
+    #[error("{0}")]
+    Options(String),
+}
+
+impl PostError {
+    /// What the user can do about it.
+    pub fn hint(&self) -> &'static str {
+        match self {
+            PostError::Input { .. } => "fix the input program (`lampost check` lists every problem)",
+            PostError::Unsupported { .. } => "resolve macros, canned cycles, cutter compensation and subprograms in the CAM system, then post again",
+            PostError::Units { .. } => "post with --convert-units to scale the program, or output the program in the machine's units",
+            PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits",
+            PostError::Kin { .. } => "choose an orientation within the rotary limits, or re-fixture the part",
+            PostError::File { .. } => "fix the file; see docs/post.md for its keys",
+            PostError::Empty(_) => "give a program with moves",
+            PostError::Io(_) => "check the paths and free space",
+            PostError::Verify(_) => "this is a lampost fault or a mismatched INPUT/POSTED pair; nothing was written",
+            PostError::Options(_) => "see `lampost post --help`",
+        }
+    }
+}
+
+impl From<std::io::Error> for PostError {
+    fn from(e: std::io::Error) -> Self {
+        PostError::Io(e.to_string())
+    }
+}

@@ -1,0 +1,412 @@
+//! The intended path: each input move placed on the part, with the tool axis it should
+//! have. The post turns it into joint moves; `verify` compares a posted program with it.
+
+use std::io::BufRead;
+use std::path::PathBuf;
+
+use lampost_gcode::{
+    EWord, ErrorKind, Event, LineReader, MoveKind, Options, Severity, Stream, Units,
+};
+use lampost_kinematics::{Machine, Units as MUnits};
+use nalgebra::Vector3;
+
+use crate::error::PostError;
+use crate::frame::Frame;
+
+/// How a section's rotaries are chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Orient {
+    /// Fixed rotary positions (file order); the program frame is not re-oriented.
+    Index([f64; 2]),
+    /// The program's +Z becomes the tool axis; rotaries from inverse kinematics.
+    ToolAxis,
+}
+
+/// Each layer (Z level) of a planar program turned about a line, `deg_per_layer` more
+/// for each layer: a straight wall built as a curved one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayerSchedule {
+    /// Direction of the turning line, part frame.
+    pub axis: Vector3<f64>,
+    /// A point on it, part frame.
+    pub point: Vector3<f64>,
+    /// Degrees per layer.
+    pub deg_per_layer: f64,
+}
+
+/// Where a section's program comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Source {
+    /// A file.
+    Path(PathBuf),
+    /// In memory (standard input, tests).
+    Bytes(Vec<u8>),
+}
+
+impl Source {
+    fn open(&self) -> Result<Box<dyn BufRead>, PostError> {
+        Ok(match self {
+            Source::Path(p) => Box::new(std::io::BufReader::with_capacity(
+                1 << 16,
+                std::fs::File::open(p)
+                    .map_err(|e| PostError::Io(format!("cannot open {}: {e}", p.display())))?,
+            )),
+            Source::Bytes(b) => Box::new(std::io::Cursor::new(b.clone())),
+        })
+    }
+}
+
+/// One planar program placed on the part.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Section {
+    /// Name for messages.
+    pub name: String,
+    /// The program.
+    pub source: Source,
+    /// Program frame on the part.
+    pub frame: Frame,
+    /// How the rotaries are chosen.
+    pub orient: Orient,
+    /// Optional layer schedule.
+    pub layers: Option<LayerSchedule>,
+}
+
+/// The geometry of one intended move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepKind {
+    /// Travel.
+    Rapid,
+    /// Straight feed.
+    Feed,
+    /// Arc about `center` (part frame) turning about `normal` (part frame, right-hand),
+    /// `sweep` radians in all.
+    Arc {
+        /// Centre (at the start's height along the normal).
+        center: Vector3<f64>,
+        /// Unit normal of the arc's plane; positive sweep turns right-handed about it.
+        normal: Vector3<f64>,
+        /// Signed angle from start to end.
+        sweep: f64,
+    },
+}
+
+/// One intended move, part frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// Section index.
+    pub section: usize,
+    /// Layer within the section (0 without a schedule).
+    pub layer: usize,
+    /// Input line.
+    pub line: u32,
+    /// Geometry.
+    pub kind: StepKind,
+    /// Start, part frame.
+    pub start: Vector3<f64>,
+    /// End, part frame.
+    pub end: Vector3<f64>,
+    /// Feed in machine units per minute (0 for rapids).
+    pub feed: f64,
+    /// A deposition move (feed, and extrusion increasing where E means extrusion).
+    pub deposit: bool,
+    /// The program frame's +Z in the part frame (the tool axis under `Orient::ToolAxis`).
+    pub program_z: Vector3<f64>,
+    /// The section's orientation rule.
+    pub orient: Orient,
+}
+
+impl Step {
+    /// The point a fraction `t` along the move.
+    pub fn at(&self, t: f64) -> Vector3<f64> {
+        match self.kind {
+            StepKind::Arc {
+                center,
+                normal,
+                sweep,
+            } => {
+                let r = nalgebra::Rotation3::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(normal),
+                    sweep * t,
+                );
+                let rel = self.start - center;
+                let h = (self.end - self.start).dot(&normal);
+                center + r * rel + normal * (h * t)
+            }
+            _ => self.start + (self.end - self.start) * t,
+        }
+    }
+}
+
+/// Settings of the intended path.
+#[derive(Debug, Clone, Copy)]
+pub struct IntendedOptions {
+    /// Scale programs in other units to the machine's instead of refusing them.
+    pub convert_units: bool,
+    /// E words are slicer extrusion (deposit only while E grows).
+    pub e_extrusion: bool,
+}
+
+/// The intended path over every section, as an iterator.
+pub struct Intended<'a> {
+    machine: &'a Machine,
+    sections: &'a [Section],
+    opts: IntendedOptions,
+    idx: usize,
+    stream: Option<Stream<LineReader<Box<dyn BufRead>>>>,
+    layer: usize,
+    layer_z: Option<f64>,
+    moves_in_section: usize,
+    last_e: f64,
+    done: bool,
+}
+
+impl std::fmt::Debug for Intended<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Intended")
+            .field("section", &self.idx)
+            .finish()
+    }
+}
+
+fn units_name(u: Units) -> &'static str {
+    match u {
+        Units::Inch => "inches",
+        Units::Mm => "millimetres",
+    }
+}
+
+impl<'a> Intended<'a> {
+    /// The intended path of `sections` on `machine`.
+    pub fn new(machine: &'a Machine, sections: &'a [Section], opts: IntendedOptions) -> Self {
+        Intended {
+            machine,
+            sections,
+            opts,
+            idx: 0,
+            stream: None,
+            layer: 0,
+            layer_z: None,
+            moves_in_section: 0,
+            last_e: 0.0,
+            done: false,
+        }
+    }
+
+    fn machine_units(&self) -> Units {
+        match self.machine.units {
+            MUnits::Inch => Units::Inch,
+            MUnits::Mm => Units::Mm,
+        }
+    }
+
+    fn frame(&self, s: &Section, layer: usize) -> Frame {
+        match &s.layers {
+            Some(l) => s
+                .frame
+                .rotated(&l.axis, &l.point, l.deg_per_layer * layer as f64),
+            None => s.frame,
+        }
+    }
+
+    fn next_step(&mut self) -> Result<Option<Step>, PostError> {
+        loop {
+            if self.done {
+                return Ok(None);
+            }
+            if self.idx >= self.sections.len() {
+                self.done = true;
+                return Ok(None);
+            }
+            let sec = &self.sections[self.idx];
+            if self.stream.is_none() {
+                let opts = Options {
+                    units: self.machine_units(),
+                    e_word: if self.opts.e_extrusion {
+                        EWord::Extrusion
+                    } else {
+                        EWord::FixtureOffset
+                    },
+                    ..Options::default()
+                };
+                self.stream = Some(Stream::from_reader(sec.source.open()?, opts, true));
+                self.layer = 0;
+                self.layer_z = None;
+                self.moves_in_section = 0;
+                self.last_e = 0.0;
+            }
+            let ev = self.stream.as_mut().and_then(Iterator::next);
+            let ev = match ev {
+                None => {
+                    if self.moves_in_section == 0 {
+                        return Err(PostError::Empty(sec.name.clone()));
+                    }
+                    self.stream = None;
+                    self.idx += 1;
+                    continue;
+                }
+                Some(Err(e)) => return Err(PostError::Io(format!("{}: {e}", sec.name))),
+                Some(Ok(ev)) => ev,
+            };
+            let m = match ev {
+                Event::Diagnostic(d) => {
+                    let file = sec.name.clone();
+                    if d.severity == Severity::Error {
+                        if matches!(d.kind, ErrorKind::EmptyProgram) {
+                            return Err(PostError::Empty(file));
+                        }
+                        return Err(PostError::Input {
+                            file,
+                            diag: Box::new(d),
+                        });
+                    }
+                    let refuse = match &d.kind {
+                        ErrorKind::MacroNotEvaluated(what) => Some(format!(
+                            "{what}: macros would need evaluating to know the path"
+                        )),
+                        ErrorKind::NotSimulated(what) if what.contains("after M2") => None,
+                        ErrorKind::NotSimulated(what) => Some(format!(
+                            "{what} changes the path; the post cannot follow it"
+                        )),
+                        ErrorKind::CannedCyclePassedThrough(c) => {
+                            Some(format!("canned cycle G{c} cannot be posted (not expanded)"))
+                        }
+                        ErrorKind::SubprogramNotFollowed(w) => Some(format!(
+                            "{w}: subprogram calls cannot be posted; inline them"
+                        )),
+                        _ => None,
+                    };
+                    if let Some(what) = refuse {
+                        return Err(PostError::Unsupported {
+                            file,
+                            line: d.line,
+                            what,
+                        });
+                    }
+                    continue;
+                }
+                Event::Move(m) => m,
+            };
+            if m.axes_named & 0b1_1111_1000 != 0 {
+                return Err(PostError::Unsupported {
+                    file: sec.name.clone(),
+                    line: m.line,
+                    what: "the input names rotary or extra axes; give a planar (X Y Z) program"
+                        .into(),
+                });
+            }
+            let mu = self.machine_units();
+            let scale = if m.modal.units == mu {
+                1.0
+            } else if self.opts.convert_units {
+                m.modal.units.mm() / mu.mm()
+            } else {
+                return Err(PostError::Units {
+                    file: sec.name.clone(),
+                    line: m.line,
+                    program: units_name(m.modal.units),
+                    machine: units_name(mu),
+                });
+            };
+            self.moves_in_section += 1;
+            let p = |a: &[f64; 9]| Vector3::new(a[0], a[1], a[2]) * scale;
+            let (start, end) = (p(&m.start), p(&m.end));
+            let is_feed = !matches!(m.kind, MoveKind::Rapid);
+            // Layers: a feed move ending at a new Z level starts a new layer.
+            if is_feed && sec.layers.is_some() {
+                match self.layer_z {
+                    None => self.layer_z = Some(end.z),
+                    Some(z) if (z - end.z).abs() > 1e-9 => {
+                        self.layer += 1;
+                        self.layer_z = Some(end.z);
+                    }
+                    _ => {}
+                }
+            }
+            let frame = self.frame(sec, self.layer);
+            let deposit = is_feed
+                && match m.extrusion {
+                    Some(e) if self.opts.e_extrusion => {
+                        let grows = e > self.last_e + 1e-12;
+                        self.last_e = e;
+                        grows
+                    }
+                    _ => true,
+                };
+            let kind = match m.kind {
+                MoveKind::Rapid => StepKind::Rapid,
+                MoveKind::Linear | MoveKind::Probe => StepKind::Feed,
+                MoveKind::Arc {
+                    clockwise,
+                    center,
+                    plane,
+                    turns,
+                } => {
+                    let (u, v, n) = plane.axes();
+                    let mut nrm = Vector3::zeros();
+                    nrm[n] = 1.0;
+                    let c = Vector3::new(center[0], center[1], center[2]) * scale;
+                    let su = (start[u] - c[u], start[v] - c[v]);
+                    let eu = (end[u] - c[u], end[v] - c[v]);
+                    let tau = std::f64::consts::TAU;
+                    let full = (su.0 - eu.0).hypot(su.1 - eu.1) <= 1e-9 * (1.0 + su.0.hypot(su.1));
+                    // Angle from start to end, right-handed about the plane's normal.
+                    let delta = eu.1.atan2(eu.0) - su.1.atan2(su.0);
+                    let extra = tau * f64::from(turns.saturating_sub(1));
+                    let sweep = if clockwise {
+                        let mut d = delta.rem_euclid(tau) - tau; // in [−2π, 0)
+                        if full {
+                            d = -tau;
+                        }
+                        d - extra
+                    } else {
+                        let mut d = delta.rem_euclid(tau); // in [0, 2π)
+                        if full || d == 0.0 {
+                            d = tau;
+                        }
+                        d + extra
+                    };
+                    StepKind::Arc {
+                        center: frame.apply(&c),
+                        normal: frame.dir(&nrm),
+                        sweep,
+                    }
+                }
+            };
+            let feed = if is_feed { m.feed * scale } else { 0.0 };
+            if is_feed && m.modal.feed_mode == lampost_gcode::modal::FeedMode::InverseTime {
+                return Err(PostError::Unsupported {
+                    file: sec.name.clone(),
+                    line: m.line,
+                    what: "G93 inverse-time feeds in the planar input cannot be posted".into(),
+                });
+            }
+            return Ok(Some(Step {
+                section: self.idx,
+                layer: self.layer,
+                line: m.line,
+                kind,
+                start: frame.apply(&start),
+                end: frame.apply(&end),
+                feed,
+                deposit,
+                program_z: frame.dir(&Vector3::z()),
+                orient: sec.orient,
+            }));
+        }
+    }
+}
+
+impl Iterator for Intended<'_> {
+    type Item = Result<Step, PostError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self.next_step() {
+            Ok(Some(s)) => Some(Ok(s)),
+            Ok(None) => None,
+            Err(e) => {
+                self.done = true;
+                Some(Err(e))
+            }
+        }
+    }
+}

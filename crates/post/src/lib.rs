@@ -1,0 +1,30 @@
+//! # lampost-post
+//!
+//! Planar toolpaths (3-axis programs from any CAM system or slicer) placed on the part and
+//! turned into 5-axis programs for the FADAL A/B table and the NRC B/C table, and the
+//! verification that replays a posted program through forward kinematics.
+//!
+//! Pipeline (each stage streams): text → [`lampost_gcode::Stream`] (moves in the program
+//! frame) → [`intended::Intended`] (placed in the part frame by a [`frame::Frame`], with
+//! the tool axis each move should have) → [`post::post`] (rotaries per section or layer
+//! by inverse kinematics, retract before every re-index, joint positions, process codes,
+//! limits on every point) → dialect text. [`verify::verify`] reads a posted program back
+//! and compares every feed point with the same intended path.
+//!
+//! ## Why these dependencies
+//! - `lampost-gcode`, `lampost-kinematics`: reading programs, writing them, the machines;
+//! - `lampost-align`: the setup file format `lampost align` writes;
+//! - `toml`: setup and job files; `nalgebra`: frames; `thiserror`: [`PostError`].
+
+pub mod error;
+pub mod frame;
+pub mod intended;
+pub mod post;
+pub mod split;
+pub mod verify;
+
+pub use error::PostError;
+pub use frame::{read_setup, Frame};
+pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
+pub use post::{post, PostConfig, PostDialect, PostReport, Process};
+pub use verify::{verify, VerifyReport};

@@ -1,0 +1,594 @@
+//! The post: the intended path → joint moves → dialect text.
+
+use std::io::Write;
+
+use lampost_gcode::{parse_line, Dialect, EmitOptions, Emitter, Units};
+use lampost_kinematics::{Machine, Units as MUnits};
+use nalgebra::Vector3;
+
+use crate::error::PostError;
+use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
+
+/// Output dialect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PostDialect {
+    /// FADAL: `%` framing, `O` number, G70/G71, forced decimal points.
+    Fadal,
+    /// Plain ISO/RS274 (what LinuxCNC reads): G20/G21.
+    Iso,
+    /// The NRC cell's controller: ISO words with N numbers on every block (assumed; the
+    /// paper prints no program).
+    Nrc,
+}
+
+/// What the head does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Process {
+    /// Laser deposition: feed moves deposit, rapids travel with the laser off.
+    Deposit {
+        /// Laser power (in the machine's power word).
+        power: f64,
+    },
+    /// Machining with the spindle.
+    Machine {
+        /// Tool to change to (T… M6).
+        tool: Option<u32>,
+        /// Tool length offset register (FADAL `G43 H…`).
+        length_offset: Option<u32>,
+        /// Work offset word, e.g. `E1` (FADAL fixture offset) or `G54`.
+        work_offset: Option<String>,
+        /// Spindle speed.
+        spindle: f64,
+        /// Coolant on.
+        coolant: bool,
+    },
+}
+
+/// Post settings.
+#[derive(Debug, Clone)]
+pub struct PostConfig {
+    /// Head index in the machine.
+    pub head: usize,
+    /// Process.
+    pub process: Process,
+    /// Dialect.
+    pub dialect: PostDialect,
+    /// N numbering (start, step).
+    pub renumber: Option<(u64, u64)>,
+    /// Chord tolerance for linearised arcs (machine units).
+    pub tolerance: f64,
+    /// Intended-path settings.
+    pub intended: IntendedOptions,
+    /// Starting rotary position (file order), for choosing solutions.
+    pub near: [f64; 2],
+    /// Program number (FADAL O word).
+    pub program_number: u32,
+    /// Header text: what was posted and how.
+    pub header: Vec<String>,
+}
+
+/// What a post did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PostReport {
+    /// Blocks of motion written.
+    pub moves: usize,
+    /// Warnings (with input lines).
+    pub warnings: Vec<String>,
+    /// Range used per joint, file order: (name, min, max).
+    pub limits_used: Vec<(String, f64, f64)>,
+    /// Byte offsets in the output where the program may be cut (before travel, laser off).
+    pub split_points: Vec<u64>,
+    /// Byte offset where the motion body starts and ends.
+    pub body: (u64, u64),
+    /// Rotary positions used, in order (file order).
+    pub indexes: Vec<[f64; 2]>,
+}
+
+struct Counting<W> {
+    inner: W,
+    n: u64,
+}
+
+impl<W: Write> Write for Counting<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = self.inner.write(buf)?;
+        self.n += k as u64;
+        Ok(k)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Words of a code string from the machine file (`"M3"`, `"M71"`, `"G43 H1"`).
+fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
+    if text.trim().is_empty() {
+        return Ok(Vec::new());
+    }
+    let b = parse_line(text.as_bytes(), 1, 0).map_err(|d| {
+        PostError::Options(format!("machine file process code `{text}`: {}", d.kind))
+    })?;
+    Ok(b.words().map(|w| (w.letter, w.value)).collect())
+}
+
+struct Writer<'m, W: Write> {
+    em: Emitter<Counting<W>>,
+    m: &'m Machine,
+    letters: [u8; 5],
+    report: PostReport,
+    rot: Option<[f64; 2]>,
+    branch: Option<i8>,
+    laser: bool,
+    pos: Option<[f64; 3]>,
+}
+
+impl<W: Write> Writer<'_, W> {
+    /// Bytes written so far (the emitter writes each block through at once).
+    fn offset(&self) -> u64 {
+        self.em.get_ref().n
+    }
+
+    fn words(&mut self, w: &[(u8, f64)], comment: Option<&str>) -> Result<(), PostError> {
+        self.em.words(w, comment).map_err(PostError::from)
+    }
+
+    fn note_limits(&mut self, joints: &[f64; 5]) {
+        for (k, v) in joints.iter().enumerate() {
+            let e = &mut self.report.limits_used[k];
+            e.1 = e.1.min(*v);
+            e.2 = e.2.max(*v);
+        }
+    }
+
+    fn check(&self, file: &str, line: u32, x: &[f64; 3], rot: &[f64; 2]) -> Result<(), PostError> {
+        for (l, &v) in self.m.linear.iter().zip(x) {
+            if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
+                return Err(PostError::Limit {
+                    file: file.to_string(),
+                    line,
+                    axis: l.name.clone(),
+                    value: v,
+                    lo: l.limits.0,
+                    hi: l.limits.1,
+                });
+            }
+        }
+        for (r, &v) in self.m.rotary.iter().zip(rot) {
+            if !r.within(v) {
+                let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                return Err(PostError::Limit {
+                    file: file.to_string(),
+                    line,
+                    axis: r.name.clone(),
+                    value: v,
+                    lo,
+                    hi,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn linear(
+        &mut self,
+        g: f64,
+        x: &[f64; 3],
+        feed: Option<f64>,
+        file: &str,
+        line: u32,
+    ) -> Result<(), PostError> {
+        let rot = self.rot.unwrap_or([0.0; 2]);
+        // A rapid to where the head already is says nothing.
+        if g == 0.0
+            && self
+                .pos
+                .is_some_and(|p| (0..3).all(|k| (p[k] - x[k]).abs() < 1e-12))
+        {
+            return Ok(());
+        }
+        self.check(file, line, x, &rot)?;
+        self.note_limits(&[x[0], x[1], x[2], rot[0], rot[1]]);
+        let mut w: Vec<(u8, f64)> = vec![(b'G', g)];
+        for k in 0..3 {
+            w.push((self.letters[k], x[k]));
+        }
+        if let Some(f) = feed {
+            w.push((b'F', f));
+        }
+        self.words(&w, None)?;
+        self.pos = Some(*x);
+        self.report.moves += 1;
+        Ok(())
+    }
+}
+
+/// The joint position of the head over part point `p` with the table at `rot`.
+fn joints(m: &Machine, head: usize, rot: &[f64; 2], p: &Vector3<f64>) -> [f64; 3] {
+    m.linear_for(&m.part_to_machine(rot, p), head)
+}
+
+/// Post `sections` for `machine` to `out`.
+pub fn post<W: Write>(
+    machine: &Machine,
+    sections: &[Section],
+    cfg: &PostConfig,
+    out: W,
+    mut progress: impl FnMut(usize),
+) -> Result<PostReport, PostError> {
+    let units = match machine.units {
+        MUnits::Inch => Units::Inch,
+        MUnits::Mm => Units::Mm,
+    };
+    let (dialect, renumber) = match cfg.dialect {
+        PostDialect::Fadal => (Dialect::Fadal, cfg.renumber),
+        PostDialect::Iso => (Dialect::Iso, cfg.renumber),
+        PostDialect::Nrc => (Dialect::Iso, Some(cfg.renumber.unwrap_or((10, 10)))),
+    };
+    let em = Emitter::new(
+        Counting { inner: out, n: 0 },
+        EmitOptions {
+            dialect: Some(dialect),
+            renumber,
+            suppress_modal: true,
+            units,
+        },
+    );
+    let names = machine.axis_names();
+    let letter = |n: &str| n.bytes().next().map_or(b'?', |b| b.to_ascii_uppercase());
+    let mut w = Writer {
+        em,
+        m: machine,
+        letters: [
+            letter(names[0]),
+            letter(names[1]),
+            letter(names[2]),
+            letter(names[3]),
+            letter(names[4]),
+        ],
+        report: PostReport {
+            limits_used: names
+                .iter()
+                .map(|n| ((*n).to_string(), f64::INFINITY, f64::NEG_INFINITY))
+                .collect(),
+            ..PostReport::default()
+        },
+        rot: None,
+        branch: None,
+        laser: false,
+        pos: None,
+    };
+    let p = &machine.def.process;
+    let laser_on = code_words(&p.laser_on)?;
+    let laser_off = code_words(&p.laser_off)?;
+    let powder_on = code_words(&p.powder_on)?;
+    let powder_off = code_words(&p.powder_off)?;
+    let power_letter = p
+        .laser_power_word
+        .bytes()
+        .next()
+        .unwrap_or(b'S')
+        .to_ascii_uppercase();
+    // Header and preamble.
+    if cfg.dialect == PostDialect::Fadal {
+        w.em.program_number(
+            cfg.program_number,
+            Some(
+                &cfg.header
+                    .first()
+                    .cloned()
+                    .unwrap_or_default()
+                    .to_uppercase(),
+            ),
+        )?;
+        for h in cfg.header.iter().skip(1) {
+            w.em.raw_line(&format!("({})", h.replace(['(', ')'], "").to_uppercase()))?;
+        }
+    } else {
+        for h in &cfg.header {
+            w.em.raw_line(&format!("({})", h.replace(['(', ')'], "")))?;
+        }
+    }
+    let units_code = match (cfg.dialect, units) {
+        (PostDialect::Fadal, Units::Inch) => 70.0,
+        (PostDialect::Fadal, Units::Mm) => 71.0,
+        (_, Units::Inch) => 20.0,
+        (_, Units::Mm) => 21.0,
+    };
+    w.words(
+        &[
+            (b'G', units_code),
+            (b'G', 90.0),
+            (b'G', 94.0),
+            (b'G', 17.0),
+            (b'G', 40.0),
+            (b'G', 80.0),
+        ],
+        None,
+    )?;
+    if let Process::Machine {
+        tool,
+        length_offset,
+        work_offset,
+        spindle,
+        coolant,
+    } = &cfg.process
+    {
+        if let Some(t) = tool {
+            let mut v = vec![(b'T', f64::from(*t))];
+            v.extend(code_words(&p.tool_change)?);
+            w.words(&v, None)?;
+        }
+        if let Some(o) = work_offset {
+            w.words(&code_words(o)?, Some("WORK OFFSET"))?;
+        }
+        if let Some(h) = length_offset {
+            w.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
+        }
+        let mut v = vec![(b'S', *spindle)];
+        v.extend(code_words(&p.spindle_on)?);
+        w.words(&v, None)?;
+        if *coolant {
+            w.words(&code_words(&p.coolant_on)?, None)?;
+        }
+    }
+    let clear_z = p.clearance_z;
+    // How far above a feed's start the rapid approach stops: 0.1 in / 2.5 mm.
+    let approach_lift = match machine.units {
+        MUnits::Inch => 0.1,
+        MUnits::Mm => 2.5,
+    };
+    let z_axis = 2usize;
+    let head = cfg.head;
+    let mut cur_key: Option<(usize, usize)> = None;
+    let mut need_approach = true;
+    let mut arc_warned: Option<usize> = None;
+    w.report.body.0 = w.offset();
+    for (count, step) in Intended::new(machine, sections, cfg.intended).enumerate() {
+        let step: Step = step?;
+        if count % 4096 == 0 {
+            progress(count);
+        }
+        let file = &sections[step.section].name;
+        let key = (step.section, step.layer);
+        if cur_key != Some(key) {
+            cur_key = Some(key);
+            // Choose the rotaries for this section/layer.
+            let rot = match step.orient {
+                Orient::Index(r) => {
+                    for (i, ax) in machine.rotary.iter().enumerate() {
+                        if !ax.within(r[i]) {
+                            let (lo, hi) = ax.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                            return Err(PostError::Limit {
+                                file: file.clone(),
+                                line: step.line,
+                                axis: ax.name.clone(),
+                                value: r[i],
+                                lo,
+                                hi,
+                            });
+                        }
+                    }
+                    r
+                }
+                Orient::ToolAxis => {
+                    let near = w.rot.unwrap_or(cfg.near);
+                    let sols = machine
+                        .orientations(&step.program_z, &near)
+                        .map_err(|err| PostError::Kin {
+                            context: format!("{file}:{}: ", step.line),
+                            err,
+                        })?;
+                    let same = sols.iter().find(|s| {
+                        s.within_limits
+                            && w.branch
+                                .is_none_or(|b| s.branch == 0 || b == 0 || s.branch == b)
+                    });
+                    let pick = match same {
+                        Some(s) => *s,
+                        None => match sols.iter().find(|s| s.within_limits) {
+                            Some(s) => {
+                                w.report.warnings.push(format!("{file}:{}: the rotary branch flips here; the tool retracts and re-approaches", step.line));
+                                *s
+                            }
+                            None => {
+                                let names: Vec<String> = machine
+                                    .rotary
+                                    .iter()
+                                    .map(|r| format!("{} {:?}", r.name, r.limits))
+                                    .collect();
+                                let cands: Vec<String> = sols
+                                    .iter()
+                                    .map(|s| {
+                                        format!(
+                                            "{} = {:.3}°, {} = {:.3}°",
+                                            machine.rotary[0].name,
+                                            s.rotary[0],
+                                            machine.rotary[1].name,
+                                            s.rotary[1]
+                                        )
+                                    })
+                                    .collect();
+                                return Err(PostError::Kin {
+                                    context: format!("{file}:{}: ", step.line),
+                                    err: lampost_kinematics::KinError::Unreachable {
+                                        what: format!("no orientation within the rotary limits ({}) turns the program's +Z ({:.4}, {:.4}, {:.4}) to the tool axis; candidates {}", names.join(", "), step.program_z.x, step.program_z.y, step.program_z.z, cands.join("; ")),
+                                    },
+                                });
+                            }
+                        },
+                    };
+                    w.branch = Some(pick.branch);
+                    pick.rotary
+                }
+            };
+            let changed = w
+                .rot
+                .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
+            if changed {
+                // Laser off, retract, then index: never a rotary move mid-cut.
+                if w.laser {
+                    w.words(&laser_off, None)?;
+                    w.words(&powder_off, None)?;
+                    w.laser = false;
+                }
+                let split = w.offset();
+                w.report.split_points.push(split);
+                w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
+                w.rot = Some(rot);
+                w.words(
+                    &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
+                    Some("INDEX"),
+                )?;
+                w.report.indexes.push(rot);
+                if let Some(pos) = w.pos.as_mut() {
+                    pos[z_axis] = clear_z;
+                }
+                need_approach = true;
+            }
+        }
+        let rot = w.rot.unwrap_or([0.0; 2]);
+        let start = joints(machine, head, &rot, &step.start);
+        let end = joints(machine, head, &rot, &step.end);
+        if need_approach {
+            // Over the start at the retract height, then down to it, all at rapid.
+            if w.laser {
+                w.words(&laser_off, None)?;
+                w.words(&powder_off, None)?;
+                w.laser = false;
+            }
+            // A rapid goes where it goes from over its end; a feed is approached from
+            // just above its start (rapid down to there, then in at the feed rate).
+            let target = if matches!(step.kind, StepKind::Rapid) {
+                end
+            } else {
+                start
+            };
+            let mut above = target;
+            above[z_axis] = clear_z;
+            w.linear(0.0, &above, None, file, step.line)?;
+            if !matches!(step.kind, StepKind::Rapid) {
+                let mut near_start = start;
+                near_start[z_axis] = (start[z_axis] + approach_lift).min(clear_z);
+                w.linear(0.0, &near_start, None, file, step.line)?;
+                w.linear(1.0, &start, Some(step.feed), file, step.line)?;
+            }
+            need_approach = false;
+        }
+        match step.kind {
+            StepKind::Rapid => {
+                if w.laser {
+                    w.words(&laser_off, None)?;
+                    w.words(&powder_off, None)?;
+                    w.laser = false;
+                }
+                let split = w.offset();
+                w.report.split_points.push(split);
+                w.linear(0.0, &end, None, file, step.line)?;
+            }
+            StepKind::Feed | StepKind::Arc { .. } => {
+                if let Process::Deposit { power } = cfg.process {
+                    if step.deposit && !w.laser {
+                        let mut v = laser_on.clone();
+                        v.push((power_letter, power));
+                        w.words(&v, None)?;
+                        w.words(&powder_on, None)?;
+                        w.laser = true;
+                    } else if !step.deposit && w.laser {
+                        w.words(&laser_off, None)?;
+                        w.words(&powder_off, None)?;
+                        w.laser = false;
+                    }
+                }
+                match step.kind {
+                    StepKind::Arc {
+                        center,
+                        normal,
+                        sweep,
+                    } => {
+                        // The arc stays an arc when its plane is the machine's XY plane.
+                        let n_m = machine.part_to_machine(&rot, &normal)
+                            - machine.part_to_machine(&rot, &Vector3::zeros());
+                        let up = n_m.z;
+                        let handed = machine.linear[0].sign
+                            * machine.linear[1].sign
+                            * machine.linear[0].dir.cross(&machine.linear[1].dir).z;
+                        let keep = (n_m.x.abs() < 1e-9 && n_m.y.abs() < 1e-9)
+                            && sweep.abs() <= std::f64::consts::TAU + 1e-12
+                            && handed.abs() > 0.5;
+                        if keep {
+                            let c = joints(machine, head, &rot, &center);
+                            // Counter-clockwise seen from machine +Z, then in joint axes.
+                            let ccw_machine = (sweep > 0.0) == (up > 0.0);
+                            let ccw = ccw_machine == (handed > 0.0);
+                            let g = if ccw { 3.0 } else { 2.0 };
+                            let rot_now = w.rot.unwrap_or([0.0; 2]);
+                            w.check(file, step.line, &end, &rot_now)?;
+                            // Travel limits along the arc: check its extreme points too.
+                            for k in 1..8 {
+                                let q = joints(machine, head, &rot, &step.at(f64::from(k) / 8.0));
+                                w.check(file, step.line, &q, &rot_now)?;
+                            }
+                            w.note_limits(&[end[0], end[1], end[2], rot_now[0], rot_now[1]]);
+                            let words = [
+                                (b'G', g),
+                                (w.letters[0], end[0]),
+                                (w.letters[1], end[1]),
+                                (w.letters[2], end[2]),
+                                (b'I', c[0] - start[0]),
+                                (b'J', c[1] - start[1]),
+                                (b'F', step.feed),
+                            ];
+                            w.words(&words, None)?;
+                            w.pos = Some(end);
+                            w.report.moves += 1;
+                        } else {
+                            if arc_warned != Some(step.section) {
+                                arc_warned = Some(step.section);
+                                w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                            }
+                            let r = (step.start - center).norm().max(1e-12);
+                            let seg_angle = 2.0 * (1.0 - (cfg.tolerance / r).min(1.0)).acos();
+                            let n = ((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize)
+                                .clamp(1, 100_000);
+                            for k in 1..=n {
+                                let q = joints(machine, head, &rot, &step.at(k as f64 / n as f64));
+                                w.linear(1.0, &q, Some(step.feed), file, step.line)?;
+                            }
+                        }
+                    }
+                    _ => w.linear(1.0, &end, Some(step.feed), file, step.line)?,
+                }
+            }
+        }
+    }
+    if w.report.moves == 0 {
+        return Err(PostError::Empty(
+            sections
+                .first()
+                .map_or_else(String::new, |s| s.name.clone()),
+        ));
+    }
+    w.report.body.1 = w.offset();
+    // Postamble.
+    if w.laser {
+        w.words(&laser_off, None)?;
+        w.words(&powder_off, None)?;
+    }
+    if let Process::Machine { coolant, .. } = &cfg.process {
+        if *coolant {
+            w.words(&code_words(&p.coolant_off)?, None)?;
+        }
+        w.words(&code_words(&p.spindle_off)?, None)?;
+    }
+    w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
+    w.words(&code_words(&p.program_end)?, None)?;
+    for e in w.report.limits_used.iter_mut() {
+        if !e.1.is_finite() {
+            e.1 = 0.0;
+            e.2 = 0.0;
+        }
+    }
+    let report = w.report;
+    w.em.finish()?;
+    Ok(report)
+}

@@ -1,0 +1,234 @@
+//! Verification: replay a posted program through the interpreter and forward kinematics
+//! and compare every feed point's tool tip and tool axis with the intended path.
+
+use std::io::BufRead;
+
+use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, Units, AXES};
+use lampost_kinematics::{Joints, Machine, Units as MUnits};
+use nalgebra::Vector3;
+
+use crate::error::PostError;
+use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
+
+/// What a verification found.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct VerifyReport {
+    /// Moves in the posted program.
+    pub moves: usize,
+    /// Feed points compared (ends and arc midpoints).
+    pub compared: usize,
+    /// Largest distance from a posted tool tip to the intended path.
+    pub max_position_error: f64,
+    /// Largest angle between a posted tool axis and the intended one (degrees).
+    pub max_axis_error_deg: f64,
+    /// Posted line with the largest position error.
+    pub worst_line: u32,
+}
+
+fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
+    match step.kind {
+        StepKind::Arc {
+            center,
+            normal,
+            sweep,
+        } => {
+            let n = normal.normalize();
+            let rel = step.start - center;
+            let rel = rel - n * n.dot(&rel);
+            let q = p - center;
+            let qp = q - n * n.dot(&q);
+            if rel.norm() < 1e-12 || qp.norm() < 1e-12 {
+                return (p - step.start).norm().min((p - step.end).norm());
+            }
+            // Angle of p from the start, right-handed about n, into the sweep's range.
+            let mut ang = n.dot(&rel.cross(&qp)).atan2(rel.dot(&qp));
+            let tau = std::f64::consts::TAU;
+            if sweep < 0.0 && ang > 0.0 {
+                ang -= tau;
+            } else if sweep > 0.0 && ang < 0.0 {
+                ang += tau;
+            }
+            let t = (ang / sweep).clamp(0.0, 1.0);
+            // Near the ends of multi-turn or near-full arcs, try the neighbours too.
+            [t, 0.0, 1.0]
+                .iter()
+                .map(|&t| (p - step.at(t)).norm())
+                .fold(f64::INFINITY, f64::min)
+        }
+        _ => {
+            let d = step.end - step.start;
+            let len2 = d.norm_squared();
+            let t = if len2 > 0.0 {
+                ((p - step.start).dot(&d) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (p - (step.start + d * t)).norm()
+        }
+    }
+}
+
+/// Replay `posted` and compare it with the intended path of `sections`.
+pub fn verify<R: BufRead>(
+    machine: &Machine,
+    sections: &[Section],
+    head: usize,
+    opts: IntendedOptions,
+    posted: R,
+    tolerance: f64,
+) -> Result<VerifyReport, PostError> {
+    let units = match machine.units {
+        MUnits::Inch => Units::Inch,
+        MUnits::Mm => Units::Mm,
+    };
+    let idx = |name: &str| {
+        name.bytes()
+            .next()
+            .and_then(|c| AXES.iter().position(|&a| a == c.to_ascii_uppercase()))
+    };
+    let names = machine.axis_names();
+    let lin_idx: Vec<usize> = names[..3].iter().map(|n| idx(n).unwrap_or(0)).collect();
+    let rot_idx: Vec<usize> = names[3..].iter().map(|n| idx(n).unwrap_or(3)).collect();
+    let mut intended = Intended::new(machine, sections, opts).filter(|s| {
+        !matches!(
+            s,
+            Ok(Step {
+                kind: StepKind::Rapid,
+                ..
+            })
+        )
+    });
+    let mut current: Option<Step> = None;
+    let mut rep = VerifyReport::default();
+    let intended_axis = |s: &Step| match s.orient {
+        Orient::ToolAxis => s.program_z.normalize(),
+        Orient::Index(r) => {
+            machine
+                .forward(
+                    &Joints {
+                        linear: [0.0; 3],
+                        rotary: r,
+                    },
+                    head,
+                )
+                .axis
+        }
+    };
+    let fk = |j: &[f64; 9]| {
+        let joints = Joints {
+            linear: [j[lin_idx[0]], j[lin_idx[1]], j[lin_idx[2]]],
+            rotary: [j[rot_idx[0]], j[rot_idx[1]]],
+        };
+        machine.forward(&joints, head)
+    };
+    let mut check = |p: Vector3<f64>,
+                     a: Vector3<f64>,
+                     line: u32,
+                     is_end: bool,
+                     current: &mut Option<Step>,
+                     rep: &mut VerifyReport|
+     -> Result<(), PostError> {
+        if current.is_none() {
+            *current = intended.next().transpose()?;
+        }
+        let Some(step) = *current else {
+            return Err(PostError::Verify(format!("posted line {line} feeds to ({:.5}, {:.5}, {:.5}) after the intended path has ended", p.x, p.y, p.z)));
+        };
+        let d_end = (p - step.end).norm();
+        let err = if is_end && d_end <= tolerance {
+            *current = None;
+            d_end
+        } else {
+            let d = dist_to(&step, &p);
+            if d > tolerance {
+                return Err(PostError::Verify(format!(
+                    "posted line {line}: the tool tip ({:.5}, {:.5}, {:.5}) is {d:.3e} from the intended path of input line {} (tolerance {tolerance:.1e})",
+                    p.x, p.y, p.z, step.line
+                )));
+            }
+            d
+        };
+        let want = intended_axis(&step);
+        let ang = a.cross(&want).norm().atan2(a.dot(&want)).to_degrees();
+        rep.compared += 1;
+        if err > rep.max_position_error {
+            rep.max_position_error = err;
+            rep.worst_line = line;
+        }
+        rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
+        Ok(())
+    };
+    let stream = Stream::from_reader(
+        posted,
+        Options {
+            units,
+            ..Options::default()
+        },
+        true,
+    );
+    for ev in stream {
+        match ev.map_err(|e| PostError::Io(e.to_string()))? {
+            Event::Diagnostic(d) if d.severity == Severity::Error => {
+                return Err(PostError::Input {
+                    file: "the posted program".into(),
+                    diag: Box::new(d),
+                });
+            }
+            Event::Diagnostic(_) => {}
+            Event::Move(m) => {
+                rep.moves += 1;
+                match m.kind {
+                    MoveKind::Rapid => {}
+                    MoveKind::Linear | MoveKind::Probe => {
+                        let pose = fk(&m.end);
+                        check(pose.tip, pose.axis, m.line, true, &mut current, &mut rep)?;
+                    }
+                    MoveKind::Arc {
+                        clockwise,
+                        center,
+                        turns,
+                        ..
+                    } => {
+                        // The midpoint in joint space (XY plane), then the end.
+                        let (sx, sy) = (m.start[0] - center[0], m.start[1] - center[1]);
+                        let (ex, ey) = (m.end[0] - center[0], m.end[1] - center[1]);
+                        let tau = std::f64::consts::TAU;
+                        let delta = ey.atan2(ex) - sy.atan2(sx);
+                        let full = (sx - ex).hypot(sy - ey) < 1e-9;
+                        let sweep = if clockwise {
+                            (if full {
+                                -tau
+                            } else {
+                                delta.rem_euclid(tau) - tau
+                            }) - tau * f64::from(turns.saturating_sub(1))
+                        } else {
+                            (if full { tau } else { delta.rem_euclid(tau) })
+                                + tau * f64::from(turns.saturating_sub(1))
+                        };
+                        let a = sy.atan2(sx) + sweep / 2.0;
+                        let r = sx.hypot(sy);
+                        let mut mid = m.end;
+                        mid[0] = center[0] + r * a.cos();
+                        mid[1] = center[1] + r * a.sin();
+                        mid[2] = (m.start[2] + m.end[2]) / 2.0;
+                        let pm = fk(&mid);
+                        check(pm.tip, pm.axis, m.line, false, &mut current, &mut rep)?;
+                        let pe = fk(&m.end);
+                        check(pe.tip, pe.axis, m.line, true, &mut current, &mut rep)?;
+                    }
+                }
+            }
+        }
+    }
+    let rest = match current {
+        Some(s) => Some(s),
+        None => intended.next().transpose()?,
+    };
+    if let Some(s) = rest {
+        return Err(PostError::Verify(format!(
+            "the posted program ends before the move of input line {} (to ({:.5}, {:.5}, {:.5}))",
+            s.line, s.end.x, s.end.y, s.end.z
+        )));
+    }
+    Ok(rep)
+}
