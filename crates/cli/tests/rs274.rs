@@ -140,3 +140,118 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
     );
     assert!(total > 10_000);
 }
+
+/// A posted ISO program (machining, so only standard M-codes) read by rs274 gives the same
+/// joint trace as `lampost trace` of it.
+#[test]
+fn posted_iso_output_reads_the_same_in_rs274() {
+    if shared().is_none() || require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("rs274-post");
+    let fx = |n: &str| {
+        root()
+            .join("fixtures/post")
+            .join(n)
+            .to_string_lossy()
+            .into_owned()
+    };
+    let runs: Vec<Vec<String>> = vec![
+        vec![
+            "--machine".into(),
+            "fadal-lamp".into(),
+            "--index".into(),
+            "A=30,B=-20".into(),
+            "--process".into(),
+            "machine".into(),
+            "--tool".into(),
+            "2".into(),
+            "--length-offset".into(),
+            "2".into(),
+            fx("facing.nc"),
+        ],
+        vec![
+            "--machine".into(),
+            "fadal-lamp".into(),
+            "--process".into(),
+            "machine".into(),
+            "--layer-axis".into(),
+            "0,1,0".into(),
+            "--layer-angle".into(),
+            "3".into(),
+            fx("wall.nc"),
+        ],
+        vec![
+            "--machine".into(),
+            "fadal-lamp".into(),
+            "--process".into(),
+            "machine".into(),
+            "--job".into(),
+            fx("bearing-seat/job.toml"),
+        ],
+    ];
+    let mut total = 0;
+    for (k, extra) in runs.iter().enumerate() {
+        let out = work.join(format!("posted-{k}.ngc"));
+        let mut args: Vec<&str> = vec![
+            "post",
+            "--dialect",
+            "iso",
+            "-o",
+            out.to_str().expect("utf8"),
+        ];
+        args.extend(extra.iter().map(String::as_str));
+        let o = lampost(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let canon = rs274_motions(&out, &work);
+        let o = lampost(&[
+            "trace",
+            "--json",
+            "--units",
+            "inch",
+            out.to_str().expect("utf8"),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        let moves = doc["moves"].as_array().expect("moves");
+        assert_eq!(
+            moves.len(),
+            canon.len(),
+            "run {k}: {} moves, rs274 {}",
+            moves.len(),
+            canon.len()
+        );
+        for (m, c) in moves.iter().zip(&canon) {
+            let end = &m["end"];
+            let ours: Vec<f64> = if c.kind == "ARC_FEED" {
+                vec![
+                    axis(end, "X"),
+                    axis(end, "Y"),
+                    axis(end, "Z"),
+                    axis(end, "A"),
+                    axis(end, "B"),
+                ]
+            } else {
+                ["X", "Y", "Z", "A", "B"]
+                    .iter()
+                    .map(|a| axis(end, a))
+                    .collect()
+            };
+            let theirs: Vec<f64> = if c.kind == "ARC_FEED" {
+                vec![c.args[0], c.args[1], c.args[5], c.args[6], c.args[7]]
+            } else {
+                c.args[..5].to_vec()
+            };
+            for (a, b) in ours.iter().zip(&theirs) {
+                total += 1;
+                assert!(
+                    (a - b).abs() <= TOL,
+                    "run {k}, posted line {}: lampost {a} vs rs274 {b}",
+                    m["line"]
+                );
+            }
+        }
+    }
+    eprintln!("posted programs through rs274: {total} joint coordinates agree");
+    assert!(total > 100);
+}

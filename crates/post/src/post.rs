@@ -204,7 +204,21 @@ impl<W: Write> Writer<'_, W> {
 
 /// The joint position of the head over part point `p` with the table at `rot`.
 fn joints(m: &Machine, head: usize, rot: &[f64; 2], p: &Vector3<f64>) -> [f64; 3] {
-    m.linear_for(&m.part_to_machine(rot, p), head)
+    thread_local! {
+        // The rotaries change per section or layer, not per point: keep their sin/cos.
+        static LAST: std::cell::Cell<([f64; 2], [(f64, f64); 2])> = const { std::cell::Cell::new(([f64::NAN; 2], [(0.0, 1.0); 2])) };
+    }
+    let sc = LAST.with(|c| {
+        let (r, sc) = c.get();
+        if r == *rot {
+            sc
+        } else {
+            let sc = [rot[0].to_radians().sin_cos(), rot[1].to_radians().sin_cos()];
+            c.set((*rot, sc));
+            sc
+        }
+    });
+    m.linear_for(&m.part_to_machine_sc(&sc, p), head)
 }
 
 /// Post `sections` for `machine` to `out`.
