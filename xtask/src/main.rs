@@ -5,6 +5,8 @@
 //!   both measured in the same process), then `lampost fmt` on a generated 1,000,000-line
 //!   program: time and peak resident memory (VmHWM of the child process).
 //! - `cargo xtask bench kin`: IK + FK pairs per second on both built-in machines.
+//! - `cargo xtask bench post`: `lampost post` on a generated 1,000,000-line program
+//!   against `lampost fmt` and a numpy script (`xtask/post_baseline.py`), same run.
 //! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
 //!   the calibration table (`cargo xtask calibration` alone).
 //! - `cargo xtask fuzz [--seconds N]`: a mutation fuzzer over parse + interpret, seeded
@@ -104,6 +106,111 @@ fn bench_gcode() -> Result<(), String> {
         t.as_secs_f64() * 1e3,
         kb as f64 / 1024.0
     );
+    Ok(())
+}
+
+fn bench_post() -> Result<(), String> {
+    println!("== lampost post --index on a generated 1,000,000-line planar program (NRC cell, mm), against fmt and a numpy script, same run");
+    let mut c = cargo();
+    c.args(["build", "--release", "-q", "-p", "lampost-cli"]);
+    run(c)?;
+    let dir = root().join("target/xtask");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let input = dir.join("planar-1m-100.nc");
+    let text = lampost_gcode::generate::planar_program_within(1_000_000, 7, 100.0);
+    std::fs::write(&input, &text).map_err(|e| e.to_string())?;
+    let mb = text.len() as f64 / 1e6;
+    let bin = root().join("target/release/lampost");
+    let out = dir.join("planar-1m-100.posted.nc");
+    let time = |cmd: Command| peak_memory(cmd);
+    let best = |make: &dyn Fn() -> Command, runs: usize| -> Result<(Duration, u64), String> {
+        let mut b = (Duration::MAX, 0);
+        for _ in 0..runs {
+            let (t, kb) = time(make())?;
+            if t < b.0 {
+                b = (t, kb);
+            }
+        }
+        Ok(b)
+    };
+    let post_cmd = || {
+        let mut c = Command::new(&bin);
+        c.args(["post", "--machine", "nrc-lc", "--index", "B=30,C=45"])
+            .arg(&input)
+            .arg("-o")
+            .arg(&out);
+        c
+    };
+    let fmt_cmd = || {
+        let mut c = Command::new(&bin);
+        c.arg("fmt").arg(&input).arg("-o").arg(dir.join("fmt.nc"));
+        c
+    };
+    let fmt_iso_cmd = || {
+        let mut c = Command::new(&bin);
+        c.arg("fmt")
+            .arg(&input)
+            .args(["--dialect", "iso"])
+            .arg("-o")
+            .arg(dir.join("fmt-iso.nc"));
+        c
+    };
+    let post_flat = || {
+        let mut c = Command::new(&bin);
+        c.args(["post", "--machine", "nrc-lc", "--index", "B=0,C=30"])
+            .arg(&input)
+            .arg("-o")
+            .arg(dir.join("posted-flat.nc"));
+        c
+    };
+    let (tflat, kflat) = best(&post_flat, 3)?;
+    println!(
+        "lampost post --index B=0,C=30 (arcs stay arcs): {:.0} ms ({:.0} MB/s), peak memory {:.1} MB",
+        tflat.as_secs_f64() * 1e3,
+        mb / tflat.as_secs_f64(),
+        kflat as f64 / 1024.0
+    );
+    let (tp, kp) = best(&post_cmd, 3)?;
+    let (tf, _) = best(&fmt_cmd, 3)?;
+    let (tfi, _) = best(&fmt_iso_cmd, 3)?;
+    println!("lampost post --index B=30,C=45 (arcs linearised, incl. its verification pass): {:.0} ms ({:.0} MB/s), peak memory {:.1} MB (target < 100 MB)", tp.as_secs_f64() * 1e3, mb / tp.as_secs_f64(), kp as f64 / 1024.0);
+    println!(
+        "lampost fmt (verbatim):        {:.0} ms; post / fmt = {:.2} tilted, {:.2} arcs kept (target ≤ 2)",
+        tf.as_secs_f64() * 1e3,
+        tp.as_secs_f64() / tf.as_secs_f64(),
+        tflat.as_secs_f64() / tf.as_secs_f64()
+    );
+    println!(
+        "lampost fmt --dialect iso:     {:.0} ms; post / fmt --dialect iso = {:.2}",
+        tfi.as_secs_f64() * 1e3,
+        tp.as_secs_f64() / tfi.as_secs_f64()
+    );
+    // The numpy script, as a user would write it.
+    let have_numpy = Command::new("python3")
+        .args(["-c", "import numpy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !have_numpy {
+        println!("installing numpy for the baseline script (pip)…");
+        let _ = Command::new("python3")
+            .args(["-m", "pip", "install", "--quiet", "numpy"])
+            .status();
+    }
+    let script = root().join("xtask/post_baseline.py");
+    let mut py = Command::new("python3");
+    py.arg(&script)
+        .arg(&input)
+        .arg(dir.join("numpy.nc"))
+        .args(["30", "45", "150"]);
+    match peak_memory(py) {
+        Ok((t, _)) => println!(
+            "numpy script, line by line:    {:.0} ms; script / post = {:.1} tilted, {:.1} arcs kept (target ≥ 20)",
+            t.as_secs_f64() * 1e3,
+            t.as_secs_f64() / tp.as_secs_f64(),
+            t.as_secs_f64() / tflat.as_secs_f64()
+        ),
+        Err(e) => println!("numpy script could not run: {e}"),
+    }
     Ok(())
 }
 
@@ -373,7 +480,8 @@ fn main() -> ExitCode {
     let r = match a.as_slice() {
         ["bench", "gcode"] => bench_gcode(),
         ["bench", "kin"] => bench_kin(),
-        ["bench"] => bench_gcode().and_then(|()| bench_kin()),
+        ["bench", "post"] => bench_post(),
+        ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),
         ["calibration"] => calibration(200),
         ["fuzz"] => fuzz(60),
@@ -381,7 +489,7 @@ fn main() -> ExitCode {
             Ok(s) => fuzz(s),
             Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
         },
-        _ => Err("usage: cargo xtask bench [gcode|kin] | cargo xtask accuracy | cargo xtask calibration | cargo xtask fuzz [--seconds N]".into()),
+        _ => Err("usage: cargo xtask bench [gcode|kin|post] | cargo xtask accuracy | cargo xtask calibration | cargo xtask fuzz [--seconds N]".into()),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -22,19 +22,6 @@ fn posted(args: &[&str]) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-/// The words of a posted line as (letter, value).
-fn words(line: &str) -> Vec<(char, f64)> {
-    line.split_whitespace()
-        .filter(|w| !w.starts_with('('))
-        .filter_map(|w| {
-            let (l, v) = w.split_at(1);
-            v.parse::<f64>()
-                .ok()
-                .map(|v| (l.chars().next().unwrap_or('?'), v))
-        })
-        .collect()
-}
-
 #[test]
 fn table_1_patch_matches_the_paper() {
     let p = posted(&[
@@ -50,31 +37,35 @@ fn table_1_patch_matches_the_paper() {
         &fx("patch-1in.nc"),
     ]);
     insta::assert_snapshot!("post_table1_patch", p);
-    // The four corners, in cutting order from (0,0): (0,1), (1,1), (1,0), (0,0).
+    // The four corners, in cutting order from (0,0): (0,1), (1,1), (1,0), (0,0), read back
+    // through our own interpreter (unchanged words are left out of the program).
     let want = [
         [2.03553, 1.12132, -0.96447],
         [2.5355, 1.8284, -1.4645],
         [3.0355, 1.1213, -1.9645],
         [2.53553, 0.41421, -1.46447],
     ];
-    let feeds: Vec<Vec<(char, f64)>> = p
-        .lines()
-        .filter(|l| l.starts_with("G1") || l.starts_with('X'))
-        .map(words)
-        .collect();
-    let corners: Vec<[f64; 3]> = feeds
+    let t = lampost_stdin(&["trace", "-", "--json", "--units", "inch"], p.as_bytes());
+    assert!(t.status.success(), "{}", stderr(&t));
+    let doc: serde_json::Value = serde_json::from_slice(&t.stdout).expect("json");
+    let corners: Vec<[f64; 3]> = doc["moves"]
+        .as_array()
+        .expect("moves")
         .iter()
-        .filter_map(|w| {
-            let g = |c: char| w.iter().find(|x| x.0 == c).map(|x| x.1);
-            Some([g('X')?, g('Y')?, g('Z')?])
+        .filter(|m| m["g"] == "G1")
+        .map(|m| {
+            [
+                m["end"]["X"].as_f64().unwrap_or(f64::NAN),
+                m["end"]["Y"].as_f64().unwrap_or(f64::NAN),
+                m["end"]["Z"].as_f64().unwrap_or(f64::NAN),
+            ]
         })
         .collect();
-    for w in want {
+    assert_eq!(corners.len(), 4, "{corners:?}");
+    for (c, w) in corners.iter().zip(want) {
         assert!(
-            corners
-                .iter()
-                .any(|c| (0..3).all(|k| (c[k] - w[k]).abs() <= 5e-5)),
-            "{w:?} not among {corners:?}"
+            (0..3).all(|k| (c[k] - w[k]).abs() <= 5e-5),
+            "{c:?} vs the paper's {w:?}"
         );
     }
 }
@@ -164,11 +155,10 @@ fn verify_reads_back_what_post_wrote() {
     assert!(v["max_axis_error_deg"].as_f64().expect("a") < 1e-3);
     assert!(v["moves"].as_u64().expect("m") > 10);
     // A tampered program fails verification.
-    let text = std::fs::read_to_string(&out).expect("read").replacen(
-        "X7.7383 Y0.1637",
-        "X7.7383 Y0.1737",
-        1,
-    );
+    let text =
+        std::fs::read_to_string(&out)
+            .expect("read")
+            .replacen("Y0.1637 F15.", "Y0.1737 F15.", 1);
     let bad = dir.join("bad.nc");
     std::fs::write(&bad, text).expect("write");
     let o = lampost(&[

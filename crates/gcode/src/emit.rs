@@ -104,31 +104,6 @@ pub fn fixed(value: f64, decimals: usize) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    use super::fixed;
-
-    #[test]
-    fn fixed_point_formatting() {
-        assert_eq!(fixed(1.5, 4), "1.5000");
-        assert_eq!(fixed(-0.25, 3), "-0.250");
-        assert_eq!(fixed(-0.00001, 4), "0.0000");
-        assert_eq!(fixed(0.00005001, 4), "0.0001");
-        assert_eq!(fixed(12345.678, 0), "12346");
-        assert_eq!(fixed(-3.0, 2), "-3.00");
-        assert_eq!(fixed(1e20, 3), format!("{:.3}", 1e20));
-        for v in [0.1, 2.675, 1.0005, -7.12345, 99.99995, 123.456789] {
-            for d in 0..6 {
-                let ours: f64 = fixed(v, d).parse().expect("number");
-                assert!(
-                    (ours - v).abs() <= 0.5 * 10f64.powi(-(d as i32)) + 1e-12 * v.abs().max(1.0),
-                    "{v} {d}"
-                );
-            }
-        }
-    }
-}
-
 /// The number text of a word in a dialect.
 pub fn format_value(
     dialect: Dialect,
@@ -420,4 +395,29 @@ impl<W: Write> Emitter<W> {
 /// The word as the emitter writes it verbatim (letter, register, number text).
 pub fn word_text(w: &Word<'_>) -> String {
     w.display()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixed;
+
+    #[test]
+    fn fixed_point_formatting() {
+        assert_eq!(fixed(1.5, 4), "1.5000");
+        assert_eq!(fixed(-0.25, 3), "-0.250");
+        assert_eq!(fixed(-0.00001, 4), "0.0000");
+        assert_eq!(fixed(0.00005001, 4), "0.0001");
+        assert_eq!(fixed(12345.678, 0), "12346");
+        assert_eq!(fixed(-3.0, 2), "-3.00");
+        assert_eq!(fixed(1e20, 3), format!("{:.3}", 1e20));
+        for v in [0.1, 2.675, 1.0005, -7.12345, 99.99995, 123.456789] {
+            for d in 0..6 {
+                let ours: f64 = fixed(v, d).parse().expect("number");
+                assert!(
+                    (ours - v).abs() <= 0.5 * 10f64.powi(-(d as i32)) + 1e-12 * v.abs().max(1.0),
+                    "{v} {d}"
+                );
+            }
+        }
+    }
 }

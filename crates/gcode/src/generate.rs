@@ -4,6 +4,12 @@
 /// 3-decimal coordinates, as common posts write them. The same `seed` gives the same
 /// text.
 pub fn planar_program(lines: usize, seed: u64) -> String {
+    planar_program_within(lines, seed, 500.0)
+}
+
+/// [`planar_program`] with X and Y kept within ±`half_extent` mm.
+pub fn planar_program_within(lines: usize, seed: u64, half_extent: f64) -> String {
+    let e = half_extent;
     let mut s = String::with_capacity(lines * 32);
     s.push_str("%\n(lampost synthetic 3-axis program)\nG21 G17 G90 G94\nG0 X0 Y0 Z5\n");
     let mut state = seed | 1;
@@ -24,15 +30,15 @@ pub fn planar_program(lines: usize, seed: u64) -> String {
         match r % 10 {
             1 => {
                 // A semicircle from here to a point 2 mm along X, centre half-way.
-                let i = if x > 490.0 { -1.0 } else { 1.0 };
+                let i = if x > e - 10.0 { -1.0 } else { 1.0 };
                 x += 2.0 * i;
                 s.push_str(&format!("G2 X{x:.3} Y{y:.3} I{i:.3} J0.000 F800.\n"));
             }
             2 => s.push_str(&format!("G1 Z{z:.3} F300.\n")),
             k => {
                 // Round to the written resolution so the next arc starts exactly here.
-                x = ((x + dx).clamp(-500.0, 500.0) * 1000.0).round() / 1000.0;
-                y = ((y + dy).clamp(-500.0, 500.0) * 1000.0).round() / 1000.0;
+                x = ((x + dx).clamp(-e, e) * 1000.0).round() / 1000.0;
+                y = ((y + dy).clamp(-e, e) * 1000.0).round() / 1000.0;
                 if k == 0 {
                     s.push_str(&format!("G0 X{x:.3} Y{y:.3} Z5.000\n"));
                 } else {

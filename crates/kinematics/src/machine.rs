@@ -566,6 +566,20 @@ impl Machine {
         rot(&ro.axis, so, co, &(a - ro.pivot)) + ro.pivot
     }
 
+    /// Machine → part with each rotary given as (sin, cos) of the *inverse* turn
+    /// (of −θ): the outer axis is undone first, then the inner.
+    pub fn machine_to_part_sc(
+        &self,
+        sc_inverse: &[(f64, f64); 2],
+        q: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
+        let (si, ci) = sc_inverse[self.inner];
+        let (so, co) = sc_inverse[self.outer];
+        let a = rot(&ro.axis, so, co, &(q - ro.pivot)) + ro.pivot;
+        rot(&ri.axis, si, ci, &(a - ri.pivot)) + ri.pivot
+    }
+
     /// Machine → part: the inverse of [`Machine::part_to_machine`].
     pub fn machine_to_part(&self, rotary: &[f64; 2], q: &Vector3<f64>) -> Vector3<f64> {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);

@@ -65,6 +65,8 @@ pub struct PostConfig {
     pub program_number: u32,
     /// Header text: what was posted and how.
     pub header: Vec<String>,
+    /// The largest distance a written feed point may have from the intended path.
+    pub verify_tolerance: f64,
 }
 
 /// What a post did.
@@ -82,6 +84,8 @@ pub struct PostReport {
     pub body: (u64, u64),
     /// Rotary positions used, in order (file order).
     pub indexes: Vec<[f64; 2]>,
+    /// The in-process verification of every written feed point.
+    pub verify: crate::verify::VerifyReport,
 }
 
 struct Counting<W> {
@@ -120,6 +124,16 @@ struct Writer<'m, W: Write> {
     branch: Option<i8>,
     laser: bool,
     pos: Option<[f64; 3]>,
+    /// The last written linear words, in output resolution units.
+    written: [Option<i64>; 3],
+    /// The feed step being written, for the in-process verification.
+    step: Option<Step>,
+    /// (rotary as written, sin/cos of minus it), for forward kinematics.
+    fk_cache: RotaryTrig,
+    head: usize,
+    tol: f64,
+    /// 10^decimals of the linear words.
+    scale: f64,
 }
 
 impl<W: Write> Writer<'_, W> {
@@ -130,6 +144,69 @@ impl<W: Write> Writer<'_, W> {
 
     fn words(&mut self, w: &[(u8, f64)], comment: Option<&str>) -> Result<(), PostError> {
         self.em.words(w, comment).map_err(PostError::from)
+    }
+
+    /// Check a written feed point: the joints as the text gives them (rounded to the
+    /// output resolution), through forward kinematics, against the intended move.
+    fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
+        let Some(step) = self.step else { return Ok(()) };
+        let rot = self.rot.unwrap_or([0.0; 2]);
+        let rw = [(rot[0] * 1e3).round() / 1e3, (rot[1] * 1e3).round() / 1e3];
+        if self.fk_cache.0 != rw {
+            let a = rw[0].to_radians().sin_cos();
+            let b = rw[1].to_radians().sin_cos();
+            self.fk_cache = (rw, [(-a.0, a.1), (-b.0, b.1)]);
+        }
+        let xw = [
+            (x[0] * self.scale).round() / self.scale,
+            (x[1] * self.scale).round() / self.scale,
+            (x[2] * self.scale).round() / self.scale,
+        ];
+        let q = self.m.head_point(&xw, self.head);
+        let inv = self.fk_cache.1;
+        let tip = self.m.machine_to_part_sc(&inv, &q);
+        let err = if is_end {
+            (tip - step.end).norm()
+        } else {
+            crate::verify::dist_to(&step, &tip)
+        };
+        if err > self.tol {
+            return Err(PostError::Verify(format!(
+                "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
+                step.line, tip.x, tip.y, tip.z, self.tol
+            )));
+        }
+        let axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
+            - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
+        let want = match step.orient {
+            Orient::ToolAxis => step.program_z.normalize(),
+            Orient::Index(r) => {
+                self.m
+                    .forward(
+                        &lampost_kinematics::Joints {
+                            linear: [0.0; 3],
+                            rotary: r,
+                        },
+                        self.head,
+                    )
+                    .axis
+            }
+        };
+        let ang = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
+        let v = &mut self.report.verify;
+        v.compared += 1;
+        if err > v.max_position_error {
+            v.max_position_error = err;
+            v.worst_line = step.line;
+        }
+        v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
+        if ang > 0.01 {
+            return Err(PostError::Verify(format!(
+                "input line {}: the tool axis is {ang:.4}° off",
+                step.line
+            )));
+        }
+        Ok(())
     }
 
     fn note_limits(&mut self, joints: &[f64; 5]) {
@@ -188,25 +265,46 @@ impl<W: Write> Writer<'_, W> {
         }
         self.check(file, line, x, &rot)?;
         self.note_limits(&[x[0], x[1], x[2], rot[0], rot[1]]);
-        let mut w: Vec<(u8, f64)> = vec![(b'G', g)];
-        for k in 0..3 {
-            w.push((self.letters[k], x[k]));
+        // Modal suppression: an axis word equal (as written) to the last one is left out.
+        let mut w = [(0u8, 0.0f64); 5];
+        let mut n = 0;
+        w[n] = (b'G', g);
+        n += 1;
+        for (k, &v) in x.iter().enumerate() {
+            let q = (v * self.scale).round() as i64;
+            if self.written[k] != Some(q) {
+                self.written[k] = Some(q);
+                w[n] = (self.letters[k], v);
+                n += 1;
+            }
         }
         if let Some(f) = feed {
-            w.push((b'F', f));
+            w[n] = (b'F', f);
+            n += 1;
         }
-        self.words(&w, None)?;
+        if n == 1 + usize::from(feed.is_some()) && g == 1.0 {
+            // A feed to where the head is (as written): keep one axis so the block moves.
+            w[n] = (self.letters[0], x[0]);
+            n += 1;
+        }
+        self.words(&w[..n], None)?;
+        if g != 0.0 {
+            self.verify_point(x, false)?;
+        }
         self.pos = Some(*x);
         self.report.moves += 1;
         Ok(())
     }
 }
 
+/// Rotary positions and the sine and cosine of each.
+type RotaryTrig = ([f64; 2], [(f64, f64); 2]);
+
 /// The joint position of the head over part point `p` with the table at `rot`.
 fn joints(m: &Machine, head: usize, rot: &[f64; 2], p: &Vector3<f64>) -> [f64; 3] {
     thread_local! {
         // The rotaries change per section or layer, not per point: keep their sin/cos.
-        static LAST: std::cell::Cell<([f64; 2], [(f64, f64); 2])> = const { std::cell::Cell::new(([f64::NAN; 2], [(0.0, 1.0); 2])) };
+        static LAST: std::cell::Cell<RotaryTrig> = const { std::cell::Cell::new(([f64::NAN; 2], [(0.0, 1.0); 2])) };
     }
     let sc = LAST.with(|c| {
         let (r, sc) = c.get();
@@ -270,6 +368,15 @@ pub fn post<W: Write>(
         branch: None,
         laser: false,
         pos: None,
+        written: [None; 3],
+        step: None,
+        fk_cache: ([f64::NAN; 2], [(0.0, 1.0); 2]),
+        head: cfg.head,
+        tol: cfg.verify_tolerance,
+        scale: match units {
+            Units::Inch => 1e4,
+            Units::Mm => 1e3,
+        },
     };
     let p = &machine.def.process;
     let laser_on = code_words(&p.laser_on)?;
@@ -448,6 +555,7 @@ pub fn post<W: Write>(
                 let split = w.offset();
                 w.report.split_points.push(split);
                 w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
+                w.written[z_axis] = Some((clear_z * w.scale).round() as i64);
                 w.rot = Some(rot);
                 w.words(
                     &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
@@ -463,6 +571,12 @@ pub fn post<W: Write>(
         let rot = w.rot.unwrap_or([0.0; 2]);
         let start = joints(machine, head, &rot, &step.start);
         let end = joints(machine, head, &rot, &step.end);
+        // The move being written, for the in-process verification (approach included).
+        w.step = if matches!(step.kind, StepKind::Rapid) {
+            None
+        } else {
+            Some(step)
+        };
         if need_approach {
             // Over the start at the retract height, then down to it, all at rapid.
             if w.laser {
@@ -553,6 +667,15 @@ pub fn post<W: Write>(
                                 (b'F', step.feed),
                             ];
                             w.words(&words, None)?;
+                            // The arc's midpoint (joint space) and its end, as written.
+                            let mid_part = step.at(0.5);
+                            let mid = joints(machine, head, &rot, &mid_part);
+                            w.verify_point(&mid, false)?;
+                            w.verify_point(&end, true)?;
+                            let scale = w.scale;
+                            for (slot, v) in w.written.iter_mut().zip(end) {
+                                *slot = Some((v * scale).round() as i64);
+                            }
                             w.pos = Some(end);
                             w.report.moves += 1;
                         } else {
@@ -602,6 +725,7 @@ pub fn post<W: Write>(
             e.2 = 0.0;
         }
     }
+    w.report.verify.moves = w.report.moves;
     let report = w.report;
     w.em.finish()?;
     Ok(report)

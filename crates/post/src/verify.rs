@@ -25,7 +25,7 @@ pub struct VerifyReport {
     pub worst_line: u32,
 }
 
-fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
+pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
     match step.kind {
         StepKind::Arc {
             center,
@@ -114,12 +114,27 @@ pub fn verify<R: BufRead>(
                 .axis
         }
     };
+    // Forward kinematics with the rotaries' sin/cos kept between points (they change per
+    // section or layer, not per point).
+    let cache = std::cell::Cell::new(([f64::NAN; 2], [(0.0, 1.0); 2]));
+    let tool = machine.tool_axis;
     let fk = |j: &[f64; 9]| {
-        let joints = Joints {
-            linear: [j[lin_idx[0]], j[lin_idx[1]], j[lin_idx[2]]],
-            rotary: [j[rot_idx[0]], j[rot_idx[1]]],
+        let rot = [j[rot_idx[0]], j[rot_idx[1]]];
+        let (r, sc) = cache.get();
+        let sc = if r == rot {
+            sc
+        } else {
+            let sc = [rot[0].to_radians().sin_cos(), rot[1].to_radians().sin_cos()];
+            cache.set((rot, sc));
+            sc
         };
-        machine.forward(&joints, head)
+        let q = machine.head_point(&[j[lin_idx[0]], j[lin_idx[1]], j[lin_idx[2]]], head);
+        let inv = [(-sc[0].0, sc[0].1), (-sc[1].0, sc[1].1)];
+        let origin = machine.machine_to_part_sc(&inv, &Vector3::zeros());
+        lampost_kinematics::Pose {
+            tip: machine.machine_to_part_sc(&inv, &q),
+            axis: machine.machine_to_part_sc(&inv, &tool) - origin,
+        }
     };
     let mut check = |p: Vector3<f64>,
                      a: Vector3<f64>,

@@ -34,6 +34,7 @@ fn config(m: &Machine, process: Process) -> PostConfig {
         near: [0.0, 0.0],
         program_number: 1000,
         header: vec!["prop".into()],
+        verify_tolerance: 0.001,
     }
 }
 
