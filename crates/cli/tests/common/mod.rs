@@ -89,8 +89,14 @@ pub struct Canon {
     pub line: usize,
 }
 
+/// rs274 runs one at a time: it keeps files of its own.
+static RS274: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Run rs274 on `program` and return its motion calls.
 pub fn rs274_motions(program: &Path, work: &Path) -> Vec<Canon> {
+    let _one_at_a_time = RS274
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let (bin, libs) = rs274().expect("rs274 installed");
     let tbl = work.join("tool.tbl");
     let mut t = String::new();
@@ -99,7 +105,9 @@ pub fn rs274_motions(program: &Path, work: &Path) -> Vec<Canon> {
     }
     std::fs::write(&tbl, t).expect("tool table");
     let out_path = work.join("canon.txt");
+    // rs274 keeps files in its working folder: give each run its own.
     let out = Command::new(bin)
+        .current_dir(work)
         .env("LD_LIBRARY_PATH", libs)
         .arg("-t")
         .arg(&tbl)
@@ -111,9 +119,11 @@ pub fn rs274_motions(program: &Path, work: &Path) -> Vec<Canon> {
     let text = std::fs::read_to_string(&out_path).unwrap_or_default();
     assert!(
         text.contains("PROGRAM_END") || text.lines().count() > 5,
-        "rs274 failed on {}: {}",
+        "rs274 failed on {} ({}): {}\n{}",
         program.display(),
-        String::from_utf8_lossy(&out.stdout)
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
     );
     let mut v = Vec::new();
     for (i, l) in text.lines().enumerate() {
