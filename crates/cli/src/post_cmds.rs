@@ -64,6 +64,39 @@ pub struct Placement {
     /// E words are slicer extrusion: deposit only while E grows.
     #[arg(long)]
     pub e_extrusion: bool,
+    /// INPUT is a path with its own tool axis: rows `x y z i j k [feed] [laser]` (implied by a .csv name).
+    #[arg(long)]
+    pub per_point: bool,
+}
+
+fn is_per_point(pl: &Placement, input: Option<&str>) -> bool {
+    pl.per_point || input.is_some_and(|i| i.to_ascii_lowercase().ends_with(".csv"))
+}
+
+/// The frame and points of a per-point input.
+fn per_point_input(
+    pl: &Placement,
+    input: &str,
+) -> Result<(Frame, Vec<lampost_post::pointwise::PathPoint>, String), CliError> {
+    if pl.index.is_some() || pl.job.is_some() || pl.layer_axis.is_some() {
+        return Err(CliError::usage("error: a per-point path carries its own tool axis: use --setup or --origin, not --index, --job or a layer schedule\n".to_string()));
+    }
+    let frame = match &pl.setup {
+        Some(st) => setup_frame(st)?,
+        None => Frame::translation(
+            pl.origin
+                .as_deref()
+                .map(|o| vector("--origin", o))
+                .transpose()?
+                .unwrap_or_else(Vector3::zeros),
+        ),
+    };
+    let name = display_name(input);
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut crate::io::open_input(input)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
+    let pts = lampost_post::pointwise::read_points(&text, &name).map_err(post_error)?;
+    Ok((frame, pts, name))
 }
 
 #[derive(serde::Deserialize)]
@@ -501,6 +534,9 @@ pub fn post(
 ) -> Result<(), CliError> {
     let t0 = std::time::Instant::now();
     let m = load_machine(&a.machine, &a.set)?;
+    if is_per_point(&a.place, input) {
+        return post_per_point(&m, a, input.unwrap_or("-"), output, json_report, t0);
+    }
     let secs = sections(&m, &a.place, input)?;
     let cfg = config(&m, a, &secs)?;
     let tmp = Temp::beside(output);
@@ -591,6 +627,59 @@ pub fn post(
     Ok(())
 }
 
+fn post_per_point(
+    m: &Machine,
+    a: &PostArgs,
+    input: &str,
+    output: Option<&str>,
+    json_report: Option<&str>,
+    t0: std::time::Instant,
+) -> Result<(), CliError> {
+    let (frame, pts, name) = per_point_input(&a.place, input)?;
+    let mut cfg = config(m, a, &[])?;
+    let short = Path::new(&name)
+        .file_name()
+        .map_or(name.clone(), |n| n.to_string_lossy().into_owned());
+    cfg.header.push(format!(
+        "{short}: per-point tool axis; origin {:.4} {:.4} {:.4}",
+        frame.origin.x, frame.origin.y, frame.origin.z
+    ));
+    let tmp = Temp::beside(output);
+    let file = std::fs::File::create(&tmp.path).map_err(|e| {
+        CliError::usage(format!("error: cannot write {}: {e}\n", tmp.path.display()))
+    })?;
+    let report = {
+        let mut bw = std::io::BufWriter::new(file);
+        let r = lampost_post::pointwise::post_points(m, &pts, &frame, &name, &cfg, &mut bw)
+            .map_err(post_error)?;
+        bw.flush().map_err(werr)?;
+        r
+    };
+    let posted = std::fs::File::open(&tmp.path).map_err(werr)?;
+    let v = lampost_post::pointwise::verify_points(
+        m,
+        &pts,
+        &frame,
+        cfg.head,
+        BufReader::new(posted),
+        cfg.verify_tolerance,
+    )
+    .map_err(post_error)?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    let written = persist(&tmp, output)?;
+    if let Some(path) = json_report {
+        let j = serde_json::json!({"moves": report.moves, "warnings": report.warnings, "indexes": report.indexes, "verify": v, "files": [written], "time_s": t0.elapsed().as_secs_f64()});
+        let mut o = crate::io::Output::create(Some(path))?;
+        o.writer()
+            .write_all(format!("{j}\n").as_bytes())
+            .map_err(werr)?;
+        o.commit()?;
+    }
+    Ok(())
+}
+
 fn numbered(out: &str, n: usize) -> String {
     let p = Path::new(out);
     let stem = p
@@ -634,7 +723,6 @@ pub fn verify(
     json: bool,
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
-    let secs = sections(&m, place, input)?;
     let head_name = head.map(str::to_string).unwrap_or_else(|| {
         let want = if process == "deposit" {
             "laser"
@@ -654,11 +742,18 @@ pub fn verify(
     });
     let f = std::fs::File::open(posted)
         .map_err(|e| CliError::usage(format!("error: cannot open {posted}: {e}\n")))?;
-    let opts = IntendedOptions {
-        convert_units: place.convert_units,
-        e_extrusion: place.e_extrusion,
+    let v = if is_per_point(place, input) {
+        let (frame, pts, _) = per_point_input(place, input.unwrap_or("-"))?;
+        lampost_post::pointwise::verify_points(&m, &pts, &frame, h, BufReader::new(f), tol)
+            .map_err(post_error)?
+    } else {
+        let secs = sections(&m, place, input)?;
+        let opts = IntendedOptions {
+            convert_units: place.convert_units,
+            e_extrusion: place.e_extrusion,
+        };
+        lampost_post::verify(&m, &secs, h, opts, BufReader::new(f), tol).map_err(post_error)?
     };
-    let v = lampost_post::verify(&m, &secs, h, opts, BufReader::new(f), tol).map_err(post_error)?;
     let s = if json {
         format!(
             "{}\n",

@@ -339,3 +339,55 @@ fn max_bytes_splits_into_pieces_that_fit() {
     }
     assert!(n >= 2);
 }
+
+#[test]
+fn per_point_paths_post_with_inverse_time_and_verify() {
+    let csv = fx("tilted-arc.csv");
+    let p = posted(&["post", "--machine", "nrc-lc", &csv]);
+    insta::assert_snapshot!("post_nrc_per_point", p);
+    assert!(
+        p.contains("G93") && p.contains(" C-"),
+        "rotary moves in inverse time"
+    );
+    let dir = tempdir("perpoint");
+    let out = dir.join("arc.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &csv,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        &csv,
+        out.to_str().expect("utf8"),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert!(v["max_position_error"].as_f64().expect("e") < 0.02, "{v}");
+    let bad = |text: &str, want: &str| {
+        let f = dir.join("bad.csv");
+        std::fs::write(&f, text).expect("write");
+        let o = lampost(&["post", "--machine", "nrc-lc", f.to_str().expect("utf8")]);
+        assert!(!o.status.success(), "{text}");
+        assert!(stderr(&o).contains(want), "`{want}` not in {}", stderr(&o));
+    };
+    bad(
+        "0 0 0 0 0 0 600\n",
+        "bad.csv:1:7: the tool axis i j k has zero length",
+    );
+    bad("0 0 0 0 0 1\n", "no feed yet");
+    bad("0 0 0 0 0 1 600\n1 nan 0 0 0 1\n", "bad.csv:2:3");
+    bad(
+        "0 0 0 0 0 1 600\n0 0 0 0 0 -1\n",
+        "no solution within limits",
+    );
+    let o = lampost(&["post", "--machine", "nrc-lc", "--index", "B=0,C=0", &csv]);
+    assert!(stderr(&o).contains("carries its own tool axis"));
+}

@@ -19,6 +19,7 @@
 pub mod error;
 pub mod frame;
 pub mod intended;
+pub mod pointwise;
 pub mod post;
 pub mod split;
 pub mod verify;

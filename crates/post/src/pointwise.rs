@@ -1,0 +1,628 @@
+//! Paths that carry their own tool axis: `x y z i j k [feed] [laser]` per point (paper
+//! 001's tangent approach, or any 5-axis CAM output as points). Each point is solved by
+//! inverse kinematics (the branch kept while it can be, continuous axes on the nearest
+//! turn); each segment is split until the controller's straight joint-space interpolation
+//! keeps the tool tip on the straight segment and the tool axis on the interpolated one;
+//! moves that turn a rotary are written with G93 inverse-time feeds.
+
+use std::io::{BufRead, Write};
+
+use lampost_gcode::{
+    Dialect, EmitOptions, Emitter, Event, MoveKind, Options, Severity, Stream, Units, AXES,
+};
+use lampost_kinematics::{Joints, Machine, Units as MUnits};
+use nalgebra::{Rotation3, Unit, Vector3};
+
+use crate::error::PostError;
+use crate::frame::Frame;
+use crate::post::{PostConfig, PostDialect, PostReport, Process};
+use crate::verify::VerifyReport;
+
+/// The fastest rotary feed assumed when a move only turns the tool (deg/min), to give it
+/// an inverse-time feed.
+pub const ROTARY_FEED_DEG_PER_MIN: f64 = 3600.0;
+
+/// One point of a path with its own tool axis (part frame once placed).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathPoint {
+    /// Tool tip.
+    pub tip: Vector3<f64>,
+    /// Unit tool axis (tip into the head).
+    pub axis: Vector3<f64>,
+    /// Feed to this point (units/min).
+    pub feed: f64,
+    /// Deposit on the way to this point.
+    pub deposit: bool,
+    /// Source line.
+    pub line: usize,
+}
+
+fn file_err(file: &str, line: usize, column: usize, message: String) -> PostError {
+    PostError::File {
+        file: file.to_string(),
+        line,
+        column,
+        message,
+    }
+}
+
+/// Read `x y z i j k [feed] [laser]` rows (spaces, tabs or commas; an optional header;
+/// `#` comments). A missing feed repeats the last; laser defaults to on.
+pub fn read_points(text: &str, file: &str) -> Result<Vec<PathPoint>, PostError> {
+    let mut out = Vec::new();
+    let mut feed: Option<f64> = None;
+    let mut seen = false;
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let code = raw.split('#').next().unwrap_or("");
+        let mut fields: Vec<(usize, &str)> = Vec::new();
+        let mut start = None;
+        for (p, ch) in code.char_indices() {
+            let sep = matches!(ch, ' ' | '\t' | ',');
+            match (sep, start) {
+                (false, None) => start = Some(p),
+                (true, Some(s)) => {
+                    fields.push((s, &code[s..p]));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(s) = start {
+            fields.push((s, &code[s..]));
+        }
+        if fields.is_empty() {
+            continue;
+        }
+        if !seen && fields.iter().all(|(_, f)| f.parse::<f64>().is_err()) {
+            seen = true;
+            continue;
+        }
+        seen = true;
+        if !(6..=8).contains(&fields.len()) {
+            return Err(file_err(
+                file,
+                line,
+                1,
+                format!(
+                    "expected x y z i j k [feed] [laser], found {} columns",
+                    fields.len()
+                ),
+            ));
+        }
+        let mut v = [0.0; 8];
+        for (k, (col, f)) in fields.iter().enumerate() {
+            v[k] = f
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    file_err(file, line, col + 1, format!("`{f}` is not a finite number"))
+                })?;
+        }
+        let axis = Vector3::new(v[3], v[4], v[5]);
+        if axis.norm() < 1e-12 {
+            return Err(file_err(
+                file,
+                line,
+                fields[3].0 + 1,
+                "the tool axis i j k has zero length".into(),
+            ));
+        }
+        if fields.len() >= 7 {
+            if v[6] <= 0.0 {
+                return Err(file_err(
+                    file,
+                    line,
+                    fields[6].0 + 1,
+                    "the feed must be positive".into(),
+                ));
+            }
+            feed = Some(v[6]);
+        }
+        let Some(f) = feed else {
+            return Err(file_err(
+                file,
+                line,
+                1,
+                "no feed yet: give the feed in the 7th column of the first point".into(),
+            ));
+        };
+        out.push(PathPoint {
+            tip: Vector3::new(v[0], v[1], v[2]),
+            axis: axis.normalize(),
+            feed: f,
+            deposit: fields.len() < 8 || v[7] != 0.0,
+            line,
+        });
+    }
+    if out.is_empty() {
+        return Err(PostError::Empty(file.to_string()));
+    }
+    Ok(out)
+}
+
+fn slerp(a: &Vector3<f64>, b: &Vector3<f64>, t: f64) -> Vector3<f64> {
+    let c = a.cross(b);
+    let ang = c.norm().atan2(a.dot(b));
+    if c.norm() < 1e-15 || ang.abs() < 1e-15 {
+        return a.normalize();
+    }
+    Rotation3::from_axis_angle(&Unit::new_normalize(c), ang * t) * a
+}
+
+fn angle(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    a.cross(b).norm().atan2(a.dot(b)).to_degrees()
+}
+
+/// Largest tool-axis deviation allowed along a linearised segment (degrees).
+pub const AXIS_TOLERANCE_DEG: f64 = 0.05;
+
+struct Ctx<'a> {
+    m: &'a Machine,
+    head: usize,
+    tol: f64,
+    file: &'a str,
+}
+
+impl Ctx<'_> {
+    fn fk(&self, j: &[f64; 5]) -> (Vector3<f64>, Vector3<f64>) {
+        let p = self.m.forward(
+            &Joints {
+                linear: [j[0], j[1], j[2]],
+                rotary: [j[3], j[4]],
+            },
+            self.head,
+        );
+        (p.tip, p.axis)
+    }
+
+    /// Joints for (tip, axis) nearest `near` on `branch` where possible.
+    fn solve(
+        &self,
+        tip: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        near: &[f64; 2],
+        branch: Option<i8>,
+        line: usize,
+    ) -> Result<([f64; 5], i8, bool), PostError> {
+        let sols = self
+            .m
+            .inverse(tip, axis, self.head, near)
+            .map_err(|err| PostError::Kin {
+                context: format!("{}:{line}: ", self.file),
+                err,
+            })?;
+        let c = self
+            .m
+            .choose(&sols, branch, axis, self.head)
+            .map_err(|err| PostError::Kin {
+                context: format!("{}:{line}: ", self.file),
+                err,
+            })?;
+        let j = c.solution.joints;
+        Ok((
+            [
+                j.linear[0],
+                j.linear[1],
+                j.linear[2],
+                j.rotary[0],
+                j.rotary[1],
+            ],
+            c.solution.branch,
+            c.branch_flip,
+        ))
+    }
+
+    /// Split (t0, j0)–(t1, j1) until straight joint interpolation stays on the segment.
+    #[allow(clippy::too_many_arguments)]
+    fn split(
+        &self,
+        a: &PathPoint,
+        b: &PathPoint,
+        t0: f64,
+        j0: [f64; 5],
+        t1: f64,
+        j1: [f64; 5],
+        branch: i8,
+        depth: u32,
+        out: &mut Vec<(f64, [f64; 5])>,
+    ) -> Result<(), PostError> {
+        let tm = (t0 + t1) / 2.0;
+        let mut jm = [0.0; 5];
+        for k in 0..5 {
+            jm[k] = (j0[k] + j1[k]) / 2.0;
+        }
+        let (tip, ax) = self.fk(&jm);
+        let want_tip = a.tip + (b.tip - a.tip) * tm;
+        let want_ax = slerp(&a.axis, &b.axis, tm);
+        let rotary_moves = (j0[3] - j1[3]).abs() + (j0[4] - j1[4]).abs() > 1e-9;
+        if !rotary_moves
+            || depth >= 24
+            || ((tip - want_tip).norm() <= self.tol && angle(&ax, &want_ax) <= AXIS_TOLERANCE_DEG)
+        {
+            out.push((t1, j1));
+            return Ok(());
+        }
+        let (js, _, _) = self.solve(&want_tip, &want_ax, &[jm[3], jm[4]], Some(branch), b.line)?;
+        self.split(a, b, t0, j0, tm, js, branch, depth + 1, out)?;
+        self.split(a, b, tm, js, t1, j1, branch, depth + 1, out)
+    }
+}
+
+fn letters(m: &Machine) -> [u8; 5] {
+    let n = m.axis_names();
+    let l = |s: &str| s.bytes().next().map_or(b'?', |b| b.to_ascii_uppercase());
+    [l(n[0]), l(n[1]), l(n[2]), l(n[3]), l(n[4])]
+}
+
+fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
+    if text.trim().is_empty() {
+        return Ok(Vec::new());
+    }
+    let b = lampost_gcode::parse_line(text.as_bytes(), 1, 0).map_err(|d| {
+        PostError::Options(format!("machine file process code `{text}`: {}", d.kind))
+    })?;
+    Ok(b.words().map(|w| (w.letter, w.value)).collect())
+}
+
+/// Post a path of points with their own tool axis (program frame `frame`).
+pub fn post_points<W: Write>(
+    machine: &Machine,
+    points: &[PathPoint],
+    frame: &Frame,
+    name: &str,
+    cfg: &PostConfig,
+    out: W,
+) -> Result<PostReport, PostError> {
+    let units = match machine.units {
+        MUnits::Inch => Units::Inch,
+        MUnits::Mm => Units::Mm,
+    };
+    let (dialect, renumber) = match cfg.dialect {
+        PostDialect::Fadal => (Dialect::Fadal, cfg.renumber),
+        PostDialect::Iso => (Dialect::Iso, cfg.renumber),
+        PostDialect::Nrc => (Dialect::Iso, Some(cfg.renumber.unwrap_or((10, 10)))),
+    };
+    let mut em = Emitter::new(
+        out,
+        EmitOptions {
+            dialect: Some(dialect),
+            renumber,
+            suppress_modal: true,
+            units,
+        },
+    );
+    let lt = letters(machine);
+    let p = &machine.def.process;
+    let (laser_on, laser_off, powder_on, powder_off) = (
+        code_words(&p.laser_on)?,
+        code_words(&p.laser_off)?,
+        code_words(&p.powder_on)?,
+        code_words(&p.powder_off)?,
+    );
+    let power_letter = p
+        .laser_power_word
+        .bytes()
+        .next()
+        .unwrap_or(b'S')
+        .to_ascii_uppercase();
+    if cfg.dialect == PostDialect::Fadal {
+        em.program_number(
+            cfg.program_number,
+            Some(
+                &cfg.header
+                    .first()
+                    .cloned()
+                    .unwrap_or_default()
+                    .to_uppercase(),
+            ),
+        )?;
+        for h in cfg.header.iter().skip(1) {
+            em.raw_line(&format!("({})", h.replace(['(', ')'], "").to_uppercase()))?;
+        }
+    } else {
+        for h in &cfg.header {
+            em.raw_line(&format!("({})", h.replace(['(', ')'], "")))?;
+        }
+    }
+    let units_code = match (cfg.dialect, units) {
+        (PostDialect::Fadal, Units::Inch) => 70.0,
+        (PostDialect::Fadal, Units::Mm) => 71.0,
+        (_, Units::Inch) => 20.0,
+        (_, Units::Mm) => 21.0,
+    };
+    em.words(
+        &[
+            (b'G', units_code),
+            (b'G', 90.0),
+            (b'G', 94.0),
+            (b'G', 17.0),
+            (b'G', 40.0),
+            (b'G', 80.0),
+        ],
+        None,
+    )?;
+    if let Process::Machine { spindle, .. } = &cfg.process {
+        let mut v = vec![(b'S', *spindle)];
+        v.extend(code_words(&p.spindle_on)?);
+        em.words(&v, None)?;
+    }
+    let ctx = Ctx {
+        m: machine,
+        head: cfg.head,
+        tol: cfg.tolerance,
+        file: name,
+    };
+    let placed: Vec<PathPoint> = points
+        .iter()
+        .map(|q| PathPoint {
+            tip: frame.apply(&q.tip),
+            axis: frame.dir(&q.axis).normalize(),
+            ..*q
+        })
+        .collect();
+    let mut report = PostReport {
+        limits_used: machine
+            .axis_names()
+            .iter()
+            .map(|n| ((*n).to_string(), f64::INFINITY, f64::NEG_INFINITY))
+            .collect(),
+        ..PostReport::default()
+    };
+    let clear = p.clearance_z;
+    let lift = match machine.units {
+        MUnits::Inch => 0.1,
+        MUnits::Mm => 2.5,
+    };
+    let check = |j: &[f64; 5], line: usize| -> Result<(), PostError> {
+        for (l, &v) in machine.linear.iter().zip(&j[..3]) {
+            if v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
+                return Err(PostError::Limit {
+                    file: name.to_string(),
+                    line: u32::try_from(line).unwrap_or(u32::MAX),
+                    axis: l.name.clone(),
+                    value: v,
+                    lo: l.limits.0,
+                    hi: l.limits.1,
+                });
+            }
+        }
+        for (r, &v) in machine.rotary.iter().zip(&j[3..]) {
+            if !r.within(v) {
+                let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                return Err(PostError::Limit {
+                    file: name.to_string(),
+                    line: u32::try_from(line).unwrap_or(u32::MAX),
+                    axis: r.name.clone(),
+                    value: v,
+                    lo,
+                    hi,
+                });
+            }
+        }
+        Ok(())
+    };
+    let mut laser = false;
+    let mut inverse_time = false;
+    let mut cur: Option<([f64; 5], i8)> = None;
+    let mut prev: Option<PathPoint> = None;
+    for q in &placed {
+        let near = cur.map_or(cfg.near, |(j, _)| [j[3], j[4]]);
+        let (j, branch, flip) = ctx.solve(&q.tip, &q.axis, &near, cur.map(|c| c.1), q.line)?;
+        check(&j, q.line)?;
+        let needs_approach = cur.is_none() || flip;
+        if flip {
+            report.warnings.push(format!(
+                "{name}:{}: the rotary branch flips here; the tool retracts and re-approaches",
+                q.line
+            ));
+        }
+        if needs_approach {
+            if laser {
+                em.words(&laser_off, None)?;
+                em.words(&powder_off, None)?;
+                laser = false;
+            }
+            if inverse_time {
+                em.words(&[(b'G', 94.0)], None)?;
+                inverse_time = false;
+            }
+            report.split_points.push(0);
+            em.words(&[(b'G', 0.0), (lt[2], clear)], None)?;
+            em.words(&[(b'G', 0.0), (lt[3], j[3]), (lt[4], j[4])], Some("INDEX"))?;
+            report.indexes.push([j[3], j[4]]);
+            em.words(&[(b'G', 0.0), (lt[0], j[0]), (lt[1], j[1])], None)?;
+            em.words(&[(b'G', 0.0), (lt[2], (j[2] + lift).min(clear))], None)?;
+            em.words(&[(b'G', 1.0), (lt[2], j[2]), (b'F', q.feed)], None)?;
+            report.moves += 5;
+            cur = Some((j, branch));
+            prev = Some(*q);
+            continue;
+        }
+        let (j0, _) = cur.unwrap_or((j, branch));
+        let a = prev.unwrap_or(*q);
+        let mut pieces = Vec::new();
+        ctx.split(&a, q, 0.0, j0, 1.0, j, branch, 0, &mut pieces)?;
+        if let Process::Deposit { power } = cfg.process {
+            if q.deposit && !laser {
+                let mut v = laser_on.clone();
+                v.push((power_letter, power));
+                em.words(&v, None)?;
+                em.words(&powder_on, None)?;
+                laser = true;
+            } else if !q.deposit && laser {
+                em.words(&laser_off, None)?;
+                em.words(&powder_off, None)?;
+                laser = false;
+            }
+        }
+        let mut t_prev = 0.0;
+        let mut j_prev = j0;
+        for (t, jp) in pieces {
+            check(&jp, q.line)?;
+            let seg = (q.tip - a.tip).norm() * (t - t_prev);
+            let dr = (jp[3] - j_prev[3]).abs().max((jp[4] - j_prev[4]).abs());
+            let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
+            if dr > 1e-9 {
+                if !inverse_time {
+                    w.push((b'G', 93.0));
+                    inverse_time = true;
+                }
+                let minutes = (seg / q.feed).max(dr / ROTARY_FEED_DEG_PER_MIN).max(1e-9);
+                w.push((b'G', 1.0));
+                for k in 0..5 {
+                    w.push((lt[k], jp[k]));
+                }
+                w.push((b'F', 1.0 / minutes));
+            } else {
+                if inverse_time {
+                    w.push((b'G', 94.0));
+                    inverse_time = false;
+                }
+                w.push((b'G', 1.0));
+                for k in 0..3 {
+                    w.push((lt[k], jp[k]));
+                }
+                w.push((b'F', q.feed));
+            }
+            em.words(&w, None)?;
+            for (k, v) in jp.iter().enumerate() {
+                let e = &mut report.limits_used[k];
+                e.1 = e.1.min(*v);
+                e.2 = e.2.max(*v);
+            }
+            report.moves += 1;
+            t_prev = t;
+            j_prev = jp;
+        }
+        cur = Some((j, branch));
+        prev = Some(*q);
+    }
+    if laser {
+        em.words(&laser_off, None)?;
+        em.words(&powder_off, None)?;
+    }
+    if inverse_time {
+        em.words(&[(b'G', 94.0)], None)?;
+    }
+    if let Process::Machine { .. } = &cfg.process {
+        em.words(&code_words(&p.spindle_off)?, None)?;
+    }
+    em.words(&[(b'G', 0.0), (lt[2], clear)], None)?;
+    em.words(&code_words(&p.program_end)?, None)?;
+    em.finish()?;
+    Ok(report)
+}
+
+/// Replay a posted program and compare every feed point with the path of `points`
+/// (placed by `frame`): tip on the current segment (or at its end), tool axis on the
+/// interpolated axis.
+pub fn verify_points<R: BufRead>(
+    machine: &Machine,
+    points: &[PathPoint],
+    frame: &Frame,
+    head: usize,
+    posted: R,
+    tolerance: f64,
+) -> Result<VerifyReport, PostError> {
+    let units = match machine.units {
+        MUnits::Inch => Units::Inch,
+        MUnits::Mm => Units::Mm,
+    };
+    let placed: Vec<PathPoint> = points
+        .iter()
+        .map(|q| PathPoint {
+            tip: frame.apply(&q.tip),
+            axis: frame.dir(&q.axis).normalize(),
+            ..*q
+        })
+        .collect();
+    let names = machine.axis_names();
+    let idx = |n: &str| {
+        n.bytes()
+            .next()
+            .and_then(|c| AXES.iter().position(|&a| a == c.to_ascii_uppercase()))
+            .unwrap_or(0)
+    };
+    let ix: Vec<usize> = names.iter().map(|n| idx(n)).collect();
+    let mut rep = VerifyReport::default();
+    // Segment k runs from placed[k-1] to placed[k]; before the first point is reached,
+    // the feeds are the approach onto it.
+    let mut k = 0usize;
+    for ev in Stream::from_reader(
+        posted,
+        Options {
+            units,
+            ..Options::default()
+        },
+        true,
+    ) {
+        match ev.map_err(|e| PostError::Io(e.to_string()))? {
+            Event::Diagnostic(d) if d.severity == Severity::Error => {
+                return Err(PostError::Input {
+                    file: "the posted program".into(),
+                    diag: Box::new(d),
+                })
+            }
+            Event::Diagnostic(_) => {}
+            Event::Move(m) => {
+                rep.moves += 1;
+                if matches!(m.kind, MoveKind::Rapid) {
+                    continue;
+                }
+                let j = Joints {
+                    linear: [m.end[ix[0]], m.end[ix[1]], m.end[ix[2]]],
+                    rotary: [m.end[ix[3]], m.end[ix[4]]],
+                };
+                let pose = machine.forward(&j, head);
+                if k >= placed.len() {
+                    return Err(PostError::Verify(format!(
+                        "posted line {} feeds on after the last point",
+                        m.line
+                    )));
+                }
+                let target = &placed[k];
+                if (pose.tip - target.tip).norm() <= tolerance {
+                    let ang = angle(&pose.axis, &target.axis);
+                    rep.compared += 1;
+                    rep.max_position_error =
+                        rep.max_position_error.max((pose.tip - target.tip).norm());
+                    rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
+                    k += 1;
+                    continue;
+                }
+                if k == 0 {
+                    // The approach onto the first point: straight down to it.
+                    continue;
+                }
+                let a = &placed[k - 1];
+                let d = target.tip - a.tip;
+                let len2 = d.norm_squared();
+                let t = if len2 > 0.0 {
+                    ((pose.tip - a.tip).dot(&d) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let err = (pose.tip - (a.tip + d * t)).norm();
+                let ang = angle(&pose.axis, &slerp(&a.axis, &target.axis, t));
+                if err > tolerance || ang > 10.0 * AXIS_TOLERANCE_DEG {
+                    return Err(PostError::Verify(format!("posted line {}: the tool is {err:.3e} and {ang:.3}° off the path between points on lines {} and {}", m.line, a.line, target.line)));
+                }
+                rep.compared += 1;
+                if err > rep.max_position_error {
+                    rep.max_position_error = err;
+                    rep.worst_line = m.line;
+                }
+                rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
+            }
+        }
+    }
+    if k < placed.len() {
+        return Err(PostError::Verify(format!(
+            "the posted program ends before the point on line {}",
+            placed[k].line
+        )));
+    }
+    Ok(rep)
+}
