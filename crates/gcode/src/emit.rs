@@ -78,34 +78,143 @@ fn trim_decimals(s: &mut String, keep_point: bool) {
 /// integer with a decimal point (a fraction of the cost of `format!`); the result is a
 /// correct rounding to the last place, and deterministic.
 pub fn fixed(value: f64, decimals: usize) -> String {
+    let mut s = String::with_capacity(16);
+    push_fixed(&mut s, value, decimals);
+    s
+}
+
+/// [`fixed`] appended to `out`, without allocating for values of ordinary size.
+pub fn push_fixed(out: &mut String, value: f64, decimals: usize) {
     const POW: [f64; 10] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
     if decimals < POW.len() && value.is_finite() && value.abs() < 1e15 / POW[decimals] {
         let n = (value * POW[decimals]).round() as i64;
-        let mut digits = n.unsigned_abs().to_string();
-        if digits.len() <= decimals {
-            digits.insert_str(0, &"0".repeat(decimals + 1 - digits.len()));
+        let mut digits = [b'0'; 24];
+        let mut i = digits.len();
+        let mut m = n.unsigned_abs();
+        loop {
+            i -= 1;
+            digits[i] = b'0' + (m % 10) as u8;
+            m /= 10;
+            if m == 0 {
+                break;
+            }
         }
-        let mut s = String::with_capacity(digits.len() + 2);
+        // At least one digit before the point (the array is pre-filled with zeros).
+        if digits.len() - i <= decimals {
+            i = digits.len() - decimals - 1;
+        }
         if n < 0 {
-            s.push('-');
+            out.push('-');
         }
         let split = digits.len() - decimals;
-        s.push_str(&digits[..split]);
-        if decimals > 0 {
-            s.push('.');
-            s.push_str(&digits[split..]);
+        for &d in &digits[i..split] {
+            out.push(char::from(d));
         }
-        return s;
+        if decimals > 0 {
+            out.push('.');
+            for &d in &digits[split..] {
+                out.push(char::from(d));
+            }
+        }
+        return;
     }
     let mut s = format!("{value:.decimals$}");
     if s.starts_with('-') && s[1..].bytes().all(|c| c == b'0' || c == b'.') {
         s.remove(0);
     }
-    s
+    out.push_str(&s);
 }
 
 /// The number text of a word in a dialect.
 pub fn format_value(
+    dialect: Dialect,
+    units: Units,
+    letter: u8,
+    register: Option<u8>,
+    value: f64,
+) -> String {
+    let mut s = String::with_capacity(16);
+    push_value(&mut s, dialect, units, letter, register, value);
+    s
+}
+
+/// Append a whole number.
+fn push_int(out: &mut String, n: i64) {
+    let mut digits = [0u8; 20];
+    let mut i = digits.len();
+    let mut m = n.unsigned_abs();
+    loop {
+        i -= 1;
+        digits[i] = b'0' + (m % 10) as u8;
+        m /= 10;
+        if m == 0 {
+            break;
+        }
+    }
+    if n < 0 {
+        out.push('-');
+    }
+    for &d in &digits[i..] {
+        out.push(char::from(d));
+    }
+}
+
+/// [`format_value`] appended to `out`, without allocating for the common words.
+pub fn push_value(
+    out: &mut String,
+    dialect: Dialect,
+    units: Units,
+    letter: u8,
+    register: Option<u8>,
+    value: f64,
+) {
+    let linear_dec = match units {
+        Units::Inch => 4,
+        Units::Mm => 3,
+    };
+    let whole = value.fract() == 0.0 && value.abs() < 9e15;
+    match letter {
+        _ if register.is_some() => {
+            out.push_str(&format_value_slow(dialect, units, letter, register, value))
+        }
+        b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' | b'R' => {
+            push_fixed(out, value, linear_dec)
+        }
+        b'A' | b'B' | b'C' => push_fixed(out, value, 3),
+        b'G' | b'M' => {
+            let t = (value * 10.0).round();
+            if (value * 10.0 - t).abs() < 1e-9 && (0.0..6553.5).contains(&t) {
+                let c = t as i64;
+                push_int(out, c / 10);
+                if c % 10 != 0 {
+                    out.push('.');
+                    push_int(out, c % 10);
+                }
+            } else {
+                out.push_str(&format_value_slow(dialect, units, letter, register, value));
+            }
+        }
+        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' | b'E' if whole => push_int(out, value as i64),
+        b'F' | b'S' | b'P' | b'E' => {
+            let start = out.len();
+            push_fixed(out, value, 5);
+            let forced = dialect == Dialect::Fadal && letter != b'S' && letter != b'P';
+            // Trim trailing zeros in place (and the point, unless forced).
+            while out.len() > start && out.ends_with('0') && out[start..].contains('.') {
+                out.pop();
+            }
+            if out.ends_with('.') && !forced {
+                out.pop();
+            }
+            if &out[start..] == "-0" || &out[start..] == "-0." {
+                out.remove(start);
+            }
+        }
+        _ => out.push_str(&format_value_slow(dialect, units, letter, register, value)),
+    }
+}
+
+fn format_value_slow(
     dialect: Dialect,
     units: Units,
     letter: u8,
@@ -205,16 +314,15 @@ impl<W: Write> Emitter<W> {
         }
         match (self.opts.dialect, text) {
             (None, Some(t)) => self.line.push_str(t),
-            (Some(d), _) => self
-                .line
-                .push_str(&format_value(d, self.units, letter, register, value)),
-            (None, None) => self.line.push_str(&format_value(
+            (Some(d), _) => push_value(&mut self.line, d, self.units, letter, register, value),
+            (None, None) => push_value(
+                &mut self.line,
                 Dialect::Iso,
                 self.units,
                 letter,
                 register,
                 value,
-            )),
+            ),
         }
     }
 

@@ -130,6 +130,10 @@ struct Writer<'m, W: Write> {
     step: Option<Step>,
     /// (rotary as written, sin/cos of minus it), for forward kinematics.
     fk_cache: RotaryTrig,
+    /// The tool axis (part frame) at the written rotary, with `fk_cache`.
+    fk_axis: Vector3<f64>,
+    /// The intended tool axis for the current orientation: (orientation, axis).
+    want_axis: Option<(Orient, Vector3<f64>)>,
     head: usize,
     tol: f64,
     /// 10^decimals of the linear words.
@@ -156,6 +160,9 @@ impl<W: Write> Writer<'_, W> {
             let a = rw[0].to_radians().sin_cos();
             let b = rw[1].to_radians().sin_cos();
             self.fk_cache = (rw, [(-a.0, a.1), (-b.0, b.1)]);
+            let inv = self.fk_cache.1;
+            self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
+                - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
         }
         let xw = [
             (x[0] * self.scale).round() / self.scale,
@@ -176,20 +183,30 @@ impl<W: Write> Writer<'_, W> {
                 step.line, tip.x, tip.y, tip.z, self.tol
             )));
         }
-        let axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
-            - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
-        let want = match step.orient {
-            Orient::ToolAxis => step.program_z.normalize(),
-            Orient::Index(r) => {
-                self.m
-                    .forward(
-                        &lampost_kinematics::Joints {
-                            linear: [0.0; 3],
-                            rotary: r,
-                        },
-                        self.head,
-                    )
-                    .axis
+        let axis = self.fk_axis;
+        let want = match self.want_axis {
+            Some((o, a))
+                if o == step.orient && (matches!(o, Orient::Index(_)) || a == step.program_z) =>
+            {
+                a
+            }
+            _ => {
+                let a = match step.orient {
+                    Orient::ToolAxis => step.program_z.normalize(),
+                    Orient::Index(r) => {
+                        self.m
+                            .forward(
+                                &lampost_kinematics::Joints {
+                                    linear: [0.0; 3],
+                                    rotary: r,
+                                },
+                                self.head,
+                            )
+                            .axis
+                    }
+                };
+                self.want_axis = Some((step.orient, a));
+                a
             }
         };
         let ang = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
@@ -371,6 +388,8 @@ pub fn post<W: Write>(
         written: [None; 3],
         step: None,
         fk_cache: ([f64::NAN; 2], [(0.0, 1.0); 2]),
+        fk_axis: Vector3::z(),
+        want_axis: None,
         head: cfg.head,
         tol: cfg.verify_tolerance,
         scale: match units {
