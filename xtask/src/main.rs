@@ -241,7 +241,7 @@ fn calibration(trials: usize) -> Result<(), String> {
         ) {
             let cell = |v: f64| {
                 if c.solved == 0 {
-                    "line only".to_string()
+                    "not fixed".to_string()
                 } else {
                     format!("{:.3}", v / um)
                 }

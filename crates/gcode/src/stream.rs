@@ -107,9 +107,18 @@ impl<S: LineSource> Iterator for Stream<S> {
                 self.any_content = true;
             }
             let queue = &mut self.queue;
+            // The queue is empty here: the block's first event is handed back directly
+            // (one move per line is the rule), the rest wait in the queue.
+            let mut first: Option<Event> = None;
             let mut block = Block::empty(line.number, line.offset);
             let failed = match parse_line_into(line.bytes, line.number, line.offset, &mut block) {
-                Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
+                Ok(()) => match self.interp.block(&block, &mut |e| {
+                    if first.is_none() {
+                        first = Some(e);
+                    } else {
+                        queue.push_back(e);
+                    }
+                }) {
                     Ok(()) => false,
                     Err(d) => {
                         queue.push_back(Event::Diagnostic(d));
@@ -123,6 +132,10 @@ impl<S: LineSource> Iterator for Stream<S> {
             };
             if failed && self.stop_on_error {
                 self.stopped = true;
+            }
+            if let Some(e) = first {
+                // An error found after the block's first event follows it in the queue.
+                return Some(Ok(e));
             }
         }
     }
