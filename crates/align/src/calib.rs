@@ -41,6 +41,7 @@ impl Pose {
 pub enum Method {
     /// Method I: a sphere through the ball centres; its centre is the rotation centre.
     I,
+
     /// Method III done right: eq. 21 over all poses, least squares.
     Iii,
     /// A nonlinear fit of both axis lines (direction and position) over all poses.
@@ -144,27 +145,41 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
     Ok(())
 }
 
+/// A result that fixes nothing about R (the reason in `notes`).
+fn unfixed(poses: &[Pose], rms: f64, note: String) -> PivotResult {
+    PivotResult {
+        method: Method::Iii,
+        r: None,
+        u_r: None,
+        pivot: None,
+        ball_home: None,
+        rms,
+        condition: f64::MAX,
+        per_pose: poses
+            .iter()
+            .map(|p| PoseResidual {
+                row: p.row,
+                residual: [0.0; 3],
+                norm: 0.0,
+            })
+            .collect(),
+        line: None,
+        axes: None,
+        notes: vec![note],
+    }
+}
+
 /// Method III done right: `[M_k  I]·[R; c] = b_k` stacked over all poses.
 pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError> {
     check_poses(m, poses, 1)?;
     let k = poses.len();
     if k < 2 {
         // Three equations, six unknowns: R can be anything and the centre follows.
-        return Ok(PivotResult {
-            method: Method::Iii,
-            r: None,
-            u_r: None,
-            pivot: None,
-            ball_home: None,
-            rms: 0.0,
-            condition: f64::MAX,
-            per_pose: poses.iter().map(|p| PoseResidual { row: p.row, residual: [0.0; 3], norm: 0.0 }).collect(),
-            line: None,
-            axes: None,
-            notes: vec![
-                "one measured pose fixes nothing: any R fits it, with the centre following; measure the ball at home (A = B = 0) too for the paper's one-pose case (a line of solutions), and at poses turning about both axes to fix R".into(),
-            ],
-        });
+        return Ok(unfixed(
+            poses,
+            0.0,
+            "one measured pose fixes nothing: any R fits it, with the centre following; measure the ball at home (A = B = 0) too for the paper's one-pose case (a line of solutions), and at poses turning about both axes to fix R".into(),
+        ));
     }
     let mut a = DMatrix::zeros(3 * k, 6);
     let mut b = DVector::zeros(3 * k);
@@ -221,21 +236,13 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     let nullity =
         sv.iter().filter(|&&x| x <= 1e-9 * smax).count() + 6usize.saturating_sub(sv.len());
     if nullity > 1 {
-        return Ok(PivotResult {
-            method: Method::Iii,
-            r: None,
-            u_r: None,
-            pivot: None,
-            ball_home: None,
+        let mut r = unfixed(
+            poses,
             rms,
-            condition: f64::MAX,
-            per_pose,
-            line: None,
-            axes: None,
-            notes: vec![format!(
-                "all {k} poses are at the same rotary angles: they fix nothing about R (a {nullity}-dimensional family fits); measure the ball at poses turning about both axes"
-            )],
-        });
+            format!("all {k} poses are at the same rotary angles: they fix nothing about R (a {nullity}-dimensional family fits); measure the ball at poses turning about both axes"),
+        );
+        r.per_pose = per_pose;
+        return Ok(r);
     }
     if smin <= 1e-9 * smax {
         // The null direction: R and c move oppositely along the poses' common axis.

@@ -368,6 +368,23 @@ pub struct PostArgs {
     pub program_number: u32,
 }
 
+/// The head a process uses unless one is named: laser for deposition, spindle for
+/// machining, else the machine's first head.
+fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
+    named.map(str::to_string).unwrap_or_else(|| {
+        let want = if process == "deposit" {
+            "laser"
+        } else {
+            "spindle"
+        };
+        if m.head(want).is_ok() {
+            want.to_string()
+        } else {
+            m.heads[0].name.clone()
+        }
+    })
+}
+
 /// The post configuration from the options.
 pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostConfig, CliError> {
     let process = match a.process.as_str() {
@@ -385,18 +402,7 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
             )))
         }
     };
-    let head_name = a.head.clone().unwrap_or_else(|| {
-        let want = if a.process == "deposit" {
-            "laser"
-        } else {
-            "spindle"
-        };
-        if m.head(want).is_ok() {
-            want.to_string()
-        } else {
-            m.heads[0].name.clone()
-        }
-    });
+    let head_name = default_head(m, &a.process, a.head.as_deref());
     let head = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
     let dialect = match a.dialect.as_deref() {
         Some("fadal") => PostDialect::Fadal,
@@ -723,18 +729,7 @@ pub fn verify(
     json: bool,
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
-    let head_name = head.map(str::to_string).unwrap_or_else(|| {
-        let want = if process == "deposit" {
-            "laser"
-        } else {
-            "spindle"
-        };
-        if m.head(want).is_ok() {
-            want.to_string()
-        } else {
-            m.heads[0].name.clone()
-        }
-    });
+    let head_name = default_head(&m, process, head);
     let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
     let tol = tolerance.unwrap_or(match m.units {
         lampost_kinematics::Units::Inch => 0.001,

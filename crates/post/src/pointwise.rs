@@ -7,15 +7,15 @@
 
 use std::io::{BufRead, Write};
 
-use lampost_gcode::{
-    Dialect, EmitOptions, Emitter, Event, MoveKind, Options, Severity, Stream, Units, AXES,
-};
+use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, Units, AXES};
 use lampost_kinematics::{Joints, Machine, Units as MUnits};
 use nalgebra::{Rotation3, Unit, Vector3};
 
 use crate::error::PostError;
 use crate::frame::Frame;
-use crate::post::{PostConfig, PostDialect, PostReport, Process};
+use crate::post::{
+    axis_letters, code_words, emitter, program_units, write_header, PostConfig, PostReport, Process,
+};
 use crate::verify::VerifyReport;
 
 /// The fastest rotary feed assumed when a move only turns the tool (deg/min), to give it
@@ -250,22 +250,6 @@ impl Ctx<'_> {
     }
 }
 
-fn letters(m: &Machine) -> [u8; 5] {
-    let n = m.axis_names();
-    let l = |s: &str| s.bytes().next().map_or(b'?', |b| b.to_ascii_uppercase());
-    [l(n[0]), l(n[1]), l(n[2]), l(n[3]), l(n[4])]
-}
-
-fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
-    if text.trim().is_empty() {
-        return Ok(Vec::new());
-    }
-    let b = lampost_gcode::parse_line(text.as_bytes(), 1, 0).map_err(|d| {
-        PostError::Options(format!("machine file process code `{text}`: {}", d.kind))
-    })?;
-    Ok(b.words().map(|w| (w.letter, w.value)).collect())
-}
-
 /// Post a path of points with their own tool axis (program frame `frame`).
 pub fn post_points<W: Write>(
     machine: &Machine,
@@ -275,25 +259,9 @@ pub fn post_points<W: Write>(
     cfg: &PostConfig,
     out: W,
 ) -> Result<PostReport, PostError> {
-    let units = match machine.units {
-        MUnits::Inch => Units::Inch,
-        MUnits::Mm => Units::Mm,
-    };
-    let (dialect, renumber) = match cfg.dialect {
-        PostDialect::Fadal => (Dialect::Fadal, cfg.renumber),
-        PostDialect::Iso => (Dialect::Iso, cfg.renumber),
-        PostDialect::Nrc => (Dialect::Iso, Some(cfg.renumber.unwrap_or((10, 10)))),
-    };
-    let mut em = Emitter::new(
-        out,
-        EmitOptions {
-            dialect: Some(dialect),
-            renumber,
-            suppress_modal: true,
-            units,
-        },
-    );
-    let lt = letters(machine);
+    let units = program_units(machine);
+    let mut em = emitter(out, cfg, units);
+    let lt = axis_letters(machine);
     let p = &machine.def.process;
     let (laser_on, laser_off, powder_on, powder_off) = (
         code_words(&p.laser_on)?,
@@ -307,42 +275,7 @@ pub fn post_points<W: Write>(
         .next()
         .unwrap_or(b'S')
         .to_ascii_uppercase();
-    if cfg.dialect == PostDialect::Fadal {
-        em.program_number(
-            cfg.program_number,
-            Some(
-                &cfg.header
-                    .first()
-                    .cloned()
-                    .unwrap_or_default()
-                    .to_uppercase(),
-            ),
-        )?;
-        for h in cfg.header.iter().skip(1) {
-            em.raw_line(&format!("({})", h.replace(['(', ')'], "").to_uppercase()))?;
-        }
-    } else {
-        for h in &cfg.header {
-            em.raw_line(&format!("({})", h.replace(['(', ')'], "")))?;
-        }
-    }
-    let units_code = match (cfg.dialect, units) {
-        (PostDialect::Fadal, Units::Inch) => 70.0,
-        (PostDialect::Fadal, Units::Mm) => 71.0,
-        (_, Units::Inch) => 20.0,
-        (_, Units::Mm) => 21.0,
-    };
-    em.words(
-        &[
-            (b'G', units_code),
-            (b'G', 90.0),
-            (b'G', 94.0),
-            (b'G', 17.0),
-            (b'G', 40.0),
-            (b'G', 80.0),
-        ],
-        None,
-    )?;
+    write_header(&mut em, cfg, units)?;
     if let Process::Machine { spindle, .. } = &cfg.process {
         let mut v = vec![(b'S', *spindle)];
         v.extend(code_words(&p.spindle_on)?);

@@ -104,8 +104,93 @@ impl<W: Write> Write for Counting<W> {
     }
 }
 
+/// The machine's length units as the G-code layer names them.
+pub(crate) fn program_units(m: &Machine) -> Units {
+    match m.units {
+        MUnits::Inch => Units::Inch,
+        MUnits::Mm => Units::Mm,
+    }
+}
+
+/// An emitter for the configured dialect (the NRC dialect numbers every block).
+pub(crate) fn emitter<W: Write>(out: W, cfg: &PostConfig, units: Units) -> Emitter<W> {
+    let (dialect, renumber) = match cfg.dialect {
+        PostDialect::Fadal => (Dialect::Fadal, cfg.renumber),
+        PostDialect::Iso => (Dialect::Iso, cfg.renumber),
+        PostDialect::Nrc => (Dialect::Iso, Some(cfg.renumber.unwrap_or((10, 10)))),
+    };
+    Emitter::new(
+        out,
+        EmitOptions {
+            dialect: Some(dialect),
+            renumber,
+            suppress_modal: true,
+            units,
+        },
+    )
+}
+
+/// The axis letters, file order.
+pub(crate) fn axis_letters(m: &Machine) -> [u8; 5] {
+    let names = m.axis_names();
+    let letter = |n: &str| n.bytes().next().map_or(b'?', |b| b.to_ascii_uppercase());
+    [
+        letter(names[0]),
+        letter(names[1]),
+        letter(names[2]),
+        letter(names[3]),
+        letter(names[4]),
+    ]
+}
+
+/// The program number and header comments, then the modal preamble (units, absolute,
+/// per-minute feed, XY plane, no compensation, no canned cycle).
+pub(crate) fn write_header<W: Write>(
+    em: &mut Emitter<W>,
+    cfg: &PostConfig,
+    units: Units,
+) -> Result<(), PostError> {
+    if cfg.dialect == PostDialect::Fadal {
+        em.program_number(
+            cfg.program_number,
+            Some(
+                &cfg.header
+                    .first()
+                    .cloned()
+                    .unwrap_or_default()
+                    .to_uppercase(),
+            ),
+        )?;
+        for h in cfg.header.iter().skip(1) {
+            em.raw_line(&format!("({})", h.replace(['(', ')'], "").to_uppercase()))?;
+        }
+    } else {
+        for h in &cfg.header {
+            em.raw_line(&format!("({})", h.replace(['(', ')'], "")))?;
+        }
+    }
+    let units_code = match (cfg.dialect, units) {
+        (PostDialect::Fadal, Units::Inch) => 70.0,
+        (PostDialect::Fadal, Units::Mm) => 71.0,
+        (_, Units::Inch) => 20.0,
+        (_, Units::Mm) => 21.0,
+    };
+    em.words(
+        &[
+            (b'G', units_code),
+            (b'G', 90.0),
+            (b'G', 94.0),
+            (b'G', 17.0),
+            (b'G', 40.0),
+            (b'G', 80.0),
+        ],
+        None,
+    )?;
+    Ok(())
+}
+
 /// Words of a code string from the machine file (`"M3"`, `"M71"`, `"G43 H1"`).
-fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
+pub(crate) fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
     if text.trim().is_empty() {
         return Ok(Vec::new());
     }
@@ -344,36 +429,13 @@ pub fn post<W: Write>(
     out: W,
     mut progress: impl FnMut(usize),
 ) -> Result<PostReport, PostError> {
-    let units = match machine.units {
-        MUnits::Inch => Units::Inch,
-        MUnits::Mm => Units::Mm,
-    };
-    let (dialect, renumber) = match cfg.dialect {
-        PostDialect::Fadal => (Dialect::Fadal, cfg.renumber),
-        PostDialect::Iso => (Dialect::Iso, cfg.renumber),
-        PostDialect::Nrc => (Dialect::Iso, Some(cfg.renumber.unwrap_or((10, 10)))),
-    };
-    let em = Emitter::new(
-        Counting { inner: out, n: 0 },
-        EmitOptions {
-            dialect: Some(dialect),
-            renumber,
-            suppress_modal: true,
-            units,
-        },
-    );
+    let units = program_units(machine);
+    let em = emitter(Counting { inner: out, n: 0 }, cfg, units);
     let names = machine.axis_names();
-    let letter = |n: &str| n.bytes().next().map_or(b'?', |b| b.to_ascii_uppercase());
     let mut w = Writer {
         em,
         m: machine,
-        letters: [
-            letter(names[0]),
-            letter(names[1]),
-            letter(names[2]),
-            letter(names[3]),
-            letter(names[4]),
-        ],
+        letters: axis_letters(machine),
         report: PostReport {
             limits_used: names
                 .iter()
@@ -408,43 +470,7 @@ pub fn post<W: Write>(
         .next()
         .unwrap_or(b'S')
         .to_ascii_uppercase();
-    // Header and preamble.
-    if cfg.dialect == PostDialect::Fadal {
-        w.em.program_number(
-            cfg.program_number,
-            Some(
-                &cfg.header
-                    .first()
-                    .cloned()
-                    .unwrap_or_default()
-                    .to_uppercase(),
-            ),
-        )?;
-        for h in cfg.header.iter().skip(1) {
-            w.em.raw_line(&format!("({})", h.replace(['(', ')'], "").to_uppercase()))?;
-        }
-    } else {
-        for h in &cfg.header {
-            w.em.raw_line(&format!("({})", h.replace(['(', ')'], "")))?;
-        }
-    }
-    let units_code = match (cfg.dialect, units) {
-        (PostDialect::Fadal, Units::Inch) => 70.0,
-        (PostDialect::Fadal, Units::Mm) => 71.0,
-        (_, Units::Inch) => 20.0,
-        (_, Units::Mm) => 21.0,
-    };
-    w.words(
-        &[
-            (b'G', units_code),
-            (b'G', 90.0),
-            (b'G', 94.0),
-            (b'G', 17.0),
-            (b'G', 40.0),
-            (b'G', 80.0),
-        ],
-        None,
-    )?;
+    write_header(&mut w.em, cfg, units)?;
     if let Process::Machine {
         tool,
         length_offset,
