@@ -145,6 +145,21 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
     Ok(())
 }
 
+/// Each pose's measured minus modelled ball centre under the intersecting-axes model.
+fn residuals(m: &Machine, poses: &[Pose], r: &P3, c: &P3) -> Vec<PoseResidual> {
+    poses
+        .iter()
+        .map(|p| {
+            let d = p.center - (rot(m, &p.rotary) * r + c);
+            PoseResidual {
+                row: p.row,
+                residual: [d.x, d.y, d.z],
+                norm: d.norm(),
+            }
+        })
+        .collect()
+}
+
 /// A result that fixes nothing about R (the reason in `notes`).
 fn unfixed(poses: &[Pose], rms: f64, note: String) -> PivotResult {
     PivotResult {
@@ -208,17 +223,7 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         .map_err(|_| AlignError::Degenerate("the Method III solve failed".into()))?;
     let r = P3::new(x[0], x[1], x[2]);
     let c = P3::new(x[3], x[4], x[5]);
-    let per_pose: Vec<PoseResidual> = poses
-        .iter()
-        .map(|p| {
-            let d = p.center - (rot(m, &p.rotary) * r + c);
-            PoseResidual {
-                row: p.row,
-                residual: [d.x, d.y, d.z],
-                norm: d.norm(),
-            }
-        })
-        .collect();
+    let per_pose = residuals(m, poses, &r, &c);
     let ss: f64 = per_pose.iter().map(|p| p.norm * p.norm).sum();
     let rms = (ss / (3 * k) as f64).sqrt();
     // Weighted sum of squares, for the uncertainties.
@@ -331,17 +336,7 @@ pub fn method_i(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError> 
         r += rot(m, &p.rotary).transpose() * (p.center - c);
     }
     r /= poses.len() as f64;
-    let per_pose: Vec<PoseResidual> = poses
-        .iter()
-        .map(|p| {
-            let d = p.center - (rot(m, &p.rotary) * r + c);
-            PoseResidual {
-                row: p.row,
-                residual: [d.x, d.y, d.z],
-                norm: d.norm(),
-            }
-        })
-        .collect();
+    let per_pose = residuals(m, poses, &r, &c);
     let ss: f64 = per_pose.iter().map(|p| p.norm * p.norm).sum();
     let home = r + c;
     // The condition of the sphere fit's centre: its uncertainty relative to the noise.

@@ -69,14 +69,9 @@ pub fn sphere_touches(
     opts: &ProbeOptions,
 ) -> Vec<Touch> {
     let r = ball_radius + stylus_radius;
-    let zmin = cap_deg.to_radians().cos();
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (1.0 - zmin) * (i as f64 + 0.5) / n as f64;
-            let rho = (1.0 - z * z).max(0.0).sqrt();
-            let phi = golden * i as f64;
-            let dir = P3::new(rho * phi.cos(), rho * phi.sin(), z);
+    crate::study::cap_points(n, 1.0, cap_deg)
+        .into_iter()
+        .map(|dir| {
             let a = |d: f64| {
                 let p = center + dir * d;
                 [p.x, p.y, p.z]
