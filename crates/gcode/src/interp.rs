@@ -143,6 +143,8 @@ pub struct Interpreter {
     axes_named: u16,
     warned_macro: bool,
     offset_cache: Position,
+    /// Every offset is zero (the common case): positions need no shifting.
+    offset_zero: bool,
 }
 
 /// Words of one block, looked up by letter.
@@ -217,6 +219,7 @@ impl Interpreter {
             axes_named: 0,
             warned_macro: false,
             offset_cache: [0.0; 9],
+            offset_zero: true,
         }
     }
 
@@ -242,6 +245,7 @@ impl Interpreter {
     /// Recompute the cached effective offset after any offset or work system change.
     fn refresh_offset(&mut self) {
         self.offset_cache = self.compute_offset();
+        self.offset_zero = self.offset_cache.iter().all(|&v| v == 0.0);
     }
 
     fn compute_offset(&self) -> Position {
@@ -542,12 +546,12 @@ impl Interpreter {
             }
         }
         // FADAL L words outside canned cycles call subroutines.
-        let canned_block = w
-            .g_in(GGroup::Motion)
-            .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {
-                matches!(c, 730 | 740 | 760 | 810..=890)
-            });
         if let Some(l) = w.word(b'L') {
+            let canned_block = w
+                .g_in(GGroup::Motion)
+                .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {
+                    matches!(c, 730 | 740 | 760 | 810..=890)
+                });
             if !canned_block && !w.has_g(100) {
                 self.warn(
                     b,
@@ -941,6 +945,9 @@ impl Interpreter {
 
     /// `p` (machine frame) in the coordinates of the work system in force.
     fn to_program(&self, p: Position) -> Position {
+        if self.offset_zero {
+            return p;
+        }
         let off = self.offset();
         let mut q = p;
         for a in 0..9 {

@@ -247,7 +247,7 @@ pub fn parse_line_into<'a>(
         }
         _ => {}
     }
-    if is_oword(text[i..].trim_start()) {
+    if matches!(bytes[i], b'o' | b'O') && is_oword(text[i..].trim_start()) {
         block.kind = BlockKind::Macro(MacroKind::LinuxCncOWord);
         return Ok(());
     }
