@@ -735,19 +735,17 @@ pub fn verify(
         lampost_kinematics::Units::Inch => 0.001,
         lampost_kinematics::Units::Mm => 0.02,
     });
-    let f = std::fs::File::open(posted)
-        .map_err(|e| CliError::usage(format!("error: cannot open {posted}: {e}\n")))?;
+    let f = crate::io::open_input(posted)?;
     let v = if is_per_point(place, input) {
         let (frame, pts, _) = per_point_input(place, input.unwrap_or("-"))?;
-        lampost_post::pointwise::verify_points(&m, &pts, &frame, h, BufReader::new(f), tol)
-            .map_err(post_error)?
+        lampost_post::pointwise::verify_points(&m, &pts, &frame, h, f, tol).map_err(post_error)?
     } else {
         let secs = sections(&m, place, input)?;
         let opts = IntendedOptions {
             convert_units: place.convert_units,
             e_extrusion: place.e_extrusion,
         };
-        lampost_post::verify(&m, &secs, h, opts, BufReader::new(f), tol).map_err(post_error)?
+        lampost_post::verify(&m, &secs, h, opts, f, tol).map_err(post_error)?
     };
     let s = if json {
         format!(
