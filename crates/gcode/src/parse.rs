@@ -247,7 +247,7 @@ pub fn parse_line_into<'a>(
         }
         _ => {}
     }
-    if matches!(bytes[i], b'o' | b'O') && is_oword(text[i..].trim_start()) {
+    if bytes.get(i).is_some_and(|c| matches!(c, b'o' | b'O')) && is_oword(text[i..].trim_start()) {
         block.kind = BlockKind::Macro(MacroKind::LinuxCncOWord);
         return Ok(());
     }
@@ -515,6 +515,22 @@ mod tests {
                 "{:?}: {}",
                 String::from_utf8_lossy(s),
                 e.kind
+            );
+        }
+    }
+
+    #[test]
+    fn a_lone_block_delete_is_an_empty_block() {
+        // Found by `cargo xtask fuzz`: `/` alone ran past the end of the line.
+        for s in ["/", "  /", "/ "] {
+            let b = parse_line(s.as_bytes(), 1, 0).expect("parses");
+            assert!(b.block_delete && !b.has_words(), "{s}");
+        }
+        for s in ["o", "O", "/o"] {
+            let e = parse_line(s.as_bytes(), 1, 0).expect_err("a letter alone");
+            assert!(
+                matches!(e.kind, ErrorKind::LetterWithoutNumber('O')),
+                "{s}: {e}"
             );
         }
     }
