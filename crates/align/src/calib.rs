@@ -160,6 +160,20 @@ fn residuals(m: &Machine, poses: &[Pose], r: &P3, c: &P3) -> Vec<PoseResidual> {
         .collect()
 }
 
+/// Column `q` of a Jacobian by central differences with step `h`.
+fn central_difference(
+    f: &dyn Fn(&DVector<f64>) -> DVector<f64>,
+    x: &DVector<f64>,
+    q: usize,
+    h: f64,
+) -> DVector<f64> {
+    let mut xp = x.clone();
+    xp[q] += h;
+    let mut xm = x.clone();
+    xm[q] -= h;
+    (f(&xp) - f(&xm)) / (2.0 * h)
+}
+
 /// A result that fixes nothing about R (the reason in `notes`).
 fn unfixed(poses: &[Pose], rms: f64, note: String) -> PivotResult {
     PivotResult {
@@ -452,20 +466,18 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         r
     };
     let scale = (r0.norm() + 1.0).max(1e-9);
+    // Difference steps: lengths (b₀ and the line offsets) scale with the table, tilts do not.
+    let step = |q: usize| {
+        if q < 3 || (q - 3) % 4 >= 2 {
+            1e-7 * scale
+        } else {
+            1e-7
+        }
+    };
     let jac = |x: &DVector<f64>| -> DMatrix<f64> {
         let mut j = DMatrix::zeros(3 * k, np);
         for q in 0..np {
-            let h = if q < 3 || (q - 3) % 4 >= 2 {
-                1e-7 * scale
-            } else {
-                1e-7
-            };
-            let mut xp = x.clone();
-            xp[q] += h;
-            let mut xm = x.clone();
-            xm[q] -= h;
-            let d = (resid(&xp) - resid(&xm)) / (2.0 * h);
-            j.set_column(q, &d);
+            j.set_column(q, &central_difference(&resid, x, q, step(q)));
         }
         j
     };
@@ -512,16 +524,12 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
             // Propagate to R numerically.
             let mut jr = DMatrix::zeros(3, np);
             for q in 0..np {
-                let h = if q < 3 || (q - 3) % 4 >= 2 {
-                    1e-7 * scale
-                } else {
-                    1e-7
-                };
-                let mut xp = x.clone();
-                xp[q] += h;
-                let mut xm = x.clone();
-                xm[q] -= h;
-                let d = (r_of(&xp) - r_of(&xm)) / (2.0 * h);
+                let d = central_difference(
+                    &|x: &DVector<f64>| DVector::from_column_slice(r_of(x).as_slice()),
+                    &x,
+                    q,
+                    step(q),
+                );
                 for c in 0..3 {
                     jr[(c, q)] = d[c];
                 }

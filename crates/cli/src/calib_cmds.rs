@@ -430,34 +430,10 @@ fn pose_set(m: &Machine, text: Option<&str>) -> Result<Vec<[f64; 2]>, CliError> 
         }
         return Ok(v);
     };
-    let names = [m.rotary[0].name.as_str(), m.rotary[1].name.as_str()];
     let mut out = Vec::new();
     for item in t.split(';').filter(|s| !s.trim().is_empty()) {
-        let mut r = [None, None];
-        for kv in item.split(',') {
-            let (k, v) = kv.split_once('=').ok_or_else(|| CliError::usage(format!("error: --poses: `{kv}` is not NAME=value\n  = help: e.g. --poses \"A=0,B=0;A=90,B=45\"\n")))?;
-            let idx = names
-                .iter()
-                .position(|n| n.eq_ignore_ascii_case(k.trim()))
-                .ok_or_else(|| {
-                    CliError::usage(format!(
-                        "error: --poses: `{}` is not a rotary axis of {} ({})\n",
-                        k.trim(),
-                        m.name,
-                        names.join(", ")
-                    ))
-                })?;
-            let val: f64 = v
-                .trim()
-                .parse()
-                .ok()
-                .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| {
-                    CliError::usage(format!("error: --poses: `{v}` is not a finite number\n"))
-                })?;
-            r[idx] = Some(val);
-        }
-        out.push([r[0].unwrap_or(0.0), r[1].unwrap_or(0.0)]);
+        let v = crate::kin_cmds::joints_arg(m, "--poses", item, &[3, 4], &[])?;
+        out.push([v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)]);
     }
     Ok(out)
 }

@@ -111,7 +111,7 @@ pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
 
 /// `A=1,B=2` against the machine's axis names; `need` lists the indices (0–4) that must
 /// be given, `allowed` those that may.
-fn joints_arg(
+pub(crate) fn joints_arg(
     m: &Machine,
     flag: &str,
     text: &str,

@@ -117,46 +117,8 @@ struct JobSection {
 }
 
 fn index_arg(m: &Machine, text: &str) -> Result<[f64; 2], CliError> {
-    let names = [m.rotary[0].name.as_str(), m.rotary[1].name.as_str()];
-    let mut r = [None, None];
-    for item in text.split(',').filter(|s| !s.trim().is_empty()) {
-        let (k, v) = item.split_once('=').ok_or_else(|| {
-            CliError::usage(format!(
-                "error: --index: `{item}` is not NAME=value\n  = help: e.g. --index {}=45,{}=-45\n",
-                names[0], names[1]
-            ))
-        })?;
-        let i = names
-            .iter()
-            .position(|n| n.eq_ignore_ascii_case(k.trim()))
-            .ok_or_else(|| {
-                CliError::usage(format!(
-                    "error: --index: `{}` is not a rotary axis of {} ({})\n",
-                    k.trim(),
-                    m.name,
-                    names.join(", ")
-                ))
-            })?;
-        let val: f64 = v
-            .trim()
-            .parse()
-            .ok()
-            .filter(|x: &f64| x.is_finite())
-            .ok_or_else(|| {
-                CliError::usage(format!(
-                    "error: --index: `{}` is not a finite number\n",
-                    v.trim()
-                ))
-            })?;
-        r[i] = Some(val);
-    }
-    match r {
-        [Some(a), Some(b)] => Ok([a, b]),
-        _ => Err(CliError::usage(format!(
-            "error: --index needs both {} and {}\n",
-            names[0], names[1]
-        ))),
-    }
+    let v = crate::kin_cmds::joints_arg(m, "--index", text, &[3, 4], &[3, 4])?;
+    Ok([v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)])
 }
 
 fn file_error(file: &str, text: &str, e: &toml::de::Error) -> CliError {

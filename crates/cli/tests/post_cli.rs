@@ -229,7 +229,7 @@ fn bad_input_is_refused_and_nothing_is_written() {
             vec!["--setup", &tilt, &ok],
             "no orientation within the rotary limits",
         ),
-        (vec!["--index", "A=0", &ok], "needs both A and B"),
+        (vec!["--index", "A=0", &ok], "no value for axis B"),
     ];
     for (extra, want) in cases {
         let mut args = vec!["post", "--machine", "fadal-lamp", "-o", &outs];

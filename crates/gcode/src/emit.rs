@@ -89,16 +89,7 @@ pub fn push_fixed(out: &mut String, value: f64, decimals: usize) {
     if decimals < POW.len() && value.is_finite() && value.abs() < 1e15 / POW[decimals] {
         let n = (value * POW[decimals]).round() as i64;
         let mut digits = [b'0'; 24];
-        let mut i = digits.len();
-        let mut m = n.unsigned_abs();
-        loop {
-            i -= 1;
-            digits[i] = b'0' + (m % 10) as u8;
-            m /= 10;
-            if m == 0 {
-                break;
-            }
-        }
+        let mut i = write_digits(&mut digits, n.unsigned_abs());
         // At least one digit before the point (the array is pre-filled with zeros).
         if digits.len() - i <= decimals {
             i = digits.len() - decimals - 1;
@@ -140,22 +131,26 @@ pub fn format_value(
 
 /// Append a whole number.
 fn push_int(out: &mut String, n: i64) {
-    let mut digits = [0u8; 20];
-    let mut i = digits.len();
-    let mut m = n.unsigned_abs();
-    loop {
-        i -= 1;
-        digits[i] = b'0' + (m % 10) as u8;
-        m /= 10;
-        if m == 0 {
-            break;
-        }
-    }
+    let mut digits = [0u8; 24];
+    let i = write_digits(&mut digits, n.unsigned_abs());
     if n < 0 {
         out.push('-');
     }
     for &d in &digits[i..] {
         out.push(char::from(d));
+    }
+}
+
+/// Write `m`'s decimal digits at the end of `buf`; returns where they start.
+fn write_digits(buf: &mut [u8; 24], mut m: u64) -> usize {
+    let mut i = buf.len();
+    loop {
+        i -= 1;
+        buf[i] = b'0' + (m % 10) as u8;
+        m /= 10;
+        if m == 0 {
+            return i;
+        }
     }
 }
 

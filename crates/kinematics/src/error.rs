@@ -86,7 +86,7 @@ impl KinError {
             KinError::MachineFile { .. } => "fix the machine file; `lampost machines show fadal-lamp` prints a complete example",
             KinError::InvalidMachine { .. } => "fix the machine file; axes must be unit vectors, linear axes orthogonal, rotary axes not parallel",
             KinError::UnknownAxis { .. } => "use the machine's axis names (see `lampost machines show`)",
-            KinError::MissingJoint(_) => "give every axis a value, e.g. --joints X=0,Y=0,Z=0,A=0,B=0",
+            KinError::MissingJoint(_) => "give every axis the option names a value, e.g. X=0,Y=0,Z=0,A=0,B=0 for --joints or A=0,B=0 for --index",
             KinError::JointOutOfLimit { .. } => "choose a value within the travel, or correct the limits in the machine file",
             KinError::UnknownHead { .. } => "use one of the machine's heads",
             KinError::Parameter { .. } => "vector parameters take --set NAME=x,y,z, scalars --set NAME=value",
