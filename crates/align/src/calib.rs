@@ -286,24 +286,16 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
                 dir.x, dir.y, dir.z
             )
         };
-        return Ok(PivotResult {
-            method: Method::Iii,
-            r: None,
-            u_r: None,
-            pivot: None,
-            ball_home: None,
-            rms,
-            condition,
-            per_pose,
-            line: Some(SolutionLine {
-                r_point: [r.x, r.y, r.z],
-                pivot_point: [c.x, c.y, c.z],
-                direction: [dir.x, dir.y, dir.z],
-                advice,
-            }),
-            axes: None,
-            notes,
+        let mut res = unfixed(poses, rms, notes.join("; "));
+        res.condition = condition;
+        res.per_pose = per_pose;
+        res.line = Some(SolutionLine {
+            r_point: [r.x, r.y, r.z],
+            pivot_point: [c.x, c.y, c.z],
+            direction: [dir.x, dir.y, dir.z],
+            advice,
         });
+        return Ok(res);
     }
     let dof = (3 * k).saturating_sub(6);
     let u_r = if dof > 0 {

@@ -7,7 +7,7 @@
 
 use std::io::{BufRead, Write};
 
-use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, Units, AXES};
+use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, AXES};
 use lampost_kinematics::{Joints, Machine, Units as MUnits};
 use nalgebra::{Rotation3, Unit, Vector3};
 
@@ -140,6 +140,18 @@ pub fn read_points(text: &str, file: &str) -> Result<Vec<PathPoint>, PostError> 
         return Err(PostError::Empty(file.to_string()));
     }
     Ok(out)
+}
+
+/// The points in the part frame.
+fn place(points: &[PathPoint], frame: &Frame) -> Vec<PathPoint> {
+    points
+        .iter()
+        .map(|q| PathPoint {
+            tip: frame.apply(&q.tip),
+            axis: frame.dir(&q.axis).normalize(),
+            ..*q
+        })
+        .collect()
 }
 
 fn slerp(a: &Vector3<f64>, b: &Vector3<f64>, t: f64) -> Vector3<f64> {
@@ -287,14 +299,7 @@ pub fn post_points<W: Write>(
         tol: cfg.tolerance,
         file: name,
     };
-    let placed: Vec<PathPoint> = points
-        .iter()
-        .map(|q| PathPoint {
-            tip: frame.apply(&q.tip),
-            axis: frame.dir(&q.axis).normalize(),
-            ..*q
-        })
-        .collect();
+    let placed = place(points, frame);
     let mut report = PostReport {
         limits_used: machine
             .axis_names()
@@ -459,18 +464,8 @@ pub fn verify_points<R: BufRead>(
     posted: R,
     tolerance: f64,
 ) -> Result<VerifyReport, PostError> {
-    let units = match machine.units {
-        MUnits::Inch => Units::Inch,
-        MUnits::Mm => Units::Mm,
-    };
-    let placed: Vec<PathPoint> = points
-        .iter()
-        .map(|q| PathPoint {
-            tip: frame.apply(&q.tip),
-            axis: frame.dir(&q.axis).normalize(),
-            ..*q
-        })
-        .collect();
+    let units = program_units(machine);
+    let placed = place(points, frame);
     let names = machine.axis_names();
     let idx = |n: &str| {
         n.bytes()
