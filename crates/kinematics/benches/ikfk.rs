@@ -1,6 +1,7 @@
 //! IK + FK pairs per second on one core (`cargo xtask bench kin`). A baseline in the
 //! same run: the same poses through nalgebra's general `Rotation3` (matrix) products
-//! for FK only, so the ratio shows what the hand-written Rodrigues form saves.
+//! for FK only, with the C library's sin/cos. Then a breakdown: IK alone, FK alone, the
+//! orientation solve alone, and one `atan2_deg` / `sin_cos_deg`.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -55,6 +56,66 @@ fn main() {
             }
             acc
         });
+        let t_ik = best_of(runs, || {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let (tip, axis, near) = &poses[i & 4095];
+                if let Ok(s) = m.inverse(tip, axis, 0, near) {
+                    acc += s.as_slice()[0].joints.linear[0];
+                }
+            }
+            acc
+        });
+        let t_or = best_of(runs, || {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let (_, axis, near) = &poses[i & 4095];
+                if let Some((o, _)) = m.orient(axis, near) {
+                    acc += o[0].degrees[0];
+                }
+            }
+            acc
+        });
+        let t_tr = best_of(runs, || {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let (_, axis, _) = &poses[i & 4095];
+                acc += lampost_kinematics::trig::atan2_deg(axis.x, axis.y);
+            }
+            acc
+        });
+        let t_sc = best_of(runs, || {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let (_, _, near) = &poses[i & 4095];
+                acc += lampost_kinematics::trig::sin_cos_deg(near[0]).0;
+            }
+            acc
+        });
+        let ns = |t: Duration| t.as_secs_f64() * 1e9 / n as f64;
+        println!(
+            "  breakdown: orientation (both branches) {:.1} ns, atan2_deg {:.1} ns, sin_cos_deg {:.1} ns",
+            ns(t_or),
+            ns(t_tr),
+            ns(t_sc)
+        );
+        let t_fk = best_of(runs, || {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let (tip, _, near) = &poses[i & 4095];
+                let j = Joints {
+                    linear: [tip.x, tip.y, tip.z],
+                    rotary: *near,
+                };
+                acc += m.forward(&j, 0).tip.x;
+            }
+            acc
+        });
+        println!(
+            "  breakdown: IK alone (every solution, ranked) {:.1} ns, FK alone {:.1} ns",
+            ns(t_ik),
+            ns(t_fk)
+        );
         let t_base = best_of(runs, || {
             let mut acc = 0.0;
             let (ri, ro) = (&m.rotary[m.inner], &m.rotary[m.outer]);

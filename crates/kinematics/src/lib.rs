@@ -19,6 +19,7 @@
 pub mod def;
 pub mod error;
 pub mod machine;
+pub mod trig;
 
 pub use def::{MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS};
 pub use error::KinError;

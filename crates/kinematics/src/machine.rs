@@ -13,6 +13,7 @@ use nalgebra::Vector3;
 
 use crate::def::{MachineDef, Moves, ParamValue, Units, VecExpr};
 use crate::error::KinError;
+use crate::trig::{atan2_deg, sin_cos_deg};
 
 /// Below this, a vector is taken as parallel to a rotary axis (singular).
 const SINGULAR: f64 = 1e-9;
@@ -160,7 +161,83 @@ pub struct Choice {
     pub branch_flip: bool,
 }
 
-/// A machine ready for kinematics.
+/// How a rotary axis turns points: about a coordinate axis (±X, ±Y, ±Z: six products,
+/// and the coordinate along the axis untouched, exactly) or about a general direction
+/// (Rodrigues' formula).
+#[derive(Debug, Clone, Copy)]
+enum Turn {
+    X(f64),
+    Y(f64),
+    Z(f64),
+    General,
+}
+
+impl Turn {
+    fn of(u: &Vector3<f64>) -> Turn {
+        let pick = |i: usize| {
+            let others_zero = (0..3).all(|j| j == i || u[j] == 0.0);
+            (others_zero && u[i].abs() == 1.0).then_some(u[i])
+        };
+        if let Some(sg) = pick(0) {
+            Turn::X(sg)
+        } else if let Some(sg) = pick(1) {
+            Turn::Y(sg)
+        } else if let Some(sg) = pick(2) {
+            Turn::Z(sg)
+        } else {
+            Turn::General
+        }
+    }
+
+    /// Rotate `p` about `u` (this turn's axis) by the angle with sine `s`, cosine `c`.
+    #[inline]
+    fn apply(self, u: &Vector3<f64>, s: f64, c: f64, p: &Vector3<f64>) -> Vector3<f64> {
+        match self {
+            Turn::X(sg) => {
+                let s = s * sg;
+                Vector3::new(p.x, c * p.y - s * p.z, s * p.y + c * p.z)
+            }
+            Turn::Y(sg) => {
+                let s = s * sg;
+                Vector3::new(c * p.x + s * p.z, p.y, c * p.z - s * p.x)
+            }
+            Turn::Z(sg) => {
+                let s = s * sg;
+                Vector3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z)
+            }
+            Turn::General => rot(u, s, c, p),
+        }
+    }
+}
+
+/// Constants of the orientation solution, fixed per machine (see [`Machine::orient`]).
+#[derive(Debug, Clone)]
+struct Chain {
+    /// How the inner and outer axes turn points.
+    inner_turn: Turn,
+    outer_turn: Turn,
+    /// u₁·u₂.
+    k: f64,
+    /// 1 / (1 − k²), 1 − k² = |u₁ × u₂|².
+    inv_det: f64,
+    /// u₂·t.
+    b: f64,
+    /// (u₂ − k·u₁)/|…|: with `n_hat` an orthonormal basis, positive about u₁, of the
+    /// plane normal to u₁.
+    e1: Vector3<f64>,
+    /// (u₁ × u₂)/|…|.
+    n_hat: Vector3<f64>,
+    /// ψ, the turn about u₂ from t's part normal to u₂ to (u₁ − k·u₂): degrees and
+    /// (sin, cos).
+    psi: f64,
+    psi_sc: (f64, f64),
+    /// The tool axis is parallel to the outer axis (always singular there).
+    outer_singular: bool,
+}
+
+/// A machine ready for kinematics. Build it with [`Machine::new`] (or
+/// [`Machine::builtin`]); the fields are public for reading, and changing them afterwards
+/// leaves constants derived from them stale: build a new machine instead.
 #[derive(Debug, Clone)]
 pub struct Machine {
     /// Name.
@@ -181,6 +258,7 @@ pub struct Machine {
     pub tool_axis: Vector3<f64>,
     /// The definition it was built from (with any `--set` applied).
     pub def: MachineDef,
+    chain: Chain,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -194,7 +272,14 @@ fn rot(u: &Vector3<f64>, s: f64, c: f64, p: &Vector3<f64>) -> Vector3<f64> {
 }
 
 /// Wrap degrees to (−180, 180].
+#[inline]
 fn wrap180(d: f64) -> f64 {
+    // One turn either way covers differences of two wrapped angles, without a branch.
+    if d > -540.0 && d <= 540.0 {
+        let up = f64::from(u8::from(d <= -180.0));
+        let down = f64::from(u8::from(d > 180.0));
+        return d + 360.0 * (up - down);
+    }
     // `d - 360·round(d/360)` instead of `%`, which is a slow libm call.
     let mut x = d - 360.0 * (d / 360.0).round();
     if x > 180.0 {
@@ -453,6 +538,30 @@ impl Machine {
         let [r0, r1]: [Rotary; 2] = rotary
             .try_into()
             .map_err(|_| bad("needs 2 rotary axes".into()))?;
+        let (u1, u2) = ([&r0, &r1][inner].axis, [&r0, &r1][outer].axis);
+        let k = u1.dot(&u2);
+        let n = u1.cross(&u2);
+        let b = u2.dot(&tool_axis);
+        let t_perp = tool_axis - u2 * b;
+        let e2 = (u1 - u2 * k).normalize();
+        let (psi_s, psi_c) = (u2.dot(&t_perp.cross(&e2)), t_perp.dot(&e2));
+        let psi_r = (psi_s * psi_s + psi_c * psi_c).sqrt();
+        let chain = Chain {
+            inner_turn: Turn::of(&u1),
+            outer_turn: Turn::of(&u2),
+            k,
+            inv_det: 1.0 / (1.0 - k * k),
+            b,
+            e1: (u2 - u1 * k).normalize(),
+            n_hat: n.normalize(),
+            psi: psi_s.atan2(psi_c).to_degrees(),
+            psi_sc: if psi_r > 0.0 {
+                (psi_s / psi_r, psi_c / psi_r)
+            } else {
+                (0.0, 1.0)
+            },
+            outer_singular: t_perp.norm() < SINGULAR,
+        };
         Ok(Machine {
             name: def.name.clone(),
             units: def.units,
@@ -463,6 +572,7 @@ impl Machine {
             heads,
             tool_axis,
             def,
+            chain,
         })
     }
 
@@ -541,6 +651,7 @@ impl Machine {
         Ok(())
     }
 
+    #[inline(always)]
     fn linear_within(&self, x: &[f64; 3]) -> bool {
         self.linear
             .iter()
@@ -551,19 +662,34 @@ impl Machine {
     /// Part → machine: where the part point `p` sits with the table at `rotary`.
     pub fn part_to_machine(&self, rotary: &[f64; 2], p: &Vector3<f64>) -> Vector3<f64> {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
-        let (si, ci) = rotary[self.inner].to_radians().sin_cos();
-        let (so, co) = rotary[self.outer].to_radians().sin_cos();
-        let a = rot(&ri.axis, si, ci, &(p - ri.pivot)) + ri.pivot;
-        rot(&ro.axis, so, co, &(a - ro.pivot)) + ro.pivot
+        let (si, ci) = sin_cos_deg(rotary[self.inner]);
+        let (so, co) = sin_cos_deg(rotary[self.outer]);
+        let a = self
+            .chain
+            .inner_turn
+            .apply(&ri.axis, si, ci, &(p - ri.pivot))
+            + ri.pivot;
+        self.chain
+            .outer_turn
+            .apply(&ro.axis, so, co, &(a - ro.pivot))
+            + ro.pivot
     }
 
     /// [`Machine::part_to_machine`] with each rotary given as (sin, cos).
+    #[inline(always)]
     pub fn part_to_machine_sc(&self, sc: &[(f64, f64); 2], p: &Vector3<f64>) -> Vector3<f64> {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
         let (si, ci) = sc[self.inner];
         let (so, co) = sc[self.outer];
-        let a = rot(&ri.axis, si, ci, &(p - ri.pivot)) + ri.pivot;
-        rot(&ro.axis, so, co, &(a - ro.pivot)) + ro.pivot
+        let a = self
+            .chain
+            .inner_turn
+            .apply(&ri.axis, si, ci, &(p - ri.pivot))
+            + ri.pivot;
+        self.chain
+            .outer_turn
+            .apply(&ro.axis, so, co, &(a - ro.pivot))
+            + ro.pivot
     }
 
     /// Machine → part with each rotary given as (sin, cos) of the *inverse* turn
@@ -576,20 +702,35 @@ impl Machine {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
         let (si, ci) = sc_inverse[self.inner];
         let (so, co) = sc_inverse[self.outer];
-        let a = rot(&ro.axis, so, co, &(q - ro.pivot)) + ro.pivot;
-        rot(&ri.axis, si, ci, &(a - ri.pivot)) + ri.pivot
+        let a = self
+            .chain
+            .outer_turn
+            .apply(&ro.axis, so, co, &(q - ro.pivot))
+            + ro.pivot;
+        self.chain
+            .inner_turn
+            .apply(&ri.axis, si, ci, &(a - ri.pivot))
+            + ri.pivot
     }
 
     /// Machine → part: the inverse of [`Machine::part_to_machine`].
     pub fn machine_to_part(&self, rotary: &[f64; 2], q: &Vector3<f64>) -> Vector3<f64> {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
-        let (si, ci) = rotary[self.inner].to_radians().sin_cos();
-        let (so, co) = rotary[self.outer].to_radians().sin_cos();
-        let a = rot(&ro.axis, -so, co, &(q - ro.pivot)) + ro.pivot;
-        rot(&ri.axis, -si, ci, &(a - ri.pivot)) + ri.pivot
+        let (si, ci) = sin_cos_deg(rotary[self.inner]);
+        let (so, co) = sin_cos_deg(rotary[self.outer]);
+        let a = self
+            .chain
+            .outer_turn
+            .apply(&ro.axis, -so, co, &(q - ro.pivot))
+            + ro.pivot;
+        self.chain
+            .inner_turn
+            .apply(&ri.axis, -si, ci, &(a - ri.pivot))
+            + ri.pivot
     }
 
     /// The head's tool point in the machine frame for linear positions `x`.
+    #[inline]
     pub fn head_point(&self, x: &[f64; 3], head: usize) -> Vector3<f64> {
         let mut q = self.heads[head].offset;
         for (l, &v) in self.linear.iter().zip(x) {
@@ -599,6 +740,7 @@ impl Machine {
     }
 
     /// Linear positions that put the head's tool point at machine point `q`.
+    #[inline(always)]
     pub fn linear_for(&self, q: &Vector3<f64>, head: usize) -> [f64; 3] {
         let d = q - self.heads[head].offset;
         [
@@ -609,100 +751,124 @@ impl Machine {
     }
 
     /// Forward kinematics: joints and head → tool tip and tool axis in the part frame.
+    #[inline]
     pub fn forward(&self, j: &Joints, head: usize) -> Pose {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
-        let (si, ci) = j.rotary[self.inner].to_radians().sin_cos();
-        let (so, co) = j.rotary[self.outer].to_radians().sin_cos();
+        let (si, ci) = sin_cos_deg(j.rotary[self.inner]);
+        let (so, co) = sin_cos_deg(j.rotary[self.outer]);
         let q = self.head_point(&j.linear, head);
-        let a = rot(&ro.axis, -so, co, &(q - ro.pivot)) + ro.pivot;
-        let tip = rot(&ri.axis, -si, ci, &(a - ri.pivot)) + ri.pivot;
-        let t = rot(&ro.axis, -so, co, &self.tool_axis);
-        let axis = rot(&ri.axis, -si, ci, &t);
+        let a = self
+            .chain
+            .outer_turn
+            .apply(&ro.axis, -so, co, &(q - ro.pivot))
+            + ro.pivot;
+        let tip = self
+            .chain
+            .inner_turn
+            .apply(&ri.axis, -si, ci, &(a - ri.pivot))
+            + ri.pivot;
+        let t = self
+            .chain
+            .outer_turn
+            .apply(&ro.axis, -so, co, &self.tool_axis);
+        let axis = self.chain.inner_turn.apply(&ri.axis, -si, ci, &t);
         Pose { tip, axis }
     }
 
     /// Rotary angles (degrees, in file order) that turn the part-frame tool axis `v`
     /// (unit) to the machine's tool axis: up to two branches. `near` fills a singular
     /// axis. Returns `None` when no rotation of these axes reaches `v`.
+    ///
+    /// With u₁, u₂ the inner and outer axes, t the tool axis and w = R₁(θ₁)·v =
+    /// R₂(−θ₂)·t: u₁·w = u₁·v = a and u₂·w = u₂·t = b give w = α·u₁ + β·u₂ ± g·n
+    /// (n = u₁ × u₂, k = u₁·u₂, α = (a − k·b)/(1 − k²), β = (b − k·a)/(1 − k²),
+    /// g² = (1 − |α·u₁ + β·u₂|²)/(1 − k²)), the two branches. Normal to u₁, w is
+    /// β·e₁ ± g·n̂ in the orthonormal basis e₁ ∝ u₂ − k·u₁, n̂ ∝ n (positive about u₁),
+    /// so θ₁ = atan2(±g, β) − atan2(v·n̂, v·e₁). Normal to u₂, w is α·e₂ ± g·n̂ with
+    /// e₂ ∝ u₁ − k·u₂ (a basis negative about u₂), so θ₂ = atan2(±g, α) − ψ with ψ the
+    /// machine's fixed turn from t to e₂. Three arctangents for both branches.
+    #[inline(always)]
     pub fn orient(&self, v: &Vector3<f64>, near: &[f64; 2]) -> Option<([Orientation; 2], usize)> {
+        let ch = &self.chain;
         let u1 = &self.rotary[self.inner].axis;
-        let u2 = &self.rotary[self.outer].axis;
-        let t = &self.tool_axis;
         let a = u1.dot(v);
-        let b = u2.dot(t);
-        let k = u1.dot(u2);
-        let det = 1.0 - k * k;
-        let alpha = (a - k * b) / det;
-        let beta = (b - k * a) / det;
-        let base = u1 * alpha + u2 * beta;
-        let n = u1.cross(u2);
-        let g2 = (1.0 - base.norm_squared()) / det;
+        let (k, b) = (ch.k, ch.b);
+        let alpha = (a - k * b) * ch.inv_det;
+        let beta = (b - k * a) * ch.inv_det;
+        let base2 = alpha * alpha + beta * beta + 2.0 * alpha * beta * k;
+        let g2 = (1.0 - base2) * ch.inv_det;
         if g2 < -1e-12 {
             return None;
         }
         let g = g2.max(0.0).sqrt();
-        let v_perp = v - u1 * a;
-        let t_perp = t - u2 * b;
-        let s1 = v_perp.norm() < SINGULAR;
-        let s2 = t_perp.norm() < SINGULAR;
-        let empty = Orientation {
+        // v's part normal to u₁, in the (e₁, n̂) basis: its length is |v − (u₁·v)·u₁|.
+        let (ve, vn) = (ch.e1.dot(v), ch.n_hat.dot(v));
+        let rv2 = ve * ve + vn * vn;
+        let s1 = rv2 < SINGULAR * SINGULAR;
+        let s2 = ch.outer_singular;
+        let count = if g < 1e-12 { 1 } else { 2 };
+        let mut out = [Orientation {
             degrees: [0.0; 2],
             sin_cos: [(0.0, 1.0); 2],
             branch: 0,
-            singular: false,
-        };
-        let mut out = [empty; 2];
-        let count = if g < 1e-12 { 1 } else { 2 };
-        // The rotation taking a to b about u, as (sin, cos), from products alone.
-        let turn = |u: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| {
-            let sn = u.dot(&a.cross(b));
-            let cs = a.dot(b);
-            // Unit-scale values: no overflow to guard against, so no `hypot`.
-            let r = (sn * sn + cs * cs).sqrt();
-            (sn / r, cs / r)
-        };
-        for (i, sign) in [1.0, -1.0].into_iter().take(count).enumerate() {
-            let w = base + n * (sign * g);
-            let mut o = empty;
-            if s1 {
+            singular: s1 || s2,
+        }; 2];
+        // Inner: θ₁ = δ₁ − φ, δ₁ = atan2(±g, β), φ = atan2(v·n̂, v·e₁).
+        if s1 {
+            let sc = sin_cos_deg(near[self.inner]);
+            for o in &mut out {
                 o.degrees[self.inner] = near[self.inner];
-                o.sin_cos[self.inner] = near[self.inner].to_radians().sin_cos();
-            } else {
-                let w_perp = w - u1 * u1.dot(&w);
-                let (sn, cs) = turn(u1, &v_perp, &w_perp);
-                o.degrees[self.inner] = sn.atan2(cs).to_degrees();
-                o.sin_cos[self.inner] = (sn, cs);
+                o.sin_cos[self.inner] = sc;
             }
-            if s2 {
+        } else {
+            let phi = atan2_deg(vn, ve);
+            let d1 = atan2_deg(g, beta);
+            // sin, cos of (±δ₁ − φ) from the unnormalised pairs, one square root and one
+            // division for both (divisions and roots share one slow unit).
+            let inv = 1.0 / ((g * g + beta * beta) * rv2).sqrt();
+            let (sp, cp) = (vn * inv, ve * inv);
+            for (o, sign) in out.iter_mut().zip([1.0, -1.0]) {
+                let sd = sign * g;
+                o.degrees[self.inner] = wrap180(sign * d1 - phi);
+                o.sin_cos[self.inner] = (sd * cp - beta * sp, beta * cp + sd * sp);
+            }
+        }
+        // Outer: θ₂ = δ₂ − ψ, δ₂ = atan2(±g, α).
+        if s2 {
+            let sc = sin_cos_deg(near[self.outer]);
+            for o in &mut out {
                 o.degrees[self.outer] = near[self.outer];
-                o.sin_cos[self.outer] = near[self.outer].to_radians().sin_cos();
-            } else {
-                let w_perp = w - u2 * u2.dot(&w);
-                // R₂(−θ₂) turns t to w, so θ₂ is minus that turn.
-                let (sn, cs) = turn(u2, &t_perp, &w_perp);
-                o.degrees[self.outer] = -sn.atan2(cs).to_degrees();
-                o.sin_cos[self.outer] = (-sn, cs);
+                o.sin_cos[self.outer] = sc;
             }
-            o.branch = if count == 1 {
-                0
-            } else if sign > 0.0 {
-                1
-            } else {
-                -1
-            };
-            o.singular = s1 || s2;
-            out[i] = o;
+        } else {
+            let d2 = atan2_deg(g, alpha);
+            let inv = 1.0 / (g * g + alpha * alpha).sqrt();
+            let (sd, cd) = (g * inv, alpha * inv);
+            let (sp, cp) = ch.psi_sc;
+            for (o, sign) in out.iter_mut().zip([1.0, -1.0]) {
+                let sd = sign * sd;
+                o.degrees[self.outer] = wrap180(sign * d2 - ch.psi);
+                o.sin_cos[self.outer] = (sd * cp - cd * sp, cd * cp + sd * sp);
+            }
+        }
+        if count == 2 {
+            out[0].branch = 1;
+            out[1].branch = -1;
         }
         Some((out, count))
     }
 
     /// The representative of `deg` (mod 360) nearest `near` that lies within the axis'
     /// travel, or the nearest one when none does.
+    #[inline(always)]
     fn place(&self, axis: usize, deg: f64, near: f64) -> (f64, bool) {
         let r = &self.rotary[axis];
         let base = near + wrap180(deg - near);
         match r.limits {
             None => (base, true),
+            // The representative nearest `near` is the answer when it is within travel
+            // (the others are 180° or more further away; an exact tie goes the long way).
+            Some(_) if r.within(base) && (base - near).abs() < 180.0 => (base, true),
             Some(_) => {
                 let mut best: Option<f64> = None;
                 for k in -2..=2 {
@@ -762,6 +928,7 @@ impl Machine {
     /// Inverse kinematics: every joint solution that puts `head`'s tool point at `tip`
     /// with tool axis `axis` (part frame), best first: within limits first, then the
     /// smallest rotary move from `near` (continuous axes wrap, limited ones don't).
+    #[inline]
     pub fn inverse(
         &self,
         tip: &Vector3<f64>,
@@ -776,7 +943,7 @@ impl Machine {
         if n < 1e-12 {
             return Err(KinError::ZeroToolAxis);
         }
-        let v = axis / n;
+        let v = axis * (1.0 / n);
         let Some((raw, count)) = self.orient(&v, near) else {
             return Err(KinError::Unreachable {
                 what: format!(
