@@ -54,7 +54,7 @@ impl Word<'_> {
     /// (`G31.1` gives 311, `G1` gives 10).
     pub fn code(&self) -> Option<u16> {
         let tenths = self.value * 10.0;
-        let rounded = tenths.round();
+        let rounded = crate::emit::round_half_away(tenths);
         if (tenths - rounded).abs() < 1e-6 && (0.0..=65535.0).contains(&rounded) {
             Some(rounded as u16)
         } else {

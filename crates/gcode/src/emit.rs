@@ -53,7 +53,7 @@ pub struct Emitter<W: Write> {
     inverse_time: bool,
     first: bool,
     last_percent: bool,
-    line: String,
+    line: Vec<u8>,
 }
 
 fn trim_decimals(s: &mut String, keep_point: bool) {
@@ -72,40 +72,75 @@ fn trim_decimals(s: &mut String, keep_point: bool) {
     }
 }
 
+/// `f64::round` (halves away from zero, the sign of zero kept) without the C library
+/// call that `round` is on baseline x86-64 (no SSE4.1): truncation by conversion, then
+/// a step when the exact remainder is a half or more. Bit-identical to `f64::round`
+/// (property-tested).
+#[inline]
+pub fn round_half_away(x: f64) -> f64 {
+    // Beyond 2⁵² every f64 is a whole number already; NaN and ±inf pass through.
+    if x.is_nan() || x.abs() >= 4.5e15 {
+        return x.round();
+    }
+    let t = x as i64 as f64;
+    let f = x - t; // exact: the fraction bits of x
+    let r = t + f64::from(u8::from(f >= 0.5)) - f64::from(u8::from(f <= -0.5));
+    r.copysign(x)
+}
+
 /// Format `value` to `decimals` places; `-0.000` becomes `0.000`.
 ///
 /// Values of ordinary size are rounded once, `round(value·10^d)`, and written as an
 /// integer with a decimal point (a fraction of the cost of `format!`); the result is a
 /// correct rounding to the last place, and deterministic.
 pub fn fixed(value: f64, decimals: usize) -> String {
-    let mut s = String::with_capacity(16);
+    let mut s = Vec::with_capacity(16);
     push_fixed(&mut s, value, decimals);
-    s
+    // Only ASCII digits, '-' and '.' are written.
+    String::from_utf8_lossy(&s).into_owned()
 }
 
-/// [`fixed`] appended to `out`, without allocating for values of ordinary size.
-pub fn push_fixed(out: &mut String, value: f64, decimals: usize) {
-    const POW: [f64; 10] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+const POW: [f64; 10] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+
+/// Append a few bytes. A byte loop, not `extend_from_slice`: for the 1–12 bytes of a
+/// number, the library `memcpy` that a slice copy of unknown length becomes costs more
+/// than the copy.
+#[inline]
+fn push_bytes(out: &mut Vec<u8>, bytes: &[u8]) {
+    out.reserve(bytes.len());
+    for &b in bytes {
+        out.push(b);
+    }
+}
+
+/// The digits of `value` rounded to `decimals` places, right-aligned in `digits`, at
+/// least one before the point: (first digit, negative). `None` beyond the fast range.
+#[inline]
+fn fixed_digits(digits: &mut [u8; 24], value: f64, decimals: usize) -> Option<(usize, bool)> {
     if decimals < POW.len() && value.is_finite() && value.abs() < 1e15 / POW[decimals] {
-        let n = (value * POW[decimals]).round() as i64;
-        let mut digits = [b'0'; 24];
-        let mut i = write_digits(&mut digits, n.unsigned_abs());
-        // At least one digit before the point (the array is pre-filled with zeros).
+        let n = round_half_away(value * POW[decimals]) as i64;
+        let mut i = write_digits(digits, n.unsigned_abs());
         if digits.len() - i <= decimals {
             i = digits.len() - decimals - 1;
         }
-        if n < 0 {
-            out.push('-');
+        Some((i, n < 0))
+    } else {
+        None
+    }
+}
+
+/// [`fixed`] appended to `out`, without allocating for values of ordinary size.
+pub fn push_fixed(out: &mut Vec<u8>, value: f64, decimals: usize) {
+    let mut digits = [b'0'; 24];
+    if let Some((i, negative)) = fixed_digits(&mut digits, value, decimals) {
+        if negative {
+            out.push(b'-');
         }
         let split = digits.len() - decimals;
-        for &d in &digits[i..split] {
-            out.push(char::from(d));
-        }
+        push_bytes(out, &digits[i..split]);
         if decimals > 0 {
-            out.push('.');
-            for &d in &digits[split..] {
-                out.push(char::from(d));
-            }
+            out.push(b'.');
+            push_bytes(out, &digits[split..]);
         }
         return;
     }
@@ -113,7 +148,35 @@ pub fn push_fixed(out: &mut String, value: f64, decimals: usize) {
     if s.starts_with('-') && s[1..].bytes().all(|c| c == b'0' || c == b'.') {
         s.remove(0);
     }
-    out.push_str(&s);
+    out.extend_from_slice(s.as_bytes());
+}
+
+/// `value` to `decimals` places with trailing zeros dropped, and the point too unless
+/// `keep_point` (FADAL feeds: `F300.`); `-0` becomes `0`.
+fn push_trimmed(out: &mut Vec<u8>, value: f64, decimals: usize, keep_point: bool) {
+    let mut digits = [b'0'; 24];
+    let Some((i, negative)) = fixed_digits(&mut digits, value, decimals) else {
+        let mut s = format!("{value:.decimals$}");
+        trim_decimals(&mut s, keep_point);
+        out.extend_from_slice(s.as_bytes());
+        return;
+    };
+    let split = digits.len() - decimals;
+    let mut end = digits.len();
+    while end > split && digits[end - 1] == b'0' {
+        end -= 1;
+    }
+    let zero = digits[i..end].iter().all(|&d| d == b'0');
+    if negative && !zero {
+        out.push(b'-');
+    }
+    push_bytes(out, &digits[i..split]);
+    if end > split {
+        out.push(b'.');
+        push_bytes(out, &digits[split..end]);
+    } else if keep_point {
+        out.push(b'.');
+    }
 }
 
 /// The number text of a word in a dialect.
@@ -124,39 +187,58 @@ pub fn format_value(
     register: Option<u8>,
     value: f64,
 ) -> String {
-    let mut s = String::with_capacity(16);
+    let mut s = Vec::with_capacity(16);
     push_value(&mut s, dialect, units, letter, register, value);
-    s
+    String::from_utf8_lossy(&s).into_owned()
 }
 
 /// Append a whole number.
-fn push_int(out: &mut String, n: i64) {
+fn push_int(out: &mut Vec<u8>, n: i64) {
     let mut digits = [0u8; 24];
     let i = write_digits(&mut digits, n.unsigned_abs());
     if n < 0 {
-        out.push('-');
+        out.push(b'-');
     }
-    for &d in &digits[i..] {
-        out.push(char::from(d));
-    }
+    push_bytes(out, &digits[i..]);
 }
 
-/// Write `m`'s decimal digits at the end of `buf`; returns where they start.
+/// "00", "01", … "99".
+const PAIRS: [u8; 200] = {
+    let mut t = [0u8; 200];
+    let mut i = 0;
+    while i < 100 {
+        t[2 * i] = b'0' + (i / 10) as u8;
+        t[2 * i + 1] = b'0' + (i % 10) as u8;
+        i += 1;
+    }
+    t
+};
+
+/// Write `m`'s decimal digits at the end of `buf`, two at a time; returns where they
+/// start.
+#[inline]
 fn write_digits(buf: &mut [u8; 24], mut m: u64) -> usize {
     let mut i = buf.len();
-    loop {
-        i -= 1;
-        buf[i] = b'0' + (m % 10) as u8;
-        m /= 10;
-        if m == 0 {
-            return i;
-        }
+    while m >= 100 {
+        let r = (m % 100) as usize;
+        m /= 100;
+        i -= 2;
+        buf[i..i + 2].copy_from_slice(&PAIRS[2 * r..2 * r + 2]);
     }
+    if m >= 10 {
+        i -= 2;
+        let r = m as usize;
+        buf[i..i + 2].copy_from_slice(&PAIRS[2 * r..2 * r + 2]);
+    } else {
+        i -= 1;
+        buf[i] = b'0' + m as u8;
+    }
+    i
 }
 
 /// [`format_value`] appended to `out`, without allocating for the common words.
 pub fn push_value(
-    out: &mut String,
+    out: &mut Vec<u8>,
     dialect: Dialect,
     units: Units,
     letter: u8,
@@ -167,45 +249,38 @@ pub fn push_value(
         Units::Inch => 4,
         Units::Mm => 3,
     };
-    let whole = value.fract() == 0.0 && value.abs() < 9e15;
+    let slow = |out: &mut Vec<u8>| {
+        out.extend_from_slice(format_value_slow(dialect, units, letter, register, value).as_bytes())
+    };
     match letter {
-        _ if register.is_some() => {
-            out.push_str(&format_value_slow(dialect, units, letter, register, value))
-        }
+        _ if register.is_some() => slow(out),
         b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' | b'R' => {
             push_fixed(out, value, linear_dec)
         }
         b'A' | b'B' | b'C' => push_fixed(out, value, 3),
         b'G' | b'M' => {
-            let t = (value * 10.0).round();
+            let t = round_half_away(value * 10.0);
             if (value * 10.0 - t).abs() < 1e-9 && (0.0..6553.5).contains(&t) {
                 let c = t as i64;
                 push_int(out, c / 10);
                 if c % 10 != 0 {
-                    out.push('.');
+                    out.push(b'.');
                     push_int(out, c % 10);
                 }
             } else {
-                out.push_str(&format_value_slow(dialect, units, letter, register, value));
+                slow(out)
             }
         }
-        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' | b'E' if whole => push_int(out, value as i64),
+        b'N' | b'O' | b'T' | b'H' | b'D' | b'L' | b'E'
+            if value.abs() < 9e15 && value == value as i64 as f64 =>
+        {
+            push_int(out, value as i64)
+        }
         b'F' | b'S' | b'P' | b'E' => {
-            let start = out.len();
-            push_fixed(out, value, 5);
             let forced = dialect == Dialect::Fadal && letter != b'S' && letter != b'P';
-            // Trim trailing zeros in place (and the point, unless forced).
-            while out.len() > start && out.ends_with('0') && out[start..].contains('.') {
-                out.pop();
-            }
-            if out.ends_with('.') && !forced {
-                out.pop();
-            }
-            if &out[start..] == "-0" || &out[start..] == "-0." {
-                out.remove(start);
-            }
+            push_trimmed(out, value, 5, forced)
         }
-        _ => out.push_str(&format_value_slow(dialect, units, letter, register, value)),
+        _ => slow(out),
     }
 }
 
@@ -228,7 +303,7 @@ fn format_value_slow(
         b'R' if register.is_none() => fixed(value, linear_dec),
         b'A' | b'B' | b'C' => fixed(value, 3),
         b'G' | b'M' => {
-            let t = (value * 10.0).round();
+            let t = round_half_away(value * 10.0);
             if (value * 10.0 - t).abs() < 1e-9 && t >= 0.0 {
                 return code_text(t as u16);
             }
@@ -274,7 +349,7 @@ impl<W: Write> Emitter<W> {
             inverse_time: false,
             first: true,
             last_percent: false,
-            line: String::with_capacity(128),
+            line: Vec::with_capacity(128),
         }
     }
 
@@ -299,16 +374,21 @@ impl<W: Write> Emitter<W> {
         Ok(())
     }
 
-    fn push_word(&mut self, letter: u8, register: Option<u8>, value: f64, text: Option<&str>) {
-        if !self.line.is_empty() && !self.line.ends_with('/') {
-            self.line.push(' ');
+    /// A space unless the line is empty or ends in the block-delete slash.
+    fn separate(&mut self) {
+        if self.line.last().is_some_and(|&c| c != b'/') {
+            self.line.push(b' ');
         }
-        self.line.push(char::from(letter));
+    }
+
+    fn push_word(&mut self, letter: u8, register: Option<u8>, value: f64, text: Option<&str>) {
+        self.separate();
+        self.line.push(letter);
         if let Some(r) = register {
-            self.line.push(char::from(b'0' + r));
+            self.line.push(b'0' + r);
         }
         match (self.opts.dialect, text) {
-            (None, Some(t)) => self.line.push_str(t),
+            (None, Some(t)) => self.line.extend_from_slice(t.as_bytes()),
             (Some(d), _) => push_value(&mut self.line, d, self.units, letter, register, value),
             (None, None) => push_value(
                 &mut self.line,
@@ -323,7 +403,7 @@ impl<W: Write> Emitter<W> {
 
     fn track(&mut self, letter: u8, value: f64) {
         if letter == b'G' {
-            let c = (value * 10.0).round() as i64;
+            let c = round_half_away(value * 10.0) as i64;
             match c {
                 200 | 700 => self.units = Units::Inch,
                 210 | 710 => self.units = Units::Mm,
@@ -341,7 +421,7 @@ impl<W: Write> Emitter<W> {
         }
         match letter {
             b'G' => {
-                let c = (value * 10.0).round() as i64;
+                let c = round_half_away(value * 10.0) as i64;
                 matches!(c, 0 | 10 | 20 | 30) && self.motion == Some(c as u16)
             }
             b'F' => !self.inverse_time && self.feed == Some(value),
@@ -351,7 +431,7 @@ impl<W: Write> Emitter<W> {
 
     fn after(&mut self, letter: u8, value: f64) {
         if letter == b'G' {
-            let c = (value * 10.0).round() as i64;
+            let c = round_half_away(value * 10.0) as i64;
             if matches!(c, 0 | 10 | 20 | 30) {
                 self.motion = Some(c as u16);
             } else if (730..=890).contains(&c) {
@@ -363,8 +443,8 @@ impl<W: Write> Emitter<W> {
     }
 
     fn flush_line(&mut self) -> io::Result<()> {
-        self.out.write_all(self.line.as_bytes())?;
-        self.out.write_all(b"\n")?;
+        self.line.push(b'\n');
+        self.out.write_all(&self.line)?;
         self.line.clear();
         Ok(())
     }
@@ -375,12 +455,12 @@ impl<W: Write> Emitter<W> {
         self.line.clear();
         match b.kind {
             BlockKind::Percent => {
-                self.line.push_str(b.raw.trim());
+                self.line.extend_from_slice(b.raw.trim().as_bytes());
                 self.last_percent = true;
                 return self.flush_line();
             }
             BlockKind::Macro(_) => {
-                self.line.push_str(b.raw.trim_end());
+                self.line.extend_from_slice(b.raw.trim_end().as_bytes());
                 self.last_percent = false;
                 return self.flush_line();
             }
@@ -392,7 +472,7 @@ impl<W: Write> Emitter<W> {
         }
         self.last_percent = false;
         if b.block_delete {
-            self.line.push('/');
+            self.line.push(b'/');
         }
         let numbered = self.opts.renumber.is_some() && b.has_words() && b.word(b'O').is_none();
         if numbered {
@@ -416,18 +496,16 @@ impl<W: Write> Emitter<W> {
                     self.push_word(w.letter, w.register, w.value, Some(w.text));
                 }
                 Item::Comment(c) => {
-                    if !self.line.is_empty() && !self.line.ends_with('/') {
-                        self.line.push(' ');
-                    }
+                    self.separate();
                     match c.style {
                         CommentStyle::Paren => {
-                            self.line.push('(');
-                            self.line.push_str(c.text);
-                            self.line.push(')');
+                            self.line.push(b'(');
+                            self.line.extend_from_slice(c.text.as_bytes());
+                            self.line.push(b')');
                         }
                         CommentStyle::Semicolon => {
-                            self.line.push(';');
-                            self.line.push_str(c.text);
+                            self.line.push(b';');
+                            self.line.extend_from_slice(c.text.as_bytes());
                         }
                     }
                 }
@@ -450,6 +528,11 @@ impl<W: Write> Emitter<W> {
                 .saturating_add(self.opts.renumber.map_or(1, |r| r.1));
         }
         for &(l, v) in words {
+            // Axis words (the bulk) need no modal bookkeeping.
+            if l != b'G' && l != b'F' {
+                self.push_word(l, None, v, None);
+                continue;
+            }
             self.track(l, v);
             if self.suppressed(l, v) {
                 continue;
@@ -459,11 +542,12 @@ impl<W: Write> Emitter<W> {
         }
         if let Some(c) = comment {
             if !self.line.is_empty() {
-                self.line.push(' ');
+                self.line.push(b' ');
             }
-            self.line.push('(');
-            self.line.push_str(&c.replace([')', '('], ""));
-            self.line.push(')');
+            self.line.push(b'(');
+            self.line
+                .extend(c.bytes().filter(|&b| b != b'(' && b != b')'));
+            self.line.push(b')');
         }
         self.flush_line()
     }
@@ -502,7 +586,48 @@ pub fn word_text(w: &Word<'_>) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::fixed;
+    use super::{fixed, round_half_away};
+    use proptest::prelude::*;
+
+    #[test]
+    fn rounding_matches_f64_round() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4503599627370495.5,
+            -4503599627370495.5,
+            4.5e15,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            5e-324,
+            -5e-324,
+            12345.5,
+            -0.3,
+        ] {
+            assert_eq!(round_half_away(x).to_bits(), x.round().to_bits(), "{x}");
+        }
+        assert!(round_half_away(f64::NAN).is_nan());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20_000))]
+        #[test]
+        fn rounding_is_bit_identical(x in proptest::num::f64::NORMAL | proptest::num::f64::SUBNORMAL | proptest::num::f64::ZERO, scale in -20i32..20) {
+            let x = x * 10f64.powi(scale);
+            prop_assert_eq!(round_half_away(x).to_bits(), x.round().to_bits());
+            let h = (x * 8.0).trunc() / 8.0 + 0.5;
+            prop_assert_eq!(round_half_away(h).to_bits(), h.round().to_bits());
+        }
+    }
 
     #[test]
     fn fixed_point_formatting() {

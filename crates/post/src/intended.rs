@@ -124,13 +124,14 @@ impl Step {
                 normal,
                 sweep,
             } => {
-                let r = nalgebra::Rotation3::from_axis_angle(
-                    &nalgebra::Unit::new_normalize(normal),
-                    sweep * t,
-                );
+                // Rodrigues' rotation of the start about the (unit) normal through the
+                // centre, plus the helix's rise; inline degree trigonometry.
+                let (s, c) = lampost_kinematics::trig::sin_cos_deg((sweep * t).to_degrees());
                 let rel = self.start - center;
+                let rotated =
+                    rel * c + normal.cross(&rel) * s + normal * (normal.dot(&rel) * (1.0 - c));
                 let h = (self.end - self.start).dot(&normal);
-                center + r * rel + normal * (h * t)
+                center + rotated + normal * (h * t)
             }
             _ => self.start + (self.end - self.start) * t,
         }

@@ -2,7 +2,9 @@
 
 use std::io::Write;
 
+use lampost_gcode::emit::round_half_away;
 use lampost_gcode::{parse_line, Dialect, EmitOptions, Emitter, Units};
+use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Machine, Units as MUnits};
 use nalgebra::Vector3;
 
@@ -206,6 +208,8 @@ struct Writer<'m, W: Write> {
     letters: [u8; 5],
     report: PostReport,
     rot: Option<[f64; 2]>,
+    /// (sin, cos) of `rot` (of 0 before the first index).
+    rot_sc: [(f64, f64); 2],
     branch: Option<i8>,
     laser: bool,
     pos: Option<[f64; 3]>,
@@ -219,6 +223,8 @@ struct Writer<'m, W: Write> {
     fk_axis: Vector3<f64>,
     /// The intended tool axis for the current orientation: (orientation, axis).
     want_axis: Option<(Orient, Vector3<f64>)>,
+    /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
+    axis_err: Option<(Vector3<f64>, Vector3<f64>, f64)>,
     head: usize,
     tol: f64,
     /// 10^decimals of the linear words.
@@ -240,19 +246,22 @@ impl<W: Write> Writer<'_, W> {
     fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
         let Some(step) = self.step else { return Ok(()) };
         let rot = self.rot.unwrap_or([0.0; 2]);
-        let rw = [(rot[0] * 1e3).round() / 1e3, (rot[1] * 1e3).round() / 1e3];
+        let rw = [
+            round_half_away(rot[0] * 1e3) / 1e3,
+            round_half_away(rot[1] * 1e3) / 1e3,
+        ];
         if self.fk_cache.0 != rw {
-            let a = rw[0].to_radians().sin_cos();
-            let b = rw[1].to_radians().sin_cos();
+            let a = sin_cos_deg(rw[0]);
+            let b = sin_cos_deg(rw[1]);
             self.fk_cache = (rw, [(-a.0, a.1), (-b.0, b.1)]);
             let inv = self.fk_cache.1;
             self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
                 - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
         }
         let xw = [
-            (x[0] * self.scale).round() / self.scale,
-            (x[1] * self.scale).round() / self.scale,
-            (x[2] * self.scale).round() / self.scale,
+            round_half_away(x[0] * self.scale) / self.scale,
+            round_half_away(x[1] * self.scale) / self.scale,
+            round_half_away(x[2] * self.scale) / self.scale,
         ];
         let q = self.m.head_point(&xw, self.head);
         let inv = self.fk_cache.1;
@@ -276,6 +285,7 @@ impl<W: Write> Writer<'_, W> {
                 a
             }
             _ => {
+                self.axis_err = None;
                 let a = match step.orient {
                     Orient::ToolAxis => step.program_z.normalize(),
                     Orient::Index(r) => {
@@ -294,7 +304,15 @@ impl<W: Write> Writer<'_, W> {
                 a
             }
         };
-        let ang = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
+        // The axis error changes only with the rotaries or the intended axis.
+        let ang = match self.axis_err {
+            Some((a, w, e)) if a == axis && w == want => e,
+            _ => {
+                let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
+                self.axis_err = Some((axis, want, e));
+                e
+            }
+        };
         let v = &mut self.report.verify;
         v.compared += 1;
         if err > v.max_position_error {
@@ -348,6 +366,10 @@ impl<W: Write> Writer<'_, W> {
         Ok(())
     }
 
+    /// Write a straight move to joints `x`. A feed point is verified against the step
+    /// being written: as its end when `step_end` (the stricter test), else as a point on
+    /// its path.
+    #[allow(clippy::too_many_arguments)]
     fn linear(
         &mut self,
         g: f64,
@@ -355,6 +377,7 @@ impl<W: Write> Writer<'_, W> {
         feed: Option<f64>,
         file: &str,
         line: u32,
+        step_end: bool,
     ) -> Result<(), PostError> {
         let rot = self.rot.unwrap_or([0.0; 2]);
         // A rapid to where the head already is says nothing.
@@ -373,7 +396,7 @@ impl<W: Write> Writer<'_, W> {
         w[n] = (b'G', g);
         n += 1;
         for (k, &v) in x.iter().enumerate() {
-            let q = (v * self.scale).round() as i64;
+            let q = round_half_away(v * self.scale) as i64;
             if self.written[k] != Some(q) {
                 self.written[k] = Some(q);
                 w[n] = (self.letters[k], v);
@@ -391,7 +414,7 @@ impl<W: Write> Writer<'_, W> {
         }
         self.words(&w[..n], None)?;
         if g != 0.0 {
-            self.verify_point(x, false)?;
+            self.verify_point(x, step_end)?;
         }
         self.pos = Some(*x);
         self.report.moves += 1;
@@ -402,23 +425,39 @@ impl<W: Write> Writer<'_, W> {
 /// Rotary positions and the sine and cosine of each.
 type RotaryTrig = ([f64; 2], [(f64, f64); 2]);
 
-/// The joint position of the head over part point `p` with the table at `rot`.
-fn joints(m: &Machine, head: usize, rot: &[f64; 2], p: &Vector3<f64>) -> [f64; 3] {
-    thread_local! {
-        // The rotaries change per section or layer, not per point: keep their sin/cos.
-        static LAST: std::cell::Cell<RotaryTrig> = const { std::cell::Cell::new(([f64::NAN; 2], [(0.0, 1.0); 2])) };
-    }
-    let sc = LAST.with(|c| {
-        let (r, sc) = c.get();
-        if r == *rot {
-            sc
-        } else {
-            let sc = [rot[0].to_radians().sin_cos(), rot[1].to_radians().sin_cos()];
-            c.set((*rot, sc));
-            sc
-        }
-    });
-    m.linear_for(&m.part_to_machine_sc(&sc, p), head)
+/// The joint position of the head over part point `p` with the table at the rotary
+/// position whose (sin, cos) are `sc`.
+#[inline]
+fn joints(m: &Machine, head: usize, sc: &[(f64, f64); 2], p: &Vector3<f64>) -> [f64; 3] {
+    m.linear_for(&m.part_to_machine_sc(sc, p), head)
+}
+
+/// The points of a flat arc in joint space where X or Y is extreme: where the circle
+/// about `c` through `start` crosses the X and Y directions within the sweep (turning
+/// counter-clockwise in joint X/Y when `ccw`; the ends are checked by the caller). Z
+/// along a helix is between the ends'.
+fn arc_extremes(
+    start: &[f64; 3],
+    end: &[f64; 3],
+    c: &[f64; 3],
+    ccw: bool,
+    sweep: f64,
+) -> impl Iterator<Item = [f64; 3]> {
+    let (rx, ry) = (start[0] - c[0], start[1] - c[1]);
+    let r = (rx * rx + ry * ry).sqrt();
+    let a0 = lampost_kinematics::trig::atan2_deg(ry, rx);
+    let sweep_deg = sweep.to_degrees();
+    let z = start[2].max(end[2]);
+    let (cx, cy) = (c[0], c[1]);
+    (0..4).filter_map(move |k| {
+        let dir = 90.0 * f64::from(k);
+        // How far along the turn the direction `dir` comes, in [0, 360).
+        let along = if ccw { dir - a0 } else { a0 - dir }.rem_euclid(360.0);
+        (along <= sweep_deg).then(|| {
+            let (s, co) = lampost_kinematics::trig::sin_cos_deg(dir);
+            [cx + r * co, cy + r * s, z]
+        })
+    })
 }
 
 /// Post `sections` for `machine` to `out`.
@@ -444,6 +483,7 @@ pub fn post<W: Write>(
             ..PostReport::default()
         },
         rot: None,
+        rot_sc: [(0.0, 1.0); 2],
         branch: None,
         laser: false,
         pos: None,
@@ -452,6 +492,7 @@ pub fn post<W: Write>(
         fk_cache: ([f64::NAN; 2], [(0.0, 1.0); 2]),
         fk_axis: Vector3::z(),
         want_axis: None,
+        axis_err: None,
         head: cfg.head,
         tol: cfg.verify_tolerance,
         scale: match units {
@@ -508,6 +549,7 @@ pub fn post<W: Write>(
     let mut cur_key: Option<(usize, usize)> = None;
     let mut need_approach = true;
     let mut arc_warned: Option<usize> = None;
+    let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     w.report.body.0 = w.offset();
     for (count, step) in Intended::new(machine, sections, cfg.intended).enumerate() {
         let step: Step = step?;
@@ -600,8 +642,9 @@ pub fn post<W: Write>(
                 let split = w.offset();
                 w.report.split_points.push(split);
                 w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
-                w.written[z_axis] = Some((clear_z * w.scale).round() as i64);
+                w.written[z_axis] = Some(round_half_away(clear_z * w.scale) as i64);
                 w.rot = Some(rot);
+                w.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
                 w.words(
                     &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
                     Some("INDEX"),
@@ -614,8 +657,14 @@ pub fn post<W: Write>(
             }
         }
         let rot = w.rot.unwrap_or([0.0; 2]);
-        let start = joints(machine, head, &rot, &step.start);
-        let end = joints(machine, head, &rot, &step.end);
+        let sc = w.rot_sc;
+        // A move starts where the last one ended: reuse its joints (same table position).
+        let start = match prev_end {
+            Some((p, j, r)) if p == step.start && r == rot => j,
+            _ => joints(machine, head, &sc, &step.start),
+        };
+        let end = joints(machine, head, &sc, &step.end);
+        prev_end = Some((step.end, end, rot));
         // The move being written, for the in-process verification (approach included).
         w.step = if matches!(step.kind, StepKind::Rapid) {
             None
@@ -638,12 +687,12 @@ pub fn post<W: Write>(
             };
             let mut above = target;
             above[z_axis] = clear_z;
-            w.linear(0.0, &above, None, file, step.line)?;
+            w.linear(0.0, &above, None, file, step.line, false)?;
             if !matches!(step.kind, StepKind::Rapid) {
                 let mut near_start = start;
                 near_start[z_axis] = (start[z_axis] + approach_lift).min(clear_z);
-                w.linear(0.0, &near_start, None, file, step.line)?;
-                w.linear(1.0, &start, Some(step.feed), file, step.line)?;
+                w.linear(0.0, &near_start, None, file, step.line, false)?;
+                w.linear(1.0, &start, Some(step.feed), file, step.line, false)?;
             }
             need_approach = false;
         }
@@ -656,7 +705,7 @@ pub fn post<W: Write>(
                 }
                 let split = w.offset();
                 w.report.split_points.push(split);
-                w.linear(0.0, &end, None, file, step.line)?;
+                w.linear(0.0, &end, None, file, step.line, true)?;
             }
             StepKind::Feed | StepKind::Arc { .. } => {
                 if let Process::Deposit { power } = cfg.process {
@@ -689,16 +738,15 @@ pub fn post<W: Write>(
                             && sweep.abs() <= std::f64::consts::TAU + 1e-12
                             && handed.abs() > 0.5;
                         if keep {
-                            let c = joints(machine, head, &rot, &center);
+                            let c = joints(machine, head, &sc, &center);
                             // Counter-clockwise seen from machine +Z, then in joint axes.
                             let ccw_machine = (sweep > 0.0) == (up > 0.0);
                             let ccw = ccw_machine == (handed > 0.0);
                             let g = if ccw { 3.0 } else { 2.0 };
                             let rot_now = w.rot.unwrap_or([0.0; 2]);
                             w.check(file, step.line, &end, &rot_now)?;
-                            // Travel limits along the arc: check its extreme points too.
-                            for k in 1..8 {
-                                let q = joints(machine, head, &rot, &step.at(f64::from(k) / 8.0));
+                            // Travel limits along the arc: its extreme points in X and Y.
+                            for q in arc_extremes(&start, &end, &c, ccw, sweep.abs()) {
                                 w.check(file, step.line, &q, &rot_now)?;
                             }
                             w.note_limits(&[end[0], end[1], end[2], rot_now[0], rot_now[1]]);
@@ -714,12 +762,12 @@ pub fn post<W: Write>(
                             w.words(&words, None)?;
                             // The arc's midpoint (joint space) and its end, as written.
                             let mid_part = step.at(0.5);
-                            let mid = joints(machine, head, &rot, &mid_part);
+                            let mid = joints(machine, head, &sc, &mid_part);
                             w.verify_point(&mid, false)?;
                             w.verify_point(&end, true)?;
                             let scale = w.scale;
                             for (slot, v) in w.written.iter_mut().zip(end) {
-                                *slot = Some((v * scale).round() as i64);
+                                *slot = Some(round_half_away(v * scale) as i64);
                             }
                             w.pos = Some(end);
                             w.report.moves += 1;
@@ -733,12 +781,12 @@ pub fn post<W: Write>(
                             let n = ((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize)
                                 .clamp(1, 100_000);
                             for k in 1..=n {
-                                let q = joints(machine, head, &rot, &step.at(k as f64 / n as f64));
-                                w.linear(1.0, &q, Some(step.feed), file, step.line)?;
+                                let q = joints(machine, head, &sc, &step.at(k as f64 / n as f64));
+                                w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
                             }
                         }
                     }
-                    _ => w.linear(1.0, &end, Some(step.feed), file, step.line)?,
+                    _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
                 }
             }
         }

@@ -32,7 +32,7 @@ pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
             normal,
             sweep,
         } => {
-            let n = normal.normalize();
+            let n = normal; // unit by construction
             let rel = step.start - center;
             let rel = rel - n * n.dot(&rel);
             let q = p - center;
@@ -41,14 +41,24 @@ pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
                 return (p - step.start).norm().min((p - step.end).norm());
             }
             // Angle of p from the start, right-handed about n, into the sweep's range.
-            let mut ang = n.dot(&rel.cross(&qp)).atan2(rel.dot(&qp));
+            let mut ang = lampost_kinematics::trig::atan2_deg(n.dot(&rel.cross(&qp)), rel.dot(&qp))
+                .to_radians();
             let tau = std::f64::consts::TAU;
             if sweep < 0.0 && ang > 0.0 {
                 ang -= tau;
             } else if sweep > 0.0 && ang < 0.0 {
                 ang += tau;
             }
-            let t = (ang / sweep).clamp(0.0, 1.0);
+            let t_raw = ang / sweep;
+            let rise = (step.end - step.start).dot(&n);
+            if rise.abs() <= 1e-12 * (1.0 + rel.norm()) && t_raw > 0.0 && t_raw < 1.0 {
+                // A flat arc, p beside its interior: the nearest point of the arc is the
+                // nearest of its circle, at p's angle.
+                let radial = qp.norm() - rel.norm();
+                let off_plane = n.dot(&q);
+                return (radial * radial + off_plane * off_plane).sqrt();
+            }
+            let t = t_raw.clamp(0.0, 1.0);
             // Near the ends of multi-turn or near-full arcs, try the neighbours too.
             [t, 0.0, 1.0]
                 .iter()
@@ -124,7 +134,10 @@ pub fn verify<R: BufRead>(
         let sc = if r == rot {
             sc
         } else {
-            let sc = [rot[0].to_radians().sin_cos(), rot[1].to_radians().sin_cos()];
+            let sc = [
+                lampost_kinematics::trig::sin_cos_deg(rot[0]),
+                lampost_kinematics::trig::sin_cos_deg(rot[1]),
+            ];
             cache.set((rot, sc));
             sc
         };
