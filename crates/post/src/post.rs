@@ -460,13 +460,67 @@ fn arc_extremes(
     })
 }
 
+/// Steps handed from the reading thread to the writing one at a time.
+const BATCH: usize = 1024;
+
 /// Post `sections` for `machine` to `out`.
+///
+/// Two threads: one reads, parses and interprets the input into intended steps (the
+/// [`Intended`] iterator), the other solves, writes and verifies them, in order; batches
+/// of [`BATCH`] steps pass between them over a bounded channel (at most four in flight,
+/// so memory stays flat). The output is the same as one thread's, byte for byte: the
+/// writing side consumes the steps in input order. An error on either side stops both.
 pub fn post<W: Write>(
     machine: &Machine,
     sections: &[Section],
     cfg: &PostConfig,
     out: W,
+    progress: impl FnMut(usize),
+) -> Result<PostReport, PostError> {
+    let opts = cfg.intended;
+    std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Result<Step, PostError>>>(4);
+        let reader = scope.spawn(move || {
+            let mut batch = Vec::with_capacity(BATCH);
+            for step in Intended::new(machine, sections, opts) {
+                let failed = step.is_err();
+                batch.push(step);
+                if batch.len() == BATCH || failed {
+                    let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                    // A closed channel: the writer stopped (an error); so do we.
+                    if tx.send(full).is_err() || failed {
+                        return;
+                    }
+                }
+            }
+            if !batch.is_empty() {
+                let _ = tx.send(batch);
+            }
+        });
+        let result = post_steps(
+            machine,
+            sections,
+            cfg,
+            out,
+            progress,
+            rx.into_iter().flatten(),
+        );
+        // `post_steps` has dropped the receiver, so the reader cannot block on a send.
+        if let Err(panic) = reader.join() {
+            std::panic::resume_unwind(panic);
+        }
+        result
+    })
+}
+
+/// [`post`] over steps from any source, on the calling thread.
+fn post_steps<W: Write>(
+    machine: &Machine,
+    sections: &[Section],
+    cfg: &PostConfig,
+    out: W,
     mut progress: impl FnMut(usize),
+    steps: impl Iterator<Item = Result<Step, PostError>>,
 ) -> Result<PostReport, PostError> {
     let units = program_units(machine);
     let em = emitter(Counting { inner: out, n: 0 }, cfg, units);
@@ -551,7 +605,7 @@ pub fn post<W: Write>(
     let mut arc_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     w.report.body.0 = w.offset();
-    for (count, step) in Intended::new(machine, sections, cfg.intended).enumerate() {
+    for (count, step) in steps.enumerate() {
         let step: Step = step?;
         if count % 4096 == 0 {
             progress(count);
