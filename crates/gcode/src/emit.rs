@@ -53,8 +53,16 @@ pub struct Emitter<W: Write> {
     inverse_time: bool,
     first: bool,
     last_percent: bool,
+    /// Finished lines not yet handed to `out`, then the line being built (from `start`):
+    /// one `write_all` per [`FLUSH_AT`] bytes instead of one per line.
     line: Vec<u8>,
+    start: usize,
+    /// Bytes handed to `out` so far.
+    flushed: u64,
 }
+
+/// Output is handed to the writer in pieces of about this size.
+const FLUSH_AT: usize = 1 << 16;
 
 fn trim_decimals(s: &mut String, keep_point: bool) {
     if s.contains('.') {
@@ -349,7 +357,9 @@ impl<W: Write> Emitter<W> {
             inverse_time: false,
             first: true,
             last_percent: false,
-            line: Vec::with_capacity(128),
+            line: Vec::with_capacity(FLUSH_AT + 1024),
+            start: 0,
+            flushed: 0,
         }
     }
 
@@ -357,7 +367,9 @@ impl<W: Write> Emitter<W> {
         if self.first {
             self.first = false;
             if self.opts.dialect == Some(Dialect::Fadal) && !starts_with_percent {
-                self.out.write_all(b"%\n")?;
+                self.line.truncate(self.start);
+                self.line.extend_from_slice(b"%");
+                self.flush_line()?;
             }
         }
         Ok(())
@@ -366,17 +378,18 @@ impl<W: Write> Emitter<W> {
     /// Write a FADAL/ISO program number line, `O1234 (comment)`.
     pub fn program_number(&mut self, number: u32, comment: Option<&str>) -> io::Result<()> {
         self.frame_start(false)?;
+        self.line.truncate(self.start);
         match comment {
-            Some(c) => writeln!(self.out, "O{number} ({})", c.replace([')', '('], "")),
-            None => writeln!(self.out, "O{number}"),
+            Some(c) => write!(self.line, "O{number} ({})", c.replace([')', '('], "")),
+            None => write!(self.line, "O{number}"),
         }?;
         self.last_percent = false;
-        Ok(())
+        self.flush_line()
     }
 
     /// A space unless the line is empty or ends in the block-delete slash.
     fn separate(&mut self) {
-        if self.line.last().is_some_and(|&c| c != b'/') {
+        if self.line.len() > self.start && self.line.last().is_some_and(|&c| c != b'/') {
             self.line.push(b' ');
         }
     }
@@ -444,15 +457,19 @@ impl<W: Write> Emitter<W> {
 
     fn flush_line(&mut self) -> io::Result<()> {
         self.line.push(b'\n');
-        self.out.write_all(&self.line)?;
-        self.line.clear();
+        if self.line.len() >= FLUSH_AT {
+            self.out.write_all(&self.line)?;
+            self.flushed += self.line.len() as u64;
+            self.line.clear();
+        }
+        self.start = self.line.len();
         Ok(())
     }
 
     /// Write one parsed block.
     pub fn block(&mut self, b: &Block<'_>) -> io::Result<()> {
         self.frame_start(b.kind == BlockKind::Percent)?;
-        self.line.clear();
+        self.line.truncate(self.start);
         match b.kind {
             BlockKind::Percent => {
                 self.line.extend_from_slice(b.raw.trim().as_bytes());
@@ -518,7 +535,7 @@ impl<W: Write> Emitter<W> {
     /// dialect (or ISO spelling when verbatim), numbered when renumbering.
     pub fn words(&mut self, words: &[(u8, f64)], comment: Option<&str>) -> io::Result<()> {
         self.frame_start(false)?;
-        self.line.clear();
+        self.line.truncate(self.start);
         self.last_percent = false;
         if self.opts.renumber.is_some() && !words.is_empty() {
             let n = self.next_n;
@@ -541,7 +558,7 @@ impl<W: Write> Emitter<W> {
             self.push_word(l, None, v, None);
         }
         if let Some(c) = comment {
-            if !self.line.is_empty() {
+            if self.line.len() > self.start {
                 self.line.push(b' ');
             }
             self.line.push(b'(');
@@ -552,28 +569,37 @@ impl<W: Write> Emitter<W> {
         self.flush_line()
     }
 
-    /// The writer underneath.
+    /// The writer underneath (output is handed to it in pieces: see [`Emitter::position`]).
     pub fn get_ref(&self) -> &W {
         &self.out
+    }
+
+    /// Bytes of output so far, every finished line counted (handed to the writer or not).
+    pub fn position(&self) -> u64 {
+        self.flushed + self.start as u64
     }
 
     /// Write a line verbatim (a macro statement such as `#PRINT …`, or a comment line).
     pub fn raw_line(&mut self, text: &str) -> io::Result<()> {
         self.frame_start(false)?;
         self.last_percent = false;
-        self.out.write_all(text.trim_end().as_bytes())?;
-        self.out.write_all(b"\n")
+        self.line.truncate(self.start);
+        self.line.extend_from_slice(text.trim_end().as_bytes());
+        self.flush_line()
     }
 
     /// Close the program (FADAL: a final `%` if the last line was not one) and hand
     /// back the writer.
     pub fn finish(mut self) -> io::Result<W> {
         if self.opts.dialect == Some(Dialect::Fadal) && !self.last_percent {
+            self.line.truncate(self.start);
             if self.first {
-                self.out.write_all(b"%\n")?;
+                self.line.extend_from_slice(b"%\n");
             }
-            self.out.write_all(b"%\n")?;
+            self.line.extend_from_slice(b"%\n");
         }
+        self.out.write_all(&self.line)?;
+        self.line.clear();
         self.out.flush()?;
         Ok(self.out)
     }
@@ -616,6 +642,32 @@ mod tests {
             assert_eq!(round_half_away(x).to_bits(), x.round().to_bits(), "{x}");
         }
         assert!(round_half_away(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn long_output_is_handed_over_whole_and_counted() {
+        // Far more than one buffer's worth: every line once, in order, and the position
+        // equal to the bytes produced.
+        let mut em = super::Emitter::new(
+            Vec::new(),
+            super::EmitOptions {
+                dialect: Some(super::Dialect::Iso),
+                ..Default::default()
+            },
+        );
+        let mut want = String::new();
+        for i in 0..40_000 {
+            let x = f64::from(i) * 0.001;
+            em.words(&[(b'X', x), (b'Y', -x)], None).expect("writes");
+            want.push_str(&format!("X{x:.3} Y{:.3}\n", -x).replace("Y-0.000", "Y0.000"));
+            if i % 997 == 0 {
+                em.raw_line("(NOTE)").expect("writes");
+                want.push_str("(NOTE)\n");
+                assert_eq!(em.position(), want.len() as u64);
+            }
+        }
+        let out = em.finish().expect("finishes");
+        assert_eq!(String::from_utf8(out).expect("ascii"), want);
     }
 
     proptest! {

@@ -90,22 +90,6 @@ pub struct PostReport {
     pub verify: crate::verify::VerifyReport,
 }
 
-struct Counting<W> {
-    inner: W,
-    n: u64,
-}
-
-impl<W: Write> Write for Counting<W> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let k = self.inner.write(buf)?;
-        self.n += k as u64;
-        Ok(k)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
-
 /// The machine's length units as the G-code layer names them.
 pub(crate) fn program_units(m: &Machine) -> Units {
     match m.units {
@@ -203,7 +187,7 @@ pub(crate) fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
 }
 
 struct Writer<'m, W: Write> {
-    em: Emitter<Counting<W>>,
+    em: Emitter<W>,
     m: &'m Machine,
     letters: [u8; 5],
     report: PostReport,
@@ -232,9 +216,9 @@ struct Writer<'m, W: Write> {
 }
 
 impl<W: Write> Writer<'_, W> {
-    /// Bytes written so far (the emitter writes each block through at once).
+    /// Bytes of output so far (finished lines).
     fn offset(&self) -> u64 {
-        self.em.get_ref().n
+        self.em.position()
     }
 
     fn words(&mut self, w: &[(u8, f64)], comment: Option<&str>) -> Result<(), PostError> {
@@ -523,7 +507,7 @@ fn post_steps<W: Write>(
     steps: impl Iterator<Item = Result<Step, PostError>>,
 ) -> Result<PostReport, PostError> {
     let units = program_units(machine);
-    let em = emitter(Counting { inner: out, n: 0 }, cfg, units);
+    let em = emitter(out, cfg, units);
     let names = machine.axis_names();
     let mut w = Writer {
         em,
