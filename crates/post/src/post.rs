@@ -201,7 +201,7 @@ struct Writer<'m, W: Write> {
     written: [Option<i64>; 3],
     /// The feed step being written, for the in-process verification.
     step: Option<Step>,
-    /// (rotary as written, sin/cos of minus it), for forward kinematics.
+    /// (rotary, sin/cos of minus it as written), for forward kinematics.
     fk_cache: RotaryTrig,
     /// The tool axis (part frame) at the written rotary, with `fk_cache`.
     fk_axis: Vector3<f64>,
@@ -213,6 +213,8 @@ struct Writer<'m, W: Write> {
     tol: f64,
     /// 10^decimals of the linear words.
     scale: f64,
+    /// The current step's end as planned: (joints, (distance, written tip)).
+    planned_check: Option<([f64; 3], (f64, Vector3<f64>))>,
 }
 
 impl<W: Write> Writer<'_, W> {
@@ -230,30 +232,24 @@ impl<W: Write> Writer<'_, W> {
     fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
         let Some(step) = self.step else { return Ok(()) };
         let rot = self.rot.unwrap_or([0.0; 2]);
-        let rw = [
-            round_half_away(rot[0] * 1e3) / 1e3,
-            round_half_away(rot[1] * 1e3) / 1e3,
-        ];
-        if self.fk_cache.0 != rw {
-            let a = sin_cos_deg(rw[0]);
-            let b = sin_cos_deg(rw[1]);
-            self.fk_cache = (rw, [(-a.0, a.1), (-b.0, b.1)]);
-            let inv = self.fk_cache.1;
+        if self.fk_cache.0 != rot {
+            let (_, inv) = written_rotary(&rot);
+            self.fk_cache = (rot, inv);
             self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
                 - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
         }
-        let xw = [
-            round_half_away(x[0] * self.scale) / self.scale,
-            round_half_away(x[1] * self.scale) / self.scale,
-            round_half_away(x[2] * self.scale) / self.scale,
-        ];
-        let q = self.m.head_point(&xw, self.head);
-        let inv = self.fk_cache.1;
-        let tip = self.m.machine_to_part_sc(&inv, &q);
-        let err = if is_end {
-            (tip - step.end).norm()
-        } else {
-            crate::verify::dist_to(&step, &tip)
+        let (err, tip) = match self.planned_check {
+            // Worked out on the reading thread, for these very joints.
+            Some((j, c)) if is_end && j == *x => c,
+            _ => {
+                let tip = written_tip(self.m, self.head, self.scale, &self.fk_cache.1, x);
+                let err = if is_end {
+                    (tip - step.end).norm()
+                } else {
+                    crate::verify::dist_to(&step, &tip)
+                };
+                (err, tip)
+            }
         };
         if err > self.tol {
             return Err(PostError::Verify(format!(
@@ -444,6 +440,91 @@ fn arc_extremes(
     })
 }
 
+/// The rotary position as written (to the output's 0.001°), and the (sin, cos) of minus
+/// each angle, for forward kinematics of the written program.
+fn written_rotary(rot: &[f64; 2]) -> RotaryTrig {
+    let rw = [
+        round_half_away(rot[0] * 1e3) / 1e3,
+        round_half_away(rot[1] * 1e3) / 1e3,
+    ];
+    let a = sin_cos_deg(rw[0]);
+    let b = sin_cos_deg(rw[1]);
+    (rw, [(-a.0, a.1), (-b.0, b.1)])
+}
+
+/// The tool tip where the joints `x` put it, as the text gives them (rounded to the
+/// output resolution `scale`), with the table at the written rotary position (`inv`:
+/// [`written_rotary`]'s sines and cosines).
+fn written_tip(
+    m: &Machine,
+    head: usize,
+    scale: f64,
+    inv: &[(f64, f64); 2],
+    x: &[f64; 3],
+) -> Vector3<f64> {
+    let xw = [
+        round_half_away(x[0] * scale) / scale,
+        round_half_away(x[1] * scale) / scale,
+        round_half_away(x[2] * scale) / scale,
+    ];
+    m.machine_to_part_sc(inv, &m.head_point(&xw, head))
+}
+
+/// What the reading thread works out ahead for a step under a fixed index: the joints
+/// of its end and, for a feed, how far the written end lands from the intended one.
+/// The writer uses them when its table position is the same `rot` (it always is for an
+/// index; it re-solves otherwise).
+#[derive(Debug, Clone, Copy)]
+struct PlannedEnd {
+    rot: [f64; 2],
+    joints: [f64; 3],
+    /// (distance, written tip) of the end, for feeds.
+    check: Option<(f64, Vector3<f64>)>,
+}
+
+/// Plans ends on the reading thread (see [`PlannedEnd`]).
+struct Planner<'m> {
+    m: &'m Machine,
+    head: usize,
+    scale: f64,
+    /// rotary → (sin, cos) of it, and of minus it as written.
+    cache: Option<([f64; 2], [(f64, f64); 2], [(f64, f64); 2])>,
+}
+
+impl Planner<'_> {
+    fn plan(&mut self, step: &Step) -> Option<PlannedEnd> {
+        let Orient::Index(rot) = step.orient else {
+            return None;
+        };
+        let (sc, inv) = match self.cache {
+            Some((r, sc, inv)) if r == rot => (sc, inv),
+            _ => {
+                let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
+                let inv = written_rotary(&rot).1;
+                self.cache = Some((rot, sc, inv));
+                (sc, inv)
+            }
+        };
+        let joints = joints(self.m, self.head, &sc, &step.end);
+        let check = (!matches!(step.kind, StepKind::Rapid)).then(|| {
+            let tip = written_tip(self.m, self.head, self.scale, &inv, &joints);
+            ((tip - step.end).norm(), tip)
+        });
+        Some(PlannedEnd { rot, joints, check })
+    }
+}
+
+/// A step and what the reading thread planned for it.
+type Planned = (Step, Option<PlannedEnd>);
+
+/// Output resolution factor of the linear words: 10^decimals.
+fn linear_scale(units: Units) -> f64 {
+    match units {
+        Units::Inch => 1e4,
+        Units::Mm => 1e3,
+    }
+}
+
 /// Steps handed from the reading thread to the writing one at a time.
 const BATCH: usize = 1024;
 
@@ -462,25 +543,37 @@ pub fn post<W: Write>(
     progress: impl FnMut(usize),
 ) -> Result<PostReport, PostError> {
     let opts = cfg.intended;
+    let mut planner = Planner {
+        m: machine,
+        head: cfg.head,
+        scale: linear_scale(program_units(machine)),
+        cache: None,
+    };
     std::thread::scope(|scope| {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Result<Step, PostError>>>(4);
-        let reader = scope.spawn(move || {
-            let mut batch = Vec::with_capacity(BATCH);
-            for step in Intended::new(machine, sections, opts) {
-                let failed = step.is_err();
-                batch.push(step);
-                if batch.len() == BATCH || failed {
-                    let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                    // A closed channel: the writer stopped (an error); so do we.
-                    if tx.send(full).is_err() || failed {
-                        return;
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Result<Planned, PostError>>>(4);
+        let reader = std::thread::Builder::new()
+            .name("lampost-read".into())
+            .spawn_scoped(scope, move || {
+                let mut batch = Vec::with_capacity(BATCH);
+                for step in Intended::new(machine, sections, opts) {
+                    let failed = step.is_err();
+                    batch.push(step.map(|s| {
+                        let end = planner.plan(&s);
+                        (s, end)
+                    }));
+                    if batch.len() == BATCH || failed {
+                        let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                        // A closed channel: the writer stopped (an error); so do we.
+                        if tx.send(full).is_err() || failed {
+                            return;
+                        }
                     }
                 }
-            }
-            if !batch.is_empty() {
-                let _ = tx.send(batch);
-            }
-        });
+                if !batch.is_empty() {
+                    let _ = tx.send(batch);
+                }
+            })
+            .map_err(|e| PostError::Io(format!("cannot start the reading thread: {e}")))?;
         let result = post_steps(
             machine,
             sections,
@@ -504,7 +597,7 @@ fn post_steps<W: Write>(
     cfg: &PostConfig,
     out: W,
     mut progress: impl FnMut(usize),
-    steps: impl Iterator<Item = Result<Step, PostError>>,
+    steps: impl Iterator<Item = Result<Planned, PostError>>,
 ) -> Result<PostReport, PostError> {
     let units = program_units(machine);
     let em = emitter(out, cfg, units);
@@ -533,10 +626,8 @@ fn post_steps<W: Write>(
         axis_err: None,
         head: cfg.head,
         tol: cfg.verify_tolerance,
-        scale: match units {
-            Units::Inch => 1e4,
-            Units::Mm => 1e3,
-        },
+        scale: linear_scale(units),
+        planned_check: None,
     };
     let p = &machine.def.process;
     let laser_on = code_words(&p.laser_on)?;
@@ -590,7 +681,7 @@ fn post_steps<W: Write>(
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     w.report.body.0 = w.offset();
     for (count, step) in steps.enumerate() {
-        let step: Step = step?;
+        let (step, planned): Planned = step?;
         if count % 4096 == 0 {
             progress(count);
         }
@@ -701,7 +792,12 @@ fn post_steps<W: Write>(
             Some((p, j, r)) if p == step.start && r == rot => j,
             _ => joints(machine, head, &sc, &step.start),
         };
-        let end = joints(machine, head, &sc, &step.end);
+        let planned = planned.filter(|p| p.rot == rot);
+        let end = match planned {
+            Some(p) => p.joints,
+            None => joints(machine, head, &sc, &step.end),
+        };
+        w.planned_check = planned.and_then(|p| p.check.map(|c| (p.joints, c)));
         prev_end = Some((step.end, end, rot));
         // The move being written, for the in-process verification (approach included).
         w.step = if matches!(step.kind, StepKind::Rapid) {
