@@ -24,6 +24,7 @@ pub mod trig;
 pub use def::{MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS};
 pub use error::KinError;
 pub use machine::{
-    Choice, Head, Joints, Linear, Machine, Orientation, Placed, Pose, Rotary, Solution, Solutions,
+    Affine, Choice, Head, Joints, Linear, Machine, Orientation, Placed, Pose, Rotary, Solution,
+    Solutions,
 };
 pub use nalgebra::Vector3;

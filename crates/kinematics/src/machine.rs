@@ -9,7 +9,7 @@
 //! Forward: tip = T⁻¹(q), axis = (R₂R₁)⁻¹·t. Inverse: solve R₁(θ₁)·v = R₂(−θ₂)·t for the
 //! two cones' intersections (two branches), then X from `T(tip)`.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 use crate::def::{MachineDef, Moves, ParamValue, Units, VecExpr};
 use crate::error::KinError;
@@ -233,6 +233,30 @@ struct Chain {
     psi_sc: (f64, f64),
     /// The tool axis is parallel to the outer axis (always singular there).
     outer_singular: bool,
+}
+
+/// An affine map `p ↦ A·p + b` (see [`Machine::joints_map`], [`Machine::tip_map`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Affine {
+    /// Linear part.
+    pub a: Matrix3<f64>,
+    /// Offset.
+    pub b: Vector3<f64>,
+}
+
+impl Affine {
+    /// The image of `p`.
+    #[inline]
+    pub fn apply(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.a * p + self.b
+    }
+
+    /// The image of `p` as an array.
+    #[inline]
+    pub fn apply3(&self, p: &[f64; 3]) -> [f64; 3] {
+        let q = self.apply(&Vector3::new(p[0], p[1], p[2]));
+        [q.x, q.y, q.z]
+    }
 }
 
 /// A machine ready for kinematics. Build it with [`Machine::new`] (or
@@ -727,6 +751,65 @@ impl Machine {
             .inner_turn
             .apply(&ri.axis, -si, ci, &(a - ri.pivot))
             + ri.pivot
+    }
+
+    /// Joints for part points with the table fixed at the rotary position whose
+    /// (sin, cos) are `sc`: the affine map `p ↦ A·p + b` equal to
+    /// `linear_for(part_to_machine_sc(sc, p), head)` (to rounding), for posting many
+    /// points at one index.
+    pub fn joints_map(&self, sc: &[(f64, f64); 2], head: usize) -> Affine {
+        // The rotation part turns directions (no pivots); the offset is where the part
+        // origin goes.
+        let turn = |d: &Vector3<f64>| {
+            let (si, ci) = sc[self.inner];
+            let (so, co) = sc[self.outer];
+            let a = self
+                .chain
+                .inner_turn
+                .apply(&self.rotary[self.inner].axis, si, ci, d);
+            self.chain
+                .outer_turn
+                .apply(&self.rotary[self.outer].axis, so, co, &a)
+        };
+        let r = Matrix3::from_columns(&[
+            turn(&Vector3::x()),
+            turn(&Vector3::y()),
+            turn(&Vector3::z()),
+        ]);
+        let sd = Matrix3::from_rows(&[
+            (self.linear[0].dir * self.linear[0].sign).transpose(),
+            (self.linear[1].dir * self.linear[1].sign).transpose(),
+            (self.linear[2].dir * self.linear[2].sign).transpose(),
+        ]);
+        let origin = self.part_to_machine_sc(sc, &Vector3::zeros());
+        Affine {
+            a: sd * r,
+            b: sd * (origin - self.heads[head].offset),
+        }
+    }
+
+    /// Part-frame tool tips for joints with the table fixed at the rotary position
+    /// whose *inverse* turns have (sin, cos) `sc_inverse` (as for
+    /// [`Machine::machine_to_part_sc`]): the affine map `x ↦ A·x + b` equal to
+    /// `machine_to_part_sc(sc_inverse, head_point(x, head))` (to rounding).
+    pub fn tip_map(&self, sc_inverse: &[(f64, f64); 2], head: usize) -> Affine {
+        let turn = |d: &Vector3<f64>| {
+            let (si, ci) = sc_inverse[self.inner];
+            let (so, co) = sc_inverse[self.outer];
+            let a = self
+                .chain
+                .outer_turn
+                .apply(&self.rotary[self.outer].axis, so, co, d);
+            self.chain
+                .inner_turn
+                .apply(&self.rotary[self.inner].axis, si, ci, &a)
+        };
+        let cols: [Vector3<f64>; 3] =
+            std::array::from_fn(|k| turn(&(self.linear[k].dir * self.linear[k].sign)));
+        Affine {
+            a: Matrix3::from_columns(&cols),
+            b: self.machine_to_part_sc(sc_inverse, &self.heads[head].offset),
+        }
     }
 
     /// The head's tool point in the machine frame for linear positions `x`.

@@ -303,6 +303,29 @@ proptest! {
         }
     }
 
+    /// The affine maps for a fixed index equal the chain they stand for.
+    #[test]
+    fn index_maps_equal_the_chain(mi in 0usize..3, u in prop::array::uniform5(0.0f64..1.0), p in prop::array::uniform3(-300.0f64..300.0)) {
+        let m = &machines()[mi];
+        let j = random_joints(m, u);
+        let sc = [lampost_kinematics::trig::sin_cos_deg(j.rotary[0]), lampost_kinematics::trig::sin_cos_deg(j.rotary[1])];
+        let p = lampost_kinematics::Vector3::new(p[0], p[1], p[2]);
+        for head in 0..m.heads.len() {
+            let direct = m.linear_for(&m.part_to_machine_sc(&sc, &p), head);
+            let mapped = m.joints_map(&sc, head).apply3(&[p.x, p.y, p.z]);
+            for k in 0..3 {
+                prop_assert!((direct[k] - mapped[k]).abs() < 1e-12 * (1.0 + p.norm()), "{:?} vs {:?}", direct, mapped);
+            }
+            let inv = [(-sc[0].0, sc[0].1), (-sc[1].0, sc[1].1)];
+            let tip = m.machine_to_part_sc(&inv, &m.head_point(&j.linear, head));
+            let mapped = m.tip_map(&inv, head).apply(&lampost_kinematics::Vector3::new(j.linear[0], j.linear[1], j.linear[2]));
+            prop_assert!((tip - mapped).norm() < 1e-12 * (1.0 + tip.norm()));
+            // And the tip map undoes the joints map.
+            let back = m.tip_map(&inv, head).apply(&lampost_kinematics::Vector3::from(direct));
+            prop_assert!((back - p).norm() < 1e-10 * (1.0 + p.norm()));
+        }
+    }
+
     /// The chooser never flips a branch when a same-branch solution within limits exists.
     #[test]
     fn chooser_keeps_the_branch(mi in 0usize..3, u in prop::array::uniform5(0.0f64..1.0), prev in prop::sample::select(vec![1i8, -1])) {

@@ -5,7 +5,7 @@ use std::io::Write;
 use lampost_gcode::emit::round_half_away;
 use lampost_gcode::{parse_line, Dialect, EmitOptions, Emitter, Units};
 use lampost_kinematics::trig::sin_cos_deg;
-use lampost_kinematics::{Machine, Units as MUnits};
+use lampost_kinematics::{Affine, Machine, Units as MUnits};
 use nalgebra::Vector3;
 
 use crate::error::PostError;
@@ -192,8 +192,8 @@ struct Writer<'m, W: Write> {
     letters: [u8; 5],
     report: PostReport,
     rot: Option<[f64; 2]>,
-    /// (sin, cos) of `rot` (of 0 before the first index).
-    rot_sc: [(f64, f64); 2],
+    /// The joints map of `rot` (of 0 before the first index).
+    jmap: Affine,
     branch: Option<i8>,
     laser: bool,
     pos: Option<[f64; 3]>,
@@ -201,8 +201,8 @@ struct Writer<'m, W: Write> {
     written: [Option<i64>; 3],
     /// The feed step being written, for the in-process verification.
     step: Option<Step>,
-    /// (rotary, sin/cos of minus it as written), for forward kinematics.
-    fk_cache: RotaryTrig,
+    /// (rotary, tip map of it as written), for forward kinematics.
+    fk_cache: ([f64; 2], Affine),
     /// The tool axis (part frame) at the written rotary, with `fk_cache`.
     fk_axis: Vector3<f64>,
     /// The intended tool axis for the current orientation: (orientation, axis).
@@ -214,7 +214,7 @@ struct Writer<'m, W: Write> {
     /// 10^decimals of the linear words.
     scale: f64,
     /// The current step's end as planned: (joints, (distance, written tip)).
-    planned_check: Option<([f64; 3], (f64, Vector3<f64>))>,
+    planned_check: Option<([f64; 3], EndCheck)>,
 }
 
 impl<W: Write> Writer<'_, W> {
@@ -234,7 +234,7 @@ impl<W: Write> Writer<'_, W> {
         let rot = self.rot.unwrap_or([0.0; 2]);
         if self.fk_cache.0 != rot {
             let (_, inv) = written_rotary(&rot);
-            self.fk_cache = (rot, inv);
+            self.fk_cache = (rot, self.m.tip_map(&inv, self.head));
             self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
                 - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
         }
@@ -242,7 +242,7 @@ impl<W: Write> Writer<'_, W> {
             // Worked out on the reading thread, for these very joints.
             Some((j, c)) if is_end && j == *x => c,
             _ => {
-                let tip = written_tip(self.m, self.head, self.scale, &self.fk_cache.1, x);
+                let tip = written_tip(&self.fk_cache.1, self.scale, x);
                 let err = if is_end {
                     (tip - step.end).norm()
                 } else {
@@ -405,11 +405,12 @@ impl<W: Write> Writer<'_, W> {
 /// Rotary positions and the sine and cosine of each.
 type RotaryTrig = ([f64; 2], [(f64, f64); 2]);
 
-/// The joint position of the head over part point `p` with the table at the rotary
-/// position whose (sin, cos) are `sc`.
+/// The joints that put the head over part point `p`, by the index's joints map
+/// ([`Machine::joints_map`]).
 #[inline]
-fn joints(m: &Machine, head: usize, sc: &[(f64, f64); 2], p: &Vector3<f64>) -> [f64; 3] {
-    m.linear_for(&m.part_to_machine_sc(sc, p), head)
+fn joints(map: &Affine, p: &Vector3<f64>) -> [f64; 3] {
+    let q = map.apply(p);
+    [q.x, q.y, q.z]
 }
 
 /// The points of a flat arc in joint space where X or Y is extreme: where the circle
@@ -453,21 +454,23 @@ fn written_rotary(rot: &[f64; 2]) -> RotaryTrig {
 }
 
 /// The tool tip where the joints `x` put it, as the text gives them (rounded to the
-/// output resolution `scale`), with the table at the written rotary position (`inv`:
-/// [`written_rotary`]'s sines and cosines).
-fn written_tip(
-    m: &Machine,
-    head: usize,
-    scale: f64,
-    inv: &[(f64, f64); 2],
-    x: &[f64; 3],
-) -> Vector3<f64> {
-    let xw = [
+/// output resolution `scale`), by the written index's tip map ([`Machine::tip_map`]).
+#[inline]
+fn written_tip(tips: &Affine, scale: f64, x: &[f64; 3]) -> Vector3<f64> {
+    tips.apply(&Vector3::new(
         round_half_away(x[0] * scale) / scale,
         round_half_away(x[1] * scale) / scale,
         round_half_away(x[2] * scale) / scale,
-    ];
-    m.machine_to_part_sc(inv, &m.head_point(&xw, head))
+    ))
+}
+
+/// The joints map of `rot` and the tip map of `rot` as written.
+fn index_maps(m: &Machine, head: usize, rot: &[f64; 2]) -> (Affine, Affine) {
+    let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
+    (
+        m.joints_map(&sc, head),
+        m.tip_map(&written_rotary(rot).1, head),
+    )
 }
 
 /// What the reading thread works out ahead for a step under a fixed index: the joints
@@ -478,17 +481,20 @@ fn written_tip(
 struct PlannedEnd {
     rot: [f64; 2],
     joints: [f64; 3],
-    /// (distance, written tip) of the end, for feeds.
-    check: Option<(f64, Vector3<f64>)>,
+    /// The end's check, for feeds.
+    check: Option<EndCheck>,
 }
+
+/// How far a written end lands from the intended one, and the written tip.
+type EndCheck = (f64, Vector3<f64>);
 
 /// Plans ends on the reading thread (see [`PlannedEnd`]).
 struct Planner<'m> {
     m: &'m Machine,
     head: usize,
     scale: f64,
-    /// rotary → (sin, cos) of it, and of minus it as written.
-    cache: Option<([f64; 2], [(f64, f64); 2], [(f64, f64); 2])>,
+    /// rotary → its joints map and written tip map.
+    cache: Option<([f64; 2], Affine, Affine)>,
 }
 
 impl Planner<'_> {
@@ -496,18 +502,17 @@ impl Planner<'_> {
         let Orient::Index(rot) = step.orient else {
             return None;
         };
-        let (sc, inv) = match self.cache {
-            Some((r, sc, inv)) if r == rot => (sc, inv),
+        let (jm, tm) = match self.cache {
+            Some((r, jm, tm)) if r == rot => (jm, tm),
             _ => {
-                let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
-                let inv = written_rotary(&rot).1;
-                self.cache = Some((rot, sc, inv));
-                (sc, inv)
+                let (jm, tm) = index_maps(self.m, self.head, &rot);
+                self.cache = Some((rot, jm, tm));
+                (jm, tm)
             }
         };
-        let joints = joints(self.m, self.head, &sc, &step.end);
+        let joints = joints(&jm, &step.end);
         let check = (!matches!(step.kind, StepKind::Rapid)).then(|| {
-            let tip = written_tip(self.m, self.head, self.scale, &inv, &joints);
+            let tip = written_tip(&tm, self.scale, &joints);
             ((tip - step.end).norm(), tip)
         });
         Some(PlannedEnd { rot, joints, check })
@@ -614,13 +619,13 @@ fn post_steps<W: Write>(
             ..PostReport::default()
         },
         rot: None,
-        rot_sc: [(0.0, 1.0); 2],
+        jmap: index_maps(machine, cfg.head, &[0.0; 2]).0,
         branch: None,
         laser: false,
         pos: None,
         written: [None; 3],
         step: None,
-        fk_cache: ([f64::NAN; 2], [(0.0, 1.0); 2]),
+        fk_cache: ([f64::NAN; 2], index_maps(machine, cfg.head, &[0.0; 2]).1),
         fk_axis: Vector3::z(),
         want_axis: None,
         axis_err: None,
@@ -773,7 +778,7 @@ fn post_steps<W: Write>(
                 w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
                 w.written[z_axis] = Some(round_half_away(clear_z * w.scale) as i64);
                 w.rot = Some(rot);
-                w.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
+                w.jmap = index_maps(machine, head, &rot).0;
                 w.words(
                     &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
                     Some("INDEX"),
@@ -786,16 +791,16 @@ fn post_steps<W: Write>(
             }
         }
         let rot = w.rot.unwrap_or([0.0; 2]);
-        let sc = w.rot_sc;
+        let jm = w.jmap;
         // A move starts where the last one ended: reuse its joints (same table position).
         let start = match prev_end {
             Some((p, j, r)) if p == step.start && r == rot => j,
-            _ => joints(machine, head, &sc, &step.start),
+            _ => joints(&jm, &step.start),
         };
         let planned = planned.filter(|p| p.rot == rot);
         let end = match planned {
             Some(p) => p.joints,
-            None => joints(machine, head, &sc, &step.end),
+            None => joints(&jm, &step.end),
         };
         w.planned_check = planned.and_then(|p| p.check.map(|c| (p.joints, c)));
         prev_end = Some((step.end, end, rot));
@@ -872,7 +877,7 @@ fn post_steps<W: Write>(
                             && sweep.abs() <= std::f64::consts::TAU + 1e-12
                             && handed.abs() > 0.5;
                         if keep {
-                            let c = joints(machine, head, &sc, &center);
+                            let c = joints(&jm, &center);
                             // Counter-clockwise seen from machine +Z, then in joint axes.
                             let ccw_machine = (sweep > 0.0) == (up > 0.0);
                             let ccw = ccw_machine == (handed > 0.0);
@@ -896,7 +901,7 @@ fn post_steps<W: Write>(
                             w.words(&words, None)?;
                             // The arc's midpoint (joint space) and its end, as written.
                             let mid_part = step.at(0.5);
-                            let mid = joints(machine, head, &sc, &mid_part);
+                            let mid = joints(&jm, &mid_part);
                             w.verify_point(&mid, false)?;
                             w.verify_point(&end, true)?;
                             let scale = w.scale;
@@ -915,7 +920,7 @@ fn post_steps<W: Write>(
                             let n = ((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize)
                                 .clamp(1, 100_000);
                             for k in 1..=n {
-                                let q = joints(machine, head, &sc, &step.at(k as f64 / n as f64));
+                                let q = joints(&jm, &step.at(k as f64 / n as f64));
                                 w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
                             }
                         }
