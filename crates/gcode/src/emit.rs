@@ -227,6 +227,16 @@ const PAIRS: [u8; 200] = {
 #[inline]
 fn write_digits(buf: &mut [u8; 24], mut m: u64) -> usize {
     let mut i = buf.len();
+    // Most numbers fit 32 bits, where division by 100 is a cheaper multiply.
+    if let Ok(mut m32) = u32::try_from(m) {
+        while m32 >= 100 {
+            let r = (m32 % 100) as usize;
+            m32 /= 100;
+            i -= 2;
+            buf[i..i + 2].copy_from_slice(&PAIRS[2 * r..2 * r + 2]);
+        }
+        m = u64::from(m32);
+    }
     while m >= 100 {
         let r = (m % 100) as usize;
         m /= 100;
