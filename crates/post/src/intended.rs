@@ -159,6 +159,9 @@ pub struct Intended<'a> {
     moves_in_section: usize,
     last_e: f64,
     done: bool,
+    /// The last move's end, in the program and the part frame, with its (section,
+    /// layer): the next move starts there, so its start needs no transform.
+    last_end: Option<(Vector3<f64>, Vector3<f64>, usize, usize)>,
 }
 
 impl std::fmt::Debug for Intended<'_> {
@@ -190,6 +193,7 @@ impl<'a> Intended<'a> {
             moves_in_section: 0,
             last_e: 0.0,
             done: false,
+            last_end: None,
         }
     }
 
@@ -381,13 +385,23 @@ impl<'a> Intended<'a> {
                     what: "G93 inverse-time feeds in the planar input cannot be posted".into(),
                 });
             }
+            let start_part = match self.last_end {
+                Some((raw, part, sec_i, layer))
+                    if raw == start && sec_i == self.idx && layer == self.layer =>
+                {
+                    part
+                }
+                _ => frame.apply(&start),
+            };
+            let end_part = frame.apply(&end);
+            self.last_end = Some((end, end_part, self.idx, self.layer));
             return Ok(Some(Step {
                 section: self.idx,
                 layer: self.layer,
                 line: m.line,
                 kind,
-                start: frame.apply(&start),
-                end: frame.apply(&end),
+                start: start_part,
+                end: end_part,
                 feed,
                 deposit,
                 program_z: frame.dir(&Vector3::z()),
