@@ -230,7 +230,12 @@ impl<W: Write> Writer<'_, W> {
     /// Check a written feed point: the joints as the text gives them (rounded to the
     /// output resolution), through forward kinematics, against the intended move.
     fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
-        let Some(step) = self.step else { return Ok(()) };
+        // The fields used, not the whole step (a copy of it costs as much as the check).
+        let Some((line, orient, program_z)) =
+            self.step.as_ref().map(|s| (s.line, s.orient, s.program_z))
+        else {
+            return Ok(());
+        };
         let rot = self.rot.unwrap_or([0.0; 2]);
         if self.fk_cache.0 != rot {
             let (_, inv) = written_rotary(&rot);
@@ -243,10 +248,10 @@ impl<W: Write> Writer<'_, W> {
             Some((j, c)) if is_end && j == *x => c,
             _ => {
                 let tip = written_tip(&self.fk_cache.1, self.scale, x);
-                let err = if is_end {
-                    (tip - step.end).norm()
-                } else {
-                    crate::verify::dist_to(&step, &tip)
+                let err = match &self.step {
+                    Some(step) if is_end => (tip - step.end).norm(),
+                    Some(step) => crate::verify::dist_to(step, &tip),
+                    None => 0.0,
                 };
                 (err, tip)
             }
@@ -254,20 +259,20 @@ impl<W: Write> Writer<'_, W> {
         if err > self.tol {
             return Err(PostError::Verify(format!(
                 "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
-                step.line, tip.x, tip.y, tip.z, self.tol
+                line, tip.x, tip.y, tip.z, self.tol
             )));
         }
         let axis = self.fk_axis;
         let want = match self.want_axis {
             Some((o, a))
-                if o == step.orient && (matches!(o, Orient::Index(_)) || a == step.program_z) =>
+                if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) =>
             {
                 a
             }
             _ => {
                 self.axis_err = None;
-                let a = match step.orient {
-                    Orient::ToolAxis => step.program_z.normalize(),
+                let a = match orient {
+                    Orient::ToolAxis => program_z.normalize(),
                     Orient::Index(r) => {
                         self.m
                             .forward(
@@ -280,7 +285,7 @@ impl<W: Write> Writer<'_, W> {
                             .axis
                     }
                 };
-                self.want_axis = Some((step.orient, a));
+                self.want_axis = Some((orient, a));
                 a
             }
         };
@@ -297,13 +302,13 @@ impl<W: Write> Writer<'_, W> {
         v.compared += 1;
         if err > v.max_position_error {
             v.max_position_error = err;
-            v.worst_line = step.line;
+            v.worst_line = line;
         }
         v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
         if ang > 0.01 {
             return Err(PostError::Verify(format!(
                 "input line {}: the tool axis is {ang:.4}° off",
-                step.line
+                line
             )));
         }
         Ok(())
