@@ -264,11 +264,7 @@ impl<W: Write> Writer<'_, W> {
         }
         let axis = self.fk_axis;
         let want = match self.want_axis {
-            Some((o, a))
-                if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) =>
-            {
-                a
-            }
+            Some((o, a)) if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) => a,
             _ => {
                 self.axis_err = None;
                 let a = match orient {
@@ -966,4 +962,61 @@ fn post_steps<W: Write>(
     let report = w.report;
     w.em.finish()?;
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::arc_extremes;
+
+    /// The extremes found are those of a dense sampling of the arc (to the sampling's
+    /// resolution), for arcs both ways, short and long, starting anywhere.
+    #[test]
+    fn arc_extremes_match_dense_sampling() {
+        let c = [3.0, -2.0, 1.0];
+        let r = 5.0;
+        for start_deg in [0.0, 10.0, 89.0, 90.0, 135.0, 180.0, 271.0, 359.0] {
+            for sweep_deg in [5.0, 45.0, 90.0, 170.0, 181.0, 270.0, 359.0, 360.0] {
+                for ccw in [true, false] {
+                    let a0 = f64::to_radians(start_deg);
+                    let start = [c[0] + r * a0.cos(), c[1] + r * a0.sin(), 1.0];
+                    let dir = if ccw { 1.0 } else { -1.0 };
+                    let a1 = a0 + dir * f64::to_radians(sweep_deg);
+                    let end = [c[0] + r * a1.cos(), c[1] + r * a1.sin(), 1.0];
+                    let mut lo = [start[0].min(end[0]), start[1].min(end[1])];
+                    let mut hi = [start[0].max(end[0]), start[1].max(end[1])];
+                    for q in arc_extremes(&start, &end, &c, ccw, f64::to_radians(sweep_deg)) {
+                        for k in 0..2 {
+                            lo[k] = lo[k].min(q[k]);
+                            hi[k] = hi[k].max(q[k]);
+                        }
+                    }
+                    let (mut slo, mut shi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+                    for i in 0..=20_000 {
+                        let a = a0 + dir * f64::to_radians(sweep_deg) * f64::from(i) / 2e4;
+                        let p = [c[0] + r * a.cos(), c[1] + r * a.sin()];
+                        for k in 0..2 {
+                            slo[k] = slo[k].min(p[k]);
+                            shi[k] = shi[k].max(p[k]);
+                        }
+                    }
+                    for k in 0..2 {
+                        let what =
+                            format!("start {start_deg} sweep {sweep_deg} ccw {ccw} axis {k}");
+                        assert!(
+                            (lo[k] - slo[k]).abs() < 1e-6,
+                            "{what}: {} vs {}",
+                            lo[k],
+                            slo[k]
+                        );
+                        assert!(
+                            (hi[k] - shi[k]).abs() < 1e-6,
+                            "{what}: {} vs {}",
+                            hi[k],
+                            shi[k]
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
