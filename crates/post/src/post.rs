@@ -213,8 +213,8 @@ struct Writer<'m, W: Write> {
     tol: f64,
     /// 10^decimals of the linear words.
     scale: f64,
-    /// The current step's end as planned: (joints, (distance, written tip)).
-    planned_check: Option<([f64; 3], EndCheck)>,
+    /// A point planned on the reading thread: (joints, is the step's end, its check).
+    planned_check: Option<([f64; 3], bool, EndCheck)>,
 }
 
 impl<W: Write> Writer<'_, W> {
@@ -244,8 +244,9 @@ impl<W: Write> Writer<'_, W> {
                 - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
         }
         let (err, tip) = match self.planned_check {
-            // Worked out on the reading thread, for these very joints.
-            Some((j, c)) if is_end && j == *x => c,
+            // Worked out on the reading thread, for these very joints (with the same
+            // end-or-path rule).
+            Some((j, end, c)) if end == is_end && j == *x => c,
             _ => {
                 let tip = written_tip(&self.fk_cache.1, self.scale, x);
                 let err = match &self.step {
@@ -484,6 +485,55 @@ struct PlannedEnd {
     joints: [f64; 3],
     /// The end's check, for feeds.
     check: Option<EndCheck>,
+    /// For an arc the index does not keep: its chord points, in the batch's `points`.
+    chords: (usize, usize),
+}
+
+/// A point written for a step, planned with its check (as [`Writer::verify_point`]
+/// would make it: against the end for the last point, against the path before).
+type PlannedPoint = ([f64; 3], EndCheck);
+
+/// Steps passed from the reading thread to the writing one, with the chord points
+/// planned for them.
+struct Batch {
+    steps: Vec<Result<Planned, PostError>>,
+    points: Vec<PlannedPoint>,
+}
+
+/// How an arc is written under a table position: kept as an arc (its plane is the
+/// machine's XY plane, counter-clockwise in joint X/Y when `ccw`), or linearised into
+/// `chords` straight moves to the chord tolerance.
+#[derive(Debug, Clone, Copy)]
+enum ArcWay {
+    Kept { ccw: bool },
+    Chords(usize),
+}
+
+fn arc_way(
+    m: &Machine,
+    rot: &[f64; 2],
+    step: &Step,
+    center: &Vector3<f64>,
+    normal: &Vector3<f64>,
+    sweep: f64,
+    tolerance: f64,
+) -> ArcWay {
+    let n_m = m.part_to_machine(rot, normal) - m.part_to_machine(rot, &Vector3::zeros());
+    let handed = m.linear[0].sign * m.linear[1].sign * m.linear[0].dir.cross(&m.linear[1].dir).z;
+    let keep = (n_m.x.abs() < 1e-9 && n_m.y.abs() < 1e-9)
+        && sweep.abs() <= std::f64::consts::TAU + 1e-12
+        && handed.abs() > 0.5;
+    if keep {
+        // Counter-clockwise seen from machine +Z, then in joint axes.
+        let ccw_machine = (sweep > 0.0) == (n_m.z > 0.0);
+        ArcWay::Kept {
+            ccw: ccw_machine == (handed > 0.0),
+        }
+    } else {
+        let r = (step.start - center).norm().max(1e-12);
+        let seg_angle = 2.0 * (1.0 - (tolerance / r).min(1.0)).acos();
+        ArcWay::Chords(((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize).clamp(1, 100_000))
+    }
 }
 
 /// How far a written end lands from the intended one, and the written tip.
@@ -494,12 +544,13 @@ struct Planner<'m> {
     m: &'m Machine,
     head: usize,
     scale: f64,
+    tolerance: f64,
     /// rotary → its joints map and written tip map.
     cache: Option<([f64; 2], Affine, Affine)>,
 }
 
 impl Planner<'_> {
-    fn plan(&mut self, step: &Step) -> Option<PlannedEnd> {
+    fn plan(&mut self, step: &Step, points: &mut Vec<PlannedPoint>) -> Option<PlannedEnd> {
         let Orient::Index(rot) = step.orient else {
             return None;
         };
@@ -511,12 +562,39 @@ impl Planner<'_> {
                 (jm, tm)
             }
         };
-        let joints = joints(&jm, &step.end);
+        let end_joints = joints(&jm, &step.end);
         let check = (!matches!(step.kind, StepKind::Rapid)).then(|| {
-            let tip = written_tip(&tm, self.scale, &joints);
+            let tip = written_tip(&tm, self.scale, &end_joints);
             ((tip - step.end).norm(), tip)
         });
-        Some(PlannedEnd { rot, joints, check })
+        let first = points.len();
+        if let StepKind::Arc {
+            center,
+            normal,
+            sweep,
+        } = step.kind
+        {
+            if let ArcWay::Chords(n) =
+                arc_way(self.m, &rot, step, &center, &normal, sweep, self.tolerance)
+            {
+                for k in 1..=n {
+                    let q = joints(&jm, &step.at(k as f64 / n as f64));
+                    let tip = written_tip(&tm, self.scale, &q);
+                    let err = if k == n {
+                        (tip - step.end).norm()
+                    } else {
+                        crate::verify::dist_to(step, &tip)
+                    };
+                    points.push((q, (err, tip)));
+                }
+            }
+        }
+        Some(PlannedEnd {
+            rot,
+            joints: end_joints,
+            check,
+            chords: (first, points.len()),
+        })
     }
 }
 
@@ -553,41 +631,40 @@ pub fn post<W: Write>(
         m: machine,
         head: cfg.head,
         scale: linear_scale(program_units(machine)),
+        tolerance: cfg.tolerance,
         cache: None,
     };
     std::thread::scope(|scope| {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Result<Planned, PostError>>>(4);
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Batch>(4);
         let reader = std::thread::Builder::new()
             .name("lampost-read".into())
             .spawn_scoped(scope, move || {
-                let mut batch = Vec::with_capacity(BATCH);
+                let fresh = || Batch {
+                    steps: Vec::with_capacity(BATCH),
+                    points: Vec::new(),
+                };
+                let mut batch = fresh();
                 for step in Intended::new(machine, sections, opts) {
                     let failed = step.is_err();
-                    batch.push(step.map(|s| {
-                        let end = planner.plan(&s);
+                    let planned = step.map(|s| {
+                        let end = planner.plan(&s, &mut batch.points);
                         (s, end)
-                    }));
-                    if batch.len() == BATCH || failed {
-                        let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                    });
+                    batch.steps.push(planned);
+                    if batch.steps.len() == BATCH || failed {
+                        let full = std::mem::replace(&mut batch, fresh());
                         // A closed channel: the writer stopped (an error); so do we.
                         if tx.send(full).is_err() || failed {
                             return;
                         }
                     }
                 }
-                if !batch.is_empty() {
+                if !batch.steps.is_empty() {
                     let _ = tx.send(batch);
                 }
             })
             .map_err(|e| PostError::Io(format!("cannot start the reading thread: {e}")))?;
-        let result = post_steps(
-            machine,
-            sections,
-            cfg,
-            out,
-            progress,
-            rx.into_iter().flatten(),
-        );
+        let result = post_steps(machine, sections, cfg, out, progress, rx.into_iter());
         // `post_steps` has dropped the receiver, so the reader cannot block on a send.
         if let Err(panic) = reader.join() {
             std::panic::resume_unwind(panic);
@@ -596,14 +673,14 @@ pub fn post<W: Write>(
     })
 }
 
-/// [`post`] over steps from any source, on the calling thread.
+/// [`post`] over batches of steps, on the calling thread.
 fn post_steps<W: Write>(
     machine: &Machine,
     sections: &[Section],
     cfg: &PostConfig,
     out: W,
     mut progress: impl FnMut(usize),
-    steps: impl Iterator<Item = Result<Planned, PostError>>,
+    batches: impl Iterator<Item = Batch>,
 ) -> Result<PostReport, PostError> {
     let units = program_units(machine);
     let em = emitter(out, cfg, units);
@@ -686,247 +763,276 @@ fn post_steps<W: Write>(
     let mut arc_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     w.report.body.0 = w.offset();
-    for (count, step) in steps.enumerate() {
-        let (step, planned): Planned = step?;
-        if count % 4096 == 0 {
-            progress(count);
-        }
-        let file = &sections[step.section].name;
-        let key = (step.section, step.layer);
-        if cur_key != Some(key) {
-            cur_key = Some(key);
-            // Choose the rotaries for this section/layer.
-            let rot = match step.orient {
-                Orient::Index(r) => {
-                    for (i, ax) in machine.rotary.iter().enumerate() {
-                        if !ax.within(r[i]) {
-                            let (lo, hi) = ax.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                            return Err(PostError::Limit {
-                                file: file.clone(),
-                                line: step.line,
-                                axis: ax.name.clone(),
-                                value: r[i],
-                                lo,
-                                hi,
-                            });
-                        }
-                    }
-                    r
-                }
-                Orient::ToolAxis => {
-                    let near = w.rot.unwrap_or(cfg.near);
-                    let sols = machine
-                        .orientations(&step.program_z, &near)
-                        .map_err(|err| PostError::Kin {
-                            context: format!("{file}:{}: ", step.line),
-                            err,
-                        })?;
-                    let same = sols.iter().find(|s| {
-                        s.within_limits
-                            && w.branch
-                                .is_none_or(|b| s.branch == 0 || b == 0 || s.branch == b)
-                    });
-                    let pick = match same {
-                        Some(s) => *s,
-                        None => match sols.iter().find(|s| s.within_limits) {
-                            Some(s) => {
-                                w.report.warnings.push(format!("{file}:{}: the rotary branch flips here; the tool retracts and re-approaches", step.line));
-                                *s
+    let mut count = 0usize;
+    for batch in batches {
+        let Batch { steps, points } = batch;
+        for step in steps {
+            let (step, planned): Planned = step?;
+            if count % 4096 == 0 {
+                progress(count);
+            }
+            count += 1;
+            let file = &sections[step.section].name;
+            let key = (step.section, step.layer);
+            if cur_key != Some(key) {
+                cur_key = Some(key);
+                // Choose the rotaries for this section/layer.
+                let rot = match step.orient {
+                    Orient::Index(r) => {
+                        for (i, ax) in machine.rotary.iter().enumerate() {
+                            if !ax.within(r[i]) {
+                                let (lo, hi) =
+                                    ax.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                                return Err(PostError::Limit {
+                                    file: file.clone(),
+                                    line: step.line,
+                                    axis: ax.name.clone(),
+                                    value: r[i],
+                                    lo,
+                                    hi,
+                                });
                             }
-                            None => {
-                                let names: Vec<String> = machine
-                                    .rotary
-                                    .iter()
-                                    .map(|r| format!("{} {:?}", r.name, r.limits))
-                                    .collect();
-                                let cands: Vec<String> = sols
-                                    .iter()
-                                    .map(|s| {
-                                        format!(
-                                            "{} = {:.3}°, {} = {:.3}°",
-                                            machine.rotary[0].name,
-                                            s.rotary[0],
-                                            machine.rotary[1].name,
-                                            s.rotary[1]
-                                        )
-                                    })
-                                    .collect();
-                                return Err(PostError::Kin {
+                        }
+                        r
+                    }
+                    Orient::ToolAxis => {
+                        let near = w.rot.unwrap_or(cfg.near);
+                        let sols = machine
+                            .orientations(&step.program_z, &near)
+                            .map_err(|err| PostError::Kin {
+                                context: format!("{file}:{}: ", step.line),
+                                err,
+                            })?;
+                        let same = sols.iter().find(|s| {
+                            s.within_limits
+                                && w.branch
+                                    .is_none_or(|b| s.branch == 0 || b == 0 || s.branch == b)
+                        });
+                        let pick = match same {
+                            Some(s) => *s,
+                            None => match sols.iter().find(|s| s.within_limits) {
+                                Some(s) => {
+                                    w.report.warnings.push(format!("{file}:{}: the rotary branch flips here; the tool retracts and re-approaches", step.line));
+                                    *s
+                                }
+                                None => {
+                                    let names: Vec<String> = machine
+                                        .rotary
+                                        .iter()
+                                        .map(|r| format!("{} {:?}", r.name, r.limits))
+                                        .collect();
+                                    let cands: Vec<String> = sols
+                                        .iter()
+                                        .map(|s| {
+                                            format!(
+                                                "{} = {:.3}°, {} = {:.3}°",
+                                                machine.rotary[0].name,
+                                                s.rotary[0],
+                                                machine.rotary[1].name,
+                                                s.rotary[1]
+                                            )
+                                        })
+                                        .collect();
+                                    return Err(PostError::Kin {
                                     context: format!("{file}:{}: ", step.line),
                                     err: lampost_kinematics::KinError::Unreachable {
                                         what: format!("no orientation within the rotary limits ({}) turns the program's +Z ({:.4}, {:.4}, {:.4}) to the tool axis; candidates {}", names.join(", "), step.program_z.x, step.program_z.y, step.program_z.z, cands.join("; ")),
                                     },
                                 });
-                            }
-                        },
-                    };
-                    w.branch = Some(pick.branch);
-                    pick.rotary
-                }
-            };
-            let changed = w
-                .rot
-                .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
-            if changed {
-                // Laser off, retract, then index: never a rotary move mid-cut.
-                if w.laser {
-                    w.words(&laser_off, None)?;
-                    w.words(&powder_off, None)?;
-                    w.laser = false;
-                }
-                let split = w.offset();
-                w.report.split_points.push(split);
-                w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
-                w.written[z_axis] = Some(round_half_away(clear_z * w.scale) as i64);
-                w.rot = Some(rot);
-                w.jmap = index_maps(machine, head, &rot).0;
-                w.words(
-                    &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
-                    Some("INDEX"),
-                )?;
-                w.report.indexes.push(rot);
-                if let Some(pos) = w.pos.as_mut() {
-                    pos[z_axis] = clear_z;
-                }
-                need_approach = true;
-            }
-        }
-        let rot = w.rot.unwrap_or([0.0; 2]);
-        let jm = w.jmap;
-        // A move starts where the last one ended: reuse its joints (same table position).
-        let start = match prev_end {
-            Some((p, j, r)) if p == step.start && r == rot => j,
-            _ => joints(&jm, &step.start),
-        };
-        let planned = planned.filter(|p| p.rot == rot);
-        let end = match planned {
-            Some(p) => p.joints,
-            None => joints(&jm, &step.end),
-        };
-        w.planned_check = planned.and_then(|p| p.check.map(|c| (p.joints, c)));
-        prev_end = Some((step.end, end, rot));
-        // The move being written, for the in-process verification (approach included).
-        w.step = if matches!(step.kind, StepKind::Rapid) {
-            None
-        } else {
-            Some(step)
-        };
-        if need_approach {
-            // Over the start at the retract height, then down to it, all at rapid.
-            if w.laser {
-                w.words(&laser_off, None)?;
-                w.words(&powder_off, None)?;
-                w.laser = false;
-            }
-            // A rapid goes where it goes from over its end; a feed is approached from
-            // just above its start (rapid down to there, then in at the feed rate).
-            let target = if matches!(step.kind, StepKind::Rapid) {
-                end
-            } else {
-                start
-            };
-            let mut above = target;
-            above[z_axis] = clear_z;
-            w.linear(0.0, &above, None, file, step.line, false)?;
-            if !matches!(step.kind, StepKind::Rapid) {
-                let mut near_start = start;
-                near_start[z_axis] = (start[z_axis] + approach_lift).min(clear_z);
-                w.linear(0.0, &near_start, None, file, step.line, false)?;
-                w.linear(1.0, &start, Some(step.feed), file, step.line, false)?;
-            }
-            need_approach = false;
-        }
-        match step.kind {
-            StepKind::Rapid => {
-                if w.laser {
-                    w.words(&laser_off, None)?;
-                    w.words(&powder_off, None)?;
-                    w.laser = false;
-                }
-                let split = w.offset();
-                w.report.split_points.push(split);
-                w.linear(0.0, &end, None, file, step.line, true)?;
-            }
-            StepKind::Feed | StepKind::Arc { .. } => {
-                if let Process::Deposit { power } = cfg.process {
-                    if step.deposit && !w.laser {
-                        let mut v = laser_on.clone();
-                        v.push((power_letter, power));
-                        w.words(&v, None)?;
-                        w.words(&powder_on, None)?;
-                        w.laser = true;
-                    } else if !step.deposit && w.laser {
+                                }
+                            },
+                        };
+                        w.branch = Some(pick.branch);
+                        pick.rotary
+                    }
+                };
+                let changed = w
+                    .rot
+                    .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
+                if changed {
+                    // Laser off, retract, then index: never a rotary move mid-cut.
+                    if w.laser {
                         w.words(&laser_off, None)?;
                         w.words(&powder_off, None)?;
                         w.laser = false;
                     }
+                    let split = w.offset();
+                    w.report.split_points.push(split);
+                    w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
+                    w.written[z_axis] = Some(round_half_away(clear_z * w.scale) as i64);
+                    w.rot = Some(rot);
+                    w.jmap = index_maps(machine, head, &rot).0;
+                    w.words(
+                        &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
+                        Some("INDEX"),
+                    )?;
+                    w.report.indexes.push(rot);
+                    if let Some(pos) = w.pos.as_mut() {
+                        pos[z_axis] = clear_z;
+                    }
+                    need_approach = true;
                 }
-                match step.kind {
-                    StepKind::Arc {
-                        center,
-                        normal,
-                        sweep,
-                    } => {
-                        // The arc stays an arc when its plane is the machine's XY plane.
-                        let n_m = machine.part_to_machine(&rot, &normal)
-                            - machine.part_to_machine(&rot, &Vector3::zeros());
-                        let up = n_m.z;
-                        let handed = machine.linear[0].sign
-                            * machine.linear[1].sign
-                            * machine.linear[0].dir.cross(&machine.linear[1].dir).z;
-                        let keep = (n_m.x.abs() < 1e-9 && n_m.y.abs() < 1e-9)
-                            && sweep.abs() <= std::f64::consts::TAU + 1e-12
-                            && handed.abs() > 0.5;
-                        if keep {
-                            let c = joints(&jm, &center);
-                            // Counter-clockwise seen from machine +Z, then in joint axes.
-                            let ccw_machine = (sweep > 0.0) == (up > 0.0);
-                            let ccw = ccw_machine == (handed > 0.0);
-                            let g = if ccw { 3.0 } else { 2.0 };
-                            let rot_now = w.rot.unwrap_or([0.0; 2]);
-                            w.check(file, step.line, &end, &rot_now)?;
-                            // Travel limits along the arc: its extreme points in X and Y.
-                            for q in arc_extremes(&start, &end, &c, ccw, sweep.abs()) {
-                                w.check(file, step.line, &q, &rot_now)?;
-                            }
-                            w.note_limits(&[end[0], end[1], end[2], rot_now[0], rot_now[1]]);
-                            let words = [
-                                (b'G', g),
-                                (w.letters[0], end[0]),
-                                (w.letters[1], end[1]),
-                                (w.letters[2], end[2]),
-                                (b'I', c[0] - start[0]),
-                                (b'J', c[1] - start[1]),
-                                (b'F', step.feed),
-                            ];
-                            w.words(&words, None)?;
-                            // The arc's midpoint (joint space) and its end, as written.
-                            let mid_part = step.at(0.5);
-                            let mid = joints(&jm, &mid_part);
-                            w.verify_point(&mid, false)?;
-                            w.verify_point(&end, true)?;
-                            let scale = w.scale;
-                            for (slot, v) in w.written.iter_mut().zip(end) {
-                                *slot = Some(round_half_away(v * scale) as i64);
-                            }
-                            w.pos = Some(end);
-                            w.report.moves += 1;
-                        } else {
-                            if arc_warned != Some(step.section) {
-                                arc_warned = Some(step.section);
-                                w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
-                            }
-                            let r = (step.start - center).norm().max(1e-12);
-                            let seg_angle = 2.0 * (1.0 - (cfg.tolerance / r).min(1.0)).acos();
-                            let n = ((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize)
-                                .clamp(1, 100_000);
-                            for k in 1..=n {
-                                let q = joints(&jm, &step.at(k as f64 / n as f64));
-                                w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
-                            }
+            }
+            let rot = w.rot.unwrap_or([0.0; 2]);
+            let jm = w.jmap;
+            // A move starts where the last one ended: reuse its joints (same table position).
+            let start = match prev_end {
+                Some((p, j, r)) if p == step.start && r == rot => j,
+                _ => joints(&jm, &step.start),
+            };
+            let planned = planned.filter(|p| p.rot == rot);
+            let end = match planned {
+                Some(p) => p.joints,
+                None => joints(&jm, &step.end),
+            };
+            w.planned_check = planned.and_then(|p| p.check.map(|c| (p.joints, true, c)));
+            prev_end = Some((step.end, end, rot));
+            // The move being written, for the in-process verification (approach included).
+            w.step = if matches!(step.kind, StepKind::Rapid) {
+                None
+            } else {
+                Some(step)
+            };
+            if need_approach {
+                // Over the start at the retract height, then down to it, all at rapid.
+                if w.laser {
+                    w.words(&laser_off, None)?;
+                    w.words(&powder_off, None)?;
+                    w.laser = false;
+                }
+                // A rapid goes where it goes from over its end; a feed is approached from
+                // just above its start (rapid down to there, then in at the feed rate).
+                let target = if matches!(step.kind, StepKind::Rapid) {
+                    end
+                } else {
+                    start
+                };
+                let mut above = target;
+                above[z_axis] = clear_z;
+                w.linear(0.0, &above, None, file, step.line, false)?;
+                if !matches!(step.kind, StepKind::Rapid) {
+                    let mut near_start = start;
+                    near_start[z_axis] = (start[z_axis] + approach_lift).min(clear_z);
+                    w.linear(0.0, &near_start, None, file, step.line, false)?;
+                    w.linear(1.0, &start, Some(step.feed), file, step.line, false)?;
+                }
+                need_approach = false;
+            }
+            match step.kind {
+                StepKind::Rapid => {
+                    if w.laser {
+                        w.words(&laser_off, None)?;
+                        w.words(&powder_off, None)?;
+                        w.laser = false;
+                    }
+                    let split = w.offset();
+                    w.report.split_points.push(split);
+                    w.linear(0.0, &end, None, file, step.line, true)?;
+                }
+                StepKind::Feed | StepKind::Arc { .. } => {
+                    if let Process::Deposit { power } = cfg.process {
+                        if step.deposit && !w.laser {
+                            let mut v = laser_on.clone();
+                            v.push((power_letter, power));
+                            w.words(&v, None)?;
+                            w.words(&powder_on, None)?;
+                            w.laser = true;
+                        } else if !step.deposit && w.laser {
+                            w.words(&laser_off, None)?;
+                            w.words(&powder_off, None)?;
+                            w.laser = false;
                         }
                     }
-                    _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
+                    match step.kind {
+                        StepKind::Arc {
+                            center,
+                            normal,
+                            sweep,
+                        } => {
+                            // The arc stays an arc when its plane is the machine's XY plane.
+                            let way = arc_way(
+                                machine,
+                                &rot,
+                                &step,
+                                &center,
+                                &normal,
+                                sweep,
+                                cfg.tolerance,
+                            );
+                            if let ArcWay::Kept { ccw } = way {
+                                let c = joints(&jm, &center);
+                                let g = if ccw { 3.0 } else { 2.0 };
+                                let rot_now = w.rot.unwrap_or([0.0; 2]);
+                                w.check(file, step.line, &end, &rot_now)?;
+                                // Travel limits along the arc: its extreme points in X and Y.
+                                for q in arc_extremes(&start, &end, &c, ccw, sweep.abs()) {
+                                    w.check(file, step.line, &q, &rot_now)?;
+                                }
+                                w.note_limits(&[end[0], end[1], end[2], rot_now[0], rot_now[1]]);
+                                let words = [
+                                    (b'G', g),
+                                    (w.letters[0], end[0]),
+                                    (w.letters[1], end[1]),
+                                    (w.letters[2], end[2]),
+                                    (b'I', c[0] - start[0]),
+                                    (b'J', c[1] - start[1]),
+                                    (b'F', step.feed),
+                                ];
+                                w.words(&words, None)?;
+                                // The arc's midpoint (joint space) and its end, as written.
+                                let mid_part = step.at(0.5);
+                                let mid = joints(&jm, &mid_part);
+                                w.verify_point(&mid, false)?;
+                                w.verify_point(&end, true)?;
+                                let scale = w.scale;
+                                for (slot, v) in w.written.iter_mut().zip(end) {
+                                    *slot = Some(round_half_away(v * scale) as i64);
+                                }
+                                w.pos = Some(end);
+                                w.report.moves += 1;
+                            } else {
+                                if arc_warned != Some(step.section) {
+                                    arc_warned = Some(step.section);
+                                    w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                                }
+                                let n = match way {
+                                    ArcWay::Chords(n) => n,
+                                    ArcWay::Kept { .. } => 1,
+                                };
+                                match planned.map(|p| &points[p.chords.0..p.chords.1]) {
+                                    // Planned on the reading thread (same table position).
+                                    Some(chords) if chords.len() == n => {
+                                        for (k, &(q, check)) in chords.iter().enumerate() {
+                                            w.planned_check = Some((q, k + 1 == n, check));
+                                            w.linear(
+                                                1.0,
+                                                &q,
+                                                Some(step.feed),
+                                                file,
+                                                step.line,
+                                                k + 1 == n,
+                                            )?;
+                                        }
+                                    }
+                                    _ => {
+                                        w.planned_check = None;
+                                        for k in 1..=n {
+                                            let q = joints(&jm, &step.at(k as f64 / n as f64));
+                                            w.linear(
+                                                1.0,
+                                                &q,
+                                                Some(step.feed),
+                                                file,
+                                                step.line,
+                                                k == n,
+                                            )?;
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
+                    }
                 }
             }
         }
