@@ -140,8 +140,8 @@ pub struct Solution {
 /// Up to two solutions, best first, without allocating.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Solutions {
-    sols: [Solution; 2],
-    n: usize,
+    pub(crate) sols: [Solution; 2],
+    pub(crate) n: usize,
 }
 
 impl Solutions {
@@ -257,6 +257,17 @@ impl Affine {
         let q = self.apply(&Vector3::new(p[0], p[1], p[2]));
         [q.x, q.y, q.z]
     }
+}
+
+/// The scalars of the orientation solve (see [`Machine::orient`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct OrientSetup {
+    pub(crate) alpha: f64,
+    pub(crate) beta: f64,
+    pub(crate) g2: f64,
+    pub(crate) ve: f64,
+    pub(crate) vn: f64,
+    pub(crate) rv2: f64,
 }
 
 /// A machine ready for kinematics. Build it with [`Machine::new`] (or
@@ -873,21 +884,12 @@ impl Machine {
     #[inline(always)]
     pub fn orient(&self, v: &Vector3<f64>, near: &[f64; 2]) -> Option<([Orientation; 2], usize)> {
         let ch = &self.chain;
-        let u1 = &self.rotary[self.inner].axis;
-        let a = u1.dot(v);
-        let (k, b) = (ch.k, ch.b);
-        let alpha = (a - k * b) * ch.inv_det;
-        let beta = (b - k * a) * ch.inv_det;
-        let base2 = alpha * alpha + beta * beta + 2.0 * alpha * beta * k;
-        let g2 = (1.0 - base2) * ch.inv_det;
-        if g2 < -1e-12 {
+        let st = self.orient_setup(v);
+        if st.g2 < -1e-12 {
             return None;
         }
-        let g = g2.max(0.0).sqrt();
-        // v's part normal to u₁, in the (e₁, n̂) basis: its length is |v − (u₁·v)·u₁|.
-        let (ve, vn) = (ch.e1.dot(v), ch.n_hat.dot(v));
-        let rv2 = ve * ve + vn * vn;
-        let s1 = rv2 < SINGULAR * SINGULAR;
+        let g = st.g2.max(0.0).sqrt();
+        let s1 = st.rv2 < SINGULAR * SINGULAR;
         let s2 = ch.outer_singular;
         let count = if g < 1e-12 { 1 } else { 2 };
         let mut out = [Orientation {
@@ -897,48 +899,101 @@ impl Machine {
             singular: s1 || s2,
         }; 2];
         // Inner: θ₁ = δ₁ − φ, δ₁ = atan2(±g, β), φ = atan2(v·n̂, v·e₁).
-        if s1 {
+        let (deg, sc) = if s1 {
             let sc = sin_cos_deg(near[self.inner]);
-            for o in &mut out {
-                o.degrees[self.inner] = near[self.inner];
-                o.sin_cos[self.inner] = sc;
-            }
+            ([near[self.inner]; 2], [sc; 2])
         } else {
-            let phi = atan2_deg(vn, ve);
-            let d1 = atan2_deg(g, beta);
-            // sin, cos of (±δ₁ − φ) from the unnormalised pairs, one square root and one
-            // division for both (divisions and roots share one slow unit).
-            let inv = 1.0 / ((g * g + beta * beta) * rv2).sqrt();
-            let (sp, cp) = (vn * inv, ve * inv);
-            for (o, sign) in out.iter_mut().zip([1.0, -1.0]) {
-                let sd = sign * g;
-                o.degrees[self.inner] = wrap180(sign * d1 - phi);
-                o.sin_cos[self.inner] = (sd * cp - beta * sp, beta * cp + sd * sp);
-            }
+            self.inner_regular(&st, g)
+        };
+        for (i, o) in out.iter_mut().enumerate() {
+            o.degrees[self.inner] = deg[i];
+            o.sin_cos[self.inner] = sc[i];
         }
         // Outer: θ₂ = δ₂ − ψ, δ₂ = atan2(±g, α).
-        if s2 {
+        let (deg, sc) = if s2 {
             let sc = sin_cos_deg(near[self.outer]);
-            for o in &mut out {
-                o.degrees[self.outer] = near[self.outer];
-                o.sin_cos[self.outer] = sc;
-            }
+            ([near[self.outer]; 2], [sc; 2])
         } else {
-            let d2 = atan2_deg(g, alpha);
-            let inv = 1.0 / (g * g + alpha * alpha).sqrt();
-            let (sd, cd) = (g * inv, alpha * inv);
-            let (sp, cp) = ch.psi_sc;
-            for (o, sign) in out.iter_mut().zip([1.0, -1.0]) {
-                let sd = sign * sd;
-                o.degrees[self.outer] = wrap180(sign * d2 - ch.psi);
-                o.sin_cos[self.outer] = (sd * cp - cd * sp, cd * cp + sd * sp);
-            }
+            self.outer_regular(st.alpha, g)
+        };
+        for (i, o) in out.iter_mut().enumerate() {
+            o.degrees[self.outer] = deg[i];
+            o.sin_cos[self.outer] = sc[i];
         }
         if count == 2 {
             out[0].branch = 1;
             out[1].branch = -1;
         }
         Some((out, count))
+    }
+
+    /// The scalars of [`Machine::orient`] for the unit axis `v`.
+    #[inline(always)]
+    pub(crate) fn orient_setup(&self, v: &Vector3<f64>) -> OrientSetup {
+        let ch = &self.chain;
+        let u1 = &self.rotary[self.inner].axis;
+        let a = u1.dot(v);
+        let (k, b) = (ch.k, ch.b);
+        let alpha = (a - k * b) * ch.inv_det;
+        let beta = (b - k * a) * ch.inv_det;
+        let base2 = alpha * alpha + beta * beta + 2.0 * alpha * beta * k;
+        let g2 = (1.0 - base2) * ch.inv_det;
+        // v's part normal to u₁, in the (e₁, n̂) basis: its length is |v − (u₁·v)·u₁|.
+        let (ve, vn) = (ch.e1.dot(v), ch.n_hat.dot(v));
+        OrientSetup {
+            alpha,
+            beta,
+            g2,
+            ve,
+            vn,
+            rv2: ve * ve + vn * vn,
+        }
+    }
+
+    /// The inner angle of both branches (degrees, (sin, cos)), away from its singularity.
+    #[inline(always)]
+    pub(crate) fn inner_regular(&self, st: &OrientSetup, g: f64) -> ([f64; 2], [(f64, f64); 2]) {
+        let (beta, ve, vn) = (st.beta, st.ve, st.vn);
+        let phi = atan2_deg(vn, ve);
+        // β is exactly 0 on the usual tables (inner axis and tool axis both normal
+        // to the outer one: FADAL, NRC, A/C trunnions), where δ₁ is a right angle.
+        let d1 = if beta == 0.0 && g > 0.0 {
+            90.0
+        } else {
+            atan2_deg(g, beta)
+        };
+        // sin, cos of (±δ₁ − φ) from the unnormalised pairs, one square root and one
+        // division for both (divisions and roots share one slow unit).
+        let inv = 1.0 / ((g * g + beta * beta) * st.rv2).sqrt();
+        let (sp, cp) = (vn * inv, ve * inv);
+        let branch = |sign: f64| {
+            let sd = sign * g;
+            (
+                wrap180(sign * d1 - phi),
+                (sd * cp - beta * sp, beta * cp + sd * sp),
+            )
+        };
+        let (p, m) = (branch(1.0), branch(-1.0));
+        ([p.0, m.0], [p.1, m.1])
+    }
+
+    /// The outer angle of both branches (degrees, (sin, cos)), away from its singularity.
+    #[inline(always)]
+    pub(crate) fn outer_regular(&self, alpha: f64, g: f64) -> ([f64; 2], [(f64, f64); 2]) {
+        let ch = &self.chain;
+        let d2 = atan2_deg(g, alpha);
+        let inv = 1.0 / (g * g + alpha * alpha).sqrt();
+        let (sd, cd) = (g * inv, alpha * inv);
+        let (sp, cp) = ch.psi_sc;
+        let branch = |sign: f64| {
+            let sd = sign * sd;
+            (
+                wrap180(sign * d2 - ch.psi),
+                (sd * cp - cd * sp, cd * cp + sd * sp),
+            )
+        };
+        let (p, m) = (branch(1.0), branch(-1.0));
+        ([p.0, m.0], [p.1, m.1])
     }
 
     /// The representative of `deg` (mod 360) nearest `near` that lies within the axis'
@@ -1049,22 +1104,42 @@ impl Machine {
             n: 0,
         };
         for o in raw.iter().take(count) {
-            let (r0, ok0) = self.place(0, o.degrees[0], near[0]);
-            let (r1, ok1) = self.place(1, o.degrees[1], near[1]);
-            let rotary = [r0, r1];
-            let (branch, singular) = (o.branch, o.singular);
-            // Whole turns do not change sine and cosine: no trigonometry here.
-            let q = self.part_to_machine_sc(&o.sin_cos, tip);
-            let linear = self.linear_for(&q, head);
-            let within_limits = ok0 && ok1 && self.linear_within(&linear);
-            sols.sols[sols.n] = Solution {
-                joints: Joints { linear, rotary },
-                within_limits,
-                branch,
-                singular,
-            };
+            sols.sols[sols.n] = self.branch_solution(o, tip, head, near);
             sols.n += 1;
         }
+        Self::rank(&mut sols, near);
+        Ok(sols)
+    }
+
+    /// The joints of one orientation branch: rotaries placed nearest `near`, linear axes
+    /// from where the table puts `tip`.
+    #[inline(always)]
+    pub(crate) fn branch_solution(
+        &self,
+        o: &Orientation,
+        tip: &Vector3<f64>,
+        head: usize,
+        near: &[f64; 2],
+    ) -> Solution {
+        let (r0, ok0) = self.place(0, o.degrees[0], near[0]);
+        let (r1, ok1) = self.place(1, o.degrees[1], near[1]);
+        // Whole turns do not change sine and cosine: no trigonometry here.
+        let q = self.part_to_machine_sc(&o.sin_cos, tip);
+        let linear = self.linear_for(&q, head);
+        Solution {
+            joints: Joints {
+                linear,
+                rotary: [r0, r1],
+            },
+            within_limits: ok0 && ok1 && self.linear_within(&linear),
+            branch: o.branch,
+            singular: o.singular,
+        }
+    }
+
+    /// Best first: within limits, then the smaller rotary move from `near`.
+    #[inline(always)]
+    pub(crate) fn rank(sols: &mut Solutions, near: &[f64; 2]) {
         if sols.n == 2 {
             let cost = |s: &Solution| {
                 (s.joints.rotary[0] - near[0]).abs() + (s.joints.rotary[1] - near[1]).abs()
@@ -1079,7 +1154,6 @@ impl Machine {
                 sols.sols.swap(0, 1);
             }
         }
-        Ok(sols)
     }
 
     /// Pick a solution: within limits, on `previous_branch` when one there is within
