@@ -764,6 +764,27 @@ impl Machine {
             + ri.pivot
     }
 
+    /// Turn the direction `d` by both rotaries, given as (sin, cos): inner then outer
+    /// (part → machine), or outer then inner when `outer_first` (machine → part, with
+    /// the inverse turns' sines).
+    fn turn_direction(
+        &self,
+        sc: &[(f64, f64); 2],
+        d: &Vector3<f64>,
+        outer_first: bool,
+    ) -> Vector3<f64> {
+        let by = |turn: Turn, i: usize, v: &Vector3<f64>| {
+            turn.apply(&self.rotary[i].axis, sc[i].0, sc[i].1, v)
+        };
+        let inner = |v: &Vector3<f64>| by(self.chain.inner_turn, self.inner, v);
+        let outer = |v: &Vector3<f64>| by(self.chain.outer_turn, self.outer, v);
+        if outer_first {
+            inner(&outer(d))
+        } else {
+            outer(&inner(d))
+        }
+    }
+
     /// Joints for part points with the table fixed at the rotary position whose
     /// (sin, cos) are `sc`: the affine map `p ↦ A·p + b` equal to
     /// `linear_for(part_to_machine_sc(sc, p), head)` (to rounding), for posting many
@@ -771,17 +792,7 @@ impl Machine {
     pub fn joints_map(&self, sc: &[(f64, f64); 2], head: usize) -> Affine {
         // The rotation part turns directions (no pivots); the offset is where the part
         // origin goes.
-        let turn = |d: &Vector3<f64>| {
-            let (si, ci) = sc[self.inner];
-            let (so, co) = sc[self.outer];
-            let a = self
-                .chain
-                .inner_turn
-                .apply(&self.rotary[self.inner].axis, si, ci, d);
-            self.chain
-                .outer_turn
-                .apply(&self.rotary[self.outer].axis, so, co, &a)
-        };
+        let turn = |d: &Vector3<f64>| self.turn_direction(sc, d, false);
         let r = Matrix3::from_columns(&[
             turn(&Vector3::x()),
             turn(&Vector3::y()),
@@ -804,17 +815,7 @@ impl Machine {
     /// [`Machine::machine_to_part_sc`]): the affine map `x ↦ A·x + b` equal to
     /// `machine_to_part_sc(sc_inverse, head_point(x, head))` (to rounding).
     pub fn tip_map(&self, sc_inverse: &[(f64, f64); 2], head: usize) -> Affine {
-        let turn = |d: &Vector3<f64>| {
-            let (si, ci) = sc_inverse[self.inner];
-            let (so, co) = sc_inverse[self.outer];
-            let a = self
-                .chain
-                .outer_turn
-                .apply(&self.rotary[self.outer].axis, so, co, d);
-            self.chain
-                .inner_turn
-                .apply(&self.rotary[self.inner].axis, si, ci, &a)
-        };
+        let turn = |d: &Vector3<f64>| self.turn_direction(sc_inverse, d, true);
         let cols: [Vector3<f64>; 3] =
             std::array::from_fn(|k| turn(&(self.linear[k].dir * self.linear[k].sign)));
         Affine {

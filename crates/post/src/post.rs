@@ -227,6 +227,20 @@ impl<W: Write> Writer<'_, W> {
         self.em.words(w, comment).map_err(PostError::from)
     }
 
+    /// Laser and powder off, if the laser is on.
+    fn laser_off(
+        &mut self,
+        laser_off: &[(u8, f64)],
+        powder_off: &[(u8, f64)],
+    ) -> Result<(), PostError> {
+        if self.laser {
+            self.words(laser_off, None)?;
+            self.words(powder_off, None)?;
+            self.laser = false;
+        }
+        Ok(())
+    }
+
     /// Check a written feed point: the joints as the text gives them (rounded to the
     /// output resolution), through forward kinematics, against the intended move.
     fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
@@ -851,11 +865,7 @@ fn post_steps<W: Write>(
                     .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
                 if changed {
                     // Laser off, retract, then index: never a rotary move mid-cut.
-                    if w.laser {
-                        w.words(&laser_off, None)?;
-                        w.words(&powder_off, None)?;
-                        w.laser = false;
-                    }
+                    w.laser_off(&laser_off, &powder_off)?;
                     let split = w.offset();
                     w.report.split_points.push(split);
                     w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
@@ -895,11 +905,7 @@ fn post_steps<W: Write>(
             };
             if need_approach {
                 // Over the start at the retract height, then down to it, all at rapid.
-                if w.laser {
-                    w.words(&laser_off, None)?;
-                    w.words(&powder_off, None)?;
-                    w.laser = false;
-                }
+                w.laser_off(&laser_off, &powder_off)?;
                 // A rapid goes where it goes from over its end; a feed is approached from
                 // just above its start (rapid down to there, then in at the feed rate).
                 let target = if matches!(step.kind, StepKind::Rapid) {
@@ -920,11 +926,7 @@ fn post_steps<W: Write>(
             }
             match step.kind {
                 StepKind::Rapid => {
-                    if w.laser {
-                        w.words(&laser_off, None)?;
-                        w.words(&powder_off, None)?;
-                        w.laser = false;
-                    }
+                    w.laser_off(&laser_off, &powder_off)?;
                     let split = w.offset();
                     w.report.split_points.push(split);
                     w.linear(0.0, &end, None, file, step.line, true)?;
@@ -937,10 +939,8 @@ fn post_steps<W: Write>(
                             w.words(&v, None)?;
                             w.words(&powder_on, None)?;
                             w.laser = true;
-                        } else if !step.deposit && w.laser {
-                            w.words(&laser_off, None)?;
-                            w.words(&powder_off, None)?;
-                            w.laser = false;
+                        } else if !step.deposit {
+                            w.laser_off(&laser_off, &powder_off)?;
                         }
                     }
                     match step.kind {
@@ -999,35 +999,18 @@ fn post_steps<W: Write>(
                                     ArcWay::Chords(n) => n,
                                     ArcWay::Kept { .. } => 1,
                                 };
-                                match planned.map(|p| &points[p.chords.0..p.chords.1]) {
-                                    // Planned on the reading thread (same table position).
-                                    Some(chords) if chords.len() == n => {
-                                        for (k, &(q, check)) in chords.iter().enumerate() {
-                                            w.planned_check = Some((q, k + 1 == n, check));
-                                            w.linear(
-                                                1.0,
-                                                &q,
-                                                Some(step.feed),
-                                                file,
-                                                step.line,
-                                                k + 1 == n,
-                                            )?;
-                                        }
-                                    }
-                                    _ => {
-                                        w.planned_check = None;
-                                        for k in 1..=n {
-                                            let q = joints(&jm, &step.at(k as f64 / n as f64));
-                                            w.linear(
-                                                1.0,
-                                                &q,
-                                                Some(step.feed),
-                                                file,
-                                                step.line,
-                                                k == n,
-                                            )?;
-                                        }
-                                    }
+                                // Planned on the reading thread (same table position), or
+                                // solved here.
+                                let chords = planned
+                                    .map(|p| &points[p.chords.0..p.chords.1])
+                                    .filter(|c| c.len() == n);
+                                for k in 1..=n {
+                                    let (q, check) = match chords {
+                                        Some(c) => (c[k - 1].0, Some(c[k - 1].1)),
+                                        None => (joints(&jm, &step.at(k as f64 / n as f64)), None),
+                                    };
+                                    w.planned_check = check.map(|c| (q, k == n, c));
+                                    w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
                                 }
                             }
                         }
@@ -1046,10 +1029,7 @@ fn post_steps<W: Write>(
     }
     w.report.body.1 = w.offset();
     // Postamble.
-    if w.laser {
-        w.words(&laser_off, None)?;
-        w.words(&powder_off, None)?;
-    }
+    w.laser_off(&laser_off, &powder_off)?;
     if let Process::Machine { coolant, .. } = &cfg.process {
         if *coolant {
             w.words(&code_words(&p.coolant_off)?, None)?;
