@@ -194,6 +194,8 @@ struct Writer<'m, W: Write> {
     rot: Option<[f64; 2]>,
     /// The joints map of `rot` (of 0 before the first index).
     jmap: Affine,
+    /// (sin, cos) of `rot`.
+    rot_sc: [(f64, f64); 2],
     branch: Option<i8>,
     laser: bool,
     pos: Option<[f64; 3]>,
@@ -257,21 +259,21 @@ impl<W: Write> Writer<'_, W> {
             self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
                 - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
         }
-        let (err, tip) = match self.planned_check {
+        let err = match self.planned_check {
             // Worked out on the reading thread, for these very joints (with the same
             // end-or-path rule).
-            Some((j, end, c)) if end == is_end && j == *x => c,
+            Some((j, end, e)) if end == is_end && j == *x => e,
             _ => {
                 let tip = written_tip(&self.fk_cache.1, self.scale, x);
-                let err = match &self.step {
+                match &self.step {
                     Some(step) if is_end => (tip - step.end).norm(),
                     Some(step) => crate::verify::dist_to(step, &tip),
                     None => 0.0,
-                };
-                (err, tip)
+                }
             }
         };
         if err > self.tol {
+            let tip = written_tip(&self.fk_cache.1, self.scale, x);
             return Err(PostError::Verify(format!(
                 "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
                 line, tip.x, tip.y, tip.z, self.tol
@@ -495,12 +497,11 @@ fn index_maps(m: &Machine, head: usize, rot: &[f64; 2]) -> (Affine, Affine) {
 /// index; it re-solves otherwise).
 #[derive(Debug, Clone, Copy)]
 struct PlannedEnd {
-    rot: [f64; 2],
     joints: [f64; 3],
     /// The end's check, for feeds.
     check: Option<EndCheck>,
     /// For an arc the index does not keep: its chord points, in the batch's `points`.
-    chords: (usize, usize),
+    chords: (u32, u32),
 }
 
 /// A point written for a step, planned with its check (as [`Writer::verify_point`]
@@ -525,14 +526,14 @@ enum ArcWay {
 
 fn arc_way(
     m: &Machine,
-    rot: &[f64; 2],
+    sc: &[(f64, f64); 2],
     step: &Step,
     center: &Vector3<f64>,
     normal: &Vector3<f64>,
     sweep: f64,
     tolerance: f64,
 ) -> ArcWay {
-    let n_m = m.part_to_machine(rot, normal) - m.part_to_machine(rot, &Vector3::zeros());
+    let n_m = m.part_to_machine_sc(sc, normal) - m.part_to_machine_sc(sc, &Vector3::zeros());
     let handed = m.linear[0].sign * m.linear[1].sign * m.linear[0].dir.cross(&m.linear[1].dir).z;
     let keep = (n_m.x.abs() < 1e-9 && n_m.y.abs() < 1e-9)
         && sweep.abs() <= std::f64::consts::TAU + 1e-12
@@ -550,8 +551,12 @@ fn arc_way(
     }
 }
 
-/// How far a written end lands from the intended one, and the written tip.
-type EndCheck = (f64, Vector3<f64>);
+/// How far a written point lands from the intended path (its check, see
+/// [`PlannedPoint`]).
+type EndCheck = f64;
+
+/// A rotary position, its (sin, cos), joints map and written tip map.
+type IndexCache = ([f64; 2], [(f64, f64); 2], Affine, Affine);
 
 /// Plans ends on the reading thread (see [`PlannedEnd`]).
 struct Planner<'m> {
@@ -559,8 +564,8 @@ struct Planner<'m> {
     head: usize,
     scale: f64,
     tolerance: f64,
-    /// rotary → its joints map and written tip map.
-    cache: Option<([f64; 2], Affine, Affine)>,
+    /// The last index and what is derived from it.
+    cache: Option<IndexCache>,
 }
 
 impl Planner<'_> {
@@ -568,19 +573,18 @@ impl Planner<'_> {
         let Orient::Index(rot) = step.orient else {
             return None;
         };
-        let (jm, tm) = match self.cache {
-            Some((r, jm, tm)) if r == rot => (jm, tm),
+        let (sc, jm, tm) = match self.cache {
+            Some((r, sc, jm, tm)) if r == rot => (sc, jm, tm),
             _ => {
                 let (jm, tm) = index_maps(self.m, self.head, &rot);
-                self.cache = Some((rot, jm, tm));
-                (jm, tm)
+                let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
+                self.cache = Some((rot, sc, jm, tm));
+                (sc, jm, tm)
             }
         };
         let end_joints = joints(&jm, &step.end);
-        let check = (!matches!(step.kind, StepKind::Rapid)).then(|| {
-            let tip = written_tip(&tm, self.scale, &end_joints);
-            ((tip - step.end).norm(), tip)
-        });
+        let check = (!matches!(step.kind, StepKind::Rapid))
+            .then(|| (written_tip(&tm, self.scale, &end_joints) - step.end).norm());
         let first = points.len();
         if let StepKind::Arc {
             center,
@@ -589,7 +593,7 @@ impl Planner<'_> {
         } = step.kind
         {
             if let ArcWay::Chords(n) =
-                arc_way(self.m, &rot, step, &center, &normal, sweep, self.tolerance)
+                arc_way(self.m, &sc, step, &center, &normal, sweep, self.tolerance)
             {
                 for k in 1..=n {
                     let q = joints(&jm, &step.at(k as f64 / n as f64));
@@ -599,15 +603,17 @@ impl Planner<'_> {
                     } else {
                         crate::verify::dist_to(step, &tip)
                     };
-                    points.push((q, (err, tip)));
+                    points.push((q, err));
                 }
             }
         }
         Some(PlannedEnd {
-            rot,
             joints: end_joints,
             check,
-            chords: (first, points.len()),
+            chords: (
+                u32::try_from(first).unwrap_or(u32::MAX),
+                u32::try_from(points.len()).unwrap_or(u32::MAX),
+            ),
         })
     }
 }
@@ -712,6 +718,7 @@ fn post_steps<W: Write>(
         },
         rot: None,
         jmap: index_maps(machine, cfg.head, &[0.0; 2]).0,
+        rot_sc: [(0.0, 1.0); 2],
         branch: None,
         laser: false,
         pos: None,
@@ -872,6 +879,7 @@ fn post_steps<W: Write>(
                     w.written[z_axis] = Some(round_half_away(clear_z * w.scale) as i64);
                     w.rot = Some(rot);
                     w.jmap = index_maps(machine, head, &rot).0;
+                    w.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
                     w.words(
                         &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
                         Some("INDEX"),
@@ -890,7 +898,8 @@ fn post_steps<W: Write>(
                 Some((p, j, r)) if p == step.start && r == rot => j,
                 _ => joints(&jm, &step.start),
             };
-            let planned = planned.filter(|p| p.rot == rot);
+            // Planned for the step's own index: usable when that is where the table is.
+            let planned = planned.filter(|_| matches!(step.orient, Orient::Index(r) if r == rot));
             let end = match planned {
                 Some(p) => p.joints,
                 None => joints(&jm, &step.end),
@@ -952,7 +961,7 @@ fn post_steps<W: Write>(
                             // The arc stays an arc when its plane is the machine's XY plane.
                             let way = arc_way(
                                 machine,
-                                &rot,
+                                &w.rot_sc,
                                 &step,
                                 &center,
                                 &normal,
@@ -1002,7 +1011,9 @@ fn post_steps<W: Write>(
                                 // Planned on the reading thread (same table position), or
                                 // solved here.
                                 let chords = planned
-                                    .map(|p| &points[p.chords.0..p.chords.1])
+                                    .and_then(|p| {
+                                        points.get(p.chords.0 as usize..p.chords.1 as usize)
+                                    })
                                     .filter(|c| c.len() == n);
                                 for k in 1..=n {
                                     let (q, check) = match chords {
