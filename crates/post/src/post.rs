@@ -656,12 +656,17 @@ pub fn post<W: Write>(
     };
     std::thread::scope(|scope| {
         let (tx, rx) = std::sync::mpsc::sync_channel::<Batch>(4);
+        // Emptied batches come back: their memory is reused, not freed on one core
+        // and allocated again on the other.
+        let (back_tx, back_rx) = std::sync::mpsc::sync_channel::<Batch>(8);
         let reader = std::thread::Builder::new()
             .name("lampost-read".into())
             .spawn_scoped(scope, move || {
-                let fresh = || Batch {
-                    steps: Vec::with_capacity(BATCH),
-                    points: Vec::new(),
+                let fresh = || {
+                    back_rx.try_recv().unwrap_or_else(|_| Batch {
+                        steps: Vec::with_capacity(BATCH),
+                        points: Vec::new(),
+                    })
                 };
                 let mut batch = fresh();
                 for step in Intended::new(machine, sections, opts) {
@@ -684,7 +689,10 @@ pub fn post<W: Write>(
                 }
             })
             .map_err(|e| PostError::Io(format!("cannot start the reading thread: {e}")))?;
-        let result = post_steps(machine, sections, cfg, out, progress, rx.into_iter());
+        let result = post_steps(machine, sections, cfg, out, progress, rx.into_iter(), |b| {
+            // A full return channel or a finished reader: the batch is just freed.
+            let _ = back_tx.try_send(b);
+        });
         // `post_steps` has dropped the receiver, so the reader cannot block on a send.
         if let Err(panic) = reader.join() {
             std::panic::resume_unwind(panic);
@@ -701,6 +709,7 @@ fn post_steps<W: Write>(
     out: W,
     mut progress: impl FnMut(usize),
     batches: impl Iterator<Item = Batch>,
+    mut give_back: impl FnMut(Batch),
 ) -> Result<PostReport, PostError> {
     let units = program_units(machine);
     let em = emitter(out, cfg, units);
@@ -786,8 +795,9 @@ fn post_steps<W: Write>(
     w.report.body.0 = w.offset();
     let mut count = 0usize;
     for batch in batches {
-        let Batch { steps, points } = batch;
-        for step in steps {
+        let mut batch = batch;
+        let Batch { steps, points } = &mut batch;
+        for step in steps.drain(..) {
             let (step, planned): Planned = step?;
             if count % 4096 == 0 {
                 progress(count);
@@ -1030,6 +1040,8 @@ fn post_steps<W: Write>(
                 }
             }
         }
+        points.clear();
+        give_back(batch);
     }
     if w.report.moves == 0 {
         return Err(PostError::Empty(
