@@ -109,13 +109,32 @@ pub struct Step {
     pub feed: f64,
     /// A deposition move (feed, and extrusion increasing where E means extrusion).
     pub deposit: bool,
-    /// The program frame's +Z in the part frame (the tool axis under `Orient::ToolAxis`).
-    pub program_z: Vector3<f64>,
-    /// The section's orientation rule.
-    pub orient: Orient,
+}
+
+/// The program frame of a section's layer: the section's frame, turned by its layer
+/// schedule (if any) for `layer`.
+pub fn section_frame(s: &Section, layer: usize) -> Frame {
+    match &s.layers {
+        Some(l) => s
+            .frame
+            .rotated(&l.axis, &l.point, l.deg_per_layer * layer as f64),
+        None => s.frame,
+    }
 }
 
 impl Step {
+    /// The program frame's +Z in the part frame (the tool axis under
+    /// `Orient::ToolAxis`). `sections` are those the step came from.
+    pub fn program_z(&self, sections: &[Section]) -> Vector3<f64> {
+        section_frame(&sections[self.section], self.layer).dir(&Vector3::z())
+    }
+
+    /// The orientation rule of the step's section (`sections` as for
+    /// [`Step::program_z`]).
+    pub fn orient(&self, sections: &[Section]) -> Orient {
+        sections[self.section].orient
+    }
+
     /// The point a fraction `t` along the move.
     pub fn at(&self, t: f64) -> Vector3<f64> {
         match self.kind {
@@ -162,6 +181,8 @@ pub struct Intended<'a> {
     /// The last move's end, in the program and the part frame, with its (section,
     /// layer): the next move starts there, so its start needs no transform.
     last_end: Option<(Vector3<f64>, Vector3<f64>, usize, usize)>,
+    /// (section, layer, its frame).
+    frame_cache: Option<(usize, usize, Frame)>,
 }
 
 impl std::fmt::Debug for Intended<'_> {
@@ -194,6 +215,7 @@ impl<'a> Intended<'a> {
             last_e: 0.0,
             done: false,
             last_end: None,
+            frame_cache: None,
         }
     }
 
@@ -204,12 +226,15 @@ impl<'a> Intended<'a> {
         }
     }
 
-    fn frame(&self, s: &Section, layer: usize) -> Frame {
-        match &s.layers {
-            Some(l) => s
-                .frame
-                .rotated(&l.axis, &l.point, l.deg_per_layer * layer as f64),
-            None => s.frame,
+    /// The current section's frame for `layer`, worked out once per layer.
+    fn frame(&mut self, s: &Section, layer: usize) -> Frame {
+        match self.frame_cache {
+            Some((i, l, f)) if i == self.idx && l == layer => f,
+            _ => {
+                let f = section_frame(s, layer);
+                self.frame_cache = Some((self.idx, layer, f));
+                f
+            }
         }
     }
 
@@ -404,8 +429,6 @@ impl<'a> Intended<'a> {
                 end: end_part,
                 feed,
                 deposit,
-                program_z: frame.dir(&Vector3::z()),
-                orient: sec.orient,
             }));
         }
     }

@@ -207,6 +207,9 @@ struct Writer<'m, W: Write> {
     fk_cache: ([f64; 2], Affine),
     /// The tool axis (part frame) at the written rotary, with `fk_cache`.
     fk_axis: Vector3<f64>,
+    /// The current section's orientation rule and its layer's program +Z.
+    orient: Orient,
+    program_z: Vector3<f64>,
     /// The intended tool axis for the current orientation: (orientation, axis).
     want_axis: Option<(Orient, Vector3<f64>)>,
     /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
@@ -247,8 +250,10 @@ impl<W: Write> Writer<'_, W> {
     /// output resolution), through forward kinematics, against the intended move.
     fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
         // The fields used, not the whole step (a copy of it costs as much as the check).
-        let Some((line, orient, program_z)) =
-            self.step.as_ref().map(|s| (s.line, s.orient, s.program_z))
+        let Some((line, orient, program_z)) = self
+            .step
+            .as_ref()
+            .map(|s| (s.line, self.orient, self.program_z))
         else {
             return Ok(());
         };
@@ -561,6 +566,7 @@ type IndexCache = ([f64; 2], [(f64, f64); 2], Affine, Affine);
 /// Plans ends on the reading thread (see [`PlannedEnd`]).
 struct Planner<'m> {
     m: &'m Machine,
+    sections: &'m [Section],
     head: usize,
     scale: f64,
     tolerance: f64,
@@ -570,7 +576,7 @@ struct Planner<'m> {
 
 impl Planner<'_> {
     fn plan(&mut self, step: &Step, points: &mut Vec<PlannedPoint>) -> Option<PlannedEnd> {
-        let Orient::Index(rot) = step.orient else {
+        let Orient::Index(rot) = step.orient(self.sections) else {
             return None;
         };
         let (sc, jm, tm) = match self.cache {
@@ -649,6 +655,7 @@ pub fn post<W: Write>(
     let opts = cfg.intended;
     let mut planner = Planner {
         m: machine,
+        sections,
         head: cfg.head,
         scale: linear_scale(program_units(machine)),
         tolerance: cfg.tolerance,
@@ -735,6 +742,8 @@ fn post_steps<W: Write>(
         step: None,
         fk_cache: ([f64::NAN; 2], index_maps(machine, cfg.head, &[0.0; 2]).1),
         fk_axis: Vector3::z(),
+        orient: Orient::ToolAxis,
+        program_z: Vector3::z(),
         want_axis: None,
         axis_err: None,
         head: cfg.head,
@@ -807,8 +816,10 @@ fn post_steps<W: Write>(
             let key = (step.section, step.layer);
             if cur_key != Some(key) {
                 cur_key = Some(key);
+                w.orient = step.orient(sections);
+                w.program_z = step.program_z(sections);
                 // Choose the rotaries for this section/layer.
-                let rot = match step.orient {
+                let rot = match w.orient {
                     Orient::Index(r) => {
                         for (i, ax) in machine.rotary.iter().enumerate() {
                             if !ax.within(r[i]) {
@@ -828,12 +839,12 @@ fn post_steps<W: Write>(
                     }
                     Orient::ToolAxis => {
                         let near = w.rot.unwrap_or(cfg.near);
-                        let sols = machine
-                            .orientations(&step.program_z, &near)
-                            .map_err(|err| PostError::Kin {
+                        let sols = machine.orientations(&w.program_z, &near).map_err(|err| {
+                            PostError::Kin {
                                 context: format!("{file}:{}: ", step.line),
                                 err,
-                            })?;
+                            }
+                        })?;
                         let same = sols.iter().find(|s| {
                             s.within_limits
                                 && w.branch
@@ -867,7 +878,7 @@ fn post_steps<W: Write>(
                                     return Err(PostError::Kin {
                                     context: format!("{file}:{}: ", step.line),
                                     err: lampost_kinematics::KinError::Unreachable {
-                                        what: format!("no orientation within the rotary limits ({}) turns the program's +Z ({:.4}, {:.4}, {:.4}) to the tool axis; candidates {}", names.join(", "), step.program_z.x, step.program_z.y, step.program_z.z, cands.join("; ")),
+                                        what: format!("no orientation within the rotary limits ({}) turns the program's +Z ({:.4}, {:.4}, {:.4}) to the tool axis; candidates {}", names.join(", "), w.program_z.x, w.program_z.y, w.program_z.z, cands.join("; ")),
                                     },
                                 });
                                 }
@@ -909,7 +920,7 @@ fn post_steps<W: Write>(
                 _ => joints(&jm, &step.start),
             };
             // Planned for the step's own index: usable when that is where the table is.
-            let planned = planned.filter(|_| matches!(step.orient, Orient::Index(r) if r == rot));
+            let planned = planned.filter(|_| matches!(w.orient, Orient::Index(r) if r == rot));
             let end = match planned {
                 Some(p) => p.joints,
                 None => joints(&jm, &step.end),

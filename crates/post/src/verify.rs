@@ -110,8 +110,8 @@ pub fn verify<R: BufRead>(
     });
     let mut current: Option<Step> = None;
     let mut rep = VerifyReport::default();
-    let intended_axis = |s: &Step| match s.orient {
-        Orient::ToolAxis => s.program_z.normalize(),
+    let intended_axis = |s: &Step| match s.orient(sections) {
+        Orient::ToolAxis => s.program_z(sections).normalize(),
         Orient::Index(r) => {
             machine
                 .forward(
