@@ -462,6 +462,15 @@ impl Machine {
             }
             names.push(n);
         }
+        let positive_resolution = |kind: &str, name: &str, res: f64| {
+            if res.is_finite() && res > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(format!(
+                    "{kind} axis {name} resolution must be positive"
+                )))
+            }
+        };
         let mut linear = Vec::with_capacity(3);
         for l in &def.linear {
             let dir =
@@ -472,12 +481,7 @@ impl Machine {
                     l.name
                 )));
             }
-            if !(l.resolution.is_finite() && l.resolution > 0.0) {
-                return Err(bad(format!(
-                    "linear axis {} resolution must be positive",
-                    l.name
-                )));
-            }
+            positive_resolution("linear", &l.name, l.resolution)?;
             linear.push(Linear {
                 name: l.name.clone(),
                 dir,
@@ -522,12 +526,7 @@ impl Machine {
                     )))
                 }
             };
-            if !(r.resolution.is_finite() && r.resolution > 0.0) {
-                return Err(bad(format!(
-                    "rotary axis {} resolution must be positive",
-                    r.name
-                )));
-            }
+            positive_resolution("rotary", &r.name, r.resolution)?;
             rotary.push(Rotary {
                 name: r.name.clone(),
                 axis,
@@ -696,18 +695,7 @@ impl Machine {
 
     /// Part → machine: where the part point `p` sits with the table at `rotary`.
     pub fn part_to_machine(&self, rotary: &[f64; 2], p: &Vector3<f64>) -> Vector3<f64> {
-        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
-        let (si, ci) = sin_cos_deg(rotary[self.inner]);
-        let (so, co) = sin_cos_deg(rotary[self.outer]);
-        let a = self
-            .chain
-            .inner_turn
-            .apply(&ri.axis, si, ci, &(p - ri.pivot))
-            + ri.pivot;
-        self.chain
-            .outer_turn
-            .apply(&ro.axis, so, co, &(a - ro.pivot))
-            + ro.pivot
+        self.part_to_machine_sc(&[sin_cos_deg(rotary[0]), sin_cos_deg(rotary[1])], p)
     }
 
     /// [`Machine::part_to_machine`] with each rotary given as (sin, cos).
@@ -750,18 +738,11 @@ impl Machine {
 
     /// Machine → part: the inverse of [`Machine::part_to_machine`].
     pub fn machine_to_part(&self, rotary: &[f64; 2], q: &Vector3<f64>) -> Vector3<f64> {
-        let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
-        let (si, ci) = sin_cos_deg(rotary[self.inner]);
-        let (so, co) = sin_cos_deg(rotary[self.outer]);
-        let a = self
-            .chain
-            .outer_turn
-            .apply(&ro.axis, -so, co, &(q - ro.pivot))
-            + ro.pivot;
-        self.chain
-            .inner_turn
-            .apply(&ri.axis, -si, ci, &(a - ri.pivot))
-            + ri.pivot
+        let inverse = |deg: f64| {
+            let (s, c) = sin_cos_deg(deg);
+            (-s, c)
+        };
+        self.machine_to_part_sc(&[inverse(rotary[0]), inverse(rotary[1])], q)
     }
 
     /// Turn the direction `d` by both rotaries, given as (sin, cos): inner then outer
