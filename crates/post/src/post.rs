@@ -10,6 +10,7 @@ use nalgebra::Vector3;
 
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
+use crate::verify::ArcPoints;
 
 /// Output dialect.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -394,28 +395,28 @@ impl<W: Write> Writer<'_, W> {
         self.check(file, line, x, &rot)?;
         self.note_limits(&[x[0], x[1], x[2], rot[0], rot[1]]);
         // Modal suppression: an axis word equal (as written) to the last one is left out.
-        let mut w = [(0u8, 0.0f64); 5];
+        let mut w = [(0u8, 0.0f64, 0i64); 3];
         let mut n = 0;
-        w[n] = (b'G', g);
-        n += 1;
         for (k, &v) in x.iter().enumerate() {
             let q = round_half_away(v * self.scale) as i64;
             if self.written[k] != Some(q) {
                 self.written[k] = Some(q);
-                w[n] = (self.letters[k], v);
+                w[n] = (self.letters[k], v, q);
                 n += 1;
             }
         }
-        if let Some(f) = feed {
-            w[n] = (b'F', f);
-            n += 1;
+        if n == 0 && g == 1.0 {
+            // A feed to where the head is (as written): keep one axis so the block moves
+            // (after the feed word, as posts have always written it).
+            let mut v = vec![(b'G', g)];
+            v.extend(feed.map(|f| (b'F', f)));
+            v.push((self.letters[0], x[0]));
+            self.words(&v, None)?;
+        } else {
+            self.em
+                .motion(g, &w[..n], self.scale, feed)
+                .map_err(PostError::from)?;
         }
-        if n == 1 + usize::from(feed.is_some()) && g == 1.0 {
-            // A feed to where the head is (as written): keep one axis so the block moves.
-            w[n] = (self.letters[0], x[0]);
-            n += 1;
-        }
-        self.words(&w[..n], None)?;
         if g != 0.0 {
             self.verify_point(x, step_end)?;
         }
@@ -601,13 +602,17 @@ impl Planner<'_> {
             if let ArcWay::Chords(n) =
                 arc_way(self.m, &sc, step, &center, &normal, sweep, self.tolerance)
             {
+                // (Always an arc here.)
+                let arc = ArcPoints::new(step)?;
                 for k in 1..=n {
-                    let q = joints(&jm, &step.at(k as f64 / n as f64));
+                    let t = k as f64 / n as f64;
+                    let c = arc.at(t);
+                    let q = joints(&jm, &c);
                     let tip = written_tip(&tm, self.scale, &q);
                     let err = if k == n {
                         (tip - step.end).norm()
                     } else {
-                        crate::verify::dist_to(step, &tip)
+                        arc.dist_near(step, &tip, &c, t)
                     };
                     points.push((q, err));
                 }
