@@ -1,14 +1,20 @@
 """The baseline for `cargo xtask bench post`: the same 3+2 transform a user would script
-with numpy, line by line: read each block, pick out X Y Z, turn the point by the table
-rotation about the pivot, write the block back. (It ignores arcs' centres, modal state and
-limits, so it does less than `lampost post`.)
+with numpy, line by line: read each block, pick out its words, turn the point by the table
+rotation about the pivot, write the block back. Arcs get what they need to stay correct:
+with the table untilted (B = 0) an arc stays an arc and its centre offset I, J turns with
+the table; tilted, the arc is no longer in the machine's XY plane, so it is written as
+chords to the same tolerance `lampost post` uses (0.01 mm). (It keeps no limits and does
+no verification, so it still does less than `lampost post`.)
 
 Usage: python3 post_baseline.py IN OUT B_DEG C_DEG H
 """
+import math
 import re
 import sys
 
 import numpy as np
+
+TOLERANCE = 0.01  # mm, chord tolerance
 
 
 def main():
@@ -18,20 +24,63 @@ def main():
     rz = np.array([[np.cos(cr), -np.sin(cr), 0], [np.sin(cr), np.cos(cr), 0], [0, 0, 1]])
     m = ry @ rz
     pivot = np.array([0.0, 0.0, -h])
-    word = re.compile(r"([XYZ])(-?\d*\.?\d+)")
+    tilted = b != 0.0
+    word = re.compile(r"([XYZIJ])(-?\d*\.?\d+)")
+    gword = re.compile(r"G0*([0-3])(?![\d.])")
+    feedword = re.compile(r"F(\d*\.?\d+)")
     pos = np.zeros(3)
+    motion = 0
     with open(src) as f, open(dst, "w") as out:
         for line in f:
             found = word.findall(line)
             if not found:
                 out.write(line)
                 continue
+            g = gword.search(line)
+            if g:
+                motion = int(g.group(1))
+            arc = motion >= 2
+            if arc:
+                start = pos.copy()
+                ij = np.zeros(2)
             for letter, value in found:
-                pos["XYZ".index(letter)] = float(value)
+                if letter in "IJ":
+                    ij["IJ".index(letter)] = float(value)
+                else:
+                    pos["XYZ".index(letter)] = float(value)
+            if arc and tilted:
+                # Chords: the arc in its own plane, then turned like every point.
+                centre = start[:2] + ij
+                r = math.hypot(start[0] - centre[0], start[1] - centre[1])
+                a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
+                a1 = math.atan2(pos[1] - centre[1], pos[0] - centre[0])
+                sweep = a1 - a0
+                if motion == 3 and sweep <= 0:
+                    sweep += 2 * math.pi
+                elif motion == 2 and sweep >= 0:
+                    sweep -= 2 * math.pi
+                n = max(1, math.ceil(abs(sweep) / (2 * math.acos(1 - min(TOLERANCE / r, 1.0)))))
+                t = np.arange(1, n + 1) / n
+                ang = a0 + sweep * t
+                pts = np.column_stack(
+                    [centre[0] + r * np.cos(ang), centre[1] + r * np.sin(ang), start[2] + (pos[2] - start[2]) * t]
+                )
+                q = (pts - pivot) @ m.T + pivot
+                rows = ["G1 X%.3f Y%.3f Z%.3f" % (-x, -y, z) for x, y, z in q]
+                fw = feedword.search(line)
+                if fw:
+                    rows[0] += " F" + fw.group(1)
+                out.write("\n".join(rows) + "\n")
+                continue
             q = m @ (pos - pivot) + pivot
             rest = word.sub("", line).strip()
-            out.write("%s X%.3f Y%.3f Z%.3f\n" % (rest, -q[0], -q[1], q[2]))
-
+            if arc:
+                # Untilted, the arc stays an arc; its centre offset turns with the table
+                # (and flips with X and Y, which move the table).
+                ij = m[:2, :2] @ ij
+                out.write("%s X%.3f Y%.3f Z%.3f I%.3f J%.3f\n" % (rest, -q[0], -q[1], q[2], -ij[0], -ij[1]))
+            else:
+                out.write("%s X%.3f Y%.3f Z%.3f\n" % (rest, -q[0], -q[1], q[2]))
 
 if __name__ == "__main__":
     main()

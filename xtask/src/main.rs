@@ -204,19 +204,53 @@ fn bench_post() -> Result<(), String> {
             .status();
     }
     let script = root().join("xtask/post_baseline.py");
-    let mut py = Command::new("python3");
-    py.arg(&script)
-        .arg(&input)
-        .arg(dir.join("numpy.nc"))
-        .args(["30", "45", "150"]);
-    match peak_memory(py) {
-        Ok((t, _)) => println!(
-            "numpy script, line by line:    {:.0} ms; script / post = {:.1} tilted, {:.1} arcs kept (target ≥ 20)",
-            t.as_secs_f64() * 1e3,
-            t.as_secs_f64() / tp.as_secs_f64(),
-            t.as_secs_f64() / tflat.as_secs_f64()
-        ),
-        Err(e) => println!("numpy script could not run: {e}"),
+    // The script for each case, then its output checked by `lampost verify` against the
+    // same intended path (with the index it assumes written first): it must be the same
+    // transform, not just the same speed.
+    for (b, c, t_post, what) in [("30", "45", tp, "tilted"), ("0", "30", tflat, "arcs kept")] {
+        let script_out = dir.join(format!("numpy-b{b}.nc"));
+        let mut py = Command::new("python3");
+        py.arg(&script)
+            .arg(&input)
+            .arg(&script_out)
+            .args([b, c, "150"]);
+        match peak_memory(py) {
+            Ok((t, _)) => {
+                let checked = dir.join(format!("numpy-b{b}-indexed.nc"));
+                let verdict = std::fs::read(&script_out)
+                    .and_then(|body| {
+                        let mut text = format!("G21 G90 G94\nG0 B{b} C{c}\n").into_bytes();
+                        text.extend_from_slice(&body);
+                        std::fs::write(&checked, text)
+                    })
+                    .map_err(|e| e.to_string())
+                    .and_then(|()| {
+                        Command::new(&bin)
+                            .args(["verify", "--machine", "nrc-lc", "--index"])
+                            .arg(format!("B={b},C={c}"))
+                            .arg(&input)
+                            .arg(&checked)
+                            .output()
+                            .map_err(|e| e.to_string())
+                    })
+                    .map_or_else(
+                        |e| format!("not verified: {e}"),
+                        |o| {
+                            if o.status.success() {
+                                "its output passes lampost verify".to_string()
+                            } else {
+                                "its output FAILS lampost verify".to_string()
+                            }
+                        },
+                    );
+                println!(
+                    "numpy script, B={b} C={c}:      {:.0} ms; script / post = {:.1} {what} (target ≥ 20); {verdict}",
+                    t.as_secs_f64() * 1e3,
+                    t.as_secs_f64() / t_post.as_secs_f64(),
+                );
+            }
+            Err(e) => println!("numpy script could not run: {e}"),
+        }
     }
     Ok(())
 }
