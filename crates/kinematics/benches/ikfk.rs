@@ -56,6 +56,55 @@ fn main() {
             }
             acc
         });
+        // The same pairs through the batch functions (`inverse_into`, `forward_into`).
+        let queries: Vec<lampost_kinematics::IkQuery> = poses
+            .iter()
+            .map(|(tip, axis, near)| lampost_kinematics::IkQuery {
+                tip: *tip,
+                axis: *axis,
+                near: *near,
+            })
+            .collect();
+        let mut sols = Vec::new();
+        let mut best = Vec::new();
+        let mut fk = Vec::new();
+        let t_batch = best_of(runs, || {
+            let mut acc = 0.0;
+            let mut done = 0;
+            while done < n {
+                m.inverse_into(&queries, 0, &mut sols);
+                best.clear();
+                best.extend(
+                    sols.iter()
+                        .filter_map(|s| s.as_ref().ok())
+                        .map(|s| s.as_slice()[0].joints),
+                );
+                m.forward_into(&best, 0, &mut fk);
+                acc += fk.iter().map(|p| p.tip.x).sum::<f64>();
+                done += queries.len();
+            }
+            acc
+        });
+        let t_bik = best_of(runs, || {
+            let mut acc = 0.0;
+            let mut done = 0;
+            while done < n {
+                m.inverse_into(&queries, 0, &mut sols);
+                acc += sols.len() as f64;
+                done += queries.len();
+            }
+            acc
+        });
+        let t_bfk = best_of(runs, || {
+            let mut acc = 0.0;
+            let mut done = 0;
+            while done < n {
+                m.forward_into(&best, 0, &mut fk);
+                acc += fk.len() as f64;
+                done += best.len();
+            }
+            acc
+        });
         let t_ik = best_of(runs, || {
             let mut acc = 0.0;
             for i in 0..n {
@@ -132,6 +181,18 @@ fn main() {
             }
             acc
         });
+        let batch_n = n.div_ceil(queries.len()) * queries.len();
+        println!(
+            "  breakdown: batched IK alone {:.1} ns, batched FK alone {:.1} ns",
+            t_bik.as_secs_f64() * 1e9 / batch_n as f64,
+            t_bfk.as_secs_f64() * 1e9 / batch_n as f64
+        );
+        println!(
+            "{name}: batched IK + FK (inverse_into, forward_into; {} poses a call): {:.1} M pairs/s ({:.1} ns a pair)",
+            queries.len(),
+            batch_n as f64 / t_batch.as_secs_f64() / 1e6,
+            t_batch.as_secs_f64() * 1e9 / batch_n as f64
+        );
         println!(
             "{name}: IK + FK {:.1} M pairs/s ({:.1} ns a pair); baseline nalgebra Rotation3 FK alone {:.1} M/s; ratio (IK+FK)/FK-baseline time {:.2}",
             n as f64 / t.as_secs_f64() / 1e6,

@@ -16,11 +16,14 @@
 //! - `serde` + `toml`: machine files users read, copy and edit, with line/column errors;
 //! - `thiserror`: the typed [`KinError`].
 
+pub mod batch;
 pub mod def;
 pub mod error;
+mod lanes;
 pub mod machine;
 pub mod trig;
 
+pub use batch::IkQuery;
 pub use def::{MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS};
 pub use error::KinError;
 pub use machine::{

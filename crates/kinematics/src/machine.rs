@@ -16,7 +16,7 @@ use crate::error::KinError;
 use crate::trig::{atan2_deg, sin_cos_deg};
 
 /// Below this, a vector is taken as parallel to a rotary axis (singular).
-const SINGULAR: f64 = 1e-9;
+pub(crate) const SINGULAR: f64 = 1e-9;
 
 /// A linear axis, resolved.
 #[derive(Debug, Clone)]
@@ -165,7 +165,7 @@ pub struct Choice {
 /// and the coordinate along the axis untouched, exactly) or about a general direction
 /// (Rodrigues' formula).
 #[derive(Debug, Clone, Copy)]
-enum Turn {
+pub(crate) enum Turn {
     X(f64),
     Y(f64),
     Z(f64),
@@ -190,7 +190,7 @@ impl Turn {
     }
 
     /// Rotate `p` about `u` (this turn's axis) by the angle with sine `s`, cosine `c`.
-    #[inline]
+    #[inline(always)]
     fn apply(self, u: &Vector3<f64>, s: f64, c: f64, p: &Vector3<f64>) -> Vector3<f64> {
         match self {
             Turn::X(sg) => {
@@ -212,27 +212,27 @@ impl Turn {
 
 /// Constants of the orientation solution, fixed per machine (see [`Machine::orient`]).
 #[derive(Debug, Clone)]
-struct Chain {
+pub(crate) struct Chain {
     /// How the inner and outer axes turn points.
-    inner_turn: Turn,
-    outer_turn: Turn,
+    pub(crate) inner_turn: Turn,
+    pub(crate) outer_turn: Turn,
     /// u₁·u₂.
-    k: f64,
+    pub(crate) k: f64,
     /// 1 / (1 − k²), 1 − k² = |u₁ × u₂|².
-    inv_det: f64,
+    pub(crate) inv_det: f64,
     /// u₂·t.
-    b: f64,
+    pub(crate) b: f64,
     /// (u₂ − k·u₁)/|…|: with `n_hat` an orthonormal basis, positive about u₁, of the
     /// plane normal to u₁.
-    e1: Vector3<f64>,
+    pub(crate) e1: Vector3<f64>,
     /// (u₁ × u₂)/|…|.
-    n_hat: Vector3<f64>,
+    pub(crate) n_hat: Vector3<f64>,
     /// ψ, the turn about u₂ from t's part normal to u₂ to (u₁ − k·u₂): degrees and
     /// (sin, cos).
-    psi: f64,
-    psi_sc: (f64, f64),
+    pub(crate) psi: f64,
+    pub(crate) psi_sc: (f64, f64),
     /// The tool axis is parallel to the outer axis (always singular there).
-    outer_singular: bool,
+    pub(crate) outer_singular: bool,
 }
 
 /// An affine map `p ↦ A·p + b` (see [`Machine::joints_map`], [`Machine::tip_map`]).
@@ -293,7 +293,7 @@ pub struct Machine {
     pub tool_axis: Vector3<f64>,
     /// The definition it was built from (with any `--set` applied).
     pub def: MachineDef,
-    chain: Chain,
+    pub(crate) chain: Chain,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -301,14 +301,14 @@ fn v3(a: [f64; 3]) -> Vector3<f64> {
 }
 
 /// Rotate `p` about the unit axis `u` by the angle with sine `s` and cosine `c`.
-#[inline]
+#[inline(always)]
 fn rot(u: &Vector3<f64>, s: f64, c: f64, p: &Vector3<f64>) -> Vector3<f64> {
     p * c + u.cross(p) * s + u * (u.dot(p) * (1.0 - c))
 }
 
 /// Wrap degrees to (−180, 180].
-#[inline]
-fn wrap180(d: f64) -> f64 {
+#[inline(always)]
+pub(crate) fn wrap180(d: f64) -> f64 {
     // One turn either way covers differences of two wrapped angles, without a branch.
     if d > -540.0 && d <= 540.0 {
         let up = f64::from(u8::from(d <= -180.0));
@@ -806,7 +806,7 @@ impl Machine {
     }
 
     /// The head's tool point in the machine frame for linear positions `x`.
-    #[inline]
+    #[inline(always)]
     pub fn head_point(&self, x: &[f64; 3], head: usize) -> Vector3<f64> {
         let mut q = self.heads[head].offset;
         for (l, &v) in self.linear.iter().zip(x) {
@@ -829,9 +829,24 @@ impl Machine {
     /// Forward kinematics: joints and head → tool tip and tool axis in the part frame.
     #[inline]
     pub fn forward(&self, j: &Joints, head: usize) -> Pose {
+        self.forward_sc(
+            j,
+            head,
+            sin_cos_deg(j.rotary[self.inner]),
+            sin_cos_deg(j.rotary[self.outer]),
+        )
+    }
+
+    /// [`Machine::forward`] with the inner and outer rotaries' (sin, cos) given.
+    #[inline(always)]
+    pub(crate) fn forward_sc(
+        &self,
+        j: &Joints,
+        head: usize,
+        (si, ci): (f64, f64),
+        (so, co): (f64, f64),
+    ) -> Pose {
         let (ri, ro) = (&self.rotary[self.inner], &self.rotary[self.outer]);
-        let (si, ci) = sin_cos_deg(j.rotary[self.inner]);
-        let (so, co) = sin_cos_deg(j.rotary[self.outer]);
         let q = self.head_point(&j.linear, head);
         let a = self
             .chain
@@ -909,6 +924,12 @@ impl Machine {
         Some((out, count))
     }
 
+    /// The tool axis is parallel to the outer rotary axis (every orientation is
+    /// singular there).
+    pub(crate) fn outer_singular(&self) -> bool {
+        self.chain.outer_singular
+    }
+
     /// The scalars of [`Machine::orient`] for the unit axis `v`.
     #[inline(always)]
     pub(crate) fn orient_setup(&self, v: &Vector3<f64>) -> OrientSetup {
@@ -935,6 +956,18 @@ impl Machine {
     /// The inner angle of both branches (degrees, (sin, cos)), away from its singularity.
     #[inline(always)]
     pub(crate) fn inner_regular(&self, st: &OrientSetup, g: f64) -> ([f64; 2], [(f64, f64); 2]) {
+        self.inner_regular_with(st, g, atan2_deg)
+    }
+
+    /// [`Machine::inner_regular`] with the arctangent given (the batch kinematics pass
+    /// the branch-free one where its input is known regular).
+    #[inline(always)]
+    pub(crate) fn inner_regular_with(
+        &self,
+        st: &OrientSetup,
+        g: f64,
+        atan2_deg: impl Fn(f64, f64) -> f64,
+    ) -> ([f64; 2], [(f64, f64); 2]) {
         let (beta, ve, vn) = (st.beta, st.ve, st.vn);
         let phi = atan2_deg(vn, ve);
         // β is exactly 0 on the usual tables (inner axis and tool axis both normal
@@ -962,6 +995,18 @@ impl Machine {
     /// The outer angle of both branches (degrees, (sin, cos)), away from its singularity.
     #[inline(always)]
     pub(crate) fn outer_regular(&self, alpha: f64, g: f64) -> ([f64; 2], [(f64, f64); 2]) {
+        self.outer_regular_with(alpha, g, atan2_deg)
+    }
+
+    /// [`Machine::outer_regular`] with the arctangent given (see
+    /// [`Machine::inner_regular_with`]).
+    #[inline(always)]
+    pub(crate) fn outer_regular_with(
+        &self,
+        alpha: f64,
+        g: f64,
+        atan2_deg: impl Fn(f64, f64) -> f64,
+    ) -> ([f64; 2], [(f64, f64); 2]) {
         let ch = &self.chain;
         let d2 = atan2_deg(g, alpha);
         let inv = 1.0 / (g * g + alpha * alpha).sqrt();

@@ -21,6 +21,8 @@
 //! the compiler; the arctangent table holds atan(k/8) in degrees, correctly rounded
 //! (computed with 40-digit arithmetic; a test checks each against the C library).
 
+use crate::lanes::F4;
+
 /// π/180 rounded to `f64`.
 const RAD: f64 = std::f64::consts::PI / 180.0;
 /// 180/π rounded to `f64`.
@@ -62,6 +64,13 @@ pub fn sin_cos_deg(x: f64) -> (f64, f64) {
     if x.is_nan() || x.abs() > 1e15 {
         return x.to_radians().sin_cos();
     }
+    sin_cos_deg_core(x)
+}
+
+/// [`sin_cos_deg`] for `|x| ≤ 1e15` (not NaN), with no branch at all: what the batch
+/// kinematics run on many angles at once (the caller checks the range).
+#[inline(always)]
+pub(crate) fn sin_cos_deg_core(x: f64) -> (f64, f64) {
     // Nearest multiple of 90, without a branch: adding and removing 1.5·2⁵² rounds to
     // an integer (|x/90| < 2⁵¹). No branch matters: angles arrive in random order, and a
     // mispredicted branch costs as much as the polynomial.
@@ -121,6 +130,14 @@ pub fn atan2_deg(y: f64, x: f64) -> f64 {
     if !(ax > 0.0 || ay > 0.0) || !(ax < f64::INFINITY && ay < f64::INFINITY) {
         return y.atan2(x).to_degrees();
     }
+    atan2_deg_core(y, x)
+}
+
+/// [`atan2_deg`] for finite `y`, `x`, not both zero, with no branch at all (see
+/// [`sin_cos_deg_core`]; the caller checks).
+#[inline(always)]
+pub(crate) fn atan2_deg_core(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
     // No data-dependent branch below (see `sin_cos_deg`): min/max, 0/1 factors, copysign.
     let swap = f64::from(u8::from(ay > ax));
     let t = ax.min(ay) / ax.max(ay); // in [0, 1]
@@ -141,6 +158,49 @@ pub fn atan2_deg(y: f64, x: f64) -> f64 {
     let sx = 1.0f64.copysign(x);
     let d = 90.0 * (1.0 - sx) + sx * d;
     d.copysign(y)
+}
+
+/// [`sin_cos_deg_core`] on four lanes at once (the same operations on each lane, so the
+/// same bits; see [`crate::lanes`]).
+#[inline(always)]
+pub(crate) fn sin_cos_deg4(x: F4) -> (F4, F4) {
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let kf = (x * (1.0 / 90.0) + ROUND) - ROUND;
+    let r = x - 90.0 * kf;
+    let k: [i64; 4] = kf.0.map(|v| v as i64);
+    let t = r * RAD;
+    let z = t * t;
+    let z2 = z * z;
+    let z4 = z2 * z2;
+    let ps = (S3 + S5 * z) + z2 * (S7 + S9 * z) + z4 * ((S11 + S13 * z) + z2 * (S15 + S17 * z));
+    let pc = (C2 + C4 * z) + z2 * (C6 + C8 * z) + z4 * ((C10 + C12 * z) + z2 * (C14 + C16 * z));
+    let s = t + t * z * ps;
+    let c = 1.0 + z * pc;
+    let odd = F4::from_fn(|i| (k[i] & 1) as f64);
+    let even = 1.0 - odd;
+    let (ps, pc) = (even * s + odd * c, even * c + odd * s);
+    let sin_sign = 1.0 - 2.0 * F4::from_fn(|i| ((k[i] >> 1) & 1) as f64);
+    let cos_sign = 1.0 - 2.0 * F4::from_fn(|i| (((k[i] + 1) >> 1) & 1) as f64);
+    (sin_sign * ps, cos_sign * pc)
+}
+
+/// [`atan2_deg_core`] on four lanes at once (see [`sin_cos_deg4`]).
+#[inline(always)]
+pub(crate) fn atan2_deg4(y: F4, x: F4) -> F4 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let swap = F4::one_if(ay.cmp(ax, |a, b| a > b));
+    let t = ax.zip(ay, f64::min) / ax.zip(ay, f64::max);
+    let k: [usize; 4] = (t * 8.0 + 0.5).0.map(|v| (v as u32).min(8) as usize);
+    let c = F4::from_fn(|i| k[i] as f64 * 0.125);
+    let u = (t - c) / (1.0 + t * c);
+    let z = u * u;
+    let z2 = z * z;
+    let p = (A3 + A5 * z) + z2 * (A7 + A9 * z) + z2 * z2 * (A11 + A13 * z);
+    let d = F4::from_fn(|i| ATAN_EIGHTHS[k[i]]) + (u + u * z * p) * DEG;
+    let d = 90.0 * swap + (1.0 - 2.0 * swap) * d;
+    let sx = x.map(|v| 1.0f64.copysign(v));
+    let d = 90.0 * (1.0 - sx) + sx * d;
+    d.zip(y, f64::copysign)
 }
 
 #[cfg(test)]
