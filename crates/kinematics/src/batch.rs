@@ -37,9 +37,6 @@ pub struct IkQuery {
     pub near: [f64; 2],
 }
 
-/// Poses per vector pass (its flags and results live on the stack).
-const CHUNK: usize = 128;
-
 const EMPTY_SOLUTION: Solution = Solution {
     joints: Joints {
         linear: [0.0; 3],
@@ -61,8 +58,10 @@ struct IkPass<'a> {
     m: &'a Machine,
     head: usize,
     queries: &'a [IkQuery],
-    sols: &'a mut [Solutions],
-    regular: &'a mut [bool],
+    /// Where the answers go, in order (irregular ones as placeholders).
+    out: &'a mut Vec<Result<Solutions, KinError>>,
+    /// Indices (into `queries`) of the irregular ones.
+    irregular: &'a mut Vec<usize>,
 }
 
 impl WithSimd for IkPass<'_> {
@@ -72,21 +71,19 @@ impl WithSimd for IkPass<'_> {
     fn with_simd<S: Simd>(self, _simd: S) {
         let (m, head) = (self.m, self.head);
         let groups = self.queries.chunks_exact(LANES);
-        let rest = groups.remainder().len();
-        for ((q, s), r) in groups
-            .zip(self.sols.chunks_exact_mut(LANES))
-            .zip(self.regular.chunks_exact_mut(LANES))
-        {
+        let rest = groups.remainder();
+        for (g, q) in groups.enumerate() {
             let (sols, regular) = m.inverse4(q, head);
-            s.copy_from_slice(&sols);
-            for (k, r) in r.iter_mut().enumerate() {
-                *r = lane(&regular, k);
+            for (k, s) in sols.into_iter().enumerate() {
+                if !lane(&regular, k) {
+                    self.irregular.push(g * LANES + k);
+                }
+                self.out.push(Ok(s));
             }
         }
-        // The last few (fewer than a group) go to the scalar function.
-        let n = self.queries.len();
-        for r in &mut self.regular[n - rest..n] {
-            *r = false;
+        // The last few (fewer than a group): the scalar function.
+        for q in rest {
+            self.out.push(m.inverse(&q.tip, &q.axis, head, &q.near));
         }
     }
 }
@@ -96,8 +93,10 @@ struct FkPass<'a> {
     m: &'a Machine,
     head: usize,
     joints: &'a [Joints],
-    poses: &'a mut [Pose],
-    regular: &'a mut [bool],
+    /// Where the poses go, in order (irregular ones as placeholders).
+    out: &'a mut Vec<Pose>,
+    /// Indices (into `joints`) of the irregular ones.
+    irregular: &'a mut Vec<usize>,
 }
 
 impl WithSimd for FkPass<'_> {
@@ -107,20 +106,19 @@ impl WithSimd for FkPass<'_> {
     fn with_simd<S: Simd>(self, _simd: S) {
         let (m, head) = (self.m, self.head);
         let groups = self.joints.chunks_exact(LANES);
-        let rest = groups.remainder().len();
-        for ((j, p), r) in groups
-            .zip(self.poses.chunks_exact_mut(LANES))
-            .zip(self.regular.chunks_exact_mut(LANES))
-        {
+        let rest = groups.remainder();
+        for (g, j) in groups.enumerate() {
             let (poses, regular) = m.forward4(j, head);
-            p.copy_from_slice(&poses);
-            for (k, r) in r.iter_mut().enumerate() {
-                *r = lane(&regular, k);
+            for (k, p) in poses.into_iter().enumerate() {
+                if !lane(&regular, k) {
+                    self.irregular.push(g * LANES + k);
+                }
+                self.out.push(p);
             }
         }
-        let n = self.joints.len();
-        for r in &mut self.regular[n - rest..n] {
-            *r = false;
+        // The last few (fewer than a group): the scalar function.
+        for j in rest {
+            self.out.push(m.forward(j, head));
         }
     }
 }
@@ -135,28 +133,26 @@ impl Machine {
     ) {
         out.clear();
         out.reserve(queries.len());
-        let arch = Arch::new();
-        let mut sols = [EMPTY; CHUNK];
-        let mut regular = [false; CHUNK];
-        for chunk in queries.chunks(CHUNK) {
-            if self.outer_singular() {
-                regular = [false; CHUNK];
-            } else {
-                arch.dispatch(IkPass {
-                    m: self,
-                    head,
-                    queries: chunk,
-                    sols: &mut sols,
-                    regular: &mut regular,
-                });
-            }
-            for ((q, s), r) in chunk.iter().zip(&sols).zip(&regular) {
-                out.push(if *r {
-                    Ok(*s)
-                } else {
-                    self.inverse(&q.tip, &q.axis, head, &q.near)
-                });
-            }
+        if self.outer_singular() {
+            // Every orientation is singular: the scalar function for all.
+            out.extend(
+                queries
+                    .iter()
+                    .map(|q| self.inverse(&q.tip, &q.axis, head, &q.near)),
+            );
+            return;
+        }
+        let mut irregular = Vec::new();
+        Arch::new().dispatch(IkPass {
+            m: self,
+            head,
+            queries,
+            out,
+            irregular: &mut irregular,
+        });
+        for i in irregular {
+            let q = &queries[i];
+            out[i] = self.inverse(&q.tip, &q.axis, head, &q.near);
         }
     }
 
@@ -164,24 +160,16 @@ impl Machine {
     pub fn forward_into(&self, joints: &[Joints], head: usize, out: &mut Vec<Pose>) {
         out.clear();
         out.reserve(joints.len());
-        let arch = Arch::new();
-        let blank = Pose {
-            tip: Vector3::zeros(),
-            axis: Vector3::zeros(),
-        };
-        let mut poses = [blank; CHUNK];
-        let mut regular = [false; CHUNK];
-        for chunk in joints.chunks(CHUNK) {
-            arch.dispatch(FkPass {
-                m: self,
-                head,
-                joints: chunk,
-                poses: &mut poses,
-                regular: &mut regular,
-            });
-            for ((j, p), r) in chunk.iter().zip(&poses).zip(&regular) {
-                out.push(if *r { *p } else { self.forward(j, head) });
-            }
+        let mut irregular = Vec::new();
+        Arch::new().dispatch(FkPass {
+            m: self,
+            head,
+            joints,
+            out,
+            irregular: &mut irregular,
+        });
+        for i in irregular {
+            out[i] = self.forward(&joints[i], head);
         }
     }
 
@@ -237,11 +225,11 @@ impl Machine {
         let tip = W3::from_fn(|i| q[i].tip);
         let axis = W3::from_fn(|i| q[i].axis);
         let near = [F4::from_fn(|i| q[i].near[0]), F4::from_fn(|i| q[i].near[1])];
-        let mut finite = [0; LANES];
-        for (f, q) in finite.iter_mut().zip(q) {
-            let all = q.tip.iter().chain(q.axis.iter()).all(|x| x.is_finite());
-            *f = if all { u64::MAX } else { 0 };
-        }
+        let fin = |w: &W3| {
+            let f = |x: F4| x.test(f64::is_finite);
+            and(and(f(w.x), f(w.y)), f(w.z))
+        };
+        let finite = and(fin(&tip), fin(&axis));
         // `inverse`: the unit axis.
         let n = axis.dot(&axis).sqrt();
         let v = axis.scale(1.0 / n);
@@ -382,6 +370,10 @@ impl Machine {
             Some((lo, hi)) => {
                 let within = |c: F4| c.test(|x| x >= lo - 1e-9 && x <= hi + 1e-9);
                 let fast = and(within(base), (base - near).abs().test(|x| x < 180.0));
+                if fast == ALL {
+                    // No lane needs the search (the usual case): `place` returns `base`.
+                    return (base, ALL);
+                }
                 let (mut best, mut best_d, mut any) = (base, F4::splat(0.0), [0; LANES]);
                 for k in -2i8..=2 {
                     let c = base + 360.0 * f64::from(k);
@@ -501,6 +493,10 @@ fn wrap180_4(d: F4) -> F4 {
     let up = F4::one_if(d.test(|x| x <= -180.0));
     let down = F4::one_if(d.test(|x| x > 180.0));
     let near_turn = d + 360.0 * (up - down);
+    if small == ALL {
+        // The usual case: no lane more than 1½ turns out.
+        return near_turn;
+    }
     let x = d - 360.0 * (d / 360.0).map(f64::round);
     let x = F4::select(
         x.test(|v| v > 180.0),

@@ -167,7 +167,10 @@ pub(crate) fn sin_cos_deg4(x: F4) -> (F4, F4) {
     const ROUND: f64 = 6_755_399_441_055_744.0;
     let kf = (x * (1.0 / 90.0) + ROUND) - ROUND;
     let r = x - 90.0 * kf;
-    let k: [i64; 4] = kf.0.map(|v| v as i64);
+    // The quadrant k (an integer, |k| < 2⁵¹) and its bits as exact float arithmetic
+    // (vector instructions; a conversion to i64 is not): k & 1 = k − 2⌊k/2⌋,
+    // (k >> 1) & 1 = h − 2⌊h/2⌋ with h = ⌊k/2⌋, and the same for k + 1.
+    let bit = |m: F4| m - 2.0 * (m * 0.5).map(f64::floor);
     let t = r * RAD;
     let z = t * t;
     let z2 = z * z;
@@ -176,11 +179,11 @@ pub(crate) fn sin_cos_deg4(x: F4) -> (F4, F4) {
     let pc = (C2 + C4 * z) + z2 * (C6 + C8 * z) + z4 * ((C10 + C12 * z) + z2 * (C14 + C16 * z));
     let s = t + t * z * ps;
     let c = 1.0 + z * pc;
-    let odd = F4::from_fn(|i| (k[i] & 1) as f64);
+    let odd = bit(kf);
     let even = 1.0 - odd;
     let (ps, pc) = (even * s + odd * c, even * c + odd * s);
-    let sin_sign = 1.0 - 2.0 * F4::from_fn(|i| ((k[i] >> 1) & 1) as f64);
-    let cos_sign = 1.0 - 2.0 * F4::from_fn(|i| (((k[i] + 1) >> 1) & 1) as f64);
+    let sin_sign = 1.0 - 2.0 * bit((kf * 0.5).map(f64::floor));
+    let cos_sign = 1.0 - 2.0 * bit(((kf + 1.0) * 0.5).map(f64::floor));
     (sin_sign * ps, cos_sign * pc)
 }
 
@@ -190,7 +193,9 @@ pub(crate) fn atan2_deg4(y: F4, x: F4) -> F4 {
     let (ax, ay) = (x.abs(), y.abs());
     let swap = F4::one_if(ay.cmp(ax, |a, b| a > b));
     let t = ax.zip(ay, f64::min) / ax.zip(ay, f64::max);
-    let k: [usize; 4] = (t * 8.0 + 0.5).0.map(|v| (v as u32).min(8) as usize);
+    // `(v as u32).min(8)` of the scalar code: v is in [0.5, 8.5] (or NaN, 0 either way),
+    // where a conversion to i32 (a vector instruction; to u32 is not) is the same.
+    let k: [usize; 4] = (t * 8.0 + 0.5).0.map(|v| (v as i32).clamp(0, 8) as usize);
     let c = F4::from_fn(|i| k[i] as f64 * 0.125);
     let u = (t - c) / (1.0 + t * c);
     let z = u * u;
