@@ -14,7 +14,11 @@
 //! ## Why these dependencies
 //! - `nalgebra`: vectors and small linear algebra, shared with the fitting code;
 //! - `serde` + `toml`: machine files users read, copy and edit, with line/column errors;
-//! - `thiserror`: the typed [`KinError`].
+//! - `thiserror`: the typed [`KinError`];
+//! - `pulp`: the batch functions ([`batch`]) run four poses per instruction with AVX2
+//!   where the processor has it, chosen at run time (a portable build cannot assume it);
+//!   that choice takes `unsafe`, which this workspace forbids and `pulp` keeps inside a
+//!   well-used crate.
 
 pub mod batch;
 pub mod def;
