@@ -12,17 +12,17 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 use nalgebra::Vector3;
 
 /// Lanes per group.
-pub(crate) const LANES: usize = 4;
+pub const LANES: usize = 4;
 
 /// Four lanes of `f64`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct F4(pub(crate) [f64; LANES]);
+pub struct F4(pub [f64; LANES]);
 
 /// Four lanes of `bool` as vector compares make them: all bits set (true) or none.
-pub(crate) type M4 = [u64; LANES];
+pub type M4 = [u64; LANES];
 
 /// Every lane true.
-pub(crate) const ALL: M4 = [u64::MAX; LANES];
+pub const ALL: M4 = [u64::MAX; LANES];
 
 /// The mask of a `bool`.
 #[inline(always)]
@@ -36,7 +36,7 @@ fn mask(b: bool) -> u64 {
 
 /// Lane `i` of a mask as a `bool`.
 #[inline(always)]
-pub(crate) fn lane(m: &M4, i: usize) -> bool {
+pub fn lane(m: &M4, i: usize) -> bool {
     m[i] != 0
 }
 
@@ -83,33 +83,33 @@ impl Neg for F4 {
 impl F4 {
     /// The same value in every lane.
     #[inline(always)]
-    pub(crate) fn splat(x: f64) -> F4 {
+    pub fn splat(x: f64) -> F4 {
         F4([x; LANES])
     }
 
     /// Lane `i` of each of four values (a gather from structures).
     #[inline(always)]
-    pub(crate) fn from_fn(f: impl Fn(usize) -> f64) -> F4 {
+    pub fn from_fn(f: impl Fn(usize) -> f64) -> F4 {
         F4([f(0), f(1), f(2), f(3)])
     }
 
     /// `f` on each lane.
     #[inline(always)]
-    pub(crate) fn map(self, f: impl Fn(f64) -> f64) -> F4 {
+    pub fn map(self, f: impl Fn(f64) -> f64) -> F4 {
         let a = self.0;
         F4([f(a[0]), f(a[1]), f(a[2]), f(a[3])])
     }
 
     /// `f` on each pair of lanes.
     #[inline(always)]
-    pub(crate) fn zip(self, b: F4, f: impl Fn(f64, f64) -> f64) -> F4 {
+    pub fn zip(self, b: F4, f: impl Fn(f64, f64) -> f64) -> F4 {
         let (a, b) = (self.0, b.0);
         F4([f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])])
     }
 
     /// A comparison on each pair of lanes.
     #[inline(always)]
-    pub(crate) fn cmp(self, b: F4, f: impl Fn(f64, f64) -> bool) -> M4 {
+    pub fn cmp(self, b: F4, f: impl Fn(f64, f64) -> bool) -> M4 {
         let (a, b) = (self.0, b.0);
         [
             mask(f(a[0], b[0])),
@@ -121,24 +121,24 @@ impl F4 {
 
     /// A test of each lane.
     #[inline(always)]
-    pub(crate) fn test(self, f: impl Fn(f64) -> bool) -> M4 {
+    pub fn test(self, f: impl Fn(f64) -> bool) -> M4 {
         let a = self.0;
         [mask(f(a[0])), mask(f(a[1])), mask(f(a[2])), mask(f(a[3]))]
     }
 
     #[inline(always)]
-    pub(crate) fn sqrt(self) -> F4 {
+    pub fn sqrt(self) -> F4 {
         self.map(f64::sqrt)
     }
 
     #[inline(always)]
-    pub(crate) fn abs(self) -> F4 {
+    pub fn abs(self) -> F4 {
         self.map(f64::abs)
     }
 
     /// `if m { a } else { b }` per lane, by bits (a blend).
     #[inline(always)]
-    pub(crate) fn select(m: M4, a: F4, b: F4) -> F4 {
+    pub fn select(m: M4, a: F4, b: F4) -> F4 {
         let (a, b) = (a.0, b.0);
         let pick = |i: usize| f64::from_bits((a[i].to_bits() & m[i]) | (b[i].to_bits() & !m[i]));
         F4([pick(0), pick(1), pick(2), pick(3)])
@@ -146,39 +146,39 @@ impl F4 {
 
     /// 1.0 where `m`, else 0.0 (as `f64::from(u8::from(m))`).
     #[inline(always)]
-    pub(crate) fn one_if(m: M4) -> F4 {
+    pub fn one_if(m: M4) -> F4 {
         F4::select(m, F4::splat(1.0), F4::splat(0.0))
     }
 }
 
 /// Per-lane `&` and `|` of masks.
 #[inline(always)]
-pub(crate) fn and(a: M4, b: M4) -> M4 {
+pub fn and(a: M4, b: M4) -> M4 {
     [a[0] & b[0], a[1] & b[1], a[2] & b[2], a[3] & b[3]]
 }
 
 #[inline(always)]
-pub(crate) fn or(a: M4, b: M4) -> M4 {
+pub fn or(a: M4, b: M4) -> M4 {
     [a[0] | b[0], a[1] | b[1], a[2] | b[2], a[3] | b[3]]
 }
 
 #[inline(always)]
-pub(crate) fn not(a: M4) -> M4 {
+pub fn not(a: M4) -> M4 {
     [!a[0], !a[1], !a[2], !a[3]]
 }
 
 /// Four 3-vectors, lane by lane.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct W3 {
-    pub(crate) x: F4,
-    pub(crate) y: F4,
-    pub(crate) z: F4,
+pub struct W3 {
+    pub x: F4,
+    pub y: F4,
+    pub z: F4,
 }
 
 impl W3 {
     /// The same vector in every lane.
     #[inline(always)]
-    pub(crate) fn splat(v: &Vector3<f64>) -> W3 {
+    pub fn splat(v: &Vector3<f64>) -> W3 {
         W3 {
             x: F4::splat(v.x),
             y: F4::splat(v.y),
@@ -188,7 +188,7 @@ impl W3 {
 
     /// Lane `i` is `f(i)`.
     #[inline(always)]
-    pub(crate) fn from_fn(f: impl Fn(usize) -> Vector3<f64>) -> W3 {
+    pub fn from_fn(f: impl Fn(usize) -> Vector3<f64>) -> W3 {
         let v = [f(0), f(1), f(2), f(3)];
         W3 {
             x: F4::from_fn(|i| v[i].x),
@@ -199,12 +199,12 @@ impl W3 {
 
     /// Lane `i` as a vector.
     #[inline(always)]
-    pub(crate) fn lane(&self, i: usize) -> Vector3<f64> {
+    pub fn lane(&self, i: usize) -> Vector3<f64> {
         Vector3::new(self.x.0[i], self.y.0[i], self.z.0[i])
     }
 
     #[inline(always)]
-    pub(crate) fn add(&self, b: &W3) -> W3 {
+    pub fn add(&self, b: &W3) -> W3 {
         W3 {
             x: self.x + b.x,
             y: self.y + b.y,
@@ -213,7 +213,7 @@ impl W3 {
     }
 
     #[inline(always)]
-    pub(crate) fn sub(&self, b: &W3) -> W3 {
+    pub fn sub(&self, b: &W3) -> W3 {
         W3 {
             x: self.x - b.x,
             y: self.y - b.y,
@@ -223,7 +223,7 @@ impl W3 {
 
     /// Each component times `s` (`v * s` in nalgebra).
     #[inline(always)]
-    pub(crate) fn scale(&self, s: F4) -> W3 {
+    pub fn scale(&self, s: F4) -> W3 {
         W3 {
             x: self.x * s,
             y: self.y * s,
@@ -233,13 +233,13 @@ impl W3 {
 
     /// nalgebra's `dot` of 3-vectors: `(a₀b₀ + a₁b₁) + a₂b₂`.
     #[inline(always)]
-    pub(crate) fn dot(&self, b: &W3) -> F4 {
+    pub fn dot(&self, b: &W3) -> F4 {
         self.x * b.x + self.y * b.y + self.z * b.z
     }
 
     /// nalgebra's `cross`.
     #[inline(always)]
-    pub(crate) fn cross(&self, b: &W3) -> W3 {
+    pub fn cross(&self, b: &W3) -> W3 {
         W3 {
             x: self.y * b.z - self.z * b.y,
             y: self.z * b.x - self.x * b.z,

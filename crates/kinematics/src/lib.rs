@@ -23,7 +23,7 @@
 pub mod batch;
 pub mod def;
 pub mod error;
-mod lanes;
+pub mod lanes;
 pub mod machine;
 pub mod trig;
 

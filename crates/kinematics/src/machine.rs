@@ -246,7 +246,7 @@ pub struct Affine {
 
 impl Affine {
     /// The image of `p`.
-    #[inline]
+    #[inline(always)]
     pub fn apply(&self, p: &Vector3<f64>) -> Vector3<f64> {
         self.a * p + self.b
     }

@@ -163,7 +163,7 @@ pub(crate) fn atan2_deg_core(y: f64, x: f64) -> f64 {
 /// [`sin_cos_deg_core`] on four lanes at once (the same operations on each lane, so the
 /// same bits; see [`crate::lanes`]).
 #[inline(always)]
-pub(crate) fn sin_cos_deg4(x: F4) -> (F4, F4) {
+pub fn sin_cos_deg4(x: F4) -> (F4, F4) {
     const ROUND: f64 = 6_755_399_441_055_744.0;
     let kf = (x * (1.0 / 90.0) + ROUND) - ROUND;
     let r = x - 90.0 * kf;
@@ -189,7 +189,7 @@ pub(crate) fn sin_cos_deg4(x: F4) -> (F4, F4) {
 
 /// [`atan2_deg_core`] on four lanes at once (see [`sin_cos_deg4`]).
 #[inline(always)]
-pub(crate) fn atan2_deg4(y: F4, x: F4) -> F4 {
+pub fn atan2_deg4(y: F4, x: F4) -> F4 {
     let (ax, ay) = (x.abs(), y.abs());
     let swap = F4::one_if(ay.cmp(ax, |a, b| a > b));
     let t = ax.zip(ay, f64::min) / ax.zip(ay, f64::max);

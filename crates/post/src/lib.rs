@@ -16,6 +16,7 @@
 //! - `lampost-align`: the setup file format `lampost align` writes;
 //! - `toml`: setup and job files; `nalgebra`: frames; `thiserror`: [`PostError`].
 
+mod chords;
 pub mod error;
 pub mod frame;
 pub mod intended;

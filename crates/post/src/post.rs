@@ -431,8 +431,8 @@ type RotaryTrig = ([f64; 2], [(f64, f64); 2]);
 
 /// The joints that put the head over part point `p`, by the index's joints map
 /// ([`Machine::joints_map`]).
-#[inline]
-fn joints(map: &Affine, p: &Vector3<f64>) -> [f64; 3] {
+#[inline(always)]
+pub(crate) fn joints(map: &Affine, p: &Vector3<f64>) -> [f64; 3] {
     let q = map.apply(p);
     [q.x, q.y, q.z]
 }
@@ -479,8 +479,8 @@ fn written_rotary(rot: &[f64; 2]) -> RotaryTrig {
 
 /// The tool tip where the joints `x` put it, as the text gives them (rounded to the
 /// output resolution `scale`), by the written index's tip map ([`Machine::tip_map`]).
-#[inline]
-fn written_tip(tips: &Affine, scale: f64, x: &[f64; 3]) -> Vector3<f64> {
+#[inline(always)]
+pub(crate) fn written_tip(tips: &Affine, scale: f64, x: &[f64; 3]) -> Vector3<f64> {
     tips.apply(&Vector3::new(
         round_half_away(x[0] * scale) / scale,
         round_half_away(x[1] * scale) / scale,
@@ -512,7 +512,7 @@ struct PlannedEnd {
 
 /// A point written for a step, planned with its check (as [`Writer::verify_point`]
 /// would make it: against the end for the last point, against the path before).
-type PlannedPoint = ([f64; 3], EndCheck);
+pub(crate) type PlannedPoint = ([f64; 3], EndCheck);
 
 /// Steps passed from the reading thread to the writing one, with the chord points
 /// planned for them.
@@ -559,7 +559,7 @@ fn arc_way(
 
 /// How far a written point lands from the intended path (its check, see
 /// [`PlannedPoint`]).
-type EndCheck = f64;
+pub(crate) type EndCheck = f64;
 
 /// A rotary position, its (sin, cos), joints map and written tip map.
 type IndexCache = ([f64; 2], [(f64, f64); 2], Affine, Affine);
@@ -604,18 +604,7 @@ impl Planner<'_> {
             {
                 // (Always an arc here.)
                 let arc = ArcPoints::new(step)?;
-                for k in 1..=n {
-                    let t = k as f64 / n as f64;
-                    let c = arc.at(t);
-                    let q = joints(&jm, &c);
-                    let tip = written_tip(&tm, self.scale, &q);
-                    let err = if k == n {
-                        (tip - step.end).norm()
-                    } else {
-                        arc.dist_near(step, &tip, &c, t)
-                    };
-                    points.push((q, err));
-                }
+                crate::chords::plan(&arc, step, n, &jm, &tm, self.scale, points);
             }
         }
         Some(PlannedEnd {

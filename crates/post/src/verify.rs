@@ -83,17 +83,17 @@ pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
 /// worked out once. Results are bit-identical to theirs (the same operations on the same
 /// values; tested).
 pub(crate) struct ArcPoints {
-    center: Vector3<f64>,
-    n: Vector3<f64>,
-    sweep: f64,
+    pub(crate) center: Vector3<f64>,
+    pub(crate) n: Vector3<f64>,
+    pub(crate) sweep: f64,
     /// start − centre, n × it, n · it, and the helix's rise (as [`Step::at`] has them).
-    rel: Vector3<f64>,
-    n_cross_rel: Vector3<f64>,
-    n_dot_rel: f64,
-    rise: f64,
+    pub(crate) rel: Vector3<f64>,
+    pub(crate) n_cross_rel: Vector3<f64>,
+    pub(crate) n_dot_rel: f64,
+    pub(crate) rise: f64,
     /// |start − centre| normal to n, when the arc is flat, within one turn and not
     /// degenerate (where [`dist_to`] has a closed form inside the sweep).
-    flat_radius: Option<f64>,
+    pub(crate) flat_radius: Option<f64>,
 }
 
 impl ArcPoints {
