@@ -47,6 +47,8 @@ pub struct Emitter<W: Write> {
     out: W,
     opts: EmitOptions,
     next_n: u64,
+    /// `next_n` in decimal, kept by decimal addition of the step (no division per line).
+    n_text: Counter,
     units: Units,
     motion: Option<u16>,
     feed: Option<f64>,
@@ -59,6 +61,52 @@ pub struct Emitter<W: Write> {
     start: usize,
     /// Bytes handed to `out` so far.
     flushed: u64,
+}
+
+/// A whole number in decimal, advanced by adding another in decimal: the N words of a
+/// renumbered program without a division per line.
+#[derive(Debug, Clone)]
+struct Counter {
+    /// The number the digits spell.
+    value: u64,
+    /// Its digits, right-aligned.
+    buf: [u8; 24],
+    /// Where they start in `buf`.
+    start: usize,
+}
+
+impl Counter {
+    fn new(value: u64) -> Counter {
+        let mut buf = [b'0'; 24];
+        let start = write_digits(&mut buf, value);
+        Counter { value, buf, start }
+    }
+
+    fn digits(&self) -> &[u8] {
+        &self.buf[self.start..]
+    }
+
+    /// Add `step`; `to` is the sum as the caller worked it out (saturating): when it is
+    /// not the exact sum the digits are written afresh.
+    fn add(&mut self, step: u64, to: u64) {
+        if self.value.checked_add(step) != Some(to) || to >= 1_000_000_000_000_000_000 {
+            *self = Counter::new(to);
+            return;
+        }
+        let (mut carry, mut s, mut i) = (0u8, step, self.buf.len());
+        while s > 0 || carry > 0 {
+            i -= 1;
+            if i < self.start {
+                self.start = i;
+                self.buf[i] = b'0';
+            }
+            let d = self.buf[i] - b'0' + (s % 10) as u8 + carry;
+            carry = u8::from(d >= 10);
+            self.buf[i] = b'0' + d % 10;
+            s /= 10;
+        }
+        self.value = to;
+    }
 }
 
 /// Output is handed to the writer in pieces of about this size.
@@ -424,6 +472,7 @@ impl<W: Write> Emitter<W> {
             out,
             opts,
             next_n: opts.renumber.map_or(0, |r| r.0),
+            n_text: Counter::new(opts.renumber.map_or(0, |r| r.0)),
             units: opts.units,
             motion: None,
             feed: None,
@@ -485,6 +534,24 @@ impl<W: Write> Emitter<W> {
                 value,
             ),
         }
+    }
+
+    /// The block's N word (renumbering), then the next number.
+    fn push_number(&mut self) {
+        let n = self.next_n;
+        // What `push_value` writes for a whole N below 9e15: its decimal digits.
+        if n < 9_000_000_000_000_000 && self.n_text.value == n {
+            self.separate();
+            self.line.push(b'N');
+            for &d in self.n_text.digits() {
+                self.line.push(d);
+            }
+        } else {
+            self.push_word(b'N', None, n as f64, None);
+        }
+        let step = self.opts.renumber.map_or(1, |r| r.1);
+        self.next_n = n.saturating_add(step);
+        self.n_text.add(step, self.next_n);
     }
 
     fn track(&mut self, letter: u8, value: f64) {
@@ -566,11 +633,7 @@ impl<W: Write> Emitter<W> {
         }
         let numbered = self.opts.renumber.is_some() && b.has_words() && b.word(b'O').is_none();
         if numbered {
-            let n = self.next_n;
-            self.push_word(b'N', None, n as f64, None);
-            self.next_n = self
-                .next_n
-                .saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+            self.push_number();
         }
         for item in &b.items {
             match item {
@@ -611,11 +674,7 @@ impl<W: Write> Emitter<W> {
         self.line.truncate(self.start);
         self.last_percent = false;
         if self.opts.renumber.is_some() && !words.is_empty() {
-            let n = self.next_n;
-            self.push_word(b'N', None, n as f64, None);
-            self.next_n = self
-                .next_n
-                .saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+            self.push_number();
         }
         for &(l, v) in words {
             // Axis words (the bulk) need no modal bookkeeping.
@@ -659,11 +718,7 @@ impl<W: Write> Emitter<W> {
         self.line.truncate(self.start);
         self.last_percent = false;
         if self.opts.renumber.is_some() {
-            let n = self.next_n;
-            self.push_word(b'N', None, n as f64, None);
-            self.next_n = self
-                .next_n
-                .saturating_add(self.opts.renumber.map_or(1, |r| r.1));
+            self.push_number();
         }
         self.track(b'G', g);
         if !self.suppressed(b'G', g) {
@@ -754,7 +809,8 @@ pub fn word_text(w: &Word<'_>) -> String {
 #[cfg(test)]
 mod tests {
     use super::{
-        fixed, push_fixed, push_scaled, round_half_away, Dialect, EmitOptions, Emitter, FAST_MAX,
+        fixed, push_fixed, push_scaled, round_half_away, Counter, Dialect, EmitOptions, Emitter,
+        FAST_MAX,
     };
     use crate::Units;
     use proptest::prelude::*;
@@ -848,6 +904,28 @@ mod tests {
                 }
                 assert_eq!(b, a, "{v} at {d} places");
             }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2_000))]
+        /// The decimal counter of N words spells its number after any run of additions,
+        /// carries across many digits and the jump to a fresh start included.
+        #[test]
+        fn counter_spells_its_number(
+            start in prop_oneof![0u64..1000, 0u64..u64::MAX, Just(999_999), Just(u64::MAX - 5)],
+            step in prop_oneof![0u64..20, 0u64..1_000_000, Just(10), Just(u64::MAX / 2)],
+            steps in 0usize..300,
+        ) {
+            let mut c = Counter::new(start);
+            let mut v = start;
+            for _ in 0..steps {
+                prop_assert_eq!(String::from_utf8_lossy(c.digits()), v.to_string());
+                let next = v.saturating_add(step);
+                c.add(step, next);
+                v = next;
+            }
+            prop_assert_eq!(String::from_utf8_lossy(c.digits()), v.to_string());
         }
     }
 
