@@ -122,23 +122,20 @@ fn bench_post() -> Result<(), String> {
     let mb = text.len() as f64 / 1e6;
     let bin = root().join("target/release/lampost");
     let out = dir.join("planar-1m-100.posted.nc");
-    // Time: best of `runs` plain runs (nothing polls beside them: post uses both cores).
-    // Peak memory: one more run, watched through /proc.
-    let best = |make: &dyn Fn() -> Command, runs: usize| -> Result<(Duration, u64), String> {
-        let mut b = Duration::MAX;
-        for _ in 0..runs {
-            let mut c = make();
-            c.stderr(std::process::Stdio::null());
-            let t = Instant::now();
-            let st = c.status().map_err(|e| format!("cannot run {c:?}: {e}"))?;
-            let e = t.elapsed();
-            if !st.success() {
-                return Err(format!("{c:?} failed: {st}"));
-            }
-            b = b.min(e);
+    // Time: the best of 7 plain runs of each command, the commands taken in turn (a
+    // round runs each once), so a slow spell of this shared machine falls on all of them
+    // alike; nothing polls beside them (post uses both cores). Peak memory: one more run
+    // of each, watched through /proc.
+    let run_once = |make: &dyn Fn() -> Command| -> Result<Duration, String> {
+        let mut c = make();
+        c.stderr(std::process::Stdio::null());
+        let t = Instant::now();
+        let st = c.status().map_err(|e| format!("cannot run {c:?}: {e}"))?;
+        let e = t.elapsed();
+        if !st.success() {
+            return Err(format!("{c:?} failed: {st}"));
         }
-        let (_, kb) = peak_memory(make())?;
-        Ok((b, kb))
+        Ok(e)
     };
     let post_cmd = || {
         let mut c = Command::new(&bin);
@@ -170,16 +167,22 @@ fn bench_post() -> Result<(), String> {
             .arg(dir.join("posted-flat.nc"));
         c
     };
-    let (tflat, kflat) = best(&post_flat, 5)?;
+    let commands: [&dyn Fn() -> Command; 4] = [&post_flat, &post_cmd, &fmt_cmd, &fmt_iso_cmd];
+    let mut times = [Duration::MAX; 4];
+    for _round in 0..7 {
+        for (t, make) in times.iter_mut().zip(commands) {
+            *t = (*t).min(run_once(make)?);
+        }
+    }
+    let [tflat, tp, tf, tfi] = times;
+    let (_, kflat) = peak_memory(post_flat())?;
+    let (_, kp) = peak_memory(post_cmd())?;
     println!(
         "lampost post --index B=0,C=30 (arcs stay arcs): {:.0} ms ({:.0} MB/s), peak memory {:.1} MB",
         tflat.as_secs_f64() * 1e3,
         mb / tflat.as_secs_f64(),
         kflat as f64 / 1024.0
     );
-    let (tp, kp) = best(&post_cmd, 5)?;
-    let (tf, _) = best(&fmt_cmd, 5)?;
-    let (tfi, _) = best(&fmt_iso_cmd, 5)?;
     println!("lampost post --index B=30,C=45 (arcs linearised, incl. its verification pass): {:.0} ms ({:.0} MB/s), peak memory {:.1} MB (target < 100 MB)", tp.as_secs_f64() * 1e3, mb / tp.as_secs_f64(), kp as f64 / 1024.0);
     println!(
         "lampost fmt (verbatim):        {:.0} ms; post / fmt = {:.2} tilted, {:.2} arcs kept (target ≤ 2)",
