@@ -37,21 +37,6 @@ pub struct IkQuery {
     pub near: [f64; 2],
 }
 
-const EMPTY_SOLUTION: Solution = Solution {
-    joints: Joints {
-        linear: [0.0; 3],
-        rotary: [0.0; 2],
-    },
-    within_limits: false,
-    branch: 0,
-    singular: false,
-};
-
-const EMPTY: Solutions = Solutions {
-    sols: [EMPTY_SOLUTION; 2],
-    n: 0,
-};
-
 /// One vector pass of [`Machine::inverse_into`] (a `pulp` operation: its body is
 /// compiled for each instruction set).
 struct IkPass<'a> {
@@ -277,7 +262,7 @@ impl Machine {
         };
         let pa = self.branch4(1.0, &inner, &outer, &tip, head, &near);
         let pb = self.branch4(-1.0, &inner, &outer, &tip, head, &near);
-        let mut sols = [EMPTY; LANES];
+        let mut sols = [Solutions::EMPTY; LANES];
         for (i, out) in sols.iter_mut().enumerate() {
             let (a, b) = (pa.solution(i, 1), pb.solution(i, -1));
             // `rank`.

@@ -145,6 +145,20 @@ pub struct Solutions {
 }
 
 impl Solutions {
+    /// No solution (filled in by the inverse kinematics).
+    pub(crate) const EMPTY: Solutions = Solutions {
+        sols: [Solution {
+            joints: Joints {
+                linear: [0.0; 3],
+                rotary: [0.0; 2],
+            },
+            within_limits: false,
+            branch: 0,
+            singular: false,
+        }; 2],
+        n: 0,
+    };
+
     /// The solutions, best first.
     pub fn as_slice(&self) -> &[Solution] {
         &self.sols[..self.n]
@@ -1117,19 +1131,7 @@ impl Machine {
                 ),
             });
         };
-        let empty = Solution {
-            joints: Joints {
-                linear: [0.0; 3],
-                rotary: [0.0; 2],
-            },
-            within_limits: false,
-            branch: 0,
-            singular: false,
-        };
-        let mut sols = Solutions {
-            sols: [empty; 2],
-            n: 0,
-        };
+        let mut sols = Solutions::EMPTY;
         for o in raw.iter().take(count) {
             sols.sols[sols.n] = self.branch_solution(o, tip, head, near);
             sols.n += 1;
