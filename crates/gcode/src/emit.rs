@@ -556,15 +556,36 @@ impl<W: Write> Emitter<W> {
 
     fn track(&mut self, letter: u8, value: f64) {
         if letter == b'G' {
-            let c = round_half_away(value * 10.0) as i64;
-            match c {
-                200 | 700 => self.units = Units::Inch,
-                210 | 710 => self.units = Units::Mm,
-                930 => self.inverse_time = true,
-                940 | 950 => self.inverse_time = false,
-                _ => {}
-            }
+            self.track_g(round_half_away(value * 10.0) as i64);
         }
+    }
+
+    /// [`Emitter::track`] of a G word given as its code ×10.
+    #[inline]
+    fn track_g(&mut self, c: i64) {
+        match c {
+            200 | 700 => self.units = Units::Inch,
+            210 | 710 => self.units = Units::Mm,
+            930 => self.inverse_time = true,
+            940 | 950 => self.inverse_time = false,
+            _ => {}
+        }
+    }
+
+    /// [`Emitter::suppressed`] and [`Emitter::after`] of a G word given as its code ×10:
+    /// whether it is left out (else the modal state is updated).
+    #[inline]
+    fn g_suppressed_or_after(&mut self, c: i64) -> bool {
+        let motion = matches!(c, 0 | 10 | 20 | 30);
+        if self.opts.suppress_modal && motion && self.motion == Some(c as u16) {
+            return true;
+        }
+        if motion {
+            self.motion = Some(c as u16);
+        } else if (730..=890).contains(&c) {
+            self.motion = None;
+        }
+        false
     }
 
     /// Should this word be left out under modal suppression?
@@ -720,9 +741,10 @@ impl<W: Write> Emitter<W> {
         if self.opts.renumber.is_some() {
             self.push_number();
         }
-        self.track(b'G', g);
-        if !self.suppressed(b'G', g) {
-            self.after(b'G', g);
+        // `track`, `suppressed` and `after` of the G word, from one rounding.
+        let code = round_half_away(g * 10.0) as i64;
+        self.track_g(code);
+        if !self.g_suppressed_or_after(code) {
             self.push_word(b'G', None, g, None);
         }
         let decimals = match self.units {
