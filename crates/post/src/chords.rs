@@ -18,6 +18,19 @@ use crate::intended::Step;
 use crate::post::{joints, written_tip, PlannedPoint};
 use crate::verify::ArcPoints;
 
+/// One arc's chord points under one index: what every point of it is worked out from.
+#[derive(Clone, Copy)]
+struct Chords<'a> {
+    arc: &'a ArcPoints,
+    step: &'a Step,
+    /// How many chords.
+    n: usize,
+    /// The index's joints map and written-tip map, and the output resolution factor.
+    jm: &'a Affine,
+    tm: &'a Affine,
+    scale: f64,
+}
+
 /// The `n` chord points of `arc` (of `step`), appended to `points`. Never inlined: its
 /// frame (four points' worth of lanes) would otherwise be set up on every step planned,
 /// arcs or not (measured: 7 % slower on a program without linearised arcs).
@@ -31,53 +44,41 @@ pub(crate) fn plan(
     scale: f64,
     points: &mut Vec<PlannedPoint>,
 ) {
-    if n < LANES {
-        for k in 1..=n {
-            points.push(plan_one(arc, step, k, n, jm, tm, scale));
-        }
-        return;
-    }
-    Arch::new().dispatch(Pass {
+    let c = Chords {
         arc,
         step,
         n,
         jm,
         tm,
         scale,
-        points,
-    });
+    };
+    if n < LANES {
+        points.extend((1..=n).map(|k| c.one(k)));
+        return;
+    }
+    Arch::new().dispatch(Pass { c, points });
 }
 
-/// Chord point `k` of `n`, one at a time.
-#[inline]
-fn plan_one(
-    arc: &ArcPoints,
-    step: &Step,
-    k: usize,
-    n: usize,
-    jm: &Affine,
-    tm: &Affine,
-    scale: f64,
-) -> PlannedPoint {
-    let t = k as f64 / n as f64;
-    let c = arc.at(t);
-    let q = joints(jm, &c);
-    let tip = written_tip(tm, scale, &q);
-    let err = if k == n {
-        (tip - step.end).norm()
-    } else {
-        arc.dist_near(step, &tip, &c, t)
-    };
-    (q, err)
+impl Chords<'_> {
+    /// Chord point `k` of `n`, one at a time.
+    #[inline]
+    fn one(&self, k: usize) -> PlannedPoint {
+        let (arc, step, n) = (self.arc, self.step, self.n);
+        let t = k as f64 / n as f64;
+        let c = arc.at(t);
+        let q = joints(self.jm, &c);
+        let tip = written_tip(self.tm, self.scale, &q);
+        let err = if k == n {
+            (tip - step.end).norm()
+        } else {
+            arc.dist_near(step, &tip, &c, t)
+        };
+        (q, err)
+    }
 }
 
 struct Pass<'a> {
-    arc: &'a ArcPoints,
-    step: &'a Step,
-    n: usize,
-    jm: &'a Affine,
-    tm: &'a Affine,
-    scale: f64,
+    c: Chords<'a>,
     points: &'a mut Vec<PlannedPoint>,
 }
 
@@ -86,31 +87,16 @@ impl WithSimd for Pass<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, _simd: S) {
-        let (arc, step, n) = (self.arc, self.step, self.n);
+        let (c, n) = (self.c, self.c.n);
         let mut k = 1;
         while k + LANES - 1 <= n {
-            match group(arc, step, k, n, self.jm, self.tm, self.scale) {
+            match c.group(k) {
                 Some(g) => self.points.extend(g),
-                None => {
-                    for i in 0..LANES {
-                        self.points.push(plan_one(
-                            arc,
-                            step,
-                            k + i,
-                            n,
-                            self.jm,
-                            self.tm,
-                            self.scale,
-                        ));
-                    }
-                }
+                None => self.points.extend((k..k + LANES).map(|k| c.one(k))),
             }
             k += LANES;
         }
-        for k in k..=n {
-            self.points
-                .push(plan_one(arc, step, k, n, self.jm, self.tm, self.scale));
-        }
+        self.points.extend((k..=n).map(|k| c.one(k)));
     }
 }
 
@@ -143,85 +129,81 @@ fn norm4(v: &W3) -> F4 {
     v.dot(v).sqrt()
 }
 
-/// Chord points `k … k + 3` of `n`, or `None` when a lane is off the usual path.
-#[inline(always)]
-fn group(
-    arc: &ArcPoints,
-    step: &Step,
-    k: usize,
-    n: usize,
-    jm: &Affine,
-    tm: &Affine,
-    scale: f64,
-) -> Option<[PlannedPoint; LANES]> {
-    let kf = F4::from_fn(|i| (k + i) as f64);
-    let t = kf / n as f64;
-    // `ArcPoints::at`.
-    let deg = (arc.sweep * t).map(f64::to_degrees);
-    let mut ok: M4 = deg.test(|d| d.abs() <= 1e15);
-    let (s, c) = sin_cos_deg4(deg);
-    let nn = &arc.n;
-    let one_minus_c = 1.0 - c;
-    let rotated = W3 {
-        x: arc.rel.x * c + arc.n_cross_rel.x * s + nn.x * (arc.n_dot_rel * one_minus_c),
-        y: arc.rel.y * c + arc.n_cross_rel.y * s + nn.y * (arc.n_dot_rel * one_minus_c),
-        z: arc.rel.z * c + arc.n_cross_rel.z * s + nn.z * (arc.n_dot_rel * one_minus_c),
-    };
-    let rise = arc.rise * t;
-    let point = W3 {
-        x: arc.center.x + rotated.x + nn.x * rise,
-        y: arc.center.y + rotated.y + nn.y * rise,
-        z: arc.center.z + rotated.z + nn.z * rise,
-    };
-    // The joints, and the tip where they put the tool as written (`written_tip`).
-    let q = affine4(jm, &point);
-    let written = |v: F4, ok: &mut M4| {
-        let x = v * scale;
-        *ok = and(*ok, x.test(|x| x.abs() < 4.5e15));
-        round4(x) / scale
-    };
-    let w = W3 {
-        x: written(q.x, &mut ok),
-        y: written(q.y, &mut ok),
-        z: written(q.z, &mut ok),
-    };
-    let tip = affine4(tm, &w);
-    // Distances: to the end for the last point, else `dist_near`'s closed form.
-    let to_end = norm4(&tip.sub(&W3::splat(&step.end)));
-    let last = kf.test(|v| v == n as f64);
-    let along = match arc.flat_radius {
-        Some(r) => {
-            let qv = tip.sub(&W3::splat(&arc.center));
-            let nw = W3::splat(nn);
-            let d = nw.dot(&qv);
-            let qp = qv.sub(&nw.scale(d));
-            let qn = norm4(&qp);
-            let m = (t.zip(1.0 - t, f64::min) * arc.sweep.abs())
-                .map(|m| m.min(std::f64::consts::FRAC_PI_2));
-            let sm = m * std::f64::consts::FRAC_1_PI;
-            let off = tip.sub(&point);
-            let near = off.dot(&off);
-            let fast = and(
-                and(qn.test(|v| v >= 1e-12), t.test(|v| v > 0.0 && v < 1.0)),
-                near.cmp(sm * sm * qn * qn, |a, b| a < b),
-            );
-            ok = and(ok, or(last, fast));
-            let radial = qn - r;
-            (radial * radial + d * d).sqrt()
+impl Chords<'_> {
+    /// Chord points `k … k + 3` of `n`, or `None` when a lane is off the usual path.
+    #[inline(always)]
+    fn group(&self, k: usize) -> Option<[PlannedPoint; LANES]> {
+        let (arc, step, n, jm, tm, scale) =
+            (self.arc, self.step, self.n, self.jm, self.tm, self.scale);
+        let kf = F4::from_fn(|i| (k + i) as f64);
+        let t = kf / n as f64;
+        // `ArcPoints::at`.
+        let deg = (arc.sweep * t).map(f64::to_degrees);
+        let mut ok: M4 = deg.test(|d| d.abs() <= 1e15);
+        let (s, c) = sin_cos_deg4(deg);
+        let nn = &arc.n;
+        let one_minus_c = 1.0 - c;
+        let rotated = W3 {
+            x: arc.rel.x * c + arc.n_cross_rel.x * s + nn.x * (arc.n_dot_rel * one_minus_c),
+            y: arc.rel.y * c + arc.n_cross_rel.y * s + nn.y * (arc.n_dot_rel * one_minus_c),
+            z: arc.rel.z * c + arc.n_cross_rel.z * s + nn.z * (arc.n_dot_rel * one_minus_c),
+        };
+        let rise = arc.rise * t;
+        let point = W3 {
+            x: arc.center.x + rotated.x + nn.x * rise,
+            y: arc.center.y + rotated.y + nn.y * rise,
+            z: arc.center.z + rotated.z + nn.z * rise,
+        };
+        // The joints, and the tip where they put the tool as written (`written_tip`).
+        let q = affine4(jm, &point);
+        let written = |v: F4, ok: &mut M4| {
+            let x = v * scale;
+            *ok = and(*ok, x.test(|x| x.abs() < 4.5e15));
+            round4(x) / scale
+        };
+        let w = W3 {
+            x: written(q.x, &mut ok),
+            y: written(q.y, &mut ok),
+            z: written(q.z, &mut ok),
+        };
+        let tip = affine4(tm, &w);
+        // Distances: to the end for the last point, else `dist_near`'s closed form.
+        let to_end = norm4(&tip.sub(&W3::splat(&step.end)));
+        let last = kf.test(|v| v == n as f64);
+        let along = match arc.flat_radius {
+            Some(r) => {
+                let qv = tip.sub(&W3::splat(&arc.center));
+                let nw = W3::splat(nn);
+                let d = nw.dot(&qv);
+                let qp = qv.sub(&nw.scale(d));
+                let qn = norm4(&qp);
+                let m = (t.zip(1.0 - t, f64::min) * arc.sweep.abs())
+                    .map(|m| m.min(std::f64::consts::FRAC_PI_2));
+                let sm = m * std::f64::consts::FRAC_1_PI;
+                let off = tip.sub(&point);
+                let near = off.dot(&off);
+                let fast = and(
+                    and(qn.test(|v| v >= 1e-12), t.test(|v| v > 0.0 && v < 1.0)),
+                    near.cmp(sm * sm * qn * qn, |a, b| a < b),
+                );
+                ok = and(ok, or(last, fast));
+                let radial = qn - r;
+                (radial * radial + d * d).sqrt()
+            }
+            None => {
+                // Every point but the last needs the general distance.
+                ok = and(ok, last);
+                F4::splat(0.0)
+            }
+        };
+        if ok != ALL {
+            return None;
         }
-        None => {
-            // Every point but the last needs the general distance.
-            ok = and(ok, last);
-            F4::splat(0.0)
-        }
-    };
-    if ok != ALL {
-        return None;
+        let err = F4::select(last, to_end, along);
+        Some(std::array::from_fn(|i| {
+            ([q.x.0[i], q.y.0[i], q.z.0[i]], err.0[i])
+        }))
     }
-    let err = F4::select(last, to_end, along);
-    Some(std::array::from_fn(|i| {
-        ([q.x.0[i], q.y.0[i], q.z.0[i]], err.0[i])
-    }))
 }
 
 /// (For the tests: the scalar path.)
@@ -234,15 +216,21 @@ fn plan_scalar(
     tm: &Affine,
     scale: f64,
 ) -> Vec<PlannedPoint> {
-    (1..=n)
-        .map(|k| plan_one(arc, step, k, n, jm, tm, scale))
-        .collect()
+    let c = Chords {
+        arc,
+        step,
+        n,
+        jm,
+        tm,
+        scale,
+    };
+    (1..=n).map(|k| c.one(k)).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::{plan, plan_scalar};
-    use crate::intended::{Step, StepKind};
+    use crate::verify::tests::arc as arc_step;
     use crate::verify::ArcPoints;
     use lampost_kinematics::lanes::LANES;
     use lampost_kinematics::trig::sin_cos_deg;
@@ -277,19 +265,7 @@ mod tests {
         ) {
             let normal = Vector3::from(nrm);
             prop_assume!(normal.norm() > 0.1);
-            let n_hat = normal.normalize();
-            let helper = if n_hat.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-            let u = n_hat.cross(&helper).normalize();
-            let v = n_hat.cross(&u);
-            let center = Vector3::from(c);
-            let start = center + (u * a0.cos() + v * a0.sin()) * r;
-            let a1 = a0 + sweep;
-            let end = center + (u * a1.cos() + v * a1.sin()) * r + n_hat * if helix { 0.3 * r } else { 0.0 };
-            let step = Step {
-                section: 0, layer: 0, line: 1,
-                kind: StepKind::Arc { center, normal: n_hat, sweep },
-                start, end, feed: 100.0, deposit: true,
-            };
+            let step = arc_step(Vector3::from(c), normal, r, a0, sweep, if helix { 0.3 * r } else { 0.0 });
             let m = Machine::builtin(if fadal { "fadal-lamp" } else { "nrc-lc" }, &[]).map_err(|e| TestCaseError::fail(e.to_string()))?;
             let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
             let jm = m.joints_map(&sc, 0);

@@ -346,13 +346,15 @@ pub fn verify<R: BufRead>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::{dist_to, ArcPoints};
     use crate::intended::{Step, StepKind};
     use nalgebra::Vector3;
     use proptest::prelude::*;
 
-    fn arc(
+    /// An arc step of radius `r` about `center` in the plane normal to `normal`, from
+    /// angle `a0` through `sweep`, rising `rise` along the normal (for tests).
+    pub(crate) fn arc(
         center: Vector3<f64>,
         normal: Vector3<f64>,
         r: f64,
