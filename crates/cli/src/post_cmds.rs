@@ -447,6 +447,7 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         program_number: a.program_number,
         header,
         verify_tolerance: 2.0 * tolerance,
+        work: None,
     })
 }
 

@@ -37,7 +37,7 @@ fn table_1_patch_matches_the_paper() {
         &fx("patch-1in.nc"),
     ]);
     insta::assert_snapshot!("post_table1_patch", p);
-    // The four corners, in cutting order from (0,0): (0,1), (1,1), (1,0), (0,0), read back
+    // The approach onto (0,0), then the four corners, in cutting order from (0,0): (0,1), (1,1), (1,0), (0,0), read back
     // through our own interpreter (unchanged words are left out of the program).
     let want = [
         [2.03553, 1.12132, -0.96447],
@@ -61,8 +61,9 @@ fn table_1_patch_matches_the_paper() {
             ]
         })
         .collect();
-    assert_eq!(corners.len(), 4, "{corners:?}");
-    for (c, w) in corners.iter().zip(want) {
+    // The first feed is the approach: from just above the start down onto it.
+    assert_eq!(corners.len(), 5, "{corners:?}");
+    for (c, w) in corners.iter().skip(1).zip(want) {
         assert!(
             (0..3).all(|k| (c[k] - w[k]).abs() <= 5e-5),
             "{c:?} vs the paper's {w:?}"

@@ -82,6 +82,8 @@ pub enum Origin {
     CannedCycle,
     /// The intermediate or home move of G28/G30.
     Home,
+    /// A G53 move, in machine coordinates.
+    MachineCoords,
 }
 
 /// One resolved move.
@@ -1005,6 +1007,11 @@ impl Interpreter {
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
         let target = self.target(w, g53);
+        let origin = if g53 {
+            Origin::MachineCoords
+        } else {
+            Origin::Block
+        };
         match self.modal.motion {
             Motion::None => Err(diag(
                 b,
@@ -1015,7 +1022,7 @@ impl Interpreter {
                     .or(b.words().next().map(|x| x.span)),
             )),
             Motion::Rapid if !probe => {
-                self.emit(b, MoveKind::Rapid, target, 0.0, Origin::Block, out);
+                self.emit(b, MoveKind::Rapid, target, 0.0, origin, out);
                 Ok(())
             }
             Motion::Rapid | Motion::Linear | Motion::Thread | Motion::Probe => {
@@ -1025,7 +1032,7 @@ impl Interpreter {
                 } else {
                     MoveKind::Linear
                 };
-                self.emit(b, kind, target, feed, Origin::Block, out);
+                self.emit(b, kind, target, feed, origin, out);
                 Ok(())
             }
             Motion::ArcCw | Motion::ArcCcw => self.arc(b, w, target, out),

@@ -53,6 +53,20 @@ pub enum PostError {
         /// Upper limit.
         hi: f64,
     },
+    /// The work at a table position stands higher than the head can retract over it.
+    #[error("{file}:{line}: at rotaries {:.3}°, {:.3}° the head must retract to Z {height:.4} to clear the work, above the top of its Z travel {limit}", .rot[0], .rot[1])]
+    SafeHeight {
+        /// Input name (the section).
+        file: String,
+        /// Input line of the section's first move there.
+        line: u32,
+        /// The safe height needed.
+        height: f64,
+        /// The top of the Z travel.
+        limit: f64,
+        /// The table position.
+        rot: [f64; 2],
+    },
     /// A kinematic problem (unreachable orientation, bad machine).
     #[error("{context}{err}")]
     Kin {
@@ -95,6 +109,7 @@ impl PostError {
             PostError::Unsupported { .. } => "resolve macros, canned cycles, cutter compensation and subprograms in the CAM system, then post again",
             PostError::Units { .. } => "post with --convert-units to scale the program, or output the program in the machine's units",
             PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits",
+            PostError::SafeHeight { .. } => "place the part lower (--origin or the setup), choose an index that keeps it lower, or check clearance_z, safe_margin and the Z limits in the machine file",
             PostError::Kin { .. } => "choose an orientation within the rotary limits, or re-fixture the part",
             PostError::File { .. } => "fix the file; see docs/post.md for its keys",
             PostError::Empty(_) => "give a program with moves",

@@ -5,7 +5,7 @@ use std::io::BufRead;
 use std::path::PathBuf;
 
 use lampost_gcode::{
-    EWord, ErrorKind, Event, LineReader, MoveKind, Options, Severity, Stream, Units,
+    EWord, ErrorKind, Event, LineReader, MoveKind, Options, Origin, Severity, Stream, Units,
 };
 use lampost_kinematics::{Machine, Units as MUnits};
 use nalgebra::Vector3;
@@ -76,6 +76,10 @@ pub struct Section {
 pub enum StepKind {
     /// Travel.
     Rapid,
+    /// A machine-coordinate move that only raises Z (G53, G28/G30: the common CAM
+    /// retract): the head goes up to the safe height where it is. Start and end are the
+    /// point it leaves from.
+    Retract,
     /// Straight feed.
     Feed,
     /// Arc about `center` (part frame) turning about `normal` (part frame, right-hand),
@@ -183,6 +187,9 @@ pub struct Intended<'a> {
     last_end: Option<(Vector3<f64>, Vector3<f64>, usize, usize)>,
     /// (section, layer, its frame).
     frame_cache: Option<(usize, usize, Frame)>,
+    /// The program Z a machine-coordinate retract left the head at: a feed may not start
+    /// from there (its height on the part is not known).
+    retract_z: Option<f64>,
 }
 
 impl std::fmt::Debug for Intended<'_> {
@@ -216,6 +223,7 @@ impl<'a> Intended<'a> {
             done: false,
             last_end: None,
             frame_cache: None,
+            retract_z: None,
         }
     }
 
@@ -324,6 +332,10 @@ impl<'a> Intended<'a> {
                         .into(),
                 });
             }
+            if let Some(step) = self.machine_coordinate_move(&m)? {
+                self.moves_in_section += 1;
+                return Ok(Some(step));
+            }
             let mu = self.machine_units();
             let scale = if m.modal.units == mu {
                 1.0
@@ -402,6 +414,18 @@ impl<'a> Intended<'a> {
                     }
                 }
             };
+            if let Some(z) = self.retract_z {
+                if is_feed && m.start[2] == z {
+                    return Err(PostError::Unsupported {
+                        file: sec.name.clone(),
+                        line: m.line,
+                        what: "a feed starts at the height a machine-coordinate retract (G53/G28/G30) left the head at, which is not known on the part; rapid to a program Z first".into(),
+                    });
+                }
+                if m.end[2] != z {
+                    self.retract_z = None;
+                }
+            }
             let feed = if is_feed { m.feed * scale } else { 0.0 };
             if is_feed && m.modal.feed_mode == lampost_gcode::modal::FeedMode::InverseTime {
                 return Err(PostError::Unsupported {
@@ -431,6 +455,52 @@ impl<'a> Intended<'a> {
                 deposit,
             }));
         }
+    }
+}
+
+impl Intended<'_> {
+    /// A G53, G28 or G30 move: a retract step when it only moves Z (every other axis
+    /// within 1e-9 of where it was), a refusal otherwise; `None` for program moves.
+    fn machine_coordinate_move(
+        &mut self,
+        m: &lampost_gcode::Move,
+    ) -> Result<Option<Step>, PostError> {
+        let what = match m.origin {
+            Origin::Home => "G28/G30 (a move to a home position)",
+            Origin::MachineCoords => "G53 (a move in machine coordinates)",
+            Origin::Block | Origin::CannedCycle => return Ok(None),
+        };
+        let sec = &self.sections[self.idx];
+        let z_only = (0..9).all(|a| a == 2 || (m.end[a] - m.start[a]).abs() <= 1e-9);
+        if !z_only || !matches!(m.kind, MoveKind::Rapid) {
+            return Err(PostError::Unsupported {
+                file: sec.name.clone(),
+                line: m.line,
+                what: format!(
+                    "{what} that moves more than Z cannot be placed on the part; keep only Z retracts in machine coordinates"
+                ),
+            });
+        }
+        let scale = if m.modal.units == self.machine_units() {
+            1.0
+        } else {
+            m.modal.units.mm() / self.machine_units().mm()
+        };
+        let frame = self.frame(sec, self.layer);
+        let here = frame.apply(&(Vector3::new(m.start[0], m.start[1], m.start[2]) * scale));
+        self.retract_z = Some(m.end[2]);
+        // The next move starts from the program position the interpreter reports.
+        self.last_end = None;
+        Ok(Some(Step {
+            section: self.idx,
+            layer: self.layer,
+            line: m.line,
+            kind: StepKind::Retract,
+            start: here,
+            end: here,
+            feed: 0.0,
+            deposit: false,
+        }))
     }
 }
 

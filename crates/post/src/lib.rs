@@ -22,6 +22,7 @@ pub mod frame;
 pub mod intended;
 pub mod pointwise;
 pub mod post;
+pub mod safety;
 pub mod split;
 pub mod verify;
 

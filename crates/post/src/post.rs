@@ -10,6 +10,7 @@ use nalgebra::Vector3;
 
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
+use crate::safety::{SafeHeights, WorkBounds};
 use crate::verify::ArcPoints;
 
 /// Output dialect.
@@ -70,6 +71,9 @@ pub struct PostConfig {
     pub header: Vec<String>,
     /// The largest distance a written feed point may have from the intended path.
     pub verify_tolerance: f64,
+    /// Work besides the program's own feed tips (a part or stock), part frame: the safe
+    /// heights clear it too.
+    pub work: Option<crate::safety::WorkBounds>,
 }
 
 /// What a post did.
@@ -221,6 +225,11 @@ struct Writer<'m, W: Write> {
     scale: f64,
     /// A point planned on the reading thread: (joints, is the step's end, its check).
     planned_check: Option<([f64; 3], bool, EndCheck)>,
+    /// The safe heights, and that of the table position in force.
+    heights: SafeHeights<'m>,
+    safe: f64,
+    /// The head is down at the end of a feed (a lift comes before any travel).
+    in_run: bool,
 }
 
 impl<W: Write> Writer<'_, W> {
@@ -370,6 +379,43 @@ impl<W: Write> Writer<'_, W> {
         Ok(())
     }
 
+    /// The safe-height invariant for a rapid to `x` from where the head is: only a
+    /// vertical move (the lift off an end, the approach onto a start) may go below the
+    /// safe height. (Checked on the values as written.)
+    fn check_rapid(&self, file: &str, line: u32, x: &[f64; 3]) -> Result<(), PostError> {
+        let q = |v: f64| round_half_away(v * self.scale);
+        let vertical = self
+            .pos
+            .is_some_and(|p| q(p[0]) == q(x[0]) && q(p[1]) == q(x[1]));
+        let low = |z: f64| q(z) < q(self.safe);
+        if !vertical && (low(x[2]) || self.pos.is_some_and(|p| low(p[2]))) {
+            return Err(PostError::Verify(format!(
+                "{file}:{line}: a rapid to ({:.4}, {:.4}, {:.4}) travels below the safe height {:.4}",
+                x[0], x[1], x[2], self.safe
+            )));
+        }
+        Ok(())
+    }
+
+    /// Raise the head to the safe height where it is (the lift off an end), or write
+    /// the height alone when the position is not known yet (the program's first move).
+    fn lift(&mut self, file: &str, line: u32) -> Result<(), PostError> {
+        let z = self.safe;
+        match self.pos {
+            Some(p) => {
+                if round_half_away(p[2] * self.scale) < round_half_away(z * self.scale) {
+                    self.linear(0.0, &[p[0], p[1], z], None, file, line, false)?;
+                }
+            }
+            None => {
+                self.words(&[(b'G', 0.0), (self.letters[2], z)], None)?;
+                self.written[2] = Some(round_half_away(z * self.scale) as i64);
+                self.report.moves += 1;
+            }
+        }
+        Ok(())
+    }
+
     /// Write a straight move to joints `x`. A feed point is verified against the step
     /// being written: as its end when `step_end` (the stricter test), else as a point on
     /// its path.
@@ -393,6 +439,9 @@ impl<W: Write> Writer<'_, W> {
             return Ok(());
         }
         self.check(file, line, x, &rot)?;
+        if g == 0.0 {
+            self.check_rapid(file, line, x)?;
+        }
         self.note_limits(&[x[0], x[1], x[2], rot[0], rot[1]]);
         // Modal suppression: an axis word equal (as written) to the last one is left out.
         let mut w = [(0u8, 0.0f64, 0i64); 3];
@@ -424,6 +473,26 @@ impl<W: Write> Writer<'_, W> {
         self.report.moves += 1;
         Ok(())
     }
+}
+
+/// The safe height `h` at table position `rot` must be within the Z travel.
+fn check_height(
+    heights: &SafeHeights<'_>,
+    h: f64,
+    file: &str,
+    line: u32,
+    rot: &[f64; 2],
+) -> Result<(), PostError> {
+    if !h.is_finite() || h > heights.z_limit() + 1e-9 {
+        return Err(PostError::SafeHeight {
+            file: file.to_string(),
+            line,
+            height: h,
+            limit: heights.z_limit(),
+            rot: *rot,
+        });
+    }
+    Ok(())
 }
 
 /// Rotary positions and the sine and cosine of each.
@@ -590,7 +659,7 @@ impl Planner<'_> {
             }
         };
         let end_joints = joints(&jm, &step.end);
-        let check = (!matches!(step.kind, StepKind::Rapid))
+        let check = (!matches!(step.kind, StepKind::Rapid | StepKind::Retract))
             .then(|| (written_tip(&tm, self.scale, &end_joints) - step.end).norm());
         let first = points.len();
         if let StepKind::Arc {
@@ -647,6 +716,12 @@ pub fn post<W: Write>(
     progress: impl FnMut(usize),
 ) -> Result<PostReport, PostError> {
     let opts = cfg.intended;
+    // The work, before anything is written: the safe heights need all of it.
+    let mut work = WorkBounds::of_program(machine, sections, opts)?;
+    if let Some(extra) = &cfg.work {
+        work.union(extra);
+    }
+    let heights = SafeHeights::new(machine, cfg.head, work)?;
     let mut planner = Planner {
         m: machine,
         sections,
@@ -690,10 +765,19 @@ pub fn post<W: Write>(
                 }
             })
             .map_err(|e| PostError::Io(format!("cannot start the reading thread: {e}")))?;
-        let result = post_steps(machine, sections, cfg, out, progress, rx.into_iter(), |b| {
-            // A full return channel or a finished reader: the batch is just freed.
-            let _ = back_tx.try_send(b);
-        });
+        let result = post_steps(
+            machine,
+            sections,
+            cfg,
+            heights,
+            out,
+            progress,
+            rx.into_iter(),
+            |b| {
+                // A full return channel or a finished reader: the batch is just freed.
+                let _ = back_tx.try_send(b);
+            },
+        );
         // `post_steps` has dropped the receiver, so the reader cannot block on a send.
         if let Err(panic) = reader.join() {
             std::panic::resume_unwind(panic);
@@ -703,10 +787,12 @@ pub fn post<W: Write>(
 }
 
 /// [`post`] over batches of steps, on the calling thread.
+#[allow(clippy::too_many_arguments)]
 fn post_steps<W: Write>(
     machine: &Machine,
     sections: &[Section],
     cfg: &PostConfig,
+    heights: SafeHeights<'_>,
     out: W,
     mut progress: impl FnMut(usize),
     batches: impl Iterator<Item = Batch>,
@@ -744,6 +830,9 @@ fn post_steps<W: Write>(
         tol: cfg.verify_tolerance,
         scale: linear_scale(units),
         planned_check: None,
+        safe: heights.at(&cfg.near),
+        heights,
+        in_run: false,
     };
     let p = &machine.def.process;
     let laser_on = code_words(&p.laser_on)?;
@@ -783,7 +872,6 @@ fn post_steps<W: Write>(
             w.words(&code_words(&p.coolant_on)?, None)?;
         }
     }
-    let clear_z = p.clearance_z;
     // How far above a feed's start the rapid approach stops: 0.1 in / 2.5 mm.
     let approach_lift = match machine.units {
         MUnits::Inch => 0.1,
@@ -793,6 +881,7 @@ fn post_steps<W: Write>(
     let head = cfg.head;
     let mut cur_key: Option<(usize, usize)> = None;
     let mut need_approach = true;
+    let mut retract_noted: Option<u32> = None;
     let mut arc_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     w.report.body.0 = w.offset();
@@ -886,12 +975,15 @@ fn post_steps<W: Write>(
                     .rot
                     .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
                 if changed {
-                    // Laser off, retract, then index: never a rotary move mid-cut.
+                    // Laser off, retract, then index: never a rotary move mid-cut, and the
+                    // head high enough for every table position the move passes through.
                     w.laser_off(&laser_off, &powder_off)?;
                     let split = w.offset();
                     w.report.split_points.push(split);
-                    w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
-                    w.written[z_axis] = Some(round_half_away(clear_z * w.scale) as i64);
+                    let from = w.rot.unwrap_or(cfg.near);
+                    w.safe = w.heights.over_move(&from, &rot);
+                    check_height(&w.heights, w.safe, file, step.line, &rot)?;
+                    w.lift(file, step.line)?;
                     w.rot = Some(rot);
                     w.jmap = index_maps(machine, head, &rot).0;
                     w.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
@@ -900,9 +992,9 @@ fn post_steps<W: Write>(
                         Some("INDEX"),
                     )?;
                     w.report.indexes.push(rot);
-                    if let Some(pos) = w.pos.as_mut() {
-                        pos[z_axis] = clear_z;
-                    }
+                    w.safe = w.heights.at(&rot);
+                    check_height(&w.heights, w.safe, file, step.line, &rot)?;
+                    w.in_run = false;
                     need_approach = true;
                 }
             }
@@ -921,40 +1013,53 @@ fn post_steps<W: Write>(
             };
             w.planned_check = planned.and_then(|p| p.check.map(|c| (p.joints, true, c)));
             prev_end = Some((step.end, end, rot));
+            let travel = matches!(step.kind, StepKind::Rapid | StepKind::Retract);
             // The move being written, for the in-process verification (approach included).
-            w.step = if matches!(step.kind, StepKind::Rapid) {
-                None
-            } else {
-                Some(step)
-            };
-            if need_approach {
-                // Over the start at the retract height, then down to it, all at rapid.
-                w.laser_off(&laser_off, &powder_off)?;
-                // A rapid goes where it goes from over its end; a feed is approached from
-                // just above its start (rapid down to there, then in at the feed rate).
-                let target = if matches!(step.kind, StepKind::Rapid) {
-                    end
-                } else {
-                    start
-                };
-                let mut above = target;
-                above[z_axis] = clear_z;
-                w.linear(0.0, &above, None, file, step.line, false)?;
-                if !matches!(step.kind, StepKind::Rapid) {
-                    let mut near_start = start;
-                    near_start[z_axis] = (start[z_axis] + approach_lift).min(clear_z);
-                    w.linear(0.0, &near_start, None, file, step.line, false)?;
-                    w.linear(1.0, &start, Some(step.feed), file, step.line, false)?;
+            w.step = if travel { None } else { Some(step) };
+            if travel {
+                // Input travel is not written as it stands: the head lifts off the end of
+                // the run to the safe height, and is brought over the next start from there.
+                if step.kind == StepKind::Retract && retract_noted != Some(step.line) {
+                    retract_noted = Some(step.line);
+                    w.report.warnings.push(format!(
+                        "{file}:{}: a machine-coordinate move (G53/G28/G30) that only moves Z is posted as a retract to the safe height",
+                        step.line
+                    ));
                 }
-                need_approach = false;
-            }
-            match step.kind {
-                StepKind::Rapid => {
-                    w.laser_off(&laser_off, &powder_off)?;
+                w.laser_off(&laser_off, &powder_off)?;
+                if w.in_run {
                     let split = w.offset();
                     w.report.split_points.push(split);
-                    w.linear(0.0, &end, None, file, step.line, true)?;
+                    w.lift(file, step.line)?;
+                    w.in_run = false;
                 }
+                need_approach = true;
+                continue;
+            }
+            let at_start = w
+                .pos
+                .is_some_and(|p| (0..3).all(|k| (p[k] - start[k]).abs() <= 1e-6));
+            if need_approach || !at_start {
+                // Off the last end (if the head is down there), over the start at the safe
+                // height, straight down to just above it, then in at the feed rate.
+                w.laser_off(&laser_off, &powder_off)?;
+                if w.in_run {
+                    let split = w.offset();
+                    w.report.split_points.push(split);
+                    w.lift(file, step.line)?;
+                }
+                let mut above = start;
+                above[z_axis] = w.pos.map_or(w.safe, |p| p[z_axis].max(w.safe));
+                w.linear(0.0, &above, None, file, step.line, false)?;
+                let mut near_start = start;
+                near_start[z_axis] = (start[z_axis] + approach_lift).min(w.safe);
+                w.linear(0.0, &near_start, None, file, step.line, false)?;
+                w.linear(1.0, &start, Some(step.feed), file, step.line, false)?;
+                need_approach = false;
+            }
+            w.in_run = true;
+            match step.kind {
+                StepKind::Rapid | StepKind::Retract => {}
                 StepKind::Feed | StepKind::Arc { .. } => {
                     if let Process::Deposit { power } = cfg.process {
                         if step.deposit && !w.laser {
@@ -1064,7 +1169,7 @@ fn post_steps<W: Write>(
         }
         w.words(&code_words(&p.spindle_off)?, None)?;
     }
-    w.words(&[(b'G', 0.0), (w.letters[z_axis], clear_z)], None)?;
+    w.lift("", 0)?;
     w.words(&code_words(&p.program_end)?, None)?;
     for e in w.report.limits_used.iter_mut() {
         if !e.1.is_finite() {

@@ -35,6 +35,7 @@ fn config(m: &Machine, process: Process) -> PostConfig {
         program_number: 1000,
         header: vec!["prop".into()],
         verify_tolerance: 0.001,
+        work: None,
     }
 }
 

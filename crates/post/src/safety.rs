@@ -1,0 +1,222 @@
+//! Safe heights: where the work is, and how high the head must be to travel over it.
+//!
+//! The work is every tool tip the program feeds through (deposited or cut), over all
+//! sections, plus a part or stock given by the user, as a box in the part frame. For a
+//! fixed table position the highest point of that box in machine Z is at one of its eight
+//! corners (the joints map is affine), so the safe height of an index is exact for the
+//! box: the larger of the machine's `clearance_z` and that height plus the machine's
+//! `safe_margin`. A rotary move happens at a height safe for every table position it
+//! passes through (sampled at most 1° apart, plus what a corner can rise between samples).
+
+use lampost_kinematics::trig::sin_cos_deg;
+use lampost_kinematics::Machine;
+use nalgebra::Vector3;
+
+use crate::error::PostError;
+use crate::intended::{Intended, IntendedOptions, Section, Step, StepKind};
+
+/// A box in the part frame holding the work.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorkBounds {
+    /// Lowest corner.
+    pub min: Vector3<f64>,
+    /// Highest corner.
+    pub max: Vector3<f64>,
+}
+
+impl WorkBounds {
+    /// No work yet.
+    pub fn empty() -> Self {
+        WorkBounds {
+            min: Vector3::repeat(f64::INFINITY),
+            max: Vector3::repeat(f64::NEG_INFINITY),
+        }
+    }
+
+    /// True when nothing was added.
+    pub fn is_empty(&self) -> bool {
+        (0..3).any(|k| self.min[k] > self.max[k])
+    }
+
+    /// Grow to hold `p`.
+    pub fn add(&mut self, p: &Vector3<f64>) {
+        self.min = self.min.inf(p);
+        self.max = self.max.sup(p);
+    }
+
+    /// Grow to hold another box.
+    pub fn union(&mut self, o: &WorkBounds) {
+        if !o.is_empty() {
+            self.add(&o.min);
+            self.add(&o.max);
+        }
+    }
+
+    /// Grow to hold the path of a feed step (an arc by its whole circle).
+    pub fn add_step(&mut self, s: &Step) {
+        match s.kind {
+            StepKind::Rapid | StepKind::Retract => {}
+            StepKind::Feed => {
+                self.add(&s.start);
+                self.add(&s.end);
+            }
+            StepKind::Arc { center, normal, .. } => {
+                // The whole circle (its extent along axis k is r·√(1 − n_k²)), at the
+                // start's level and at the end's (a helix rises between them).
+                self.add(&s.start);
+                self.add(&s.end);
+                let n = normal;
+                let rel = s.start - center;
+                let r = (rel - n * n.dot(&rel)).norm();
+                let half = Vector3::new(
+                    r * (1.0 - n.x * n.x).max(0.0).sqrt(),
+                    r * (1.0 - n.y * n.y).max(0.0).sqrt(),
+                    r * (1.0 - n.z * n.z).max(0.0).sqrt(),
+                );
+                let rise = n * n.dot(&(s.end - s.start));
+                for c in [center, center + rise] {
+                    self.add(&(c - half));
+                    self.add(&(c + half));
+                }
+            }
+        }
+    }
+
+    /// The eight corners.
+    pub fn corners(&self) -> impl Iterator<Item = Vector3<f64>> + '_ {
+        (0..8).map(move |i| {
+            Vector3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
+    /// Every feed tip of `sections`' intended path (one pass over the input).
+    pub fn of_program(
+        machine: &Machine,
+        sections: &[Section],
+        opts: IntendedOptions,
+    ) -> Result<WorkBounds, PostError> {
+        let mut b = WorkBounds::empty();
+        for s in Intended::new(machine, sections, opts) {
+            b.add_step(&s?);
+        }
+        Ok(b)
+    }
+}
+
+/// Safe heights of a machine, head and work.
+#[derive(Debug, Clone)]
+pub struct SafeHeights<'m> {
+    m: &'m Machine,
+    head: usize,
+    work: WorkBounds,
+    margin: f64,
+    clearance: f64,
+}
+
+impl<'m> SafeHeights<'m> {
+    /// Safe heights over `work` for `head` (the machine's clearance and margin).
+    pub fn new(m: &'m Machine, head: usize, work: WorkBounds) -> Result<Self, PostError> {
+        let s = SafeHeights {
+            m,
+            head,
+            work,
+            margin: safe_margin(m),
+            clearance: m.def.process.clearance_z,
+        };
+        // The post lifts by raising the Z joint: that must move the head away from the
+        // table (true of every table machine lampost knows).
+        let sc = [sin_cos_deg(0.0); 2];
+        let map = m.joints_map(&sc, head);
+        let up = m.machine_to_part_sc(&[(0.0, 1.0); 2], &m.tool_axis)
+            - m.machine_to_part_sc(&[(0.0, 1.0); 2], &Vector3::zeros());
+        if map.apply(&up).z - map.apply(&Vector3::zeros()).z <= 0.0 {
+            return Err(PostError::Options(format!(
+                "machine {}: raising its Z joint does not move the head away from the table; the post cannot derive safe heights for it",
+                m.def.name
+            )));
+        }
+        Ok(s)
+    }
+
+    /// The work box.
+    pub fn work(&self) -> &WorkBounds {
+        &self.work
+    }
+
+    /// The highest point of the work in machine Z (the Z joint that puts the tip there)
+    /// at table position `rot`, or `None` without work.
+    pub fn work_top(&self, rot: &[f64; 2]) -> Option<f64> {
+        if self.work.is_empty() {
+            return None;
+        }
+        let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
+        let map = self.m.joints_map(&sc, self.head);
+        Some(
+            self.work
+                .corners()
+                .map(|c| map.apply(&c).z)
+                .fold(f64::NEG_INFINITY, f64::max),
+        )
+    }
+
+    /// The retract height at `rot`.
+    pub fn at(&self, rot: &[f64; 2]) -> f64 {
+        match self.work_top(rot) {
+            Some(t) => self.clearance.max(t + self.margin),
+            None => self.clearance,
+        }
+    }
+
+    /// A height safe for the whole rotary move from `from` to `to` (both axes turning
+    /// together, linearly).
+    pub fn over_move(&self, from: &[f64; 2], to: &[f64; 2]) -> f64 {
+        let span = (to[0] - from[0]).abs().max((to[1] - from[1]).abs());
+        let n = (span.ceil() as usize).clamp(1, 100_000);
+        let mut top = f64::NEG_INFINITY;
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let r = [
+                from[0] + (to[0] - from[0]) * t,
+                from[1] + (to[1] - from[1]) * t,
+            ];
+            if let Some(h) = self.work_top(&r) {
+                top = top.max(h);
+            }
+        }
+        if !top.is_finite() {
+            return self.clearance;
+        }
+        // Between samples (at most 1° apart) a point at distance d from an axis rises at
+        // most d·(1 − cos 0.5°) above the higher neighbouring sample.
+        let reach = self.work.corners().map(|c| c.norm()).fold(0.0, f64::max)
+            + self
+                .m
+                .rotary
+                .iter()
+                .map(|r| r.pivot.norm())
+                .fold(0.0, f64::max);
+        let slack = if n > 1 {
+            reach * (1.0 - 0.5f64.to_radians().cos())
+        } else {
+            0.0
+        };
+        self.clearance.max(top + self.margin + slack)
+    }
+
+    /// The top of the machine's Z travel.
+    pub fn z_limit(&self) -> f64 {
+        self.m.linear[2].limits.1
+    }
+}
+
+/// The margin above the work's highest point (the machine file's `safe_margin`).
+pub fn safe_margin(m: &Machine) -> f64 {
+    match m.units {
+        lampost_kinematics::Units::Inch => 0.2,
+        lampost_kinematics::Units::Mm => 5.0,
+    }
+}
