@@ -708,7 +708,7 @@ pub fn verify(
             convert_units: place.convert_units,
             e_extrusion: place.e_extrusion,
         };
-        lampost_post::verify(&m, &secs, h, opts, f, tol).map_err(post_error)?
+        lampost_post::verify(&m, &secs, h, opts, f, tol, None).map_err(post_error)?
     };
     let s = if json {
         format!(

@@ -107,6 +107,9 @@ pub struct Move {
     pub origin: Origin,
     /// Axes the program has named so far (bit `i` for `AXES[i]`).
     pub axes_named: u16,
+    /// Axes named in the move's own block (bit `i` for `AXES[i]`).
+    #[serde(skip)]
+    pub block_axes: u16,
 }
 
 /// What the interpreter reports.
@@ -143,6 +146,8 @@ pub struct Interpreter {
     ended: bool,
     warned_after_end: bool,
     axes_named: u16,
+    /// Axes named in the block being run.
+    block_axes: u16,
     warned_macro: bool,
     offset_cache: Position,
     /// Every offset is zero (the common case): positions need no shifting.
@@ -219,6 +224,7 @@ impl Interpreter {
             ended: false,
             warned_after_end: false,
             axes_named: 0,
+            block_axes: 0,
             warned_macro: false,
             offset_cache: [0.0; 9],
             offset_zero: true,
@@ -312,11 +318,13 @@ impl Interpreter {
             ms: smallvec::SmallVec::new(),
         };
         self.collect(b, &mut w)?;
+        self.block_axes = 0;
         for (i, &l) in AXES.iter().enumerate() {
             if w.word(l).is_some() {
-                self.axes_named |= 1 << i;
+                self.block_axes |= 1 << i;
             }
         }
+        self.axes_named |= self.block_axes;
         self.execute(b, &w, out)
     }
 
@@ -901,6 +909,7 @@ impl Interpreter {
                 line: b.line,
                 origin: Origin::Home,
                 axes_named: this.axes_named,
+                block_axes: this.block_axes,
             }));
         };
         if any {
@@ -994,6 +1003,7 @@ impl Interpreter {
             line: b.line,
             origin,
             axes_named: self.axes_named,
+            block_axes: self.block_axes,
         }));
         self.pos = end;
     }

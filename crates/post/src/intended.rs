@@ -471,7 +471,11 @@ impl Intended<'_> {
             Origin::Block | Origin::CannedCycle => return Ok(None),
         };
         let sec = &self.sections[self.idx];
-        let z_only = (0..9).all(|a| a == 2 || (m.end[a] - m.start[a]).abs() <= 1e-9);
+        // Home and machine positions are not known here: judge by the axes the block
+        // names (G28/G30 with none sends every axis home).
+        let named_only_z = m.block_axes == 1 << 2;
+        let z_only =
+            named_only_z && (0..9).all(|a| a == 2 || (m.end[a] - m.start[a]).abs() <= 1e-9);
         if !z_only || !matches!(m.kind, MoveKind::Rapid) {
             return Err(PostError::Unsupported {
                 file: sec.name.clone(),

@@ -992,6 +992,7 @@ fn post_steps<W: Write>(
                         Some("INDEX"),
                     )?;
                     w.report.indexes.push(rot);
+                    w.report.moves += 1;
                     w.safe = w.heights.at(&rot);
                     check_height(&w.heights, w.safe, file, step.line, &rot)?;
                     w.in_run = false;

@@ -9,6 +9,7 @@ use nalgebra::Vector3;
 
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
+use crate::safety::WorkBounds;
 
 /// What a verification found.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -170,7 +171,20 @@ pub fn verify<R: BufRead>(
     opts: IntendedOptions,
     posted: R,
     tolerance: f64,
+    work: Option<&WorkBounds>,
 ) -> Result<VerifyReport, PostError> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(PostError::Options(format!(
+            "the verification tolerance must be a finite positive number, not {tolerance}"
+        )));
+    }
+    // The work the rapids must clear: the input's feed tips (a pass of its own) and the
+    // part or stock given.
+    let mut bounds = WorkBounds::of_program(machine, sections, opts)?;
+    if let Some(w) = work {
+        bounds.union(w);
+    }
+    let mut safety = Safety::new(machine, head, bounds);
     let units = match machine.units {
         MUnits::Inch => Units::Inch,
         MUnits::Mm => Units::Mm,
@@ -187,7 +201,7 @@ pub fn verify<R: BufRead>(
         !matches!(
             s,
             Ok(Step {
-                kind: StepKind::Rapid,
+                kind: StepKind::Rapid | StepKind::Retract,
                 ..
             })
         )
@@ -268,6 +282,12 @@ pub fn verify<R: BufRead>(
             rep.worst_line = line;
         }
         rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
+        if ang > AXIS_TOLERANCE_DEG {
+            return Err(PostError::Verify(format!(
+                "posted line {line}: the tool axis is {ang:.4}° from the intended one of input line {} (tolerance {AXIS_TOLERANCE_DEG}°)",
+                step.line
+            )));
+        }
         Ok(())
     };
     let stream = Stream::from_reader(
@@ -278,7 +298,8 @@ pub fn verify<R: BufRead>(
         },
         true,
     );
-    for ev in stream {
+    let mut stream = stream;
+    while let Some(ev) = stream.next() {
         match ev.map_err(|e| PostError::Io(e.to_string()))? {
             Event::Diagnostic(d) if d.severity == Severity::Error => {
                 return Err(PostError::Input {
@@ -289,6 +310,26 @@ pub fn verify<R: BufRead>(
             Event::Diagnostic(_) => {}
             Event::Move(m) => {
                 rep.moves += 1;
+                let j = |p: &[f64; 9]| {
+                    (
+                        [p[lin_idx[0]], p[lin_idx[1]], p[lin_idx[2]]],
+                        [p[rot_idx[0]], p[rot_idx[1]]],
+                    )
+                };
+                let (ls, rs) = j(&m.start);
+                let (le, re) = j(&m.end);
+                safety.travel(&le, &re, m.line)?;
+                match m.kind {
+                    MoveKind::Rapid => safety.rapid(&ls, &rs, &le, &re, m.line)?,
+                    MoveKind::Arc {
+                        clockwise, center, ..
+                    } => {
+                        safety.feed(&le, m.line)?;
+                        let c = [center[lin_idx[0]], center[lin_idx[1]]];
+                        safety.arc_travel(&ls, &le, &c, clockwise, &re, m.line)?;
+                    }
+                    _ => safety.feed(&le, m.line)?,
+                }
                 match m.kind {
                     MoveKind::Rapid => {}
                     MoveKind::Linear | MoveKind::Probe => {
@@ -342,7 +383,267 @@ pub fn verify<R: BufRead>(
             s.line, s.end.x, s.end.y, s.end.z
         )));
     }
+    safety.finish(stream.interpreter().ended())?;
     Ok(rep)
+}
+
+/// The largest angle a posted tool axis may have from the intended one.
+pub const AXIS_TOLERANCE_DEG: f64 = 0.01;
+
+/// The safety rules a posted program must keep, checked on the joints as the text gives
+/// them, in the part frame by forward kinematics (not the post's joints maps): every point
+/// within travel; outside a run no rapid below the safe height (the larger of the
+/// machine's clearance and the work's highest point along the tool axis plus the
+/// margin) except the vertical lift off an end and the vertical approach onto a start;
+/// a rotary move only at a height safe for every table position it passes; the program
+/// ends with the head lifted and a program end.
+struct Safety<'m> {
+    m: &'m Machine,
+    head: usize,
+    work: WorkBounds,
+    margin: f64,
+    clearance: f64,
+    /// Half the output resolution and a little: the written rounding.
+    eps: f64,
+    /// A vertical rapid came down below the safe height to this Z: the next move must be
+    /// the feed it approaches, ending no higher.
+    approach: Option<(f64, u32)>,
+    /// The head is below the safe height after a feed.
+    down: Option<u32>,
+}
+
+impl<'m> Safety<'m> {
+    fn new(m: &'m Machine, head: usize, work: WorkBounds) -> Self {
+        let eps = 0.5 * m.linear[2].resolution.max(1e-6) + 1e-9;
+        Safety {
+            m,
+            head,
+            work,
+            margin: crate::safety::safe_margin(m),
+            clearance: m.def.process.clearance_z,
+            eps,
+            approach: None,
+            down: None,
+        }
+    }
+
+    /// How far the tip at joints `x`, table `rot`, is above the work's highest point,
+    /// along the tool axis (part frame); +inf without work.
+    fn height(&self, x: &[f64; 3], rot: &[f64; 2]) -> f64 {
+        if self.work.is_empty() {
+            return f64::INFINITY;
+        }
+        let pose = self.m.forward(
+            &Joints {
+                linear: *x,
+                rotary: *rot,
+            },
+            self.head,
+        );
+        let a = pose.axis.normalize();
+        let top = self
+            .work
+            .corners()
+            .map(|c| c.dot(&a))
+            .fold(f64::NEG_INFINITY, f64::max);
+        pose.tip.dot(&a) - top
+    }
+
+    /// Whether the head at `x`, `rot` is at or above the safe height.
+    fn is_safe(&self, x: &[f64; 3], rot: &[f64; 2]) -> bool {
+        x[2] >= self.clearance - self.eps && self.height(x, rot) >= self.margin - self.eps
+    }
+
+    fn fail(line: u32, what: String) -> PostError {
+        PostError::Verify(format!("posted line {line}: {what}"))
+    }
+
+    fn travel(&self, x: &[f64; 3], rot: &[f64; 2], line: u32) -> Result<(), PostError> {
+        for (l, &v) in self.m.linear.iter().zip(x) {
+            if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
+                return Err(Self::fail(
+                    line,
+                    format!(
+                        "{} = {v:.4} is beyond its travel [{}, {}]",
+                        l.name, l.limits.0, l.limits.1
+                    ),
+                ));
+            }
+        }
+        for (r, &v) in self.m.rotary.iter().zip(rot) {
+            if !v.is_finite() || !r.within(v) {
+                return Err(Self::fail(
+                    line,
+                    format!("{} = {v:.3} is beyond its travel {:?}", r.name, r.limits),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// An arc's X/Y extremes within travel (the ends are checked as moves).
+    fn arc_travel(
+        &self,
+        s: &[f64; 3],
+        e: &[f64; 3],
+        c: &[f64; 2],
+        clockwise: bool,
+        rot: &[f64; 2],
+        line: u32,
+    ) -> Result<(), PostError> {
+        let r = (s[0] - c[0]).hypot(s[1] - c[1]);
+        let a0 = (s[1] - c[1]).atan2(s[0] - c[0]);
+        let a1 = (e[1] - c[1]).atan2(e[0] - c[0]);
+        let tau = std::f64::consts::TAU;
+        // Angle travelled (a full circle when the ends meet).
+        let mut sweep = if clockwise { a0 - a1 } else { a1 - a0 }.rem_euclid(tau);
+        if sweep < 1e-12 {
+            sweep = tau;
+        }
+        for k in 0..4 {
+            let dir = f64::from(k) * std::f64::consts::FRAC_PI_2;
+            let along = if clockwise { a0 - dir } else { dir - a0 }.rem_euclid(tau);
+            if along <= sweep {
+                let q = [c[0] + r * dir.cos(), c[1] + r * dir.sin(), s[2].max(e[2])];
+                self.travel(&q, rot, line)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A feed to `x`.
+    fn feed(&mut self, x: &[f64; 3], line: u32) -> Result<(), PostError> {
+        if let Some((z, l)) = self.approach.take() {
+            if x[2] > z + self.eps {
+                return Err(Self::fail(
+                    l,
+                    format!("a rapid comes down to Z {z:.4}, below the feed it approaches (line {line}, to Z {:.4}): it goes through the work", x[2]),
+                ));
+            }
+        }
+        self.down = Some(line);
+        Ok(())
+    }
+
+    /// A rapid from `xs`, `rs` to `xe`, `re`.
+    fn rapid(
+        &mut self,
+        xs: &[f64; 3],
+        rs: &[f64; 2],
+        xe: &[f64; 3],
+        re: &[f64; 2],
+        line: u32,
+    ) -> Result<(), PostError> {
+        let turns = rs != re;
+        let vertical = !turns && xs[0] == xe[0] && xs[1] == xe[1];
+        if vertical {
+            if xe[2] < xs[2] {
+                // Coming down: the approach onto a start, if it goes below the safe height.
+                if !self.is_safe(xe, re) {
+                    self.approach = Some((xe[2], line));
+                }
+            } else if self.is_safe(xe, re) {
+                self.down = None;
+                self.approach = None;
+            }
+            return Ok(());
+        }
+        if let Some((_, l)) = self.approach {
+            return Err(Self::fail(
+                l,
+                "a rapid comes down below the safe height and is not followed by the feed it approaches".into(),
+            ));
+        }
+        for (x, r, which) in [(xs, rs, "starts"), (xe, re, "ends")] {
+            if !self.is_safe(x, r) {
+                return Err(Self::fail(
+                    line,
+                    format!(
+                        "a rapid {which} below the safe height (Z {:.4}: {:.4} above the work along the tool axis; the safe height is the larger of clearance_z {} and the work's top plus {})",
+                        x[2],
+                        self.height(x, r),
+                        self.clearance,
+                        self.margin
+                    ),
+                ));
+            }
+        }
+        if turns {
+            self.sweep(xs, rs, re, line)?;
+            self.sweep(xe, rs, re, line)?;
+        }
+        self.down = None;
+        Ok(())
+    }
+
+    /// The table turning from `from` to `to` with the head at `x`: safe throughout
+    /// (sampled at most 1° apart, less what a point can rise between samples).
+    fn sweep(
+        &self,
+        x: &[f64; 3],
+        from: &[f64; 2],
+        to: &[f64; 2],
+        line: u32,
+    ) -> Result<(), PostError> {
+        if self.work.is_empty() {
+            return Ok(());
+        }
+        let span = (to[0] - from[0]).abs().max((to[1] - from[1]).abs());
+        let n = (span.ceil() as usize).clamp(1, 100_000);
+        let reach = self.work.corners().map(|c| c.norm()).fold(0.0, f64::max)
+            + self
+                .m
+                .rotary
+                .iter()
+                .map(|r| r.pivot.norm())
+                .fold(0.0, f64::max);
+        let slack = if n > 1 {
+            reach * (1.0 - 0.5f64.to_radians().cos())
+        } else {
+            0.0
+        };
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let r = [
+                from[0] + (to[0] - from[0]) * t,
+                from[1] + (to[1] - from[1]) * t,
+            ];
+            let h = self.height(x, &r);
+            if h < self.margin + slack - self.eps {
+                return Err(Self::fail(
+                    line,
+                    format!(
+                        "the table turns with the head {h:.4} above the work at {:.3}°, {:.3}° (needs {:.4})",
+                        r[0],
+                        r[1],
+                        self.margin + slack
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The end of the program: a program end, and the head lifted off the last run.
+    fn finish(&self, ended: bool) -> Result<(), PostError> {
+        if let Some((_, l)) = self.approach {
+            return Err(Self::fail(
+                l,
+                "the program ends after a rapid down below the safe height".into(),
+            ));
+        }
+        if let Some(l) = self.down {
+            return Err(PostError::Verify(format!(
+                "the program ends with the head down at the work (last feed on posted line {l}): no lift to the safe height, and the program may be truncated"
+            )));
+        }
+        if !ended {
+            return Err(PostError::Verify(
+                "the posted program has no program end (M2/M30): it may be truncated".into(),
+            ));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

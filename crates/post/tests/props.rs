@@ -57,7 +57,7 @@ proptest! {
         let mut out = Vec::new();
         match post(&m, &secs, &cfg, &mut out, |_| {}) {
             Ok(_) => {
-                let v = verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001).expect("verifies");
+                let v = verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001, None).expect("verifies");
                 prop_assert!(v.max_position_error < 2e-4, "{v:?}");
                 prop_assert!(v.max_axis_error_deg < 1e-3, "{v:?}");
                 prop_assert!(v.compared >= 7);
@@ -100,7 +100,8 @@ fn a_grid_of_indexes_all_post_and_verify() {
             )];
             let mut out = Vec::new();
             post(&m, &secs, &cfg, &mut out, |_| {}).unwrap_or_else(|e| panic!("A={a} B={b}: {e}"));
-            let v = verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001).expect("verifies");
+            let v =
+                verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001, None).expect("verifies");
             assert!(
                 v.max_position_error < 2e-4 && v.compared >= 7,
                 "A={a} B={b}: {v:?}"

@@ -1,0 +1,354 @@
+//! Post safety (issue 11): safe heights derived from the work, machine-coordinate moves,
+//! and a verify that catches wrong programs. Heights are checked here with FADAL's
+//! kinematics written out from the machine file's comment (paper 000), not the crate's.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn fx(name: &str) -> String {
+    root()
+        .join("fixtures/post")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write");
+    p.to_string_lossy().into_owned()
+}
+
+/// FADAL (fixtures/machines/fadal-lamp.toml): a part point p sits at M(a, b)·(p + R) − R,
+/// M = Ry(−b)·Rz(a); the laser tip is the joints plus L. The tip and tool axis in the
+/// part frame.
+fn fadal_tip(j: [f64; 3], a: f64, b: f64, laser: bool) -> ([f64; 3], [f64; 3]) {
+    let r = [-4.877, 1.4798, 7.0918];
+    let l = if laser {
+        [-10.10308, 0.03632, -8.72762]
+    } else {
+        [0.0; 3]
+    };
+    let (sa, ca) = a.to_radians().sin_cos();
+    // Ry(−b): rotation about y by −b.
+    let (sb, cb) = (-b).to_radians().sin_cos();
+    let rz = [[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]];
+    let ry = [[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]];
+    let mut m = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for k in 0..3 {
+            m[i][k] = (0..3).map(|x| ry[i][x] * rz[x][k]).sum();
+        }
+    }
+    // p = Mᵀ(q + R) − R; axis = Mᵀ·(0, 0, 1).
+    let q = [j[0] + l[0] + r[0], j[1] + l[1] + r[1], j[2] + l[2] + r[2]];
+    let mut p = [0.0; 3];
+    let mut ax = [0.0; 3];
+    for k in 0..3 {
+        p[k] = (0..3).map(|i| m[i][k] * q[i]).sum::<f64>() - r[k];
+        ax[k] = m[2][k];
+    }
+    (p, ax)
+}
+
+/// The posted rapids and feeds as (g, X, Y, Z, A, B), via `lampost trace`.
+fn moves(posted: &str) -> Vec<(String, [f64; 5])> {
+    let t = lampost_stdin(
+        &["trace", "-", "--json", "--units", "inch"],
+        posted.as_bytes(),
+    );
+    assert!(t.status.success(), "{}", stderr(&t));
+    let doc: serde_json::Value = serde_json::from_slice(&t.stdout).expect("json");
+    doc["moves"]
+        .as_array()
+        .expect("moves")
+        .iter()
+        .map(|m| {
+            let e = &m["end"];
+            let g = |k: &str| e[k].as_f64().unwrap_or(0.0);
+            (
+                m["g"].as_str().unwrap_or("").to_string(),
+                [g("X"), g("Y"), g("Z"), g("A"), g("B")],
+            )
+        })
+        .collect()
+}
+
+/// Issue 11, case 1: with the laser head at B = −20 and the part 1 in up, the head
+/// used to retract to Z10 and traverse below the deposit (which runs at Z 10.9–11.3).
+/// Every non-vertical rapid must now be above every feed tip along the tool axis, by
+/// the margin, in the part frame, by the paper's formulas.
+#[test]
+fn retract_clears_the_work_at_a_tilted_index() {
+    for (index, origin) in [
+        ("A=0,B=-20", "0,0,1"),
+        ("A=0,B=0", "0,0,1"),
+        ("A=30,B=45", "0,0,0.5"),
+    ] {
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            index,
+            "--origin",
+            origin,
+            &fx("issue11-patch.nc"),
+        ]);
+        assert!(o.status.success(), "{index}: {}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        let mv = moves(&text);
+        let tips: Vec<([f64; 3], [f64; 3])> = mv
+            .iter()
+            .filter(|(g, _)| g != "G0")
+            .map(|(_, j)| fadal_tip([j[0], j[1], j[2]], j[3], j[4], true))
+            .collect();
+        assert!(!tips.is_empty());
+        let mut prev: Option<[f64; 5]> = None;
+        for (g, j) in &mv {
+            if g == "G0" {
+                if let Some(p) = prev {
+                    let vertical = p[0] == j[0] && p[1] == j[1] && p[3] == j[3] && p[4] == j[4];
+                    if !vertical {
+                        for q in [p, *j] {
+                            let (tip, ax) = fadal_tip([q[0], q[1], q[2]], q[3], q[4], true);
+                            let h = |x: [f64; 3]| x[0] * ax[0] + x[1] * ax[1] + x[2] * ax[2];
+                            let top = tips.iter().map(|(t, _)| h(*t)).fold(f64::MIN, f64::max);
+                            assert!(
+                                h(tip) >= top + 0.2 - 1e-4,
+                                "{index}: a rapid at {q:?} is {:.4} above the work's top (margin 0.2)\n{text}",
+                                h(tip) - top
+                            );
+                            assert!(q[2] >= 10.0 - 1e-4, "{index}: below clearance_z");
+                        }
+                    }
+                }
+            }
+            prev = Some(*j);
+        }
+        let v = lampost_stdin(
+            &[
+                "verify",
+                "--machine",
+                "fadal-lamp",
+                "--index",
+                index,
+                "--origin",
+                origin,
+                &fx("issue11-patch.nc"),
+                "-",
+            ],
+            text.as_bytes(),
+        );
+        assert!(v.status.success(), "{index}: {}", stderr(&v));
+    }
+}
+
+/// The work higher than the Z travel allows: refused, naming the section, nothing written.
+#[test]
+fn safe_height_beyond_travel_is_refused() {
+    let dir = tempdir("safety-refuse");
+    let out = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=-20",
+        "--origin",
+        "0,0,2.5",
+        &fx("issue11-patch.nc"),
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("issue11-patch.nc:") && e.contains("Z travel"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+/// Issue 11, case 2: G53 and G28/G30 Z-only moves become retracts to the safe height
+/// (with a note); any other machine-coordinate move is refused with its line.
+#[test]
+fn machine_coordinate_moves() {
+    let dir = tempdir("safety-g53");
+    let ok = write(
+        &dir,
+        "g53.nc",
+        "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG1 X1.\nG0 G53 Z-10.\nG0 X0 Y1\nG0 Z0.1\nG1 Z0\nG1 X1\nG28 G91 Z0.\nG30 G91 Z0.\nM30\n",
+    );
+    let o = lampost(&["post", "--machine", "fadal-lamp", "--index", "A=0,B=0", &ok]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("g53.nc:5:") && e.contains("g53.nc:10:") && e.contains("g53.nc:11:"),
+        "{e}"
+    );
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        !text.contains("Z-10.0000") && !text.contains("Z0.0000\n"),
+        "{text}"
+    );
+    for (name, body, line) in [
+        (
+            "g53xy.nc",
+            "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG53 G0 X-5. Z-1.\nM30\n",
+            4,
+        ),
+        (
+            "g28xy.nc",
+            "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG28 G91 X0. Y0.\nM30\n",
+            4,
+        ),
+        (
+            "g28all.nc",
+            "G20 G90\nG0 X1 Y0 Z0.2\nG1 Z0 F20.\nG28\nM30\n",
+            4,
+        ),
+        (
+            "g53feed.nc",
+            "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG53 G0 Z0\nG1 X1. F10\nM30\n",
+            5,
+        ),
+    ] {
+        let p = write(&dir, name, body);
+        let out = dir.join(format!("{name}.out"));
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            &p,
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        assert!(!o.status.success(), "{name}");
+        let e = stderr(&o);
+        assert!(e.contains(&format!("{name}:{line}:")), "{name}: {e}");
+        assert!(!out.exists(), "{name}");
+    }
+}
+
+fn post_patch(dir: &Path, index: &str) -> String {
+    let out = dir.join("patch.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        index,
+        &fx("issue11-patch.nc"),
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::read_to_string(&out).expect("posted")
+}
+
+fn verify(dir: &Path, index: &str, posted: &str, extra: &[&str]) -> std::process::Output {
+    let p = write(dir, "check.nc", posted);
+    let input = fx("issue11-patch.nc");
+    let mut args = vec![
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        index,
+        input.as_str(),
+        p.as_str(),
+    ];
+    args.extend_from_slice(extra);
+    lampost(&args)
+}
+
+/// Issue 11, case 3: verify rejects a wrong index, added travel, a rapid through the
+/// work, truncation and non-finite tolerances; it passes the program as posted.
+#[test]
+fn verify_rejects_wrong_programs() {
+    let dir = tempdir("safety-verify");
+    let posted = post_patch(&dir, "A=0,B=-30");
+    let good = verify(&dir, "A=0,B=-30", &posted, &[]);
+    assert!(good.status.success(), "{}", stderr(&good));
+    let wrong = verify(&dir, "A=45,B=30", &posted, &[]);
+    assert!(!wrong.status.success());
+    assert!(
+        stderr(&wrong).contains("tool axis") || stderr(&wrong).contains("from the intended path"),
+        "{}",
+        stderr(&wrong)
+    );
+    // An added rapid far beyond X travel, before the program end.
+    let added = posted.replace("M30\n", "G0 X900.\nM30\n");
+    let o = verify(&dir, "A=0,B=-30", &added, &[]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("beyond its travel"),
+        "{}",
+        stderr(&o)
+    );
+    // A rapid down through the work just after the laser turns off.
+    let lines: Vec<&str> = posted.lines().collect();
+    let k = lines.iter().position(|l| *l == "M72").expect("laser off");
+    let mut through = lines.clone();
+    through.insert(k, "G0 X13.0 Y0.5 Z5.0");
+    let o = verify(&dir, "A=0,B=-30", &(through.join("\n") + "\n"), &[]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("below the safe height"),
+        "{}",
+        stderr(&o)
+    );
+    // Truncated: the last lines gone (lift, program end).
+    let cut = lines[..lines.len() - 4].join("\n") + "\n";
+    let o = verify(&dir, "A=0,B=-30", &cut, &[]);
+    assert!(!o.status.success(), "truncated program passed");
+    // Truncated inside the body.
+    let cut = lines[..lines.len() / 2].join("\n") + "\n";
+    let o = verify(&dir, "A=0,B=-30", &cut, &[]);
+    assert!(!o.status.success(), "truncated program passed");
+    for t in ["inf", "nan", "0", "-1"] {
+        let o = verify(&dir, "A=0,B=-30", &posted, &["--tolerance", t]);
+        assert!(!o.status.success(), "--tolerance {t} accepted");
+    }
+}
+
+/// The post's report and verify count the same moves.
+#[test]
+fn move_counts_agree() {
+    let dir = tempdir("safety-count");
+    let out = dir.join("p.nc");
+    let rep = dir.join("r.json");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--job",
+        &fx("bearing-seat/job.toml"),
+        "-o",
+        &out.to_string_lossy(),
+        "--json-report",
+        &rep.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&rep).expect("report")).expect("json");
+    let v = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--job",
+        &fx("bearing-seat/job.toml"),
+        &out.to_string_lossy(),
+        "--json",
+    ]);
+    assert!(v.status.success(), "{}", stderr(&v));
+    let vj: serde_json::Value = serde_json::from_slice(&v.stdout).expect("json");
+    assert_eq!(r["moves"], vj["moves"]);
+}
