@@ -299,7 +299,7 @@ pub fn verify<R: BufRead>(
         true,
     );
     let mut stream = stream;
-    while let Some(ev) = stream.next() {
+    for ev in stream.by_ref() {
         match ev.map_err(|e| PostError::Io(e.to_string()))? {
             Event::Diagnostic(d) if d.severity == Severity::Error => {
                 return Err(PostError::Input {
