@@ -352,3 +352,58 @@ fn move_counts_agree() {
     let vj: serde_json::Value = serde_json::from_slice(&v.stdout).expect("json");
     assert_eq!(r["moves"], vj["moves"]);
 }
+
+/// Issue 11, case 4: a line break in the input file's name cannot write a block into
+/// the header comment.
+#[test]
+fn file_names_stay_inside_the_header_comment() {
+    let dir = tempdir("safety-name");
+    let p = write(
+        &dir,
+        "a\nG0 X900 (.nc",
+        "G20 G90\nG0 X0 Y0 Z0.1\nG1 Z0 F20.\nG1 X1.\nM30\n",
+    );
+    let o = lampost(&["post", "--machine", "fadal-lamp", "--index", "A=0,B=0", &p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    for l in text.lines() {
+        assert_eq!(
+            l.matches('(').count(),
+            l.matches(')').count(),
+            "a broken comment line: {l:?}\n{text}"
+        );
+        assert!(!l.starts_with("G0 X900"), "{text}");
+    }
+    assert!(!moves(&text).iter().any(|(_, j)| j[0] > 100.0), "{text}");
+}
+
+/// The per-point post retracts over its own tips too (not to a fixed clearance): on
+/// the NRC cell with the part raised 140 mm, the first retract is above every feed.
+#[test]
+fn per_point_retract_clears_the_path() {
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--origin",
+        "0,0,140",
+        &fx("tilted-arc.csv"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let t = lampost_stdin(&["trace", "-", "--json", "--units", "mm"], text.as_bytes());
+    assert!(t.status.success(), "{}", stderr(&t));
+    let doc: serde_json::Value = serde_json::from_slice(&t.stdout).expect("json");
+    let mv = doc["moves"].as_array().expect("moves");
+    let z = |m: &serde_json::Value| m["end"]["Z"].as_f64().unwrap_or(f64::NAN);
+    let top = mv
+        .iter()
+        .filter(|m| m["g"] != "G0")
+        .map(z)
+        .fold(f64::MIN, f64::max);
+    let first = mv.iter().find(|m| m["g"] == "G0").map(z);
+    assert!(
+        first.is_some_and(|f| f >= top + 5.0 - 1e-3),
+        "{first:?} vs {top}\n{text}"
+    );
+}

@@ -308,7 +308,15 @@ pub fn post_points<W: Write>(
             .collect(),
         ..PostReport::default()
     };
-    let clear = p.clearance_z;
+    // Safe heights over every tip of the path (and the part or stock given).
+    let mut work = crate::safety::WorkBounds::empty();
+    for q in &placed {
+        work.add(&q.tip);
+    }
+    if let Some(extra) = &cfg.work {
+        work.union(extra);
+    }
+    let heights = crate::safety::SafeHeights::new(machine, cfg.head, work)?;
     let lift = match machine.units {
         MUnits::Inch => 0.1,
         MUnits::Mm => 2.5,
@@ -367,11 +375,18 @@ pub fn post_points<W: Write>(
                 inverse_time = false;
             }
             report.split_points.push(0);
-            em.words(&[(b'G', 0.0), (lt[2], clear)], None)?;
+            // Up to a height safe over the whole rotary move, index, over the start, down.
+            let from = cur.map_or(cfg.near, |(c, _)| [c[3], c[4]]);
+            let rot = [j[3], j[4]];
+            let line = u32::try_from(q.line).unwrap_or(u32::MAX);
+            let over = heights.over_move(&from, &rot);
+            crate::post::check_height(&heights, over, name, line, &rot)?;
+            let safe = heights.at(&rot);
+            em.words(&[(b'G', 0.0), (lt[2], over)], None)?;
             em.words(&[(b'G', 0.0), (lt[3], j[3]), (lt[4], j[4])], Some("INDEX"))?;
             report.indexes.push([j[3], j[4]]);
             em.words(&[(b'G', 0.0), (lt[0], j[0]), (lt[1], j[1])], None)?;
-            em.words(&[(b'G', 0.0), (lt[2], (j[2] + lift).min(clear))], None)?;
+            em.words(&[(b'G', 0.0), (lt[2], (j[2] + lift).min(safe))], None)?;
             em.words(&[(b'G', 1.0), (lt[2], j[2]), (b'F', q.feed)], None)?;
             report.moves += 5;
             cur = Some((j, branch));
@@ -447,7 +462,8 @@ pub fn post_points<W: Write>(
     if let Process::Machine { .. } = &cfg.process {
         em.words(&code_words(&p.spindle_off)?, None)?;
     }
-    em.words(&[(b'G', 0.0), (lt[2], clear)], None)?;
+    let last = cur.map_or(cfg.near, |(c, _)| [c[3], c[4]]);
+    em.words(&[(b'G', 0.0), (lt[2], heights.at(&last))], None)?;
     em.words(&code_words(&p.program_end)?, None)?;
     em.finish()?;
     Ok(report)

@@ -144,20 +144,14 @@ pub(crate) fn write_header<W: Write>(
     if cfg.dialect == PostDialect::Fadal {
         em.program_number(
             cfg.program_number,
-            Some(
-                &cfg.header
-                    .first()
-                    .cloned()
-                    .unwrap_or_default()
-                    .to_uppercase(),
-            ),
+            Some(&comment_text(cfg.header.first().map_or("", String::as_str)).to_uppercase()),
         )?;
         for h in cfg.header.iter().skip(1) {
-            em.raw_line(&format!("({})", h.replace(['(', ')'], "").to_uppercase()))?;
+            em.raw_line(&format!("({})", comment_text(h).to_uppercase()))?;
         }
     } else {
         for h in &cfg.header {
-            em.raw_line(&format!("({})", h.replace(['(', ')'], "")))?;
+            em.raw_line(&format!("({})", comment_text(h)))?;
         }
     }
     let units_code = match (cfg.dialect, units) {
@@ -178,6 +172,17 @@ pub(crate) fn write_header<W: Write>(
         None,
     )?;
     Ok(())
+}
+
+/// Text safe inside a `( … )` comment on one line: parentheses are dropped, line breaks
+/// and other control characters (from machine names, file names, header text) become
+/// spaces, so
+/// no text can close the comment or start a block of its own.
+pub fn comment_text(s: &str) -> String {
+    s.chars()
+        .filter(|&c| c != '(' && c != ')')
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect()
 }
 
 /// Words of a code string from the machine file (`"M3"`, `"M71"`, `"G43 H1"`).
@@ -476,7 +481,7 @@ impl<W: Write> Writer<'_, W> {
 }
 
 /// The safe height `h` at table position `rot` must be within the Z travel.
-fn check_height(
+pub(crate) fn check_height(
     heights: &SafeHeights<'_>,
     h: f64,
     file: &str,
