@@ -878,10 +878,7 @@ fn post_steps<W: Write>(
         }
     }
     // How far above a feed's start the rapid approach stops: 0.1 in / 2.5 mm.
-    let approach_lift = match machine.units {
-        MUnits::Inch => 0.1,
-        MUnits::Mm => 2.5,
-    };
+    let approach_lift = crate::safety::approach_lift(machine);
     let z_axis = 2usize;
     let head = cfg.head;
     let mut cur_key: Option<(usize, usize)> = None;

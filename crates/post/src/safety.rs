@@ -220,3 +220,11 @@ pub fn safe_margin(m: &Machine) -> f64 {
         lampost_kinematics::Units::Mm => 5.0,
     }
 }
+
+/// How far above a start the vertical approach stops before feeding in: 0.1 in / 2.5 mm.
+pub fn approach_lift(m: &Machine) -> f64 {
+    match m.units {
+        lampost_kinematics::Units::Inch => 0.1,
+        lampost_kinematics::Units::Mm => 2.5,
+    }
+}

@@ -251,9 +251,19 @@ pub fn verify<R: BufRead>(
                      a: Vector3<f64>,
                      line: u32,
                      is_end: bool,
+                     entering: bool,
                      current: &mut Option<Step>,
                      rep: &mut VerifyReport|
      -> Result<(), PostError> {
+        if entering {
+            // The first feed after travel comes onto the start of the next move.
+            if let Some(s) = current {
+                return Err(PostError::Verify(format!(
+                    "posted line {line}: travel interrupts the move of input line {}",
+                    s.line
+                )));
+            }
+        }
         if current.is_none() {
             *current = intended.next().transpose()?;
         }
@@ -261,7 +271,13 @@ pub fn verify<R: BufRead>(
             return Err(PostError::Verify(format!("posted line {line} feeds to ({:.5}, {:.5}, {:.5}) after the intended path has ended", p.x, p.y, p.z)));
         };
         let d_end = (p - step.end).norm();
-        let err = if is_end && d_end <= tolerance {
+        if entering && (p - step.start).norm() > tolerance {
+            return Err(PostError::Verify(format!(
+                "posted line {line}: the feed after travel ends at ({:.5}, {:.5}, {:.5}), not on the start of input line {}'s move",
+                p.x, p.y, p.z, step.line
+            )));
+        }
+        let err = if is_end && !entering && d_end <= tolerance {
             *current = None;
             d_end
         } else {
@@ -299,6 +315,8 @@ pub fn verify<R: BufRead>(
         true,
     );
     let mut stream = stream;
+    // The last move was travel (the next feed must come onto a start).
+    let mut after_travel = true;
     for ev in stream.by_ref() {
         match ev.map_err(|e| PostError::Io(e.to_string()))? {
             Event::Diagnostic(d) if d.severity == Severity::Error => {
@@ -330,11 +348,22 @@ pub fn verify<R: BufRead>(
                     }
                     _ => safety.feed(&le, m.line)?,
                 }
+                let entering = after_travel;
+                after_travel = matches!(m.kind, MoveKind::Rapid);
                 match m.kind {
                     MoveKind::Rapid => {}
                     MoveKind::Linear | MoveKind::Probe => {
+                        if !entering {
+                            // The segment's middle too (a chord left out would bulge).
+                            let mut mid = m.end;
+                            for k in 0..9 {
+                                mid[k] = 0.5 * (m.start[k] + m.end[k]);
+                            }
+                            let pm = fk(&mid);
+                            check(pm.tip, pm.axis, m.line, false, false, &mut current, &mut rep)?;
+                        }
                         let pose = fk(&m.end);
-                        check(pose.tip, pose.axis, m.line, true, &mut current, &mut rep)?;
+                        check(pose.tip, pose.axis, m.line, true, entering, &mut current, &mut rep)?;
                     }
                     MoveKind::Arc {
                         clockwise,
@@ -365,9 +394,9 @@ pub fn verify<R: BufRead>(
                         mid[1] = center[1] + r * a.sin();
                         mid[2] = (m.start[2] + m.end[2]) / 2.0;
                         let pm = fk(&mid);
-                        check(pm.tip, pm.axis, m.line, false, &mut current, &mut rep)?;
+                        check(pm.tip, pm.axis, m.line, false, entering, &mut current, &mut rep)?;
                         let pe = fk(&m.end);
-                        check(pe.tip, pe.axis, m.line, true, &mut current, &mut rep)?;
+                        check(pe.tip, pe.axis, m.line, true, false, &mut current, &mut rep)?;
                     }
                 }
             }
@@ -410,6 +439,10 @@ struct Safety<'m> {
     approach: Option<(f64, u32)>,
     /// The head is below the safe height after a feed.
     down: Option<u32>,
+    /// The last move was a rapid ending at this Z: the feed onto the start begins there.
+    entering: Option<(f64, u32)>,
+    /// The longest feed onto a start (the approach stops this far above it).
+    lift: f64,
 }
 
 impl<'m> Safety<'m> {
@@ -424,6 +457,8 @@ impl<'m> Safety<'m> {
             eps,
             approach: None,
             down: None,
+            entering: None,
+            lift: crate::safety::approach_lift(m),
         }
     }
 
@@ -513,6 +548,18 @@ impl<'m> Safety<'m> {
 
     /// A feed to `x`.
     fn feed(&mut self, x: &[f64; 3], line: u32) -> Result<(), PostError> {
+        if let Some((z, _)) = self.entering.take() {
+            if z - x[2] > self.lift + self.eps {
+                return Err(Self::fail(
+                    line,
+                    format!(
+                        "the feed onto a start begins {:.4} above it (the approach comes down to {} above it)",
+                        z - x[2],
+                        self.lift
+                    ),
+                ));
+            }
+        }
         if let Some((z, l)) = self.approach.take() {
             if x[2] > z + self.eps {
                 return Err(Self::fail(
@@ -534,6 +581,7 @@ impl<'m> Safety<'m> {
         re: &[f64; 2],
         line: u32,
     ) -> Result<(), PostError> {
+        self.entering = Some((xe[2], line));
         let turns = rs != re;
         let vertical = !turns && xs[0] == xe[0] && xs[1] == xe[1];
         if vertical {
