@@ -360,10 +360,26 @@ pub fn verify<R: BufRead>(
                                 mid[k] = 0.5 * (m.start[k] + m.end[k]);
                             }
                             let pm = fk(&mid);
-                            check(pm.tip, pm.axis, m.line, false, false, &mut current, &mut rep)?;
+                            check(
+                                pm.tip,
+                                pm.axis,
+                                m.line,
+                                false,
+                                false,
+                                &mut current,
+                                &mut rep,
+                            )?;
                         }
                         let pose = fk(&m.end);
-                        check(pose.tip, pose.axis, m.line, true, entering, &mut current, &mut rep)?;
+                        check(
+                            pose.tip,
+                            pose.axis,
+                            m.line,
+                            true,
+                            entering,
+                            &mut current,
+                            &mut rep,
+                        )?;
                     }
                     MoveKind::Arc {
                         clockwise,
@@ -394,7 +410,15 @@ pub fn verify<R: BufRead>(
                         mid[1] = center[1] + r * a.sin();
                         mid[2] = (m.start[2] + m.end[2]) / 2.0;
                         let pm = fk(&mid);
-                        check(pm.tip, pm.axis, m.line, false, entering, &mut current, &mut rep)?;
+                        check(
+                            pm.tip,
+                            pm.axis,
+                            m.line,
+                            false,
+                            entering,
+                            &mut current,
+                            &mut rep,
+                        )?;
                         let pe = fk(&m.end);
                         check(pe.tip, pe.axis, m.line, true, false, &mut current, &mut rep)?;
                     }
@@ -432,7 +456,7 @@ struct Safety<'m> {
     work: WorkBounds,
     margin: f64,
     clearance: f64,
-    /// Half the output resolution and a little: the written rounding.
+    /// The output resolution and a little: the written rounding.
     eps: f64,
     /// A vertical rapid came down below the safe height to this Z: the next move must be
     /// the feed it approaches, ending no higher.
@@ -447,7 +471,12 @@ struct Safety<'m> {
 
 impl<'m> Safety<'m> {
     fn new(m: &'m Machine, head: usize, work: WorkBounds) -> Self {
-        let eps = 0.5 * m.linear[2].resolution.max(1e-6) + 1e-9;
+        // The written words are rounded to the output resolution (1e-4 in, 1e-3 mm);
+        // along a tilted tool axis the three roundings add up to at most √3/2 of it.
+        let eps = match m.units {
+            MUnits::Inch => 1e-4,
+            MUnits::Mm => 1e-3,
+        } + 1e-9;
         Safety {
             m,
             head,

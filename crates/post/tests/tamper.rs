@@ -1,0 +1,397 @@
+//! Issue 11's differential test: random planar programs (rapids, G53/G28 retracts,
+//! lines, arcs, helices) at random placements and indexes on three machines and both
+//! FADAL heads. Every posted program must pass `verify`; on the FADAL, a checker written
+//! here from paper 000's formulas (not the crate's kinematics) confirms that no rapid
+//! but a vertical one goes below the work's top plus the margin. Then each posted
+//! program is tampered with (a feed or rotary value moved beyond tolerance, a rapid
+//! added to a point of the work, a motion block removed) and `verify` must catch at
+//! least 99 % of the tampered programs. Seeded, so a failure reproduces.
+
+use lampost_gcode::{Event, MoveKind, Options, Stream, Units};
+use lampost_kinematics::{Machine, MachineDef, Vector3};
+use lampost_post::{
+    post, verify, Frame, IntendedOptions, Orient, PostConfig, PostDialect, PostError, Process,
+    Section, Source,
+};
+
+/// xorshift64*: a small deterministic generator.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// A random planar program in `k` units per inch (1 or 25.4), within a 1-in square.
+fn program(r: &mut Rng, k: f64) -> String {
+    let units = if k == 1.0 { "G20" } else { "G21" };
+    let f = |v: f64| format!("{:.4}", v * k);
+    let mut s = format!("{units} G90 G17\n");
+    let runs = 1 + r.below(3);
+    for run in 0..runs {
+        let (mut x, mut y) = (r.range(0.0, 1.0), r.range(0.0, 1.0));
+        let z0 = 0.02 * run as f64;
+        s += &format!("G0 X{} Y{} Z{}\n", f(x), f(y), f(z0 + 0.1));
+        s += &format!("G1 Z{} F{}\n", f(z0), f(20.0));
+        let mut z = z0;
+        for _ in 0..2 + r.below(5) {
+            match r.below(4) {
+                0 | 1 => {
+                    x = r.range(0.0, 1.0);
+                    y = r.range(0.0, 1.0);
+                    s += &format!("G1 X{} Y{}\n", f(x), f(y));
+                }
+                _ => {
+                    // An arc about a centre at 0.1–0.4 in, sometimes a helix or a full turn.
+                    let rad = r.range(0.1, 0.4);
+                    let a0 = r.range(0.0, std::f64::consts::TAU);
+                    let (cx, cy) = (x - rad * a0.cos(), y - rad * a0.sin());
+                    let a1 = a0 + r.range(-3.0, 3.0);
+                    let (ex, ey) = (cx + rad * a1.cos(), cy + rad * a1.sin());
+                    let g = if r.below(2) == 0 { "G2" } else { "G3" };
+                    let helix = r.below(4) == 0;
+                    let ez = if helix { z + 0.01 } else { z };
+                    let full = r.below(6) == 0;
+                    let (ex, ey) = if full { (x, y) } else { (ex, ey) };
+                    s += &format!(
+                        "{g} X{} Y{} Z{} I{} J{}\n",
+                        f(ex),
+                        f(ey),
+                        f(ez),
+                        f(cx - x),
+                        f(cy - y)
+                    );
+                    x = ex;
+                    y = ey;
+                    z = ez;
+                }
+            }
+        }
+        match r.below(3) {
+            0 => s += "G53 G0 Z-1.\n",
+            1 => s += "G28 G91 Z0.\nG90\n",
+            _ => s += &format!("G0 Z{}\n", f(z + 0.2)),
+        }
+    }
+    s + "M30\n"
+}
+
+fn trt() -> Machine {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/machines/xyzac-trt.toml"
+    ))
+    .expect("fixture");
+    Machine::new(
+        MachineDef::from_toml(&text, "xyzac-trt.toml").expect("parses"),
+        &[],
+    )
+    .expect("valid")
+}
+
+fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
+    let tolerance = match m.units {
+        lampost_kinematics::Units::Inch => 0.0005,
+        lampost_kinematics::Units::Mm => 0.0125,
+    };
+    PostConfig {
+        head,
+        process: if deposit {
+            Process::Deposit { power: 500.0 }
+        } else {
+            Process::Machine {
+                tool: None,
+                length_offset: None,
+                work_offset: None,
+                spindle: 1000.0,
+                coolant: false,
+            }
+        },
+        dialect: PostDialect::Iso,
+        renumber: None,
+        tolerance,
+        intended: IntendedOptions {
+            convert_units: false,
+            e_extrusion: false,
+        },
+        near: [0.0, 0.0],
+        program_number: 1000,
+        header: vec!["tamper".into()],
+        verify_tolerance: 2.0 * tolerance,
+        work: None,
+    }
+}
+
+/// Paper 000's FADAL (fixtures/machines/fadal-lamp.toml): a part point p sits at
+/// M(a, b)·(p + R) − R, M = Ry(−b)·Rz(a); the laser tip is the joints plus L. Returns the
+/// tip and the tool axis in the part frame.
+fn fadal_tip(j: [f64; 3], a: f64, b: f64, laser: bool) -> ([f64; 3], [f64; 3]) {
+    let r = [-4.877, 1.4798, 7.0918];
+    let l = if laser {
+        [-10.10308, 0.03632, -8.72762]
+    } else {
+        [0.0; 3]
+    };
+    let (sa, ca) = a.to_radians().sin_cos();
+    let (sb, cb) = (-b).to_radians().sin_cos();
+    let rz = [[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]];
+    let ry = [[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]];
+    let mut m = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for k in 0..3 {
+            m[i][k] = (0..3).map(|x| ry[i][x] * rz[x][k]).sum();
+        }
+    }
+    let q = [j[0] + l[0] + r[0], j[1] + l[1] + r[1], j[2] + l[2] + r[2]];
+    let mut p = [0.0; 3];
+    let mut ax = [0.0; 3];
+    for k in 0..3 {
+        p[k] = (0..3).map(|i| m[i][k] * q[i]).sum::<f64>() - r[k];
+        ax[k] = m[2][k];
+    }
+    (p, ax)
+}
+
+/// (line, kind, start, end) of every move of a posted program (X Y Z A B C of AXES).
+type Mv = (u32, MoveKind, [f64; 9], [f64; 9]);
+
+fn moves(text: &str, units: Units) -> Vec<Mv> {
+    Stream::from_bytes(
+        text.as_bytes(),
+        Options {
+            units,
+            ..Options::default()
+        },
+        true,
+    )
+    .filter_map(|e| match e {
+        Ok(Event::Move(m)) => Some((m.line, m.kind, m.start, m.end)),
+        _ => None,
+    })
+    .collect()
+}
+
+/// The FADAL check: every rapid that is not vertical keeps the tip at least the margin
+/// above every feed tip, along the tool axis.
+fn fadal_rapids_clear_the_work(mv: &[Mv], laser: bool) -> Result<(), String> {
+    let tips: Vec<[f64; 3]> = mv
+        .iter()
+        .filter(|m| !matches!(m.1, MoveKind::Rapid))
+        .map(|m| fadal_tip([m.3[0], m.3[1], m.3[2]], m.3[3], m.3[4], laser).0)
+        .collect();
+    for m in mv.iter().filter(|m| matches!(m.1, MoveKind::Rapid)) {
+        let (s, e) = (m.2, m.3);
+        if s[0] == e[0] && s[1] == e[1] && s[3] == e[3] && s[4] == e[4] {
+            continue;
+        }
+        for q in [s, e] {
+            let (tip, ax) = fadal_tip([q[0], q[1], q[2]], q[3], q[4], laser);
+            let h = |x: &[f64; 3]| x[0] * ax[0] + x[1] * ax[1] + x[2] * ax[2];
+            let top = tips.iter().map(h).fold(f64::MIN, f64::max);
+            if h(&tip) < top + 0.2 - 1e-4 {
+                return Err(format!(
+                    "line {}: a rapid {:.4} above the work (margin 0.2)",
+                    m.0,
+                    h(&tip) - top
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A tampered copy of `text`, or `None` when the chosen change does not apply.
+fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'static str)> {
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let fmt = |v: f64| {
+        if mm {
+            format!("{v:.3}")
+        } else {
+            format!("{v:.4}")
+        }
+    };
+    let tol = if mm { 0.025 } else { 0.001 };
+    match r.below(3) {
+        0 => {
+            // One value moved beyond tolerance: an axis word of a feed, or a rotary.
+            let feeds: Vec<&Mv> = mv
+                .iter()
+                .filter(|m| !matches!(m.1, MoveKind::Rapid))
+                .collect();
+            let m = feeds[r.below(feeds.len())];
+            let idx = (m.0 - 1) as usize;
+            let words: Vec<String> = lines[idx].split(' ').map(str::to_string).collect();
+            let cand: Vec<usize> = (0..words.len())
+                .filter(|&k| {
+                    words[k]
+                        .bytes()
+                        .next()
+                        .is_some_and(|c| b"XYZABC".contains(&c))
+                })
+                .collect();
+            if cand.is_empty() {
+                return None;
+            }
+            let k = cand[r.below(cand.len())];
+            let letter = words[k].as_bytes()[0];
+            let v: f64 = words[k][1..].parse().ok()?;
+            let sign = if r.below(2) == 0 { -1.0 } else { 1.0 };
+            let nv = if b"ABC".contains(&letter) {
+                format!("{:.3}", v + sign * r.range(0.05, 2.0))
+            } else {
+                fmt(v + sign * tol * r.range(3.0, 50.0))
+            };
+            let mut w = words;
+            w[k] = format!("{}{nv}", letter as char);
+            lines[idx] = w.join(" ");
+            Some((lines.join("\n") + "\n", "value moved"))
+        }
+        1 => {
+            // A rapid added to a point of the work (another feed's end), after a feed.
+            let feeds: Vec<&Mv> = mv
+                .iter()
+                .filter(|m| !matches!(m.1, MoveKind::Rapid))
+                .collect();
+            let at = feeds[r.below(feeds.len())];
+            let to = feeds[r.below(feeds.len())];
+            if (0..3).all(|k| (at.3[k] - to.3[k]).abs() < 1e-3) {
+                return None;
+            }
+            let e = to.3;
+            lines.insert(
+                at.0 as usize,
+                format!("G0 X{} Y{} Z{}", fmt(e[0]), fmt(e[1]), fmt(e[2])),
+            );
+            Some((lines.join("\n") + "\n", "rapid through the work"))
+        }
+        _ => {
+            // A motion block removed.
+            let m = &mv[r.below(mv.len())];
+            lines.remove((m.0 - 1) as usize);
+            Some((lines.join("\n") + "\n", "block removed"))
+        }
+    }
+}
+
+#[test]
+fn random_programs_post_verify_and_tampering_is_caught() {
+    let machines = [
+        (Machine::builtin("fadal-lamp", &[]).expect("fadal"), "fadal"),
+        (Machine::builtin("nrc-lc", &[]).expect("nrc"), "nrc"),
+        (trt(), "trt"),
+    ];
+    let mut r = Rng(0x1A3B_5C7D_9E0F_1234);
+    let (mut posted, mut refused, mut tampered, mut caught) = (0, 0, 0, 0);
+    let mut missed: Vec<String> = Vec::new();
+    for case in 0..240 {
+        let (m, name) = &machines[case % 3];
+        let mm = m.units == lampost_kinematics::Units::Mm;
+        let k = if mm { 25.4 } else { 1.0 };
+        let laser = *name == "fadal" && r.below(2) == 0;
+        let head = if laser {
+            m.head("laser").expect("laser")
+        } else {
+            0
+        };
+        let text = program(&mut r, k);
+        let origin = Vector3::new(r.range(-2.0, 2.0), r.range(-2.0, 2.0), r.range(0.0, 1.0)) * k;
+        let (frame, orient) = if r.below(3) == 0 {
+            let f = Frame::from_axes(
+                origin,
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::new(r.range(-0.5, 0.5), r.range(-0.5, 0.5), 1.0),
+            )
+            .expect("frame");
+            (f, Orient::ToolAxis)
+        } else {
+            let lim = m.rotary[1].limits.map_or(60.0, |l| l.1.min(-l.0).min(60.0));
+            let (a, b) = match *name {
+                "fadal" => (r.range(-180.0, 180.0), r.range(-lim, lim)),
+                "nrc" => (r.range(-lim, lim), r.range(-180.0, 180.0)),
+                _ => (r.range(-60.0, 60.0), r.range(-180.0, 180.0)),
+            };
+            (Frame::translation(origin), Orient::Index([a, b]))
+        };
+        let secs = vec![Section {
+            name: format!("case{case}.nc"),
+            source: Source::Bytes(text.clone().into_bytes()),
+            frame,
+            orient,
+            layers: None,
+        }];
+        let cfg = config(m, head, r.below(2) == 0);
+        let mut out = Vec::new();
+        match post(m, &secs, &cfg, &mut out, |_| {}) {
+            Ok(_) => {}
+            Err(PostError::Limit { .. } | PostError::SafeHeight { .. } | PostError::Kin { .. }) => {
+                refused += 1;
+                continue;
+            }
+            Err(e) => panic!("case {case} ({name}): {e}\n{text}"),
+        }
+        posted += 1;
+        let out = String::from_utf8(out).expect("ascii");
+        let v = |t: &str| {
+            verify(
+                m,
+                &secs,
+                cfg.head,
+                cfg.intended,
+                t.as_bytes(),
+                cfg.verify_tolerance,
+                None,
+            )
+        };
+        if let Err(e) = v(&out) {
+            panic!("case {case} ({name}): the posted program fails verify: {e}\n{text}\n{out}");
+        }
+        let units = if mm { Units::Mm } else { Units::Inch };
+        let mv = moves(&out, units);
+        if *name == "fadal" {
+            if let Err(e) = fadal_rapids_clear_the_work(&mv, laser) {
+                panic!("case {case}: {e}\n{out}");
+            }
+        }
+        for _ in 0..6 {
+            let Some((bad, what)) = tamper(&mut r, &out, &mv, mm) else {
+                continue;
+            };
+            if bad == out {
+                continue;
+            }
+            tampered += 1;
+            if v(&bad).is_err() {
+                caught += 1;
+            } else {
+                missed.push(format!("case {case} ({name}): {what}"));
+            }
+        }
+    }
+    let rate = caught as f64 / tampered as f64;
+    eprintln!(
+        "posted {posted}, refused {refused} (travel, safe height, reach); tampered {tampered}, caught {caught} ({:.2} %)",
+        100.0 * rate
+    );
+    for m in missed.iter().take(20) {
+        eprintln!("missed: {m}");
+    }
+    assert!(posted >= 100, "too few programs posted: {posted}");
+    assert!(
+        rate >= 0.99,
+        "verify caught {:.2} % of tampered programs",
+        100.0 * rate
+    );
+}
