@@ -392,3 +392,58 @@ fn per_point_paths_post_with_inverse_time_and_verify() {
     let o = lampost(&["post", "--machine", "nrc-lc", "--index", "B=0,C=0", &csv]);
     assert!(stderr(&o).contains("carries its own tool axis"));
 }
+
+#[test]
+fn a_machine_file_cannot_inject_motion() {
+    let dir = tempdir("postmachfile");
+    let out = dir.join("out.nc");
+    let outs = out.to_str().expect("utf8").to_string();
+    let good = std::fs::read_to_string(root().join("fixtures/machines/fadal-lamp.toml"))
+        .expect("fadal-lamp.toml");
+    // (line replaced, bad line, column of the offending text, what the message names)
+    let cases = [
+        ("laser_on = \"M71\"", "laser_on = \"G0 X900\"", 13, "`G0`"),
+        (
+            "laser_power_word = \"S\"",
+            "laser_power_word = \"X\"",
+            21,
+            "\"X\"",
+        ),
+        ("name = \"B\"", "name = \"N\"", 9, "rotary axis name \"N\""),
+    ];
+    for (old, bad, column, named) in cases {
+        assert!(good.contains(&format!("{old}\n")), "{old}");
+        let text = good.replacen(&format!("{old}\n"), &format!("{bad}\n"), 1);
+        let line = text.lines().position(|l| l == bad).expect("the bad line") + 1;
+        let machine = dir.join("bad.toml");
+        std::fs::write(&machine, &text).expect("write");
+        let machine = machine.to_string_lossy().into_owned();
+        let o = lampost(&[
+            "post",
+            "--machine",
+            &machine,
+            "--index",
+            "A=0,B=0",
+            "--head",
+            "laser",
+            "-o",
+            &outs,
+            &fx("patch-1in.nc"),
+        ]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{bad}: posted");
+        assert!(
+            err.contains(&format!("{machine}:{line}:{column}")),
+            "{bad}: no {machine}:{line}:{column} in\n{err}"
+        );
+        assert!(err.contains(named), "{bad}: `{named}` not in\n{err}");
+        assert!(err.contains(bad), "{bad}: the line is not shown in\n{err}");
+        assert!(!out.exists(), "{bad}: an output file was written");
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .expect("dir")
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with(".lampost"))
+            .collect();
+        assert!(left.is_empty(), "temporary files left: {left:?}");
+    }
+}

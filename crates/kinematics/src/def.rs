@@ -144,9 +144,9 @@ pub struct MachineDef {
     pub process: ProcessDef,
 }
 
-/// Process codes (blocks of words, e.g. `"M71"` or `"M3 S1200"`) and post settings. The
-/// papers give no laser or powder codes: the defaults are documented assumptions for the
-/// machine's integrator to set.
+/// Process codes (M, S, P and Q words only, e.g. `"M71"` or `"M98 P10"`; see
+/// [`crate::check`]) and post settings. The papers give no laser or powder codes: the
+/// defaults are documented assumptions for the machine's integrator to set.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ProcessDef {
@@ -175,6 +175,50 @@ pub struct ProcessDef {
     pub clearance_z: f64,
     /// Program end.
     pub program_end: String,
+    /// Added to the highest point of the work at an index: the retract height is the
+    /// larger of `clearance_z` and the highest point of the work at that index plus this
+    /// margin. Machine units, finite, ≥ 0; default 0.2 in / 5 mm (see
+    /// [`ProcessDef::safe_margin`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub safe_margin: Option<f64>,
+    /// Radius of the head: the cylinder along the tool axis used for collision checks.
+    /// Machine units, finite, > 0; default 1 in / 25 mm (see [`ProcessDef::head_radius`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub head_radius: Option<f64>,
+    /// Length of the head: the cylinder along the tool axis, from the tool point into the
+    /// head, used for collision checks. Machine units, finite, > 0; default 6 in / 150 mm
+    /// (see [`ProcessDef::head_length`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub head_length: Option<f64>,
+}
+
+impl ProcessDef {
+    /// The retract height is the larger of `clearance_z` and the highest point of the
+    /// work at that index plus this margin: `safe_margin`, or 0.2 in / 5 mm.
+    pub fn safe_margin(&self, units: Units) -> f64 {
+        self.safe_margin.unwrap_or(match units {
+            Units::Inch => 0.2,
+            Units::Mm => 5.0,
+        })
+    }
+
+    /// Radius of the cylinder along the tool axis used for collision checks:
+    /// `head_radius`, or 1 in / 25 mm.
+    pub fn head_radius(&self, units: Units) -> f64 {
+        self.head_radius.unwrap_or(match units {
+            Units::Inch => 1.0,
+            Units::Mm => 25.0,
+        })
+    }
+
+    /// Length of the cylinder along the tool axis (from the tool point into the head) used
+    /// for collision checks: `head_length`, or 6 in / 150 mm.
+    pub fn head_length(&self, units: Units) -> f64 {
+        self.head_length.unwrap_or(match units {
+            Units::Inch => 6.0,
+            Units::Mm => 150.0,
+        })
+    }
 }
 
 impl Default for ProcessDef {
@@ -192,6 +236,9 @@ impl Default for ProcessDef {
             tool_change: "M6".into(),
             clearance_z: 0.0,
             program_end: "M30".into(),
+            safe_margin: None,
+            head_radius: None,
+            head_length: None,
         }
     }
 }
@@ -265,7 +312,9 @@ fn find_non_finite(text: &str) -> Option<usize> {
 }
 
 impl MachineDef {
-    /// Read a machine file's text; `file` names it in errors.
+    /// Read a machine file's text; `file` names it in errors. The values the post writes
+    /// as text are checked as data ([`crate::check`]): a refusal names the file, line and
+    /// column of the offending text.
     pub fn from_toml(text: &str, file: &str) -> Result<Self, KinError> {
         if let Some(at) = find_non_finite(text) {
             let (line, column, t) = line_col(text, at);
@@ -277,7 +326,7 @@ impl MachineDef {
                 text: t,
             });
         }
-        toml::from_str::<MachineDef>(text).map_err(|e| {
+        let mut def = toml::from_str::<MachineDef>(text).map_err(|e| {
             let (line, column, t) = match e.span() {
                 Some(sp) => line_col(text, sp.start),
                 None => (0, 0, String::new()),
@@ -289,7 +338,21 @@ impl MachineDef {
                 message: e.message().trim().to_string(),
                 text: t,
             }
-        })
+        })?;
+        if let Err((place, refusal)) = def.check_values() {
+            let (line, column, t) = match crate::check::locate(text, place, refusal.at) {
+                Some(at) => line_col(text, at),
+                None => (0, 0, String::new()),
+            };
+            return Err(KinError::MachineFile {
+                file: file.to_string(),
+                line,
+                column,
+                message: refusal.message,
+                text: t,
+            });
+        }
+        Ok(def)
     }
 
     /// The file as TOML.

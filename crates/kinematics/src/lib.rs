@@ -21,6 +21,7 @@
 //!   well-used crate.
 
 pub mod batch;
+pub mod check;
 pub mod def;
 pub mod error;
 pub mod lanes;

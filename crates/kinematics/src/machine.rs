@@ -342,6 +342,8 @@ pub(crate) fn wrap180(d: f64) -> f64 {
 impl Machine {
     /// Build from a definition, applying parameter overrides (`--set`).
     pub fn new(mut def: MachineDef, overrides: &[(String, ParamValue)]) -> Result<Self, KinError> {
+        // Values written into programs as text (a no-op for a file already read).
+        def.check()?;
         let bad = |what: String| KinError::InvalidMachine {
             machine: def.name.clone(),
             what,
@@ -637,6 +639,26 @@ impl Machine {
             MachineDef::from_toml(text, &format!("<built-in {name}>"))?,
             overrides,
         )
+    }
+
+    /// The retract height is the larger of `clearance_z` and the highest point of the
+    /// work at that index plus this margin (machine units): `process.safe_margin`, or
+    /// 0.2 in / 5 mm.
+    pub fn safe_margin(&self) -> f64 {
+        self.def.process.safe_margin(self.units)
+    }
+
+    /// Radius of the head, the cylinder along the tool axis used for collision checks
+    /// (machine units): `process.head_radius`, or 1 in / 25 mm.
+    pub fn head_radius(&self) -> f64 {
+        self.def.process.head_radius(self.units)
+    }
+
+    /// Length of the head, the cylinder along the tool axis (from the tool point into the
+    /// head) used for collision checks (machine units): `process.head_length`, or
+    /// 6 in / 150 mm.
+    pub fn head_length(&self) -> f64 {
+        self.def.process.head_length(self.units)
     }
 
     /// Axis names: linear then rotary, file order.
