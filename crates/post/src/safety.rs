@@ -124,7 +124,7 @@ impl<'m> SafeHeights<'m> {
             m,
             head,
             work,
-            margin: safe_margin(m),
+            margin: m.safe_margin(),
             clearance: m.def.process.clearance_z,
         };
         // The post lifts by raising the Z joint: that must move the head away from the
@@ -210,14 +210,6 @@ impl<'m> SafeHeights<'m> {
     /// The top of the machine's Z travel.
     pub fn z_limit(&self) -> f64 {
         self.m.linear[2].limits.1
-    }
-}
-
-/// The margin above the work's highest point (the machine file's `safe_margin`).
-pub fn safe_margin(m: &Machine) -> f64 {
-    match m.units {
-        lampost_kinematics::Units::Inch => 0.2,
-        lampost_kinematics::Units::Mm => 5.0,
     }
 }
 

@@ -356,8 +356,8 @@ pub fn verify<R: BufRead>(
                         if !entering {
                             // The segment's middle too (a chord left out would bulge).
                             let mut mid = m.end;
-                            for k in 0..9 {
-                                mid[k] = 0.5 * (m.start[k] + m.end[k]);
+                            for (v, s) in mid.iter_mut().zip(m.start) {
+                                *v = 0.5 * (s + *v);
                             }
                             let pm = fk(&mid);
                             check(
@@ -481,7 +481,7 @@ impl<'m> Safety<'m> {
             m,
             head,
             work,
-            margin: crate::safety::safe_margin(m),
+            margin: m.safe_margin(),
             clearance: m.def.process.clearance_z,
             eps,
             approach: None,
