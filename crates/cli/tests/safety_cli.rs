@@ -407,3 +407,69 @@ fn per_point_retract_clears_the_path() {
         "{first:?} vs {top}\n{text}"
     );
 }
+
+/// Issue 11, case 7: valid input once refused as "a lampost fault" now posts and
+/// verifies: a multi-turn helix (`G2 … P2`) flat and tilted, and a tool axis turning
+/// about a standing tip (per-point path: rotaries move, linear axes compensate, G93).
+#[test]
+fn multi_turn_helix_and_pivot_post_and_verify() {
+    let dir = tempdir("safety-case7");
+    let helix = write(
+        &dir,
+        "helix.nc",
+        "G20 G90\nG0 X0 Y0 Z0.1\nG1 Z0 F20.\nG2 X0 Y0 I0.5 J0 Z0.2 P2\nM30\n",
+    );
+    for index in ["A=0,B=0", "A=0,B=-30"] {
+        let out = dir.join("helix.out");
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            index,
+            &helix,
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        assert!(o.status.success(), "{index}: {}", stderr(&o));
+        let v = lampost(&[
+            "verify",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            index,
+            &helix,
+            &out.to_string_lossy(),
+        ]);
+        assert!(v.status.success(), "{index}: {}", stderr(&v));
+    }
+    let pivot = write(
+        &dir,
+        "pivot.csv",
+        "x y z i j k feed laser\n0 0 0 0 0 1 10 0\n0 0 0 0.5 0 0.866 10 1\n0 0 0 0 0.5 0.866 10 1\n1 0 0 0 0 1 10 1\n",
+    );
+    let out = dir.join("pivot.out");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--head",
+        "spindle",
+        &pivot,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    assert!(text.contains("G93"), "{text}");
+    let v = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--head",
+        "spindle",
+        &pivot,
+        &out.to_string_lossy(),
+    ]);
+    assert!(v.status.success(), "{}", stderr(&v));
+}

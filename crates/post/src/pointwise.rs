@@ -527,7 +527,11 @@ pub fn verify_points<R: BufRead>(
                     )));
                 }
                 let target = &placed[k];
-                if (pose.tip - target.tip).norm() <= tolerance {
+                // A point is reached when the tip is there and the axis too (a path may
+                // turn the axis about a standing tip).
+                if (pose.tip - target.tip).norm() <= tolerance
+                    && angle(&pose.axis, &target.axis) <= AXIS_TOLERANCE_DEG
+                {
                     let ang = angle(&pose.axis, &target.axis);
                     rep.compared += 1;
                     rep.max_position_error =
@@ -543,8 +547,12 @@ pub fn verify_points<R: BufRead>(
                 let a = &placed[k - 1];
                 let d = target.tip - a.tip;
                 let len2 = d.norm_squared();
+                let turn = angle(&a.axis, &target.axis);
                 let t = if len2 > 0.0 {
                     ((pose.tip - a.tip).dot(&d) / len2).clamp(0.0, 1.0)
+                } else if turn > 0.0 {
+                    // The tip stands still: how far the axis has turned.
+                    (angle(&a.axis, &pose.axis) / turn).clamp(0.0, 1.0)
                 } else {
                     0.0
                 };

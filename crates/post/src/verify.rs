@@ -61,10 +61,18 @@ pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
             }
             let t = t_raw.clamp(0.0, 1.0);
             // Near the ends of multi-turn or near-full arcs, try the neighbours too.
-            [t, 0.0, 1.0]
+            let near = [t, 0.0, 1.0]
                 .iter()
                 .map(|&t| (p - step.at(t)).norm())
-                .fold(f64::INFINITY, f64::min)
+                .fold(f64::INFINITY, f64::min);
+            // A helix of more than one turn passes p's angle once a turn: each of those.
+            let turns = (sweep.abs() / tau).ceil() as u32;
+            (1..turns.min(10_001))
+                .map(|k| {
+                    let t = ((ang + f64::from(k) * tau * sweep.signum()) / sweep).clamp(0.0, 1.0);
+                    (p - step.at(t)).norm()
+                })
+                .fold(near, f64::min)
         }
         _ => {
             let d = step.end - step.start;
