@@ -20,11 +20,13 @@ mod chords;
 pub mod error;
 pub mod frame;
 pub mod intended;
+mod orient;
 pub mod pointwise;
 pub mod post;
 pub mod safety;
 pub mod split;
 pub mod verify;
+mod writer;
 
 pub use error::PostError;
 pub use frame::{read_setup, Frame};

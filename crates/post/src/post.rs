@@ -11,6 +11,7 @@ use nalgebra::Vector3;
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
 use crate::safety::{SafeHeights, WorkBounds};
+use crate::writer::Writer;
 use crate::verify::ArcPoints;
 
 /// Output dialect.
@@ -196,290 +197,6 @@ pub(crate) fn code_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
     Ok(b.words().map(|w| (w.letter, w.value)).collect())
 }
 
-struct Writer<'m, W: Write> {
-    em: Emitter<W>,
-    m: &'m Machine,
-    letters: [u8; 5],
-    report: PostReport,
-    rot: Option<[f64; 2]>,
-    /// The joints map of `rot` (of 0 before the first index).
-    jmap: Affine,
-    /// (sin, cos) of `rot`.
-    rot_sc: [(f64, f64); 2],
-    branch: Option<i8>,
-    laser: bool,
-    pos: Option<[f64; 3]>,
-    /// The last written linear words, in output resolution units.
-    written: [Option<i64>; 3],
-    /// The feed step being written, for the in-process verification.
-    step: Option<Step>,
-    /// (rotary, tip map of it as written), for forward kinematics.
-    fk_cache: ([f64; 2], Affine),
-    /// The tool axis (part frame) at the written rotary, with `fk_cache`.
-    fk_axis: Vector3<f64>,
-    /// The current section's orientation rule and its layer's program +Z.
-    orient: Orient,
-    program_z: Vector3<f64>,
-    /// The intended tool axis for the current orientation: (orientation, axis).
-    want_axis: Option<(Orient, Vector3<f64>)>,
-    /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
-    axis_err: Option<(Vector3<f64>, Vector3<f64>, f64)>,
-    head: usize,
-    tol: f64,
-    /// 10^decimals of the linear words.
-    scale: f64,
-    /// A point planned on the reading thread: (joints, is the step's end, its check).
-    planned_check: Option<([f64; 3], bool, EndCheck)>,
-    /// The safe heights, and that of the table position in force.
-    heights: SafeHeights<'m>,
-    safe: f64,
-    /// The head is down at the end of a feed (a lift comes before any travel).
-    in_run: bool,
-}
-
-impl<W: Write> Writer<'_, W> {
-    /// Bytes of output so far (finished lines).
-    fn offset(&self) -> u64 {
-        self.em.position()
-    }
-
-    fn words(&mut self, w: &[(u8, f64)], comment: Option<&str>) -> Result<(), PostError> {
-        self.em.words(w, comment).map_err(PostError::from)
-    }
-
-    /// Laser and powder off, if the laser is on.
-    fn laser_off(
-        &mut self,
-        laser_off: &[(u8, f64)],
-        powder_off: &[(u8, f64)],
-    ) -> Result<(), PostError> {
-        if self.laser {
-            self.words(laser_off, None)?;
-            self.words(powder_off, None)?;
-            self.laser = false;
-        }
-        Ok(())
-    }
-
-    /// Check a written feed point: the joints as the text gives them (rounded to the
-    /// output resolution), through forward kinematics, against the intended move.
-    fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
-        // The fields used, not the whole step (a copy of it costs as much as the check).
-        let Some((line, orient, program_z)) = self
-            .step
-            .as_ref()
-            .map(|s| (s.line, self.orient, self.program_z))
-        else {
-            return Ok(());
-        };
-        let rot = self.rot.unwrap_or([0.0; 2]);
-        if self.fk_cache.0 != rot {
-            let (_, inv) = written_rotary(&rot);
-            self.fk_cache = (rot, self.m.tip_map(&inv, self.head));
-            self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
-                - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
-        }
-        let err = match self.planned_check {
-            // Worked out on the reading thread, for these very joints (with the same
-            // end-or-path rule).
-            Some((j, end, e)) if end == is_end && j == *x => e,
-            _ => {
-                let tip = written_tip(&self.fk_cache.1, self.scale, x);
-                match &self.step {
-                    Some(step) if is_end => (tip - step.end).norm(),
-                    Some(step) => crate::verify::dist_to(step, &tip),
-                    None => 0.0,
-                }
-            }
-        };
-        if err > self.tol {
-            let tip = written_tip(&self.fk_cache.1, self.scale, x);
-            return Err(PostError::Verify(format!(
-                "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
-                line, tip.x, tip.y, tip.z, self.tol
-            )));
-        }
-        let axis = self.fk_axis;
-        let want = match self.want_axis {
-            Some((o, a)) if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) => a,
-            _ => {
-                self.axis_err = None;
-                let a = match orient {
-                    Orient::ToolAxis => program_z.normalize(),
-                    Orient::Index(r) => {
-                        self.m
-                            .forward(
-                                &lampost_kinematics::Joints {
-                                    linear: [0.0; 3],
-                                    rotary: r,
-                                },
-                                self.head,
-                            )
-                            .axis
-                    }
-                };
-                self.want_axis = Some((orient, a));
-                a
-            }
-        };
-        // The axis error changes only with the rotaries or the intended axis.
-        let ang = match self.axis_err {
-            Some((a, w, e)) if a == axis && w == want => e,
-            _ => {
-                let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
-                self.axis_err = Some((axis, want, e));
-                e
-            }
-        };
-        let v = &mut self.report.verify;
-        v.compared += 1;
-        if err > v.max_position_error {
-            v.max_position_error = err;
-            v.worst_line = line;
-        }
-        v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
-        if ang > 0.01 {
-            return Err(PostError::Verify(format!(
-                "input line {}: the tool axis is {ang:.4}° off",
-                line
-            )));
-        }
-        Ok(())
-    }
-
-    fn note_limits(&mut self, joints: &[f64; 5]) {
-        for (k, v) in joints.iter().enumerate() {
-            let e = &mut self.report.limits_used[k];
-            e.1 = e.1.min(*v);
-            e.2 = e.2.max(*v);
-        }
-    }
-
-    fn check(&self, file: &str, line: u32, x: &[f64; 3], rot: &[f64; 2]) -> Result<(), PostError> {
-        for (l, &v) in self.m.linear.iter().zip(x) {
-            if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
-                return Err(PostError::Limit {
-                    file: file.to_string(),
-                    line,
-                    axis: l.name.clone(),
-                    value: v,
-                    lo: l.limits.0,
-                    hi: l.limits.1,
-                });
-            }
-        }
-        for (r, &v) in self.m.rotary.iter().zip(rot) {
-            if !r.within(v) {
-                let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                return Err(PostError::Limit {
-                    file: file.to_string(),
-                    line,
-                    axis: r.name.clone(),
-                    value: v,
-                    lo,
-                    hi,
-                });
-            }
-        }
-        Ok(())
-    }
-
-    /// The safe-height invariant for a rapid to `x` from where the head is: only a
-    /// vertical move (the lift off an end, the approach onto a start) may go below the
-    /// safe height. (Checked on the values as written.)
-    fn check_rapid(&self, file: &str, line: u32, x: &[f64; 3]) -> Result<(), PostError> {
-        let q = |v: f64| round_half_away(v * self.scale);
-        let vertical = self
-            .pos
-            .is_some_and(|p| q(p[0]) == q(x[0]) && q(p[1]) == q(x[1]));
-        let low = |z: f64| q(z) < q(self.safe);
-        if !vertical && (low(x[2]) || self.pos.is_some_and(|p| low(p[2]))) {
-            return Err(PostError::Verify(format!(
-                "{file}:{line}: a rapid to ({:.4}, {:.4}, {:.4}) travels below the safe height {:.4}",
-                x[0], x[1], x[2], self.safe
-            )));
-        }
-        Ok(())
-    }
-
-    /// Raise the head to the safe height where it is (the lift off an end), or write
-    /// the height alone when the position is not known yet (the program's first move).
-    fn lift(&mut self, file: &str, line: u32) -> Result<(), PostError> {
-        let z = self.safe;
-        match self.pos {
-            Some(p) => {
-                if round_half_away(p[2] * self.scale) < round_half_away(z * self.scale) {
-                    self.linear(0.0, &[p[0], p[1], z], None, file, line, false)?;
-                }
-            }
-            None => {
-                self.words(&[(b'G', 0.0), (self.letters[2], z)], None)?;
-                self.written[2] = Some(round_half_away(z * self.scale) as i64);
-                self.report.moves += 1;
-            }
-        }
-        Ok(())
-    }
-
-    /// Write a straight move to joints `x`. A feed point is verified against the step
-    /// being written: as its end when `step_end` (the stricter test), else as a point on
-    /// its path.
-    #[allow(clippy::too_many_arguments)]
-    fn linear(
-        &mut self,
-        g: f64,
-        x: &[f64; 3],
-        feed: Option<f64>,
-        file: &str,
-        line: u32,
-        step_end: bool,
-    ) -> Result<(), PostError> {
-        let rot = self.rot.unwrap_or([0.0; 2]);
-        // A rapid to where the head already is says nothing.
-        if g == 0.0
-            && self
-                .pos
-                .is_some_and(|p| (0..3).all(|k| (p[k] - x[k]).abs() < 1e-12))
-        {
-            return Ok(());
-        }
-        self.check(file, line, x, &rot)?;
-        if g == 0.0 {
-            self.check_rapid(file, line, x)?;
-        }
-        self.note_limits(&[x[0], x[1], x[2], rot[0], rot[1]]);
-        // Modal suppression: an axis word equal (as written) to the last one is left out.
-        let mut w = [(0u8, 0.0f64, 0i64); 3];
-        let mut n = 0;
-        for (k, &v) in x.iter().enumerate() {
-            let q = round_half_away(v * self.scale) as i64;
-            if self.written[k] != Some(q) {
-                self.written[k] = Some(q);
-                w[n] = (self.letters[k], v, q);
-                n += 1;
-            }
-        }
-        if n == 0 && g == 1.0 {
-            // A feed to where the head is (as written): keep one axis so the block moves
-            // (after the feed word, as posts have always written it).
-            let mut v = vec![(b'G', g)];
-            v.extend(feed.map(|f| (b'F', f)));
-            v.push((self.letters[0], x[0]));
-            self.words(&v, None)?;
-        } else {
-            self.em
-                .motion(g, &w[..n], self.scale, feed)
-                .map_err(PostError::from)?;
-        }
-        if g != 0.0 {
-            self.verify_point(x, step_end)?;
-        }
-        self.pos = Some(*x);
-        self.report.moves += 1;
-        Ok(())
-    }
-}
-
 /// The safe height `h` at table position `rot` must be within the Z travel.
 pub(crate) fn check_height(
     heights: &SafeHeights<'_>,
@@ -515,7 +232,7 @@ pub(crate) fn joints(map: &Affine, p: &Vector3<f64>) -> [f64; 3] {
 /// about `c` through `start` crosses the X and Y directions within the sweep (turning
 /// counter-clockwise in joint X/Y when `ccw`; the ends are checked by the caller). Z
 /// along a helix is between the ends'.
-fn arc_extremes(
+pub(crate) fn arc_extremes(
     start: &[f64; 3],
     end: &[f64; 3],
     c: &[f64; 3],
@@ -541,7 +258,7 @@ fn arc_extremes(
 
 /// The rotary position as written (to the output's 0.001°), and the (sin, cos) of minus
 /// each angle, for forward kinematics of the written program.
-fn written_rotary(rot: &[f64; 2]) -> RotaryTrig {
+pub(crate) fn written_rotary(rot: &[f64; 2]) -> RotaryTrig {
     let rw = [
         round_half_away(rot[0] * 1e3) / 1e3,
         round_half_away(rot[1] * 1e3) / 1e3,
@@ -563,7 +280,7 @@ pub(crate) fn written_tip(tips: &Affine, scale: f64, x: &[f64; 3]) -> Vector3<f6
 }
 
 /// The joints map of `rot` and the tip map of `rot` as written.
-fn index_maps(m: &Machine, head: usize, rot: &[f64; 2]) -> (Affine, Affine) {
+pub(crate) fn index_maps(m: &Machine, head: usize, rot: &[f64; 2]) -> (Affine, Affine) {
     let sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
     (
         m.joints_map(&sc, head),
@@ -696,7 +413,7 @@ impl Planner<'_> {
 type Planned = (Step, Option<PlannedEnd>);
 
 /// Output resolution factor of the linear words: 10^decimals.
-fn linear_scale(units: Units) -> f64 {
+pub(crate) fn linear_scale(units: Units) -> f64 {
     match units {
         Units::Inch => 1e4,
         Units::Mm => 1e3,
@@ -791,7 +508,8 @@ pub fn post<W: Write>(
     })
 }
 
-/// [`post`] over batches of steps, on the calling thread.
+/// [`post`] over batches of steps, on the calling thread: the rotaries of each section
+/// or layer, travel as lift / traverse / approach, and each feed through the [`Writer`].
 #[allow(clippy::too_many_arguments)]
 fn post_steps<W: Write>(
     machine: &Machine,
@@ -803,90 +521,13 @@ fn post_steps<W: Write>(
     batches: impl Iterator<Item = Batch>,
     mut give_back: impl FnMut(Batch),
 ) -> Result<PostReport, PostError> {
-    let units = program_units(machine);
-    let em = emitter(out, cfg, units);
-    let names = machine.axis_names();
-    let mut w = Writer {
-        em,
-        m: machine,
-        letters: axis_letters(machine),
-        report: PostReport {
-            limits_used: names
-                .iter()
-                .map(|n| ((*n).to_string(), f64::INFINITY, f64::NEG_INFINITY))
-                .collect(),
-            ..PostReport::default()
-        },
-        rot: None,
-        jmap: index_maps(machine, cfg.head, &[0.0; 2]).0,
-        rot_sc: [(0.0, 1.0); 2],
-        branch: None,
-        laser: false,
-        pos: None,
-        written: [None; 3],
-        step: None,
-        fk_cache: ([f64::NAN; 2], index_maps(machine, cfg.head, &[0.0; 2]).1),
-        fk_axis: Vector3::z(),
-        orient: Orient::ToolAxis,
-        program_z: Vector3::z(),
-        want_axis: None,
-        axis_err: None,
-        head: cfg.head,
-        tol: cfg.verify_tolerance,
-        scale: linear_scale(units),
-        planned_check: None,
-        safe: heights.at(&cfg.near),
-        heights,
-        in_run: false,
-    };
-    let p = &machine.def.process;
-    let laser_on = code_words(&p.laser_on)?;
-    let laser_off = code_words(&p.laser_off)?;
-    let powder_on = code_words(&p.powder_on)?;
-    let powder_off = code_words(&p.powder_off)?;
-    let power_letter = p
-        .laser_power_word
-        .bytes()
-        .next()
-        .unwrap_or(b'S')
-        .to_ascii_uppercase();
-    write_header(&mut w.em, cfg, units)?;
-    if let Process::Machine {
-        tool,
-        length_offset,
-        work_offset,
-        spindle,
-        coolant,
-    } = &cfg.process
-    {
-        if let Some(t) = tool {
-            let mut v = vec![(b'T', f64::from(*t))];
-            v.extend(code_words(&p.tool_change)?);
-            w.words(&v, None)?;
-        }
-        if let Some(o) = work_offset {
-            w.words(&code_words(o)?, Some("WORK OFFSET"))?;
-        }
-        if let Some(h) = length_offset {
-            w.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
-        }
-        let mut v = vec![(b'S', *spindle)];
-        v.extend(code_words(&p.spindle_on)?);
-        w.words(&v, None)?;
-        if *coolant {
-            w.words(&code_words(&p.coolant_on)?, None)?;
-        }
-    }
-    // How far above a feed's start the rapid approach stops: 0.1 in / 2.5 mm.
-    let approach_lift = crate::safety::approach_lift(machine);
-    let z_axis = 2usize;
-    let head = cfg.head;
+    let mut w = Writer::new(machine, cfg, heights, out)?;
+    w.preamble(cfg)?;
     let mut cur_key: Option<(usize, usize)> = None;
     let mut need_approach = true;
     let mut retract_noted: Option<u32> = None;
     let mut arc_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
-    w.report.body.0 = w.offset();
     let mut count = 0usize;
     for batch in batches {
         let mut batch = batch;
@@ -903,101 +544,25 @@ fn post_steps<W: Write>(
                 cur_key = Some(key);
                 w.orient = step.orient(sections);
                 w.program_z = step.program_z(sections);
-                // Choose the rotaries for this section/layer.
-                let rot = match w.orient {
-                    Orient::Index(r) => {
-                        for (i, ax) in machine.rotary.iter().enumerate() {
-                            if !ax.within(r[i]) {
-                                let (lo, hi) =
-                                    ax.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                                return Err(PostError::Limit {
-                                    file: file.clone(),
-                                    line: step.line,
-                                    axis: ax.name.clone(),
-                                    value: r[i],
-                                    lo,
-                                    hi,
-                                });
-                            }
-                        }
-                        r
-                    }
-                    Orient::ToolAxis => {
-                        let near = w.rot.unwrap_or(cfg.near);
-                        let sols = machine.orientations(&w.program_z, &near).map_err(|err| {
-                            PostError::Kin {
-                                context: format!("{file}:{}: ", step.line),
-                                err,
-                            }
-                        })?;
-                        let same = sols.iter().find(|s| {
-                            s.within_limits
-                                && w.branch
-                                    .is_none_or(|b| s.branch == 0 || b == 0 || s.branch == b)
-                        });
-                        let pick = match same {
-                            Some(s) => *s,
-                            None => match sols.iter().find(|s| s.within_limits) {
-                                Some(s) => {
-                                    w.report.warnings.push(format!("{file}:{}: the rotary branch flips here; the tool retracts and re-approaches", step.line));
-                                    *s
-                                }
-                                None => {
-                                    let names: Vec<String> = machine
-                                        .rotary
-                                        .iter()
-                                        .map(|r| format!("{} {:?}", r.name, r.limits))
-                                        .collect();
-                                    let cands: Vec<String> = sols
-                                        .iter()
-                                        .map(|s| {
-                                            format!(
-                                                "{} = {:.3}°, {} = {:.3}°",
-                                                machine.rotary[0].name,
-                                                s.rotary[0],
-                                                machine.rotary[1].name,
-                                                s.rotary[1]
-                                            )
-                                        })
-                                        .collect();
-                                    return Err(PostError::Kin {
-                                    context: format!("{file}:{}: ", step.line),
-                                    err: lampost_kinematics::KinError::Unreachable {
-                                        what: format!("no orientation within the rotary limits ({}) turns the program's +Z ({:.4}, {:.4}, {:.4}) to the tool axis; candidates {}", names.join(", "), w.program_z.x, w.program_z.y, w.program_z.z, cands.join("; ")),
-                                    },
-                                });
-                                }
-                            },
-                        };
-                        w.branch = Some(pick.branch);
-                        pick.rotary
-                    }
-                };
+                let near = w.rot.unwrap_or(cfg.near);
+                let (rot, branch) = crate::orient::rotaries(
+                    machine,
+                    w.orient,
+                    &w.program_z,
+                    &near,
+                    w.branch,
+                    file,
+                    step.line,
+                    &mut w.report.warnings,
+                )?;
+                if branch.is_some() {
+                    w.branch = branch;
+                }
                 let changed = w
                     .rot
                     .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
                 if changed {
-                    // Laser off, retract, then index: never a rotary move mid-cut, and the
-                    // head high enough for every table position the move passes through.
-                    w.laser_off(&laser_off, &powder_off)?;
-                    let split = w.offset();
-                    w.report.split_points.push(split);
-                    let from = w.rot.unwrap_or(cfg.near);
-                    w.safe = w.heights.over_move(&from, &rot);
-                    check_height(&w.heights, w.safe, file, step.line, &rot)?;
-                    w.lift(file, step.line)?;
-                    w.rot = Some(rot);
-                    w.jmap = index_maps(machine, head, &rot).0;
-                    w.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
-                    w.words(
-                        &[(b'G', 0.0), (w.letters[3], rot[0]), (w.letters[4], rot[1])],
-                        Some("INDEX"),
-                    )?;
-                    w.report.indexes.push(rot);
-                    w.report.moves += 1;
-                    w.safe = w.heights.at(&rot);
-                    check_height(&w.heights, w.safe, file, step.line, &rot)?;
-                    w.in_run = false;
+                    w.index(rot, cfg.near, file, step.line)?;
                     need_approach = true;
                 }
             }
@@ -1029,13 +594,7 @@ fn post_steps<W: Write>(
                         step.line
                     ));
                 }
-                w.laser_off(&laser_off, &powder_off)?;
-                if w.in_run {
-                    let split = w.offset();
-                    w.report.split_points.push(split);
-                    w.lift(file, step.line)?;
-                    w.in_run = false;
-                }
+                w.travel(file, step.line)?;
                 need_approach = true;
                 continue;
             }
@@ -1043,114 +602,53 @@ fn post_steps<W: Write>(
                 .pos
                 .is_some_and(|p| (0..3).all(|k| (p[k] - start[k]).abs() <= 1e-6));
             if need_approach || !at_start {
-                // Off the last end (if the head is down there), over the start at the safe
-                // height, straight down to just above it, then in at the feed rate.
-                w.laser_off(&laser_off, &powder_off)?;
-                if w.in_run {
-                    let split = w.offset();
-                    w.report.split_points.push(split);
-                    w.lift(file, step.line)?;
-                }
-                let mut above = start;
-                above[z_axis] = w.pos.map_or(w.safe, |p| p[z_axis].max(w.safe));
-                w.linear(0.0, &above, None, file, step.line, false)?;
-                let mut near_start = start;
-                near_start[z_axis] = (start[z_axis] + approach_lift).min(w.safe);
-                w.linear(0.0, &near_start, None, file, step.line, false)?;
-                w.linear(1.0, &start, Some(step.feed), file, step.line, false)?;
+                w.approach(&start, step.feed, file, step.line)?;
                 need_approach = false;
             }
-            w.in_run = true;
+            w.process_for(cfg, step.deposit)?;
             match step.kind {
-                StepKind::Rapid | StepKind::Retract => {}
-                StepKind::Feed | StepKind::Arc { .. } => {
-                    if let Process::Deposit { power } = cfg.process {
-                        if step.deposit && !w.laser {
-                            let mut v = laser_on.clone();
-                            v.push((power_letter, power));
-                            w.words(&v, None)?;
-                            w.words(&powder_on, None)?;
-                            w.laser = true;
-                        } else if !step.deposit {
-                            w.laser_off(&laser_off, &powder_off)?;
+                StepKind::Arc {
+                    center,
+                    normal,
+                    sweep,
+                } => {
+                    // The arc stays an arc when its plane is the machine's XY plane.
+                    let way = arc_way(
+                        machine,
+                        &w.rot_sc,
+                        &step,
+                        &center,
+                        &normal,
+                        sweep,
+                        cfg.tolerance,
+                    );
+                    if let ArcWay::Kept { ccw } = way {
+                        w.arc(&step, &start, &end, &joints(&jm, &center), ccw, sweep, file)?;
+                    } else {
+                        if arc_warned != Some(step.section) {
+                            arc_warned = Some(step.section);
+                            w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
                         }
-                    }
-                    match step.kind {
-                        StepKind::Arc {
-                            center,
-                            normal,
-                            sweep,
-                        } => {
-                            // The arc stays an arc when its plane is the machine's XY plane.
-                            let way = arc_way(
-                                machine,
-                                &w.rot_sc,
-                                &step,
-                                &center,
-                                &normal,
-                                sweep,
-                                cfg.tolerance,
-                            );
-                            if let ArcWay::Kept { ccw } = way {
-                                let c = joints(&jm, &center);
-                                let g = if ccw { 3.0 } else { 2.0 };
-                                let rot_now = w.rot.unwrap_or([0.0; 2]);
-                                w.check(file, step.line, &end, &rot_now)?;
-                                // Travel limits along the arc: its extreme points in X and Y.
-                                for q in arc_extremes(&start, &end, &c, ccw, sweep.abs()) {
-                                    w.check(file, step.line, &q, &rot_now)?;
-                                }
-                                w.note_limits(&[end[0], end[1], end[2], rot_now[0], rot_now[1]]);
-                                let words = [
-                                    (b'G', g),
-                                    (w.letters[0], end[0]),
-                                    (w.letters[1], end[1]),
-                                    (w.letters[2], end[2]),
-                                    (b'I', c[0] - start[0]),
-                                    (b'J', c[1] - start[1]),
-                                    (b'F', step.feed),
-                                ];
-                                w.words(&words, None)?;
-                                // The arc's midpoint (joint space) and its end, as written.
-                                let mid_part = step.at(0.5);
-                                let mid = joints(&jm, &mid_part);
-                                w.verify_point(&mid, false)?;
-                                w.verify_point(&end, true)?;
-                                let scale = w.scale;
-                                for (slot, v) in w.written.iter_mut().zip(end) {
-                                    *slot = Some(round_half_away(v * scale) as i64);
-                                }
-                                w.pos = Some(end);
-                                w.report.moves += 1;
-                            } else {
-                                if arc_warned != Some(step.section) {
-                                    arc_warned = Some(step.section);
-                                    w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
-                                }
-                                let n = match way {
-                                    ArcWay::Chords(n) => n,
-                                    ArcWay::Kept { .. } => 1,
-                                };
-                                // Planned on the reading thread (same table position), or
-                                // solved here.
-                                let chords = planned
-                                    .and_then(|p| {
-                                        points.get(p.chords.0 as usize..p.chords.1 as usize)
-                                    })
-                                    .filter(|c| c.len() == n);
-                                for k in 1..=n {
-                                    let (q, check) = match chords {
-                                        Some(c) => (c[k - 1].0, Some(c[k - 1].1)),
-                                        None => (joints(&jm, &step.at(k as f64 / n as f64)), None),
-                                    };
-                                    w.planned_check = check.map(|c| (q, k == n, c));
-                                    w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
-                                }
-                            }
+                        let n = match way {
+                            ArcWay::Chords(n) => n,
+                            ArcWay::Kept { .. } => 1,
+                        };
+                        // Planned on the reading thread (same table position), or solved
+                        // here.
+                        let chords = planned
+                            .and_then(|p| points.get(p.chords.0 as usize..p.chords.1 as usize))
+                            .filter(|c| c.len() == n);
+                        for k in 1..=n {
+                            let (q, check) = match chords {
+                                Some(c) => (c[k - 1].0, Some(c[k - 1].1)),
+                                None => (joints(&jm, &step.at(k as f64 / n as f64)), None),
+                            };
+                            w.planned_check = check.map(|c| (q, k == n, c));
+                            w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
                         }
-                        _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
                     }
                 }
+                _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
             }
         }
         points.clear();
@@ -1163,27 +661,7 @@ fn post_steps<W: Write>(
                 .map_or_else(String::new, |s| s.name.clone()),
         ));
     }
-    w.report.body.1 = w.offset();
-    // Postamble.
-    w.laser_off(&laser_off, &powder_off)?;
-    if let Process::Machine { coolant, .. } = &cfg.process {
-        if *coolant {
-            w.words(&code_words(&p.coolant_off)?, None)?;
-        }
-        w.words(&code_words(&p.spindle_off)?, None)?;
-    }
-    w.lift("", 0)?;
-    w.words(&code_words(&p.program_end)?, None)?;
-    for e in w.report.limits_used.iter_mut() {
-        if !e.1.is_finite() {
-            e.1 = 0.0;
-            e.2 = 0.0;
-        }
-    }
-    w.report.verify.moves = w.report.moves;
-    let report = w.report;
-    w.em.finish()?;
-    Ok(report)
+    w.finish(cfg)
 }
 
 #[cfg(test)]

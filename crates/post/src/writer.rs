@@ -1,0 +1,637 @@
+//! The one writer of posted programs: every block the planar and the per-point post
+//! write goes through it (preamble and machining options, retract and index, approach,
+//! process codes, straight moves with their limits and in-process check, five-axis
+//! moves, postamble), so both paths keep the same safety rules and honour the same
+//! options.
+
+use std::io::Write;
+
+use lampost_gcode::emit::round_half_away;
+use lampost_gcode::Emitter;
+use lampost_kinematics::trig::sin_cos_deg;
+use lampost_kinematics::{Affine, Machine};
+use nalgebra::Vector3;
+
+use crate::error::PostError;
+use crate::intended::{Orient, Step};
+use crate::post::{
+    axis_letters, check_height, code_words, emitter, index_maps, linear_scale, program_units,
+    write_header, written_rotary, written_tip, EndCheck, PostConfig, PostReport, Process,
+};
+use crate::safety::SafeHeights;
+
+/// The machine's process codes as words.
+#[derive(Debug, Clone)]
+pub(crate) struct Codes {
+    laser_on: Vec<(u8, f64)>,
+    laser_off: Vec<(u8, f64)>,
+    powder_on: Vec<(u8, f64)>,
+    powder_off: Vec<(u8, f64)>,
+    power_letter: u8,
+}
+
+impl Codes {
+    fn of(m: &Machine) -> Result<Codes, PostError> {
+        let p = &m.def.process;
+        Ok(Codes {
+            laser_on: code_words(&p.laser_on)?,
+            laser_off: code_words(&p.laser_off)?,
+            powder_on: code_words(&p.powder_on)?,
+            powder_off: code_words(&p.powder_off)?,
+            power_letter: p
+                .laser_power_word
+                .bytes()
+                .next()
+                .unwrap_or(b'S')
+                .to_ascii_uppercase(),
+        })
+    }
+}
+
+pub(crate) struct Writer<'m, W: Write> {
+    pub(crate) em: Emitter<W>,
+    pub(crate) m: &'m Machine,
+    pub(crate) letters: [u8; 5],
+    pub(crate) report: PostReport,
+    pub(crate) rot: Option<[f64; 2]>,
+    /// The joints map of `rot` (of 0 before the first index).
+    pub(crate) jmap: Affine,
+    /// (sin, cos) of `rot`.
+    pub(crate) rot_sc: [(f64, f64); 2],
+    pub(crate) branch: Option<i8>,
+    pub(crate) laser: bool,
+    pub(crate) pos: Option<[f64; 3]>,
+    /// The last written linear words, in output resolution units.
+    pub(crate) written: [Option<i64>; 3],
+    /// The feed step being written, for the in-process verification.
+    pub(crate) step: Option<Step>,
+    /// (rotary, tip map of it as written), for forward kinematics.
+    pub(crate) fk_cache: ([f64; 2], Affine),
+    /// The tool axis (part frame) at the written rotary, with `fk_cache`.
+    pub(crate) fk_axis: Vector3<f64>,
+    /// The current section's orientation rule and its layer's program +Z.
+    pub(crate) orient: Orient,
+    pub(crate) program_z: Vector3<f64>,
+    /// The intended tool axis for the current orientation: (orientation, axis).
+    pub(crate) want_axis: Option<(Orient, Vector3<f64>)>,
+    /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
+    pub(crate) axis_err: Option<(Vector3<f64>, Vector3<f64>, f64)>,
+    pub(crate) head: usize,
+    pub(crate) tol: f64,
+    /// 10^decimals of the linear words.
+    pub(crate) scale: f64,
+    /// A point planned on the reading thread: (joints, is the step's end, its check).
+    pub(crate) planned_check: Option<([f64; 3], bool, EndCheck)>,
+    /// The safe heights, and that of the table position in force.
+    pub(crate) heights: SafeHeights<'m>,
+    pub(crate) safe: f64,
+    /// The head is down at the end of a feed (a lift comes before any travel).
+    pub(crate) in_run: bool,
+    /// The machine's process codes, read once.
+    pub(crate) codes: Codes,
+    /// Inverse-time feeds (G93) in force.
+    pub(crate) inverse_time: bool,
+
+}
+
+impl<'m, W: Write> Writer<'m, W> {
+    /// A writer for `machine` and `cfg` over `out`, with the safe heights of the work.
+    pub(crate) fn new(
+        machine: &'m Machine,
+        cfg: &PostConfig,
+        heights: SafeHeights<'m>,
+        out: W,
+    ) -> Result<Self, PostError> {
+        let units = program_units(machine);
+        let names = machine.axis_names();
+        Ok(Writer {
+            em: emitter(out, cfg, units),
+            m: machine,
+            letters: axis_letters(machine),
+            report: PostReport {
+                limits_used: names
+                    .iter()
+                    .map(|n| ((*n).to_string(), f64::INFINITY, f64::NEG_INFINITY))
+                    .collect(),
+                ..PostReport::default()
+            },
+            rot: None,
+            jmap: index_maps(machine, cfg.head, &[0.0; 2]).0,
+            rot_sc: [(0.0, 1.0); 2],
+            branch: None,
+            laser: false,
+            pos: None,
+            written: [None; 3],
+            step: None,
+            fk_cache: ([f64::NAN; 2], index_maps(machine, cfg.head, &[0.0; 2]).1),
+            fk_axis: Vector3::z(),
+            orient: Orient::ToolAxis,
+            program_z: Vector3::z(),
+            want_axis: None,
+            axis_err: None,
+            head: cfg.head,
+            tol: cfg.verify_tolerance,
+            scale: linear_scale(units),
+            planned_check: None,
+            safe: heights.at(&cfg.near),
+            heights,
+            in_run: false,
+            codes: Codes::of(machine)?,
+            inverse_time: false,
+        })
+    }
+
+    /// The header, the modal preamble and the machining options (tool change, work
+    /// offset, length offset, spindle, coolant); the body starts after it.
+    pub(crate) fn preamble(&mut self, cfg: &PostConfig) -> Result<(), PostError> {
+        let units = program_units(self.m);
+        write_header(&mut self.em, cfg, units)?;
+        let p = &self.m.def.process;
+        match &cfg.process {
+            Process::Machine {
+                tool,
+                length_offset,
+                work_offset,
+                spindle,
+                coolant,
+            } => {
+                if !(spindle.is_finite() && *spindle >= 0.0) {
+                    return Err(PostError::Options(format!(
+                        "--spindle {spindle}: the spindle speed must be a finite number, 0 or more"
+                    )));
+                }
+                if let Some(t) = tool {
+                    let mut v = vec![(b'T', f64::from(*t))];
+                    v.extend(code_words(&p.tool_change)?);
+                    self.words(&v, None)?;
+                }
+                if let Some(o) = work_offset {
+                    self.words(&code_words(o)?, Some("WORK OFFSET"))?;
+                }
+                if let Some(h) = length_offset {
+                    self.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
+                }
+                let mut v = vec![(b'S', *spindle)];
+                v.extend(code_words(&p.spindle_on)?);
+                self.words(&v, None)?;
+                if *coolant {
+                    self.words(&code_words(&p.coolant_on)?, None)?;
+                }
+            }
+            Process::Deposit { power } => {
+                if !(power.is_finite() && *power >= 0.0) {
+                    return Err(PostError::Options(format!(
+                        "--power {power}: the laser power must be a finite number, 0 or more"
+                    )));
+                }
+            }
+        }
+        self.report.body.0 = self.offset();
+        Ok(())
+    }
+
+    /// The process for a feed: laser and powder on for a deposition move (when the
+    /// process deposits), off otherwise.
+    pub(crate) fn process_for(&mut self, cfg: &PostConfig, deposit: bool) -> Result<(), PostError> {
+        if let Process::Deposit { power } = cfg.process {
+            if deposit && !self.laser {
+                let mut v = self.codes.laser_on.clone();
+                v.push((self.codes.power_letter, power));
+                self.words(&v, None)?;
+                let on = self.codes.powder_on.clone();
+                self.words(&on, None)?;
+                self.laser = true;
+            } else if !deposit {
+                self.laser_off()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Back to per-minute feeds after inverse-time moves.
+    fn per_minute(&mut self) -> Result<(), PostError> {
+        if self.inverse_time {
+            self.words(&[(b'G', 94.0)], None)?;
+            self.inverse_time = false;
+        }
+        Ok(())
+    }
+
+    /// Laser off, a split point, up to a height safe over the whole rotary move, then
+    /// the rotaries to `rot`; the safe height becomes that of `rot`. Never a rotary move
+    /// mid-cut.
+    pub(crate) fn index(&mut self, rot: [f64; 2], near: [f64; 2], file: &str, line: u32) -> Result<(), PostError> {
+        self.laser_off()?;
+        self.per_minute()?;
+        let split = self.offset();
+        self.report.split_points.push(split);
+        let from = self.rot.unwrap_or(near);
+        self.safe = self.heights.over_move(&from, &rot);
+        check_height(&self.heights, self.safe, file, line, &rot)?;
+        self.lift(file, line)?;
+        self.rot = Some(rot);
+        self.jmap = index_maps(self.m, self.head, &rot).0;
+        self.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
+        self.words(
+            &[(b'G', 0.0), (self.letters[3], rot[0]), (self.letters[4], rot[1])],
+            Some("INDEX"),
+        )?;
+        self.report.indexes.push(rot);
+        self.report.moves += 1;
+        self.safe = self.heights.at(&rot);
+        check_height(&self.heights, self.safe, file, line, &rot)?;
+        self.in_run = false;
+        Ok(())
+    }
+
+    /// Travel between runs: laser off, and the lift off the end of the run (a split
+    /// point) if the head is down there.
+    pub(crate) fn travel(&mut self, file: &str, line: u32) -> Result<(), PostError> {
+        self.laser_off()?;
+        self.per_minute()?;
+        if self.in_run {
+            let split = self.offset();
+            self.report.split_points.push(split);
+            self.lift(file, line)?;
+            self.in_run = false;
+        }
+        Ok(())
+    }
+
+    /// Onto a start at joints `start`: off the last end (if the head is down there), over
+    /// the start at the safe height, straight down to the approach lift above it, then
+    /// in at `feed`. The head is then in a run.
+    pub(crate) fn approach(&mut self, start: &[f64; 3], feed: f64, file: &str, line: u32) -> Result<(), PostError> {
+        self.travel(file, line)?;
+        let lift = crate::safety::approach_lift(self.m);
+        let mut above = *start;
+        above[2] = self.pos.map_or(self.safe, |p| p[2].max(self.safe));
+        self.linear(0.0, &above, None, file, line, false)?;
+        let mut near_start = *start;
+        near_start[2] = (start[2] + lift).min(self.safe);
+        self.linear(0.0, &near_start, None, file, line, false)?;
+        self.linear(1.0, start, Some(feed), file, line, false)?;
+        self.in_run = true;
+        Ok(())
+    }
+
+    /// A five-axis feed to joints `j` (rotaries turning: inverse time `per_min` = 1 /
+    /// minutes, G93; else per-minute `feed`), within travel, in a run.
+    pub(crate) fn move5(
+        &mut self,
+        j: &[f64; 5],
+        feed: f64,
+        per_min: Option<f64>,
+        file: &str,
+        line: u32,
+    ) -> Result<(), PostError> {
+        let x = [j[0], j[1], j[2]];
+        let rot = [j[3], j[4]];
+        self.check(file, line, &x, &rot)?;
+        let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
+        match per_min {
+            Some(f) => {
+                if !self.inverse_time {
+                    w.push((b'G', 93.0));
+                    self.inverse_time = true;
+                }
+                w.push((b'G', 1.0));
+                for (k, v) in j.iter().enumerate() {
+                    w.push((self.letters[k], *v));
+                }
+                w.push((b'F', f));
+            }
+            None => {
+                if self.inverse_time {
+                    w.push((b'G', 94.0));
+                    self.inverse_time = false;
+                }
+                w.push((b'G', 1.0));
+                for (k, v) in x.iter().enumerate() {
+                    w.push((self.letters[k], *v));
+                }
+                w.push((b'F', feed));
+            }
+        }
+        self.words(&w, None)?;
+        self.note_limits(j);
+        self.rot = Some(rot);
+        self.pos = Some(x);
+        for (slot, v) in self.written.iter_mut().zip(x) {
+            *slot = Some(round_half_away(v * self.scale) as i64);
+        }
+        self.report.moves += 1;
+        self.in_run = true;
+        Ok(())
+    }
+
+    /// An arc kept as an arc (its plane is the machine's XY plane): `G2`/`G3` from joints
+    /// `start` to `end` about `c`, its X/Y extremes within travel, its midpoint and end
+    /// checked as written.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn arc(
+        &mut self,
+        step: &Step,
+        start: &[f64; 3],
+        end: &[f64; 3],
+        c: &[f64; 3],
+        ccw: bool,
+        sweep: f64,
+        file: &str,
+    ) -> Result<(), PostError> {
+        let g = if ccw { 3.0 } else { 2.0 };
+        let rot_now = self.rot.unwrap_or([0.0; 2]);
+        self.check(file, step.line, end, &rot_now)?;
+        // Travel limits along the arc: its extreme points in X and Y.
+        for q in crate::post::arc_extremes(start, end, c, ccw, sweep.abs()) {
+            self.check(file, step.line, &q, &rot_now)?;
+        }
+        self.note_limits(&[end[0], end[1], end[2], rot_now[0], rot_now[1]]);
+        let words = [
+            (b'G', g),
+            (self.letters[0], end[0]),
+            (self.letters[1], end[1]),
+            (self.letters[2], end[2]),
+            (b'I', c[0] - start[0]),
+            (b'J', c[1] - start[1]),
+            (b'F', step.feed),
+        ];
+        self.words(&words, None)?;
+        // The arc's midpoint (joint space) and its end, as written.
+        let mid = crate::post::joints(&self.jmap, &step.at(0.5));
+        self.verify_point(&mid, false)?;
+        self.verify_point(end, true)?;
+        let scale = self.scale;
+        for (slot, v) in self.written.iter_mut().zip(end) {
+            *slot = Some(round_half_away(v * scale) as i64);
+        }
+        self.pos = Some(*end);
+        self.report.moves += 1;
+        Ok(())
+    }
+
+    /// The postamble: laser off, coolant and spindle off, the lift to the safe height,
+    /// the program end; the report.
+    pub(crate) fn finish(mut self, cfg: &PostConfig) -> Result<PostReport, PostError> {
+        self.report.body.1 = self.offset();
+        self.laser_off()?;
+        self.per_minute()?;
+        let p = &self.m.def.process;
+        if let Process::Machine { coolant, .. } = &cfg.process {
+            if *coolant {
+                self.words(&code_words(&p.coolant_off)?, None)?;
+            }
+            self.words(&code_words(&p.spindle_off)?, None)?;
+        }
+        self.lift("", 0)?;
+        self.words(&code_words(&p.program_end)?, None)?;
+        for e in self.report.limits_used.iter_mut() {
+            if !e.1.is_finite() {
+                e.1 = 0.0;
+                e.2 = 0.0;
+            }
+        }
+        self.report.verify.moves = self.report.moves;
+        self.em.finish()?;
+        Ok(self.report)
+    }
+
+    /// Bytes of output so far (finished lines).
+    pub(crate) fn offset(&self) -> u64 {
+        self.em.position()
+    }
+
+    pub(crate) fn words(&mut self, w: &[(u8, f64)], comment: Option<&str>) -> Result<(), PostError> {
+        self.em.words(w, comment).map_err(PostError::from)
+    }
+
+    /// Laser and powder off, if the laser is on.
+    pub(crate) fn laser_off(&mut self) -> Result<(), PostError> {
+        if self.laser {
+            let (off, powder) = (self.codes.laser_off.clone(), self.codes.powder_off.clone());
+            self.words(&off, None)?;
+            self.words(&powder, None)?;
+            self.laser = false;
+        }
+        Ok(())
+    }
+
+    /// Check a written feed point: the joints as the text gives them (rounded to the
+    /// output resolution), through forward kinematics, against the intended move.
+    pub(crate) fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
+        // The fields used, not the whole step (a copy of it costs as much as the check).
+        let Some((line, orient, program_z)) = self
+            .step
+            .as_ref()
+            .map(|s| (s.line, self.orient, self.program_z))
+        else {
+            return Ok(());
+        };
+        let rot = self.rot.unwrap_or([0.0; 2]);
+        if self.fk_cache.0 != rot {
+            let (_, inv) = written_rotary(&rot);
+            self.fk_cache = (rot, self.m.tip_map(&inv, self.head));
+            self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
+                - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
+        }
+        let err = match self.planned_check {
+            // Worked out on the reading thread, for these very joints (with the same
+            // end-or-path rule).
+            Some((j, end, e)) if end == is_end && j == *x => e,
+            _ => {
+                let tip = written_tip(&self.fk_cache.1, self.scale, x);
+                match &self.step {
+                    Some(step) if is_end => (tip - step.end).norm(),
+                    Some(step) => crate::verify::dist_to(step, &tip),
+                    None => 0.0,
+                }
+            }
+        };
+        if err > self.tol {
+            let tip = written_tip(&self.fk_cache.1, self.scale, x);
+            return Err(PostError::Verify(format!(
+                "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
+                line, tip.x, tip.y, tip.z, self.tol
+            )));
+        }
+        let axis = self.fk_axis;
+        let want = match self.want_axis {
+            Some((o, a)) if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) => a,
+            _ => {
+                self.axis_err = None;
+                let a = match orient {
+                    Orient::ToolAxis => program_z.normalize(),
+                    Orient::Index(r) => {
+                        self.m
+                            .forward(
+                                &lampost_kinematics::Joints {
+                                    linear: [0.0; 3],
+                                    rotary: r,
+                                },
+                                self.head,
+                            )
+                            .axis
+                    }
+                };
+                self.want_axis = Some((orient, a));
+                a
+            }
+        };
+        // The axis error changes only with the rotaries or the intended axis.
+        let ang = match self.axis_err {
+            Some((a, w, e)) if a == axis && w == want => e,
+            _ => {
+                let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
+                self.axis_err = Some((axis, want, e));
+                e
+            }
+        };
+        let v = &mut self.report.verify;
+        v.compared += 1;
+        if err > v.max_position_error {
+            v.max_position_error = err;
+            v.worst_line = line;
+        }
+        v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
+        if ang > 0.01 {
+            return Err(PostError::Verify(format!(
+                "input line {}: the tool axis is {ang:.4}° off",
+                line
+            )));
+        }
+        Ok(())
+    }
+
+    pub(crate) fn note_limits(&mut self, joints: &[f64; 5]) {
+        for (k, v) in joints.iter().enumerate() {
+            let e = &mut self.report.limits_used[k];
+            e.1 = e.1.min(*v);
+            e.2 = e.2.max(*v);
+        }
+    }
+
+    pub(crate) fn check(&self, file: &str, line: u32, x: &[f64; 3], rot: &[f64; 2]) -> Result<(), PostError> {
+        for (l, &v) in self.m.linear.iter().zip(x) {
+            if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
+                return Err(PostError::Limit {
+                    file: file.to_string(),
+                    line,
+                    axis: l.name.clone(),
+                    value: v,
+                    lo: l.limits.0,
+                    hi: l.limits.1,
+                });
+            }
+        }
+        for (r, &v) in self.m.rotary.iter().zip(rot) {
+            if !r.within(v) {
+                let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                return Err(PostError::Limit {
+                    file: file.to_string(),
+                    line,
+                    axis: r.name.clone(),
+                    value: v,
+                    lo,
+                    hi,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The safe-height invariant for a rapid to `x` from where the head is: only a
+    /// vertical move (the lift off an end, the approach onto a start) may go below the
+    /// safe height. (Checked on the values as written.)
+    pub(crate) fn check_rapid(&self, file: &str, line: u32, x: &[f64; 3]) -> Result<(), PostError> {
+        let q = |v: f64| round_half_away(v * self.scale);
+        let vertical = self
+            .pos
+            .is_some_and(|p| q(p[0]) == q(x[0]) && q(p[1]) == q(x[1]));
+        let low = |z: f64| q(z) < q(self.safe);
+        if !vertical && (low(x[2]) || self.pos.is_some_and(|p| low(p[2]))) {
+            return Err(PostError::Verify(format!(
+                "{file}:{line}: a rapid to ({:.4}, {:.4}, {:.4}) travels below the safe height {:.4}",
+                x[0], x[1], x[2], self.safe
+            )));
+        }
+        Ok(())
+    }
+
+    /// Raise the head to the safe height where it is (the lift off an end), or write
+    /// the height alone when the position is not known yet (the program's first move).
+    pub(crate) fn lift(&mut self, file: &str, line: u32) -> Result<(), PostError> {
+        let z = self.safe;
+        match self.pos {
+            Some(p) => {
+                if round_half_away(p[2] * self.scale) < round_half_away(z * self.scale) {
+                    self.linear(0.0, &[p[0], p[1], z], None, file, line, false)?;
+                }
+            }
+            None => {
+                self.words(&[(b'G', 0.0), (self.letters[2], z)], None)?;
+                self.written[2] = Some(round_half_away(z * self.scale) as i64);
+                self.report.moves += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Write a straight move to joints `x`. A feed point is verified against the step
+    /// being written: as its end when `step_end` (the stricter test), else as a point on
+    /// its path.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn linear(
+        &mut self,
+        g: f64,
+        x: &[f64; 3],
+        feed: Option<f64>,
+        file: &str,
+        line: u32,
+        step_end: bool,
+    ) -> Result<(), PostError> {
+        let rot = self.rot.unwrap_or([0.0; 2]);
+        // A rapid to where the head already is says nothing.
+        if g == 0.0
+            && self
+                .pos
+                .is_some_and(|p| (0..3).all(|k| (p[k] - x[k]).abs() < 1e-12))
+        {
+            return Ok(());
+        }
+        self.check(file, line, x, &rot)?;
+        if g == 0.0 {
+            self.check_rapid(file, line, x)?;
+        }
+        self.note_limits(&[x[0], x[1], x[2], rot[0], rot[1]]);
+        // Modal suppression: an axis word equal (as written) to the last one is left out.
+        let mut w = [(0u8, 0.0f64, 0i64); 3];
+        let mut n = 0;
+        for (k, &v) in x.iter().enumerate() {
+            let q = round_half_away(v * self.scale) as i64;
+            if self.written[k] != Some(q) {
+                self.written[k] = Some(q);
+                w[n] = (self.letters[k], v, q);
+                n += 1;
+            }
+        }
+        if n == 0 && g == 1.0 {
+            // A feed to where the head is (as written): keep one axis so the block moves
+            // (after the feed word, as posts have always written it).
+            let mut v = vec![(b'G', g)];
+            v.extend(feed.map(|f| (b'F', f)));
+            v.push((self.letters[0], x[0]));
+            self.words(&v, None)?;
+        } else {
+            self.em
+                .motion(g, &w[..n], self.scale, feed)
+                .map_err(PostError::from)?;
+        }
+        if g != 0.0 {
+            self.verify_point(x, step_end)?;
+        }
+        self.pos = Some(*x);
+        self.report.moves += 1;
+        Ok(())
+    }
+}
+
