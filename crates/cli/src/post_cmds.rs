@@ -503,18 +503,56 @@ pub fn post(
 ) -> Result<(), CliError> {
     let t0 = std::time::Instant::now();
     let m = load_machine(&a.machine, &a.set)?;
-    if is_per_point(&a.place, input) {
-        return post_per_point(&m, a, input.unwrap_or("-"), output, json_report, t0);
+    if let Some(max) = max_bytes {
+        if max < MIN_PIECE_BYTES {
+            return Err(CliError::usage(format!(
+                "error: --max-bytes {max}: too small to hold a program piece; the minimum is {MIN_PIECE_BYTES}\n"
+            )));
+        }
+        if output.is_none_or(|o| o == "-") {
+            return Err(CliError::usage(
+                "error: --max-bytes needs -o OUT (the pieces are files)\n".to_string(),
+            ));
+        }
     }
-    let secs = sections(&m, &a.place, input)?;
-    let cfg = config(&m, a, &secs)?;
     let tmp = Temp::beside(output);
     let file = std::fs::File::create(&tmp.path).map_err(|e| {
         CliError::usage(format!("error: cannot write {}: {e}\n", tmp.path.display()))
     })?;
-    let show = std::io::stderr().is_terminal();
-    let report = {
-        let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
+    let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
+    let (report, cfg) = if is_per_point(&a.place, input) {
+        // The per-point post, then its verification of what was written.
+        let (frame, pts, name) = per_point_input(&a.place, input.unwrap_or("-"))?;
+        let mut cfg = config(&m, a, &[])?;
+        let short = Path::new(&name)
+            .file_name()
+            .map_or(name.clone(), |n| n.to_string_lossy().into_owned());
+        cfg.header.push(format!(
+            "{short}: per-point tool axis; origin {:.4} {:.4} {:.4}",
+            frame.origin.x, frame.origin.y, frame.origin.z
+        ));
+        let mut report =
+            lampost_post::pointwise::post_points(&m, &pts, &frame, &name, &cfg, &mut bw)
+                .map_err(post_error)?;
+        bw.flush().map_err(werr)?;
+        let posted = std::fs::File::open(&tmp.path).map_err(werr)?;
+        report.verify = lampost_post::pointwise::verify_points(
+            &m,
+            &pts,
+            &frame,
+            cfg.head,
+            BufReader::new(posted),
+            cfg.verify_tolerance,
+        )
+        .map_err(post_error)?;
+        (report, cfg)
+    } else {
+        let secs = sections(&m, &a.place, input)?;
+        let cfg = config(&m, a, &secs)?;
+        let show = std::io::stderr().is_terminal();
+        // The post verifies every written feed point in-process (FK of the values as
+        // written) and every rapid against the safe height; nothing reaches the user's
+        // path unless that passed.
         let r = lampost_post::post(&m, &secs, &cfg, &mut bw, |n| {
             if show && n > 0 {
                 eprint!("\rposting: {n} moves");
@@ -525,10 +563,9 @@ pub fn post(
         if show {
             eprint!("\r                                \r");
         }
-        r
+        (r, cfg)
     };
-    // The post verified every written feed point in-process (FK of the values as written);
-    // nothing reaches the user's path unless that passed.
+    drop(bw);
     let v = report.verify;
     for w in &report.warnings {
         eprintln!("warning: {w}");
@@ -536,45 +573,31 @@ pub fn post(
     let total = std::fs::metadata(&tmp.path).map_err(werr)?.len();
     let mut written: Vec<String> = Vec::new();
     match (max_bytes, output) {
-        (Some(max), _) => {
-            if max < 256 {
-                return Err(CliError::usage(format!(
-                    "error: --max-bytes {max}: too small to hold a program\n"
-                )));
-            }
-            if total as usize <= max {
-                // Fits as it is.
-                written.push(persist(&tmp, output)?);
-            } else {
-                let mut f = std::fs::File::open(&tmp.path).map_err(werr)?;
-                let pieces = lampost_post::split::split(
-                    &mut f,
-                    total,
-                    &report,
-                    cfg.dialect,
-                    cfg.program_number,
-                    max,
-                )
-                .map_err(post_error)?;
-                let Some(out) = output else {
-                    return Err(CliError::usage(
-                        "error: --max-bytes needs -o OUT (the pieces are files)\n".to_string(),
-                    ));
+        (Some(max), Some(out)) if total as usize > max => {
+            let mut f = std::fs::File::open(&tmp.path).map_err(werr)?;
+            let pieces = lampost_post::split::split(
+                &mut f,
+                total,
+                &report,
+                cfg.dialect,
+                cfg.program_number,
+                max,
+            )
+            .map_err(post_error)?;
+            for p in pieces {
+                let name = if p.number == 0 {
+                    out.to_string()
+                } else {
+                    numbered(out, p.number)
                 };
-                for p in pieces {
-                    let name = if p.number == 0 {
-                        out.to_string()
-                    } else {
-                        numbered(out, p.number)
-                    };
-                    let mut o = crate::io::Output::create(Some(&name))?;
-                    o.writer().write_all(&p.text).map_err(werr)?;
-                    o.commit()?;
-                    written.push(name);
-                }
+                let mut o = crate::io::Output::create(Some(&name))?;
+                o.writer().write_all(&p.text).map_err(werr)?;
+                o.commit()?;
+                written.push(name);
             }
         }
-        (None, _) => written.push(persist(&tmp, output)?),
+        // Fits as it is.
+        _ => written.push(persist(&tmp, output)?),
     }
     if let Some(path) = json_report {
         let limits: Vec<serde_json::Value> = report
@@ -596,58 +619,8 @@ pub fn post(
     Ok(())
 }
 
-fn post_per_point(
-    m: &Machine,
-    a: &PostArgs,
-    input: &str,
-    output: Option<&str>,
-    json_report: Option<&str>,
-    t0: std::time::Instant,
-) -> Result<(), CliError> {
-    let (frame, pts, name) = per_point_input(&a.place, input)?;
-    let mut cfg = config(m, a, &[])?;
-    let short = Path::new(&name)
-        .file_name()
-        .map_or(name.clone(), |n| n.to_string_lossy().into_owned());
-    cfg.header.push(format!(
-        "{short}: per-point tool axis; origin {:.4} {:.4} {:.4}",
-        frame.origin.x, frame.origin.y, frame.origin.z
-    ));
-    let tmp = Temp::beside(output);
-    let file = std::fs::File::create(&tmp.path).map_err(|e| {
-        CliError::usage(format!("error: cannot write {}: {e}\n", tmp.path.display()))
-    })?;
-    let report = {
-        let mut bw = std::io::BufWriter::new(file);
-        let r = lampost_post::pointwise::post_points(m, &pts, &frame, &name, &cfg, &mut bw)
-            .map_err(post_error)?;
-        bw.flush().map_err(werr)?;
-        r
-    };
-    let posted = std::fs::File::open(&tmp.path).map_err(werr)?;
-    let v = lampost_post::pointwise::verify_points(
-        m,
-        &pts,
-        &frame,
-        cfg.head,
-        BufReader::new(posted),
-        cfg.verify_tolerance,
-    )
-    .map_err(post_error)?;
-    for w in &report.warnings {
-        eprintln!("warning: {w}");
-    }
-    let written = persist(&tmp, output)?;
-    if let Some(path) = json_report {
-        let j = serde_json::json!({"moves": report.moves, "warnings": report.warnings, "indexes": report.indexes, "verify": v, "files": [written], "time_s": t0.elapsed().as_secs_f64()});
-        let mut o = crate::io::Output::create(Some(path))?;
-        o.writer()
-            .write_all(format!("{j}\n").as_bytes())
-            .map_err(werr)?;
-        o.commit()?;
-    }
-    Ok(())
-}
+/// The smallest `--max-bytes`: a piece must hold the header and preamble.
+const MIN_PIECE_BYTES: usize = 256;
 
 fn numbered(out: &str, n: usize) -> String {
     let p = Path::new(out);

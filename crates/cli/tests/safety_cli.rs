@@ -473,3 +473,94 @@ fn multi_turn_helix_and_pivot_post_and_verify() {
     ]);
     assert!(v.status.success(), "{}", stderr(&v));
 }
+
+/// Issue 11, case 6: the per-point post goes through the same writer: machining options,
+/// --max-bytes, and refusals of a work offset that is not one.
+#[test]
+fn per_point_honours_every_option() {
+    let dir = tempdir("safety-perpoint-opts");
+    let out = dir.join("pp.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--head",
+        "spindle",
+        "--process",
+        "machine",
+        "--tool",
+        "3",
+        "--coolant",
+        "--work-offset",
+        "G55",
+        "--length-offset",
+        "3",
+        "--origin",
+        "0,0,0.5",
+        &fx("tilted-arc.csv"),
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    for want in ["T3 M6", "G55", "G43 H3", "M8", "M9"] {
+        assert!(text.contains(want), "{want} missing:\n{text}");
+    }
+    // Split into DNC pieces (ISO) under a small size.
+    let out = dir.join("split.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--head",
+        "spindle",
+        "--origin",
+        "0,0,0.5",
+        "--dialect",
+        "iso",
+        &fx("tilted-arc.csv"),
+        "-o",
+        &out.to_string_lossy(),
+        "--max-bytes",
+        "9500",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.join("split.001.nc").exists() && dir.join("split.002.nc").exists());
+    for bad in ["G0 X900", "G54 X1", "E49", "T1"] {
+        let out = dir.join("bad.nc");
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--head",
+            "spindle",
+            "--process",
+            "machine",
+            "--work-offset",
+            bad,
+            "--origin",
+            "0,0,0.5",
+            &fx("tilted-arc.csv"),
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        assert!(!o.status.success(), "--work-offset {bad} accepted");
+        assert!(stderr(&o).contains("--work-offset"), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &fx("tilted-arc.csv"),
+        "-o",
+        &dir.join("x.nc").to_string_lossy(),
+        "--max-bytes",
+        "100",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("the minimum is 256"),
+        "{}",
+        stderr(&o)
+    );
+}

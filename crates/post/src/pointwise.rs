@@ -8,15 +8,15 @@
 use std::io::{BufRead, Write};
 
 use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, AXES};
-use lampost_kinematics::{Joints, Machine, Units as MUnits};
+use lampost_kinematics::{Joints, Machine};
 use nalgebra::{Rotation3, Unit, Vector3};
 
 use crate::error::PostError;
 use crate::frame::Frame;
-use crate::post::{
-    axis_letters, code_words, emitter, program_units, write_header, PostConfig, PostReport, Process,
-};
+use crate::post::{program_units, PostConfig, PostReport};
+use crate::safety::{SafeHeights, WorkBounds};
 use crate::verify::VerifyReport;
+use crate::writer::Writer;
 
 /// The fastest rotary feed assumed when a move only turns the tool (deg/min), to give it
 /// an inverse-time feed.
@@ -262,7 +262,10 @@ impl Ctx<'_> {
     }
 }
 
-/// Post a path of points with their own tool axis (program frame `frame`).
+/// Post a path of points with their own tool axis (program frame `frame`), through the
+/// same [`Writer`] as planar programs: preamble and machining options, a retract to a
+/// height safe over the whole rotary move before the first point and every branch flip,
+/// the approach, process codes, travel limits on every point, split points, postamble.
 pub fn post_points<W: Write>(
     machine: &Machine,
     points: &[PathPoint],
@@ -271,124 +274,40 @@ pub fn post_points<W: Write>(
     cfg: &PostConfig,
     out: W,
 ) -> Result<PostReport, PostError> {
-    let units = program_units(machine);
-    let mut em = emitter(out, cfg, units);
-    let lt = axis_letters(machine);
-    let p = &machine.def.process;
-    let (laser_on, laser_off, powder_on, powder_off) = (
-        code_words(&p.laser_on)?,
-        code_words(&p.laser_off)?,
-        code_words(&p.powder_on)?,
-        code_words(&p.powder_off)?,
-    );
-    let power_letter = p
-        .laser_power_word
-        .bytes()
-        .next()
-        .unwrap_or(b'S')
-        .to_ascii_uppercase();
-    write_header(&mut em, cfg, units)?;
-    if let Process::Machine { spindle, .. } = &cfg.process {
-        let mut v = vec![(b'S', *spindle)];
-        v.extend(code_words(&p.spindle_on)?);
-        em.words(&v, None)?;
-    }
-    let ctx = Ctx {
-        m: machine,
-        head: cfg.head,
-        tol: cfg.tolerance,
-        file: name,
-    };
     let placed = place(points, frame);
-    let mut report = PostReport {
-        limits_used: machine
-            .axis_names()
-            .iter()
-            .map(|n| ((*n).to_string(), f64::INFINITY, f64::NEG_INFINITY))
-            .collect(),
-        ..PostReport::default()
-    };
     // Safe heights over every tip of the path (and the part or stock given).
-    let mut work = crate::safety::WorkBounds::empty();
+    let mut work = WorkBounds::empty();
     for q in &placed {
         work.add(&q.tip);
     }
     if let Some(extra) = &cfg.work {
         work.union(extra);
     }
-    let heights = crate::safety::SafeHeights::new(machine, cfg.head, work)?;
-    let lift = match machine.units {
-        MUnits::Inch => 0.1,
-        MUnits::Mm => 2.5,
+    let heights = SafeHeights::new(machine, cfg.head, work)?;
+    let mut w = Writer::new(machine, cfg, heights, out)?;
+    w.preamble(cfg)?;
+    let ctx = Ctx {
+        m: machine,
+        head: cfg.head,
+        tol: cfg.tolerance,
+        file: name,
     };
-    let check = |j: &[f64; 5], line: usize| -> Result<(), PostError> {
-        for (l, &v) in machine.linear.iter().zip(&j[..3]) {
-            if v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
-                return Err(PostError::Limit {
-                    file: name.to_string(),
-                    line: u32::try_from(line).unwrap_or(u32::MAX),
-                    axis: l.name.clone(),
-                    value: v,
-                    lo: l.limits.0,
-                    hi: l.limits.1,
-                });
-            }
-        }
-        for (r, &v) in machine.rotary.iter().zip(&j[3..]) {
-            if !r.within(v) {
-                let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                return Err(PostError::Limit {
-                    file: name.to_string(),
-                    line: u32::try_from(line).unwrap_or(u32::MAX),
-                    axis: r.name.clone(),
-                    value: v,
-                    lo,
-                    hi,
-                });
-            }
-        }
-        Ok(())
-    };
-    let mut laser = false;
-    let mut inverse_time = false;
     let mut cur: Option<([f64; 5], i8)> = None;
     let mut prev: Option<PathPoint> = None;
     for q in &placed {
+        let line = u32::try_from(q.line).unwrap_or(u32::MAX);
         let near = cur.map_or(cfg.near, |(j, _)| [j[3], j[4]]);
         let (j, branch, flip) = ctx.solve(&q.tip, &q.axis, &near, cur.map(|c| c.1), q.line)?;
-        check(&j, q.line)?;
-        let needs_approach = cur.is_none() || flip;
-        if flip {
-            report.warnings.push(format!(
-                "{name}:{}: the rotary branch flips here; the tool retracts and re-approaches",
-                q.line
-            ));
-        }
-        if needs_approach {
-            if laser {
-                em.words(&laser_off, None)?;
-                em.words(&powder_off, None)?;
-                laser = false;
+        w.check(name, line, &[j[0], j[1], j[2]], &[j[3], j[4]])?;
+        if cur.is_none() || flip {
+            if flip {
+                w.report.warnings.push(format!(
+                    "{name}:{}: the rotary branch flips here; the tool retracts and re-approaches",
+                    q.line
+                ));
             }
-            if inverse_time {
-                em.words(&[(b'G', 94.0)], None)?;
-                inverse_time = false;
-            }
-            report.split_points.push(0);
-            // Up to a height safe over the whole rotary move, index, over the start, down.
-            let from = cur.map_or(cfg.near, |(c, _)| [c[3], c[4]]);
-            let rot = [j[3], j[4]];
-            let line = u32::try_from(q.line).unwrap_or(u32::MAX);
-            let over = heights.over_move(&from, &rot);
-            crate::post::check_height(&heights, over, name, line, &rot)?;
-            let safe = heights.at(&rot);
-            em.words(&[(b'G', 0.0), (lt[2], over)], None)?;
-            em.words(&[(b'G', 0.0), (lt[3], j[3]), (lt[4], j[4])], Some("INDEX"))?;
-            report.indexes.push([j[3], j[4]]);
-            em.words(&[(b'G', 0.0), (lt[0], j[0]), (lt[1], j[1])], None)?;
-            em.words(&[(b'G', 0.0), (lt[2], (j[2] + lift).min(safe))], None)?;
-            em.words(&[(b'G', 1.0), (lt[2], j[2]), (b'F', q.feed)], None)?;
-            report.moves += 5;
+            w.index([j[3], j[4]], cfg.near, name, line)?;
+            w.approach(&[j[0], j[1], j[2]], q.feed, name, line)?;
             cur = Some((j, branch));
             prev = Some(*q);
             continue;
@@ -397,76 +316,23 @@ pub fn post_points<W: Write>(
         let a = prev.unwrap_or(*q);
         let mut pieces = Vec::new();
         ctx.split(&a, q, 0.0, j0, 1.0, j, branch, 0, &mut pieces)?;
-        if let Process::Deposit { power } = cfg.process {
-            if q.deposit && !laser {
-                let mut v = laser_on.clone();
-                v.push((power_letter, power));
-                em.words(&v, None)?;
-                em.words(&powder_on, None)?;
-                laser = true;
-            } else if !q.deposit && laser {
-                em.words(&laser_off, None)?;
-                em.words(&powder_off, None)?;
-                laser = false;
-            }
-        }
+        w.process_for(cfg, q.deposit)?;
         let mut t_prev = 0.0;
         let mut j_prev = j0;
         for (t, jp) in pieces {
-            check(&jp, q.line)?;
             let seg = (q.tip - a.tip).norm() * (t - t_prev);
             let dr = (jp[3] - j_prev[3]).abs().max((jp[4] - j_prev[4]).abs());
-            let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
-            if dr > 1e-9 {
-                if !inverse_time {
-                    w.push((b'G', 93.0));
-                    inverse_time = true;
-                }
-                let minutes = (seg / q.feed).max(dr / ROTARY_FEED_DEG_PER_MIN).max(1e-9);
-                w.push((b'G', 1.0));
-                for k in 0..5 {
-                    w.push((lt[k], jp[k]));
-                }
-                w.push((b'F', 1.0 / minutes));
-            } else {
-                if inverse_time {
-                    w.push((b'G', 94.0));
-                    inverse_time = false;
-                }
-                w.push((b'G', 1.0));
-                for k in 0..3 {
-                    w.push((lt[k], jp[k]));
-                }
-                w.push((b'F', q.feed));
-            }
-            em.words(&w, None)?;
-            for (k, v) in jp.iter().enumerate() {
-                let e = &mut report.limits_used[k];
-                e.1 = e.1.min(*v);
-                e.2 = e.2.max(*v);
-            }
-            report.moves += 1;
+            // Rotaries turning: inverse time, long enough for the rotary feed.
+            let per_min = (dr > 1e-9)
+                .then(|| 1.0 / (seg / q.feed).max(dr / ROTARY_FEED_DEG_PER_MIN).max(1e-9));
+            w.move5(&jp, q.feed, per_min, name, line)?;
             t_prev = t;
             j_prev = jp;
         }
         cur = Some((j, branch));
         prev = Some(*q);
     }
-    if laser {
-        em.words(&laser_off, None)?;
-        em.words(&powder_off, None)?;
-    }
-    if inverse_time {
-        em.words(&[(b'G', 94.0)], None)?;
-    }
-    if let Process::Machine { .. } = &cfg.process {
-        em.words(&code_words(&p.spindle_off)?, None)?;
-    }
-    let last = cur.map_or(cfg.near, |(c, _)| [c[3], c[4]]);
-    em.words(&[(b'G', 0.0), (lt[2], heights.at(&last))], None)?;
-    em.words(&code_words(&p.program_end)?, None)?;
-    em.finish()?;
-    Ok(report)
+    w.finish(cfg)
 }
 
 /// Replay a posted program and compare every feed point with the path of `points`

@@ -11,8 +11,8 @@ use nalgebra::Vector3;
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
 use crate::safety::{SafeHeights, WorkBounds};
-use crate::writer::Writer;
 use crate::verify::ArcPoints;
+use crate::writer::Writer;
 
 /// Output dialect.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -91,7 +91,6 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) codes: Codes,
     /// Inverse-time feeds (G93) in force.
     pub(crate) inverse_time: bool,
-
 }
 
 impl<'m, W: Write> Writer<'m, W> {
@@ -166,7 +165,7 @@ impl<'m, W: Write> Writer<'m, W> {
                     self.words(&v, None)?;
                 }
                 if let Some(o) = work_offset {
-                    self.words(&code_words(o)?, Some("WORK OFFSET"))?;
+                    self.words(&work_offset_words(o)?, Some("WORK OFFSET"))?;
                 }
                 if let Some(h) = length_offset {
                     self.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
@@ -220,7 +219,13 @@ impl<'m, W: Write> Writer<'m, W> {
     /// Laser off, a split point, up to a height safe over the whole rotary move, then
     /// the rotaries to `rot`; the safe height becomes that of `rot`. Never a rotary move
     /// mid-cut.
-    pub(crate) fn index(&mut self, rot: [f64; 2], near: [f64; 2], file: &str, line: u32) -> Result<(), PostError> {
+    pub(crate) fn index(
+        &mut self,
+        rot: [f64; 2],
+        near: [f64; 2],
+        file: &str,
+        line: u32,
+    ) -> Result<(), PostError> {
         self.laser_off()?;
         self.per_minute()?;
         let split = self.offset();
@@ -233,7 +238,11 @@ impl<'m, W: Write> Writer<'m, W> {
         self.jmap = index_maps(self.m, self.head, &rot).0;
         self.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
         self.words(
-            &[(b'G', 0.0), (self.letters[3], rot[0]), (self.letters[4], rot[1])],
+            &[
+                (b'G', 0.0),
+                (self.letters[3], rot[0]),
+                (self.letters[4], rot[1]),
+            ],
             Some("INDEX"),
         )?;
         self.report.indexes.push(rot);
@@ -261,7 +270,13 @@ impl<'m, W: Write> Writer<'m, W> {
     /// Onto a start at joints `start`: off the last end (if the head is down there), over
     /// the start at the safe height, straight down to the approach lift above it, then
     /// in at `feed`. The head is then in a run.
-    pub(crate) fn approach(&mut self, start: &[f64; 3], feed: f64, file: &str, line: u32) -> Result<(), PostError> {
+    pub(crate) fn approach(
+        &mut self,
+        start: &[f64; 3],
+        feed: f64,
+        file: &str,
+        line: u32,
+    ) -> Result<(), PostError> {
         self.travel(file, line)?;
         let lift = crate::safety::approach_lift(self.m);
         let mut above = *start;
@@ -401,7 +416,11 @@ impl<'m, W: Write> Writer<'m, W> {
         self.em.position()
     }
 
-    pub(crate) fn words(&mut self, w: &[(u8, f64)], comment: Option<&str>) -> Result<(), PostError> {
+    pub(crate) fn words(
+        &mut self,
+        w: &[(u8, f64)],
+        comment: Option<&str>,
+    ) -> Result<(), PostError> {
         self.em.words(w, comment).map_err(PostError::from)
     }
 
@@ -510,7 +529,13 @@ impl<'m, W: Write> Writer<'m, W> {
         }
     }
 
-    pub(crate) fn check(&self, file: &str, line: u32, x: &[f64; 3], rot: &[f64; 2]) -> Result<(), PostError> {
+    pub(crate) fn check(
+        &self,
+        file: &str,
+        line: u32,
+        x: &[f64; 3],
+        rot: &[f64; 2],
+    ) -> Result<(), PostError> {
         for (l, &v) in self.m.linear.iter().zip(x) {
             if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
                 return Err(PostError::Limit {
@@ -524,7 +549,7 @@ impl<'m, W: Write> Writer<'m, W> {
             }
         }
         for (r, &v) in self.m.rotary.iter().zip(rot) {
-            if !r.within(v) {
+            if !v.is_finite() || !r.within(v) {
                 let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
                 return Err(PostError::Limit {
                     file: file.to_string(),
@@ -635,3 +660,24 @@ impl<'m, W: Write> Writer<'m, W> {
     }
 }
 
+/// A work offset as words: `G54`–`G59.3`, `G54.1 Pn` or a FADAL fixture offset `E0`–`E48`;
+/// anything else (a motion word, say) is refused.
+fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
+    let bad = || {
+        PostError::Options(format!(
+            "--work-offset `{text}`: give one of G54 to G59.3, G54.1 P1 to P300, or a FADAL fixture offset E0 to E48"
+        ))
+    };
+    let words = code_words(text).map_err(|_| bad())?;
+    let ok = match words.as_slice() {
+        [(b'G', g)] => (54.0..=59.3).contains(g) && (g * 10.0).fract() == 0.0,
+        [(b'G', g), (b'P', p)] => *g == 54.1 && p.fract() == 0.0 && (1.0..=300.0).contains(p),
+        [(b'E', e)] => e.fract() == 0.0 && (0.0..=48.0).contains(e),
+        _ => false,
+    };
+    if ok {
+        Ok(words)
+    } else {
+        Err(bad())
+    }
+}
