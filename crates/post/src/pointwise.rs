@@ -346,8 +346,14 @@ pub fn verify_points<R: BufRead>(
     posted: R,
     tolerance: f64,
 ) -> Result<VerifyReport, PostError> {
+    crate::verify::check_tolerance(tolerance)?;
     let units = program_units(machine);
     let placed = place(points, frame);
+    let mut work = WorkBounds::empty();
+    for q in &placed {
+        work.add(&q.tip);
+    }
+    let mut safety = crate::verify::Safety::new(machine, head, work);
     let names = machine.axis_names();
     let idx = |n: &str| {
         n.bytes()
@@ -360,14 +366,15 @@ pub fn verify_points<R: BufRead>(
     // Segment k runs from placed[k-1] to placed[k]; before the first point is reached,
     // the feeds are the approach onto it.
     let mut k = 0usize;
-    for ev in Stream::from_reader(
+    let mut stream = Stream::from_reader(
         posted,
         Options {
             units,
             ..Options::default()
         },
         true,
-    ) {
+    );
+    for ev in stream.by_ref() {
         match ev.map_err(|e| PostError::Io(e.to_string()))? {
             Event::Diagnostic(d) if d.severity == Severity::Error => {
                 return Err(PostError::Input {
@@ -378,9 +385,20 @@ pub fn verify_points<R: BufRead>(
             Event::Diagnostic(_) => {}
             Event::Move(m) => {
                 rep.moves += 1;
+                let lin = |p: &[f64; 9]| [p[ix[0]], p[ix[1]], p[ix[2]]];
+                let rot = |p: &[f64; 9]| [p[ix[3]], p[ix[4]]];
+                safety.travel(&lin(&m.end), &rot(&m.end), m.line)?;
                 if matches!(m.kind, MoveKind::Rapid) {
+                    safety.rapid(
+                        &lin(&m.start),
+                        &rot(&m.start),
+                        &lin(&m.end),
+                        &rot(&m.end),
+                        m.line,
+                    )?;
                     continue;
                 }
+                safety.feed(&lin(&m.end), m.line)?;
                 let j = Joints {
                     linear: [m.end[ix[0]], m.end[ix[1]], m.end[ix[2]]],
                     rotary: [m.end[ix[3]], m.end[ix[4]]],
@@ -442,5 +460,6 @@ pub fn verify_points<R: BufRead>(
             placed[k].line
         )));
     }
+    safety.finish(stream.interpreter().ended())?;
     Ok(rep)
 }

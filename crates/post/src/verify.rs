@@ -181,11 +181,7 @@ pub fn verify<R: BufRead>(
     tolerance: f64,
     work: Option<&WorkBounds>,
 ) -> Result<VerifyReport, PostError> {
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(PostError::Options(format!(
-            "the verification tolerance must be a finite positive number, not {tolerance}"
-        )));
-    }
+    check_tolerance(tolerance)?;
     // The work the rapids must clear: the input's feed tips (a pass of its own) and the
     // part or stock given.
     let mut bounds = WorkBounds::of_program(machine, sections, opts)?;
@@ -448,6 +444,16 @@ pub fn verify<R: BufRead>(
     Ok(rep)
 }
 
+/// A verification tolerance must be finite and positive.
+pub(crate) fn check_tolerance(tolerance: f64) -> Result<(), PostError> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(PostError::Options(format!(
+            "the verification tolerance must be a finite positive number, not {tolerance}"
+        )));
+    }
+    Ok(())
+}
+
 /// The largest angle a posted tool axis may have from the intended one.
 pub const AXIS_TOLERANCE_DEG: f64 = 0.01;
 
@@ -458,7 +464,7 @@ pub const AXIS_TOLERANCE_DEG: f64 = 0.01;
 /// margin) except the vertical lift off an end and the vertical approach onto a start;
 /// a rotary move only at a height safe for every table position it passes; the program
 /// ends with the head lifted and a program end.
-struct Safety<'m> {
+pub(crate) struct Safety<'m> {
     m: &'m Machine,
     head: usize,
     work: WorkBounds,
@@ -478,7 +484,7 @@ struct Safety<'m> {
 }
 
 impl<'m> Safety<'m> {
-    fn new(m: &'m Machine, head: usize, work: WorkBounds) -> Self {
+    pub(crate) fn new(m: &'m Machine, head: usize, work: WorkBounds) -> Self {
         // The written words are rounded to the output resolution (1e-4 in, 1e-3 mm);
         // along a tilted tool axis the three roundings add up to at most √3/2 of it.
         let eps = match m.units {
@@ -530,7 +536,7 @@ impl<'m> Safety<'m> {
         PostError::Verify(format!("posted line {line}: {what}"))
     }
 
-    fn travel(&self, x: &[f64; 3], rot: &[f64; 2], line: u32) -> Result<(), PostError> {
+    pub(crate) fn travel(&self, x: &[f64; 3], rot: &[f64; 2], line: u32) -> Result<(), PostError> {
         for (l, &v) in self.m.linear.iter().zip(x) {
             if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
                 return Err(Self::fail(
@@ -584,7 +590,7 @@ impl<'m> Safety<'m> {
     }
 
     /// A feed to `x`.
-    fn feed(&mut self, x: &[f64; 3], line: u32) -> Result<(), PostError> {
+    pub(crate) fn feed(&mut self, x: &[f64; 3], line: u32) -> Result<(), PostError> {
         if let Some((z, _)) = self.entering.take() {
             if z - x[2] > self.lift + self.eps {
                 return Err(Self::fail(
@@ -610,7 +616,7 @@ impl<'m> Safety<'m> {
     }
 
     /// A rapid from `xs`, `rs` to `xe`, `re`.
-    fn rapid(
+    pub(crate) fn rapid(
         &mut self,
         xs: &[f64; 3],
         rs: &[f64; 2],
@@ -710,7 +716,7 @@ impl<'m> Safety<'m> {
     }
 
     /// The end of the program: a program end, and the head lifted off the last run.
-    fn finish(&self, ended: bool) -> Result<(), PostError> {
+    pub(crate) fn finish(&self, ended: bool) -> Result<(), PostError> {
         if let Some((_, l)) = self.approach {
             return Err(Self::fail(
                 l,
