@@ -286,6 +286,17 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
     }
 }
 
+/// The lines that differ between two texts (first difference and its neighbours).
+fn diff_lines(a: &str, b: &str) -> Vec<String> {
+    let (la, lb): (Vec<&str>, Vec<&str>) = (a.lines().collect(), b.lines().collect());
+    let k = la.iter().zip(&lb).take_while(|(x, y)| x == y).count();
+    let from = k.saturating_sub(1);
+    vec![
+        format!("was {:?}", &la[from..(k + 2).min(la.len())]),
+        format!("now {:?}", &lb[from..(k + 2).min(lb.len())]),
+    ]
+}
+
 #[test]
 fn random_programs_post_verify_and_tampering_is_caught() {
     let machines = [
@@ -376,7 +387,11 @@ fn random_programs_post_verify_and_tampering_is_caught() {
             if v(&bad).is_err() {
                 caught += 1;
             } else {
-                missed.push(format!("case {case} ({name}): {what}"));
+                let changed: Vec<String> = diff_lines(&out, &bad);
+                missed.push(format!(
+                    "case {case} ({name}): {what}: {}",
+                    changed.join(" | ")
+                ));
             }
         }
     }
