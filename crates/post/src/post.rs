@@ -639,7 +639,10 @@ fn post_steps<W: Write>(
                             .and_then(|p| points.get(p.chords.0 as usize..p.chords.1 as usize))
                             .filter(|c| c.len() == n);
                         for k in 1..=n {
+                            // The last chord ends exactly where the move does (an arc whose
+                            // end is off its start's radius by the program's rounding too).
                             let (q, check) = match chords {
+                                _ if k == n => (end, planned.and_then(|p| p.check)),
                                 Some(c) => (c[k - 1].0, Some(c[k - 1].1)),
                                 None => (joints(&jm, &step.at(k as f64 / n as f64)), None),
                             };

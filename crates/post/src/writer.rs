@@ -639,6 +639,11 @@ impl<'m, W: Write> Writer<'m, W> {
                 n += 1;
             }
         }
+        if n == 0 && g == 0.0 {
+            // A rapid that changes no word as written moves nowhere: no block.
+            self.pos = Some(*x);
+            return Ok(());
+        }
         if n == 0 && g == 1.0 {
             // A feed to where the head is (as written): keep one axis so the block moves
             // (after the feed word, as posts have always written it).

@@ -1,6 +1,6 @@
 //! Issue 11's differential test: random planar programs (rapids, G53/G28 retracts,
-//! lines, arcs, helices) at random placements and indexes on three machines and both
-//! FADAL heads. Every posted program must pass `verify`; on the FADAL, a checker written
+//! lines, arcs, helices) at random placements, indexes, layer schedules and second
+//! sections on three machines and both FADAL heads. Every posted program must pass `verify`; on the FADAL, a checker written
 //! here from paper 000's formulas (not the crate's kinematics) confirms that no rapid
 //! but a vertical one goes below the work's top plus the margin. Then each posted
 //! program is tampered with (a feed or rotary value moved beyond tolerance, a rapid
@@ -10,8 +10,8 @@
 use lampost_gcode::{Event, MoveKind, Options, Stream, Units};
 use lampost_kinematics::{Machine, MachineDef, Vector3};
 use lampost_post::{
-    post, verify, Frame, IntendedOptions, Orient, PostConfig, PostDialect, PostError, Process,
-    Section, Source,
+    post, verify, Frame, IntendedOptions, LayerSchedule, Orient, PostConfig, PostDialect,
+    PostError, Process, Section, Source,
 };
 
 /// xorshift64*: a small deterministic generator.
@@ -336,13 +336,34 @@ fn random_programs_post_verify_and_tampering_is_caught() {
             };
             (Frame::translation(origin), Orient::Index([a, b]))
         };
-        let secs = vec![Section {
+        // Sometimes a layer schedule (each Z level turned a little more), sometimes a
+        // second section at another index.
+        let layers = (r.below(4) == 0).then(|| LayerSchedule {
+            axis: Vector3::new(0.0, 1.0, 0.0),
+            point: origin,
+            deg_per_layer: r.range(-5.0, 5.0),
+        });
+        let mut secs = vec![Section {
             name: format!("case{case}.nc"),
             source: Source::Bytes(text.clone().into_bytes()),
             frame,
             orient,
-            layers: None,
+            layers,
         }];
+        if r.below(3) == 0 {
+            let text2 = program(&mut r, k);
+            let rot2 = match orient {
+                Orient::Index([a, b]) => Orient::Index([a, b * 0.5]),
+                o => o,
+            };
+            secs.push(Section {
+                name: format!("case{case}b.nc"),
+                source: Source::Bytes(text2.into_bytes()),
+                frame: Frame::translation(origin + Vector3::new(0.5, 0.5, 0.0) * k),
+                orient: rot2,
+                layers: None,
+            });
+        }
         let cfg = config(m, head, r.below(2) == 0);
         let mut out = Vec::new();
         match post(m, &secs, &cfg, &mut out, |_| {}) {
