@@ -564,3 +564,62 @@ fn per_point_honours_every_option() {
         stderr(&o)
     );
 }
+
+/// Real CAM programs from `../shared/corpus` (see its SOURCES.md), posted for the FADAL
+/// spindle at two indexes, each with its expected verdict: posted and verified, or
+/// refused at the named line (Cereal.ngc parks in machine X/Y with `G53` at its end).
+#[test]
+fn real_programs_post_and_verify_or_are_refused_where_expected() {
+    let Some(shared) = shared() else {
+        eprintln!("../shared not found: real-program test skipped");
+        return;
+    };
+    let dir = tempdir("safety-corpus");
+    let cases: [(&str, Option<&str>); 3] = [
+        ("cam/fusion360-generic-mm-bore-tests.nc", None),
+        ("linuxcnc/LHchips4.ngc", None),
+        ("linuxcnc/Cereal.ngc", Some("Cereal.ngc:2270: G53")),
+    ];
+    for (rel, refusal) in cases {
+        let f = shared
+            .join("corpus")
+            .join(rel)
+            .to_string_lossy()
+            .into_owned();
+        for index in ["A=0,B=0", "A=30,B=-20"] {
+            let out = dir.join("out.nc");
+            let _ = std::fs::remove_file(&out);
+            let args = [
+                "--machine",
+                "fadal-lamp",
+                "--index",
+                index,
+                "--convert-units",
+                "--process",
+                "machine",
+                "--head",
+                "spindle",
+            ];
+            let mut post = vec!["post"];
+            post.extend_from_slice(&args);
+            let o_s = out.to_string_lossy().into_owned();
+            post.extend_from_slice(&[f.as_str(), "-o", o_s.as_str()]);
+            let o = lampost(&post);
+            match refusal {
+                Some(what) => {
+                    assert!(!o.status.success(), "{rel} {index} posted");
+                    assert!(stderr(&o).contains(what), "{rel}: {}", stderr(&o));
+                    assert!(!out.exists());
+                }
+                None => {
+                    assert!(o.status.success(), "{rel} {index}: {}", stderr(&o));
+                    let mut verify = vec!["verify"];
+                    verify.extend_from_slice(&args);
+                    verify.extend_from_slice(&[f.as_str(), o_s.as_str()]);
+                    let v = lampost(&verify);
+                    assert!(v.status.success(), "{rel} {index}: {}", stderr(&v));
+                }
+            }
+        }
+    }
+}
