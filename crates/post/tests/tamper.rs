@@ -1,11 +1,12 @@
 //! Issue 11's differential test: random planar programs (rapids, G53/G28 retracts,
 //! lines, arcs, helices) at random placements, indexes, layer schedules and second
-//! sections on three machines and both FADAL heads. Every posted program must pass `verify`; on the FADAL, a checker written
-//! here from paper 000's formulas (not the crate's kinematics) confirms that no rapid
-//! but a vertical one goes below the work's top plus the margin. Then each posted
-//! program is tampered with (a feed or rotary value moved beyond tolerance, a rapid
-//! added to a point of the work, a motion block removed) and `verify` must catch at
-//! least 99 % of the tampered programs. Seeded, so a failure reproduces.
+//! sections on three machines and both FADAL heads. Every posted program must pass
+//! `verify`; on the FADAL and the NRC cell, a checker written here from papers 000's and
+//! 003's formulas (not the crate's kinematics) confirms that no rapid but a vertical one
+//! goes below the work's top plus the margin. Then each posted program is tampered with
+//! (a feed or rotary value moved beyond tolerance, a rapid added to a point of the work,
+//! a motion block removed) and `verify` must catch at least 99 % of the tampered
+//! programs. Seeded, so a failure reproduces.
 
 use lampost_gcode::{Event, MoveKind, Options, Stream, Units};
 use lampost_kinematics::{Machine, MachineDef, Vector3};
@@ -165,6 +166,19 @@ fn fadal_tip(j: [f64; 3], a: f64, b: f64, laser: bool) -> ([f64; 3], [f64; 3]) {
     (p, ax)
 }
 
+/// Paper 003's NRC cell, eq. (3) (fixtures/machines/nrc-lc.toml): the workpiece point
+/// under the tool is x_w = Rz(−C)·Ry(−B)·(−X, −Y, Z + H) − (0, 0, H), H = 150 mm; the tool
+/// axis is Rz(−C)·Ry(−B)·(0, 0, 1). Returns the tip and the axis in the part frame.
+fn nrc_tip(j: [f64; 3], b: f64, c: f64) -> ([f64; 3], [f64; 3]) {
+    let h = 150.0;
+    let (sb, cb) = (-b).to_radians().sin_cos();
+    let (sc, cc) = (-c).to_radians().sin_cos();
+    let ry = |v: [f64; 3]| [cb * v[0] + sb * v[2], v[1], -sb * v[0] + cb * v[2]];
+    let rz = |v: [f64; 3]| [cc * v[0] - sc * v[1], sc * v[0] + cc * v[1], v[2]];
+    let t = rz(ry([-j[0], -j[1], j[2] + h]));
+    ([t[0], t[1], t[2] - h], rz(ry([0.0, 0.0, 1.0])))
+}
+
 /// (line, kind, start, end) of every move of a posted program (X Y Z A B C of AXES).
 type Mv = (u32, MoveKind, [f64; 9], [f64; 9]);
 
@@ -184,28 +198,34 @@ fn moves(text: &str, units: Units) -> Vec<Mv> {
     .collect()
 }
 
-/// The FADAL check: every rapid that is not vertical keeps the tip at least the margin
-/// above every feed tip, along the tool axis.
-fn fadal_rapids_clear_the_work(mv: &[Mv], laser: bool) -> Result<(), String> {
+/// The check from the papers' formulas (`tip` maps joints X Y Z and the two rotaries to
+/// the tip and tool axis in the part frame): every rapid that is not vertical keeps the
+/// tip at least `margin` above every feed tip, along the tool axis.
+fn rapids_clear_the_work(
+    mv: &[Mv],
+    tip: impl Fn(&[f64; 9]) -> ([f64; 3], [f64; 3]),
+    margin: f64,
+    eps: f64,
+) -> Result<(), String> {
     let tips: Vec<[f64; 3]> = mv
         .iter()
         .filter(|m| !matches!(m.1, MoveKind::Rapid))
-        .map(|m| fadal_tip([m.3[0], m.3[1], m.3[2]], m.3[3], m.3[4], laser).0)
+        .map(|m| tip(&m.3).0)
         .collect();
     for m in mv.iter().filter(|m| matches!(m.1, MoveKind::Rapid)) {
         let (s, e) = (m.2, m.3);
-        if s[0] == e[0] && s[1] == e[1] && s[3] == e[3] && s[4] == e[4] {
+        if s[0] == e[0] && s[1] == e[1] && s[3] == e[3] && s[4] == e[4] && s[5] == e[5] {
             continue;
         }
         for q in [s, e] {
-            let (tip, ax) = fadal_tip([q[0], q[1], q[2]], q[3], q[4], laser);
+            let (t, ax) = tip(&q);
             let h = |x: &[f64; 3]| x[0] * ax[0] + x[1] * ax[1] + x[2] * ax[2];
             let top = tips.iter().map(h).fold(f64::MIN, f64::max);
-            if h(&tip) < top + 0.2 - 1e-4 {
+            if h(&t) < top + margin - eps {
                 return Err(format!(
-                    "line {}: a rapid {:.4} above the work (margin 0.2)",
+                    "line {}: a rapid {:.4} above the work (margin {margin})",
                     m.0,
-                    h(&tip) - top
+                    h(&t) - top
                 ));
             }
         }
@@ -392,10 +412,21 @@ fn random_programs_post_verify_and_tampering_is_caught() {
         }
         let units = if mm { Units::Mm } else { Units::Inch };
         let mv = moves(&out, units);
-        if *name == "fadal" {
-            if let Err(e) = fadal_rapids_clear_the_work(&mv, laser) {
-                panic!("case {case}: {e}\n{out}");
+        // AXES order: X Y Z A B C.
+        let checked = match *name {
+            "fadal" => rapids_clear_the_work(
+                &mv,
+                |p| fadal_tip([p[0], p[1], p[2]], p[3], p[4], laser),
+                0.2,
+                1e-4,
+            ),
+            "nrc" => {
+                rapids_clear_the_work(&mv, |p| nrc_tip([p[0], p[1], p[2]], p[4], p[5]), 5.0, 1e-3)
             }
+            _ => Ok(()),
+        };
+        if let Err(e) = checked {
+            panic!("case {case} ({name}): {e}\n{out}");
         }
         for _ in 0..6 {
             let Some((bad, what)) = tamper(&mut r, &out, &mv, mm) else {
