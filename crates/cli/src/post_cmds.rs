@@ -5,6 +5,7 @@ use std::io::{BufReader, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use lampost_kinematics::{Machine, Vector3};
+use lampost_post::safety::WorkBounds;
 use lampost_post::{
     Frame, IntendedOptions, LayerSchedule, Orient, PostConfig, PostDialect, PostError, Process,
     Section, Source,
@@ -67,6 +68,32 @@ pub struct Placement {
     /// INPUT is a path with its own tool axis: rows `x y z i j k [feed] [laser]` (implied by a .csv name).
     #[arg(long)]
     pub per_point: bool,
+    /// Stock as a box in the part frame, X0,Y0,Z0,X1,Y1,Z1 (machine units): safe heights clear it.
+    #[arg(long, allow_hyphen_values = true)]
+    pub stock: Option<String>,
+}
+
+/// The work given besides the program's feed tips (`--stock`).
+fn extra_work(pl: &Placement) -> Result<Option<WorkBounds>, CliError> {
+    let Some(text) = &pl.stock else {
+        return Ok(None);
+    };
+    let (a, b) = text
+        .match_indices(',')
+        .nth(2)
+        .map(|(i, _)| (&text[..i], &text[i + 1..]))
+        .ok_or_else(|| {
+            CliError::usage(format!(
+                "error: --stock `{text}`: give two corners, X0,Y0,Z0,X1,Y1,Z1\n"
+            ))
+        })?;
+    let (lo, hi) = (vector("--stock", a)?, vector("--stock", b)?);
+    let mut w = WorkBounds::empty();
+    let mut bx = WorkBounds::empty();
+    bx.add(&lo);
+    bx.add(&hi);
+    w.add_points(bx.extremes());
+    Ok(Some(w))
 }
 
 fn is_per_point(pl: &Placement, input: Option<&str>) -> bool {
@@ -447,7 +474,7 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         program_number: a.program_number,
         header,
         verify_tolerance: 2.0 * tolerance,
-        work: None,
+        work: extra_work(&a.place)?,
     })
 }
 
@@ -543,6 +570,7 @@ pub fn post(
             cfg.head,
             BufReader::new(posted),
             cfg.verify_tolerance,
+            cfg.work.as_ref(),
         )
         .map_err(post_error)?;
         (report, cfg)
@@ -674,14 +702,24 @@ pub fn verify(
     let f = crate::io::open_input(posted)?;
     let v = if is_per_point(place, input) {
         let (frame, pts, _) = per_point_input(place, input.unwrap_or("-"))?;
-        lampost_post::pointwise::verify_points(&m, &pts, &frame, h, f, tol).map_err(post_error)?
+        lampost_post::pointwise::verify_points(
+            &m,
+            &pts,
+            &frame,
+            h,
+            f,
+            tol,
+            extra_work(place)?.as_ref(),
+        )
+        .map_err(post_error)?
     } else {
         let secs = sections(&m, place, input)?;
         let opts = IntendedOptions {
             convert_units: place.convert_units,
             e_extrusion: place.e_extrusion,
         };
-        lampost_post::verify(&m, &secs, h, opts, f, tol, None).map_err(post_error)?
+        lampost_post::verify(&m, &secs, h, opts, f, tol, extra_work(place)?.as_ref())
+            .map_err(post_error)?
     };
     let s = if json {
         format!(

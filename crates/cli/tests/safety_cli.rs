@@ -623,3 +623,84 @@ fn real_programs_post_and_verify_or_are_refused_where_expected() {
         }
     }
 }
+
+/// `--stock` (a box in the part frame) raises the retracts over it, and verify, given the
+/// same stock, rejects the program posted without it.
+#[test]
+fn stock_box_raises_the_retracts() {
+    let dir = tempdir("safety-stock");
+    let with = dir.join("with.nc");
+    let without = dir.join("without.nc");
+    let input = fx("issue11-patch.nc");
+    for (out, extra) in [(&with, Some("-1,-1,-1,2,2,11")), (&without, None)] {
+        let o_s = out.to_string_lossy().into_owned();
+        let mut args = vec![
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            "--head",
+            "spindle",
+            input.as_str(),
+            "-o",
+            o_s.as_str(),
+        ];
+        if let Some(s) = extra {
+            args.extend_from_slice(&["--stock", s]);
+        }
+        let o = lampost(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let text = std::fs::read_to_string(&with).expect("posted");
+    let first_z = moves(&text)
+        .iter()
+        .find(|(g, _)| g == "G0")
+        .map(|(_, j)| j[2])
+        .unwrap_or(f64::NAN);
+    // FADAL spindle at A = B = 0: the tip is at the joints; the stock's top is Z 11.
+    assert!(first_z >= 11.0 + 0.2 - 1e-4, "{first_z}\n{text}");
+    let v = |posted: &std::path::Path, stock: bool| {
+        let p_s = posted.to_string_lossy().into_owned();
+        let mut args = vec![
+            "verify",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            "--head",
+            "spindle",
+            input.as_str(),
+            p_s.as_str(),
+        ];
+        if stock {
+            args.extend_from_slice(&["--stock", "-1,-1,-1,2,2,12"]);
+        }
+        lampost(&args)
+    };
+    assert!(v(&with, false).status.success());
+    // A stock up to Z 12 cannot be cleared at the clearance height 10: verify says so.
+    let o = v(&without, true);
+    assert!(
+        !o.status.success() && stderr(&o).contains("safe height"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        "--head",
+        "spindle",
+        input.as_str(),
+        "--stock",
+        "0,0,0,1,1",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--stock"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -345,6 +345,7 @@ pub fn verify_points<R: BufRead>(
     head: usize,
     posted: R,
     tolerance: f64,
+    work_extra: Option<&WorkBounds>,
 ) -> Result<VerifyReport, PostError> {
     crate::verify::check_tolerance(tolerance)?;
     let units = program_units(machine);
@@ -352,6 +353,9 @@ pub fn verify_points<R: BufRead>(
     let mut work = WorkBounds::empty();
     for q in &placed {
         work.add(&q.tip);
+    }
+    if let Some(extra) = work_extra {
+        work.union(extra);
     }
     let mut safety = crate::verify::Safety::new(machine, head, work);
     let names = machine.axis_names();

@@ -1,10 +1,10 @@
 //! Safe heights: where the work is, and how high the head must be to travel over it.
 //!
 //! The work is every tool tip the program feeds through (deposited or cut), over all
-//! sections, plus a part or stock given by the user, as a box in the part frame. For a
-//! fixed table position the highest point of that box in machine Z is at one of its eight
-//! corners (the joints map is affine), so the safe height of an index is exact for the
-//! box: the larger of the machine's `clearance_z` and that height plus the machine's
+//! sections, as a box in the part frame, plus a part or stock given by the user (the
+//! vertices of its convex hull, or the stock box's corners). For a fixed table position
+//! the highest point of that in machine Z is at one of those points (the joints map is
+//! affine), so the safe height of an index is exact for them: the larger of the machine's `clearance_z` and that height plus the machine's
 //! `safe_margin`. A rotary move happens at a height safe for every table position it
 //! passes through (sampled at most 1° apart, plus what a corner can rise between samples).
 
@@ -15,13 +15,17 @@ use nalgebra::Vector3;
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Section, Step, StepKind};
 
-/// A box in the part frame holding the work.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The work in the part frame: a box holding every feed tip, and points of a part or
+/// stock (the vertices of its convex hull, or a box's corners). The highest point of the
+/// work in any direction is one of [`WorkBounds::extremes`].
+#[derive(Debug, Clone, PartialEq)]
 pub struct WorkBounds {
-    /// Lowest corner.
+    /// Lowest corner of the feed tips' box.
     pub min: Vector3<f64>,
-    /// Highest corner.
+    /// Highest corner of the feed tips' box.
     pub max: Vector3<f64>,
+    /// Points of a part or stock.
+    pub points: Vec<Vector3<f64>>,
 }
 
 impl WorkBounds {
@@ -30,26 +34,37 @@ impl WorkBounds {
         WorkBounds {
             min: Vector3::repeat(f64::INFINITY),
             max: Vector3::repeat(f64::NEG_INFINITY),
+            points: Vec::new(),
         }
     }
 
     /// True when nothing was added.
     pub fn is_empty(&self) -> bool {
+        self.box_empty() && self.points.is_empty()
+    }
+
+    fn box_empty(&self) -> bool {
         (0..3).any(|k| self.min[k] > self.max[k])
     }
 
-    /// Grow to hold `p`.
+    /// Grow the box to hold `p`.
     pub fn add(&mut self, p: &Vector3<f64>) {
         self.min = self.min.inf(p);
         self.max = self.max.sup(p);
     }
 
-    /// Grow to hold another box.
+    /// Add points of a part or stock.
+    pub fn add_points(&mut self, pts: impl IntoIterator<Item = Vector3<f64>>) {
+        self.points.extend(pts);
+    }
+
+    /// Grow to hold another's work.
     pub fn union(&mut self, o: &WorkBounds) {
-        if !o.is_empty() {
+        if !o.box_empty() {
             self.add(&o.min);
             self.add(&o.max);
         }
+        self.points.extend_from_slice(&o.points);
     }
 
     /// Grow to hold the path of a feed step (an arc by its whole circle).
@@ -82,15 +97,18 @@ impl WorkBounds {
         }
     }
 
-    /// The eight corners.
-    pub fn corners(&self) -> impl Iterator<Item = Vector3<f64>> + '_ {
-        (0..8).map(move |i| {
-            Vector3::new(
-                if i & 1 == 0 { self.min.x } else { self.max.x },
-                if i & 2 == 0 { self.min.y } else { self.max.y },
-                if i & 4 == 0 { self.min.z } else { self.max.z },
-            )
-        })
+    /// The points that bound the work: the box's eight corners and the part's points.
+    pub fn extremes(&self) -> impl Iterator<Item = Vector3<f64>> + '_ {
+        let n = if self.box_empty() { 0 } else { 8 };
+        (0..n)
+            .map(move |i| {
+                Vector3::new(
+                    if i & 1 == 0 { self.min.x } else { self.max.x },
+                    if i & 2 == 0 { self.min.y } else { self.max.y },
+                    if i & 4 == 0 { self.min.z } else { self.max.z },
+                )
+            })
+            .chain(self.points.iter().copied())
     }
 
     /// Every feed tip of `sections`' intended path (one pass over the input).
@@ -157,7 +175,7 @@ impl<'m> SafeHeights<'m> {
         let map = self.m.joints_map(&sc, self.head);
         Some(
             self.work
-                .corners()
+                .extremes()
                 .map(|c| map.apply(&c).z)
                 .fold(f64::NEG_INFINITY, f64::max),
         )
@@ -192,7 +210,7 @@ impl<'m> SafeHeights<'m> {
         }
         // Between samples (at most 1° apart) a point at distance d from an axis rises at
         // most d·(1 − cos 0.5°) above the higher neighbouring sample.
-        let reach = self.work.corners().map(|c| c.norm()).fold(0.0, f64::max)
+        let reach = self.work.extremes().map(|c| c.norm()).fold(0.0, f64::max)
             + self
                 .m
                 .rotary

@@ -521,7 +521,7 @@ impl<'m> Safety<'m> {
         let a = pose.axis.normalize();
         let top = self
             .work
-            .corners()
+            .extremes()
             .map(|c| c.dot(&a))
             .fold(f64::NEG_INFINITY, f64::max);
         pose.tip.dot(&a) - top
@@ -681,7 +681,7 @@ impl<'m> Safety<'m> {
         }
         let span = (to[0] - from[0]).abs().max((to[1] - from[1]).abs());
         let n = (span.ceil() as usize).clamp(1, 100_000);
-        let reach = self.work.corners().map(|c| c.norm()).fold(0.0, f64::max)
+        let reach = self.work.extremes().map(|c| c.norm()).fold(0.0, f64::max)
             + self
                 .m
                 .rotary
