@@ -10,8 +10,8 @@
 //! - in file order ([`Order::File`], for `check`): every line of every program; a call
 //!   is checked against the index (the program is there, once, and ends in M99);
 //! - in execution order ([`Order::Execution`], for `trace` and verification): the main
-//!   program, and at each `M98 Pn Lk` line the body of `On` (its `O` line through its
-//!   M99) `k` times, calls inside it followed in turn.
+//!   program, and at each `M98 Pn Lk` line the body of `On` (its `O` line up to the
+//!   first M99 met, which returns) `k` times, calls inside it followed in turn.
 //!
 //! A *subprogram body* runs from an `O` line to the last M99 before the next `O` line (or
 //! the end of the file). The *main program* is every line outside the bodies, in file
