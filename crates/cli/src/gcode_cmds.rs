@@ -5,10 +5,10 @@ use std::io::Write;
 use lampost_gcode::emit::fixed;
 use lampost_gcode::{
     parse_line, Dialect, EWord, EmitOptions, Emitter, Event, LineReader, Move, MoveKind, Options,
-    Severity, Stream, Units, AXES,
+    Order, ProgramReader, Severity, Stream, Units, AXES,
 };
 
-use crate::io::{display_name, open_input, Output};
+use crate::io::{display_name, open_input, open_seekable, Output};
 use crate::report::{self, CliError};
 use crate::{DialectArg, EWordArg, InterpArgs, UnitsArg};
 
@@ -38,15 +38,24 @@ fn io_err(name: &str, e: std::io::Error) -> CliError {
     CliError::usage(format!("error: cannot read {name}: {e}"))
 }
 
+/// `file`'s lines in `order` (every program in turn, or the main program with its calls
+/// followed).
+fn program(
+    file: &str,
+    order: Order,
+) -> Result<ProgramReader<Box<dyn crate::io::ReadSeek>>, CliError> {
+    Ok(ProgramReader::new(open_seekable(file)?, order))
+}
+
 pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError> {
     let name = display_name(file);
-    let input = open_input(file)?;
+    let input = program(file, Order::File)?;
     let mut errors = 0usize;
     let mut warnings = 0usize;
     let mut printed = 0usize;
     let mut all = Vec::new();
     let stderr = std::io::stderr();
-    for ev in Stream::from_reader(input, options(interp), false) {
+    for ev in Stream::new(input, options(interp), false) {
         let Event::Diagnostic(d) = ev.map_err(|e| io_err(&name, e))? else {
             continue;
         };
@@ -263,7 +272,7 @@ pub fn trace(
     interp: InterpArgs,
 ) -> Result<(), CliError> {
     let name = display_name(file);
-    let input = open_input(file)?;
+    let input = program(file, Order::Execution)?;
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut diags = Vec::new();
@@ -274,7 +283,7 @@ pub fn trace(
         if json {
             w.write_all(b"{\"moves\":[").map_err(werr)?;
         }
-        for ev in Stream::from_reader(input, options(interp), true) {
+        for ev in Stream::new(input, options(interp), true) {
             match ev.map_err(|e| io_err(&name, e))? {
                 Event::Move(m) => {
                     if json {

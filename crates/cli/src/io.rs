@@ -1,7 +1,7 @@
 //! Input from a file or stdin, output to stdout or a file written atomically.
 
 use std::fs::{self, File};
-use std::io::{self, BufRead, BufReader, BufWriter, Write};
+use std::io::{self, BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use crate::report::CliError;
@@ -17,6 +17,154 @@ pub fn open_input(path: &str) -> Result<Box<dyn BufRead>, CliError> {
         ))
     })?;
     Ok(Box::new(BufReader::with_capacity(1 << 16, f)))
+}
+
+/// Something to read and seek in.
+pub trait ReadSeek: Read + Seek {}
+impl<T: Read + Seek> ReadSeek for T {}
+
+fn cannot_open(path: &str, e: &io::Error) -> CliError {
+    CliError::usage(format!(
+        "error: cannot open {path}: {e}\n  = help: check the path; use - to read standard input"
+    ))
+}
+
+/// Open `path` for reading and seeking (programs with subprograms are read out of
+/// order). Standard input (`-`), or a pipe given by name, is first copied to a temporary
+/// file that has no name (removed as soon as it is open), so memory stays flat.
+pub fn open_seekable(path: &str) -> Result<Box<dyn ReadSeek>, CliError> {
+    let mut source: Box<dyn Read> = if path == "-" {
+        Box::new(io::stdin().lock())
+    } else {
+        let f = File::open(path).map_err(|e| cannot_open(path, &e))?;
+        if f.metadata().is_ok_and(|m| m.is_file()) {
+            return Ok(Box::new(f));
+        }
+        Box::new(f)
+    };
+    let mut spool = || -> io::Result<File> {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        let name =
+            std::env::temp_dir().join(format!(".lampost-stdin-{}-{nanos}.tmp", std::process::id()));
+        let mut f = fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&name)?;
+        let _ = fs::remove_file(&name);
+        io::copy(&mut source, &mut f)?;
+        f.seek(SeekFrom::Start(0))?;
+        Ok(f)
+    };
+    spool()
+        .map(|f| Box::new(f) as Box<dyn ReadSeek>)
+        .map_err(|e| CliError::usage(format!("error: cannot read {}: {e}", display_name(path))))
+}
+
+/// Several files read one after another as one input, seekable: DNC pieces given in
+/// order. A file that does not end in a line break gets one, so no two lines run
+/// together. One file is open at a time.
+#[derive(Debug)]
+pub struct Concat {
+    /// Each file, its length, and whether a line break is added after it.
+    parts: Vec<(PathBuf, u64, bool)>,
+    /// Where each part starts in the whole.
+    starts: Vec<u64>,
+    total: u64,
+    pos: u64,
+    open: Option<(usize, File)>,
+}
+
+impl Concat {
+    /// The files `paths`, in order.
+    pub fn open(paths: &[String]) -> Result<Self, CliError> {
+        let mut parts = Vec::with_capacity(paths.len());
+        let mut starts = Vec::with_capacity(paths.len());
+        let mut total = 0u64;
+        for p in paths {
+            let mut f = File::open(p).map_err(|e| cannot_open(p, &e))?;
+            let meta = f.metadata().map_err(|e| cannot_open(p, &e))?;
+            if !meta.is_file() {
+                return Err(CliError::usage(format!(
+                    "error: {p} is not a file: pieces read together are opened again as they are read\n"
+                )));
+            }
+            let len = meta.len();
+            let mut last = [b'\n'];
+            if len > 0 {
+                f.seek(SeekFrom::Start(len - 1))
+                    .and_then(|_| f.read_exact(&mut last))
+                    .map_err(|e| cannot_open(p, &e))?;
+            }
+            let add = last[0] != b'\n';
+            starts.push(total);
+            total += len + u64::from(add);
+            parts.push((PathBuf::from(p), len, add));
+        }
+        Ok(Concat {
+            parts,
+            starts,
+            total,
+            pos: 0,
+            open: None,
+        })
+    }
+
+    /// The file holding byte `offset` of the whole, and the offset where it starts.
+    pub fn part_at(&self, offset: u64) -> Option<(usize, u64)> {
+        let k = self
+            .starts
+            .partition_point(|&s| s <= offset)
+            .checked_sub(1)?;
+        Some((k, self.starts[k]))
+    }
+}
+
+impl Read for Concat {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        if buf.is_empty() || self.pos >= self.total {
+            return Ok(0);
+        }
+        let Some((k, start)) = self.part_at(self.pos) else {
+            return Ok(0);
+        };
+        let (path, len, _) = &self.parts[k];
+        let within = self.pos - start;
+        if within >= *len {
+            // The added line break.
+            buf[0] = b'\n';
+            self.pos += 1;
+            return Ok(1);
+        }
+        if self.open.as_ref().is_none_or(|(i, _)| *i != k) {
+            self.open = Some((k, File::open(path)?));
+        }
+        let Some((_, f)) = self.open.as_mut() else {
+            return Ok(0);
+        };
+        f.seek(SeekFrom::Start(within))?;
+        let want = usize::try_from(len - within)
+            .unwrap_or(usize::MAX)
+            .min(buf.len());
+        let n = f.read(&mut buf[..want])?;
+        self.pos += n as u64;
+        Ok(n)
+    }
+}
+
+impl Seek for Concat {
+    fn seek(&mut self, to: SeekFrom) -> io::Result<u64> {
+        let target = match to {
+            SeekFrom::Start(p) => i128::from(p),
+            SeekFrom::Current(d) => i128::from(self.pos) + i128::from(d),
+            SeekFrom::End(d) => i128::from(self.total) + i128::from(d),
+        };
+        self.pos = u64::try_from(target)
+            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "seek before the start"))?;
+        Ok(self.pos)
+    }
 }
 
 /// The name used for `path` in messages.

@@ -10,6 +10,7 @@ mod io;
 mod kin_cmds;
 mod points;
 mod post_cmds;
+mod posted;
 mod report;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -376,8 +377,9 @@ enum Command {
     },
     /// Replay a posted program through forward kinematics and compare it with the intended path.
     Verify {
-        /// INPUT POSTED: the planar program and the posted program (with --job, POSTED alone).
-        #[arg(num_args = 1..=2, required = true)]
+        /// INPUT POSTED...: the planar program and the posted program (with --job, POSTED
+        /// alone). Several POSTED files are the DNC pieces of a split program, in order.
+        #[arg(num_args = 1.., required = true)]
         files: Vec<String>,
         /// Built-in machine name or machine file.
         #[arg(long)]
@@ -513,9 +515,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
             json,
         } => {
             let (input, posted) = match files.as_slice() {
-                [p] => (None, p.clone()),
-                [i, p] => (Some(i.clone()), p.clone()),
-                _ => {
+                [p] => (None, vec![p.clone()]),
+                all if place.job.is_some() => (None, all.to_vec()),
+                [i, p @ ..] => (Some(i.clone()), p.to_vec()),
+                [] => {
                     return Err(CliError::usage(
                         "error: give INPUT POSTED (or POSTED with --job)\n".to_string(),
                     ))

@@ -688,7 +688,7 @@ pub fn verify(
     head: Option<&str>,
     process: &str,
     input: Option<&str>,
-    posted: &str,
+    posted: &[String],
     tolerance: Option<f64>,
     json: bool,
 ) -> Result<(), CliError> {
@@ -699,7 +699,9 @@ pub fn verify(
         lampost_kinematics::Units::Inch => 0.001,
         lampost_kinematics::Units::Mm => 0.02,
     });
-    let f = crate::io::open_input(posted)?;
+    // One file, or DNC pieces in order; FADAL subprograms are followed.
+    let f = crate::posted::open(posted)?;
+    let located = |e| post_error(crate::posted::locate(posted, e));
     let v = if is_per_point(place, input) {
         let (frame, pts, _) = per_point_input(place, input.unwrap_or("-"))?;
         lampost_post::pointwise::verify_points(
@@ -711,7 +713,7 @@ pub fn verify(
             tol,
             extra_work(place)?.as_ref(),
         )
-        .map_err(post_error)?
+        .map_err(located)?
     } else {
         let secs = sections(&m, place, input)?;
         let opts = IntendedOptions {
@@ -719,7 +721,7 @@ pub fn verify(
             e_extrusion: place.e_extrusion,
         };
         lampost_post::verify(&m, &secs, h, opts, f, tol, extra_work(place)?.as_ref())
-            .map_err(post_error)?
+            .map_err(located)?
     };
     let s = if json {
         format!(

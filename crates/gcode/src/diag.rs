@@ -125,6 +125,51 @@ pub enum ErrorKind {
     /// A subprogram call not followed.
     #[error("{0}: subprogram calls are not followed; the trace continues after the call")]
     SubprogramNotFollowed(String),
+    /// A call to a program number the file does not hold.
+    #[error("M98 P{0}: this file holds no program O{0}")]
+    UnknownProgram(u32),
+    /// A call to a program that is in the file more than once.
+    #[error(
+        "M98 P{number}: O{number} is in this file more than once (lines {first} and {second})"
+    )]
+    DuplicateProgram {
+        /// The program number.
+        number: u32,
+        /// Line of the first `O` line.
+        first: u32,
+        /// Line of the second.
+        second: u32,
+    },
+    /// A call to a program that does not return.
+    #[error("M98 P{number}: O{number} (line {line}) has no M99, so it cannot be called")]
+    NotASubprogram {
+        /// The program number.
+        number: u32,
+        /// Line of its `O` line.
+        line: u32,
+    },
+    /// A subprogram that calls itself, directly or through others.
+    #[error("M98 P{number}: O{number} is already running ({chain}): recursion")]
+    RecursiveCall {
+        /// The program number.
+        number: u32,
+        /// The calls in force, outermost first (`O1001 → O1002 → O1001`).
+        chain: String,
+    },
+    /// Calls nested deeper than lampost follows.
+    #[error("subprogram calls nested more than {0} deep")]
+    CallsTooDeep(usize),
+    /// More work through calls than lampost follows.
+    #[error("more than {limit} {what} through subprogram calls")]
+    TooManyCalls {
+        /// The limit.
+        limit: u64,
+        /// What was counted.
+        what: &'static str,
+    },
+    /// More `O` programs in one file than lampost indexes.
+    #[error("more than {0} programs (O numbers) in one file")]
+    TooManyPrograms(usize),
     /// A program with no blocks at all.
     #[error("the program is empty")]
     EmptyProgram,
@@ -163,6 +208,13 @@ impl ErrorKind {
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
+            ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",
+            ErrorKind::DuplicateProgram { .. } => "give every program in the file its own O number",
+            ErrorKind::NotASubprogram { .. } => "end the subprogram with M99, or correct P",
+            ErrorKind::RecursiveCall { .. } => "a subprogram may not call itself, directly or through others",
+            ErrorKind::CallsTooDeep(_) => "flatten the calls: lampost follows calls 8 deep",
+            ErrorKind::TooManyCalls { .. } => "check the L repeats of nested calls; split the program",
+            ErrorKind::TooManyPrograms(_) => "split the file",
             ErrorKind::EmptyProgram => "give a file that holds a program",
             ErrorKind::LineTooLong(_) => "split the line; controllers take lines of a few hundred characters",
         }

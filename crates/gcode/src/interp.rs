@@ -49,6 +49,22 @@ impl Default for Options {
     }
 }
 
+/// How the interpreter treats subprogram calls (`M98 P… L…`); the line source decides
+/// (see [`crate::program::ProgramReader`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Calls {
+    /// Calls are not followed: the interpreter warns and goes on after the call (a plain
+    /// line source).
+    #[default]
+    NotFollowed,
+    /// The file is read in file order, each program in turn; the source checks that each
+    /// called program is there. An `O` line after M2/M30 starts the next program.
+    Checked,
+    /// The source hands over the called program's lines after the call (execution
+    /// order).
+    Followed,
+}
+
 /// The kind of a resolved move.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "type")]
@@ -145,6 +161,10 @@ pub struct Interpreter {
     extrusion: f64,
     ended: bool,
     warned_after_end: bool,
+    calls: Calls,
+    /// `O` programs started and not yet closed by an M99 (calls nest: in execution
+    /// order the called program's `O` line comes inside the caller).
+    open_programs: u32,
     axes_named: u16,
     /// Axes named in the block being run.
     block_axes: u16,
@@ -223,6 +243,8 @@ impl Interpreter {
             extrusion: 0.0,
             ended: false,
             warned_after_end: false,
+            calls: Calls::NotFollowed,
+            open_programs: 0,
             axes_named: 0,
             block_axes: 0,
             warned_macro: false,
@@ -241,9 +263,15 @@ impl Interpreter {
         &self.pos
     }
 
-    /// True after M2/M30.
+    /// True after M2/M30 (or an M99 outside any `O` program).
     pub fn ended(&self) -> bool {
         self.ended
+    }
+
+    /// How subprogram calls are treated (the line source knows; [`crate::Stream`] sets
+    /// it from [`crate::LineSource::calls`]).
+    pub fn set_calls(&mut self, calls: Calls) {
+        self.calls = calls;
     }
 
     fn offset(&self) -> Position {
@@ -297,6 +325,12 @@ impl Interpreter {
         }
         if !b.has_words() {
             return Ok(());
+        }
+        if self.ended && self.calls == Calls::Checked && crate::program::program_number(b).is_some()
+        {
+            // Read in file order, the next program of the file starts here.
+            self.ended = false;
+            self.warned_after_end = false;
         }
         if self.ended {
             if !self.warned_after_end {
@@ -457,6 +491,9 @@ impl Interpreter {
         w: &Words<'_, '_>,
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
+        if w.word(b'O').is_some() && crate::program::program_number(b).is_some() {
+            self.open_programs = self.open_programs.saturating_add(1);
+        }
         let m = &mut self.modal;
         // Feed mode, F, S, T.
         if let Some((_, c)) = w.g_in(GGroup::FeedMode) {
@@ -518,12 +555,12 @@ impl Interpreter {
                     m.flood = false;
                 }
                 20 | 300 => stop_after = true,
-                980 => {
-                    let what = format!(
-                        "{} {}",
-                        mw.display_code(),
-                        w.word(b'P').map(|p| p.display()).unwrap_or_default()
-                    );
+                980 if self.calls == Calls::NotFollowed => {
+                    let mut what = mw.display_code();
+                    for word in [w.word(b'P'), w.word(b'L')].into_iter().flatten() {
+                        what.push(' ');
+                        what.push_str(&word.display());
+                    }
                     out(Event::Diagnostic(diag(
                         b,
                         Severity::Warning,
@@ -555,8 +592,12 @@ impl Interpreter {
                 EWord::Extrusion => self.extrusion = e.value,
             }
         }
-        // FADAL L words outside canned cycles call subroutines.
-        if let Some(l) = w.word(b'L') {
+        // FADAL L words outside canned cycles call subroutines (with M98, L is the
+        // call's repeat count).
+        if let Some(l) = w
+            .word(b'L')
+            .filter(|_| !w.ms.iter().any(|&(_, c)| c == 980))
+        {
             let canned_block = w
                 .g_in(GGroup::Motion)
                 .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {
@@ -824,10 +865,18 @@ impl Interpreter {
         }
         if stop_after {
             self.ended = true;
+            self.open_programs = 0;
         }
         if w.ms.iter().any(|&(_, c)| c == 990) {
-            // M99: return from a subprogram; the rest is not reached from here.
-            self.ended = true;
+            if self.open_programs > 0 {
+                // M99 closes the `O` program it is in: a subprogram returns. Read in file
+                // order the next program follows; in execution order, the caller.
+                self.open_programs -= 1;
+            } else {
+                // M99 with no `O` program open: a subprogram traced on its own returns;
+                // the rest is not reached from here.
+                self.ended = true;
+            }
         }
         Ok(())
     }

@@ -1,6 +1,6 @@
 //! Splitting input into lines: from a byte slice, or streamed from a reader.
 
-use std::io::{self, BufRead};
+use std::io::{self, BufRead, BufReader, Read, Seek};
 
 /// One line of input: 1-based number, byte offset of its first byte, its bytes
 /// without `\n` or `\r\n`.
@@ -86,6 +86,11 @@ impl<R: BufRead> LineReader<R> {
 
     /// The next line, or `None` at the end of input.
     pub fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
+        Ok(self.next_line_end()?.map(|(line, _)| line))
+    }
+
+    /// The next line and the offset just past it (its line ending included).
+    pub(crate) fn next_line_end(&mut self) -> io::Result<Option<(Line<'_>, usize)>> {
         self.buf.clear();
         let n = self.reader.read_until(b'\n', &mut self.buf)?;
         if n == 0 {
@@ -94,16 +99,43 @@ impl<R: BufRead> LineReader<R> {
         let offset = self.pos;
         self.pos += n;
         self.number = self.number.saturating_add(1);
-        Ok(Some(Line {
-            number: self.number,
-            offset,
-            bytes: strip_eol(&self.buf),
-        }))
+        Ok(Some((
+            Line {
+                number: self.number,
+                offset,
+                bytes: strip_eol(&self.buf),
+            },
+            self.pos,
+        )))
     }
 
     /// Bytes read so far.
     pub fn bytes_read(&self) -> usize {
         self.pos
+    }
+
+    /// The line the last [`LineReader::next_line`] handed out again (empty after a seek).
+    pub(crate) fn last_line(&self) -> Line<'_> {
+        Line {
+            number: self.number,
+            offset: self.pos - self.buf.len(),
+            bytes: strip_eol(&self.buf),
+        }
+    }
+}
+
+impl<R: Read + Seek> LineReader<BufReader<R>> {
+    /// Go on reading at byte `offset`, whose line is numbered `number`. A jump that
+    /// lands inside the buffer reuses it (a short subprogram called many times is not
+    /// read from the source again each time).
+    pub(crate) fn seek_line(&mut self, offset: usize, number: u32) -> io::Result<()> {
+        let delta = i64::try_from(offset as i128 - self.pos as i128)
+            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "seek out of range"))?;
+        self.reader.seek_relative(delta)?;
+        self.buf.clear();
+        self.pos = offset;
+        self.number = number.saturating_sub(1);
+        Ok(())
     }
 }
 

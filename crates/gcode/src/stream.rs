@@ -5,14 +5,26 @@ use std::io::{self, BufRead};
 
 use crate::ast::Block;
 use crate::diag::{Diagnostic, ErrorKind, Severity};
-use crate::interp::{Event, Interpreter, Options};
+use crate::interp::{Calls, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
 use crate::parse::parse_line_into;
+use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
 pub trait LineSource {
     /// The next line, or `None` at the end.
     fn next_line(&mut self) -> io::Result<Option<Line<'_>>>;
+
+    /// How this source treats subprogram calls (plain sources do not follow them).
+    fn calls(&self) -> Calls {
+        Calls::NotFollowed
+    }
+
+    /// A problem the source found (a call to a missing program, say), reported after the
+    /// line it concerns.
+    fn take_diagnostic(&mut self) -> Option<Diagnostic> {
+        None
+    }
 }
 
 impl LineSource for Lines<'_> {
@@ -44,9 +56,11 @@ impl<S: LineSource> Stream<S> {
     /// (what follows an error cannot be trusted for motion); without it, every block is
     /// read and every problem reported.
     pub fn new(src: S, opts: Options, stop_on_error: bool) -> Self {
+        let mut interp = Interpreter::new(opts);
+        interp.set_calls(src.calls());
         Stream {
             src,
-            interp: Interpreter::new(opts),
+            interp,
             queue: VecDeque::new(),
             stop_on_error,
             stopped: false,
@@ -93,7 +107,10 @@ impl<S: LineSource> Iterator for Stream<S> {
                 }
                 Ok(None) => {
                     self.finished = true;
-                    if !self.any_content {
+                    while let Some(d) = self.src.take_diagnostic() {
+                        self.queue.push_back(Event::Diagnostic(d));
+                    }
+                    if !self.any_content && self.queue.is_empty() {
                         self.queue.push_back(Event::Diagnostic(Diagnostic::whole(
                             Severity::Error,
                             ErrorKind::EmptyProgram,
@@ -130,6 +147,12 @@ impl<S: LineSource> Iterator for Stream<S> {
                     true
                 }
             };
+            drop(block);
+            let mut failed = failed;
+            while let Some(d) = self.src.take_diagnostic() {
+                failed |= d.is_error();
+                self.queue.push_back(Event::Diagnostic(d));
+            }
             if failed && self.stop_on_error {
                 self.stopped = true;
             }
@@ -141,12 +164,14 @@ impl<S: LineSource> Iterator for Stream<S> {
     }
 }
 
-/// Every diagnostic of a program (parse and interpretation), in order.
+/// Every diagnostic of a program (parse and interpretation), in order: every line of
+/// every `O` program in the file, and calls to programs the file does not hold (see
+/// [`ProgramReader`] in [`Order::File`]).
 pub fn check(input: &[u8], opts: Options) -> Vec<Diagnostic> {
-    Stream::from_bytes(input, opts, false)
-        .filter_map(|e| match e {
-            Ok(Event::Diagnostic(d)) => Some(d),
-            _ => None,
-        })
-        .collect()
+    let diags = |e: io::Result<Event>| match e {
+        Ok(Event::Diagnostic(d)) => Some(d),
+        _ => None,
+    };
+    let src = ProgramReader::new(io::Cursor::new(input), Order::File);
+    Stream::new(src, opts, false).filter_map(diags).collect()
 }

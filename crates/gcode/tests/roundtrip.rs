@@ -1,7 +1,8 @@
 //! parse(emit(p)) == p, and fmt keeps the trace, on generated programs and the corpus.
 
 use lampost_gcode::{
-    parse_line, Dialect, EmitOptions, Emitter, Event, Lines, Move, Options, Stream, Units,
+    parse_line, Dialect, EmitOptions, Emitter, Event, Lines, Move, Options, Order, ProgramReader,
+    Stream, Units,
 };
 use proptest::prelude::*;
 
@@ -138,6 +139,20 @@ proptest! {
     ]), 0..80)) {
         let text = tokens.concat();
         let _ = Stream::from_bytes(text.as_bytes(), Options::default(), false).count();
+    }
+
+    /// Programs, calls and returns in any order: read in both orders, nothing panics or
+    /// runs away (every call is followed under the nesting and repeat caps).
+    #[test]
+    fn call_soup_never_panics(tokens in prop::collection::vec(prop::sample::select(vec![
+        "O1", "O2", "O3", "O1.5", "O-1", "M98", "M99", "M30", "P1", "P2", "P3", "P4", "P-1", "L2",
+        "L3", "L10001", "L0", "L1.5", "G0", "X1", "G91", "N5", "%", "(c)", "\n", "\n", " ",
+    ]), 0..80)) {
+        let text = tokens.concat();
+        for order in [Order::File, Order::Execution] {
+            let r = ProgramReader::new(std::io::Cursor::new(text.as_bytes()), order);
+            let _ = Stream::new(r, Options::default(), false).count();
+        }
     }
 }
 

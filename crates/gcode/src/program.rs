@@ -1,0 +1,916 @@
+//! Files that hold several programs: `O` numbers, subprograms that end in M99, and calls
+//! `M98 P… [L…]` (FADAL, Fanuc-style ISO).
+//!
+//! A [`ProgramReader`] hands out the lines, each with its own line number and byte offset.
+//! When the first `M98` (or, in execution order, the first `O` line) comes, it reads the
+//! file once and notes where each `O` program starts and where its last M99 ends (byte
+//! offsets and line numbers, never the text); a file with neither is read once, as it
+//! stands. The orders:
+//!
+//! - in file order ([`Order::File`], for `check`): every line of every program; a call
+//!   is checked against the index (the program is there, once, and ends in M99);
+//! - in execution order ([`Order::Execution`], for `trace` and verification): the main
+//!   program, and at each `M98 Pn Lk` line the body of `On` (its `O` line up to the
+//!   first M99 met, which returns) `k` times, calls inside it followed in turn.
+//!
+//! A *subprogram body* runs from an `O` line to the last M99 before the next `O` line (or
+//! the end of the file). The *main program* is every line outside the bodies, in file
+//! order; a file whose lines outside the bodies hold no words (a subprogram on its own)
+//! is its own main program, read from the top. A file without `O` lines or M98 reads
+//! exactly as a plain [`crate::LineReader`] reads it.
+//!
+//! Hostile input cannot hang or exhaust memory: an `L` repeat is at most 10,000, calls
+//! nest at most [`MAX_NESTING`] deep, recursion is refused, and at most [`MAX_RUNS`]
+//! subprogram runs and [`MAX_CALL_LINES`] lines are read through calls in all; the index
+//! holds at most [`MAX_PROGRAMS`] programs. A called body is reached by a relative seek,
+//! so a short subprogram called often is served from the read buffer.
+
+use std::collections::VecDeque;
+use std::io::{self, BufRead, BufReader, Read, Seek};
+
+use crate::ast::{Block, BlockKind};
+use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::interp::Calls;
+use crate::lines::{Line, LineReader};
+use crate::parse::{parse_line, MAX_LINE_BYTES};
+use crate::stream::LineSource;
+
+/// The deepest calls are followed (the main program is depth 0).
+pub const MAX_NESTING: usize = 8;
+/// The most subprogram runs (each `L` repeat is a run) followed in one program.
+pub const MAX_RUNS: u64 = 1_000_000;
+/// The most lines read through calls in one program.
+pub const MAX_CALL_LINES: u64 = 100_000_000;
+/// The most `O` programs indexed in one file.
+pub const MAX_PROGRAMS: usize = 100_000;
+/// The largest `L` repeat of one call (as for canned cycles).
+const MAX_REPEATS: u32 = 10_000;
+
+/// The order in which a [`ProgramReader`] hands out lines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Order {
+    /// Every line of the file in turn; calls are checked, not followed.
+    File,
+    /// The main program with every call followed.
+    Execution,
+}
+
+/// The program number of a block that starts an `O` program (`O1001`, `N1 O800`): an `O`
+/// word with a whole value.
+pub(crate) fn program_number(b: &Block<'_>) -> Option<u32> {
+    if b.kind != BlockKind::Words {
+        return None;
+    }
+    let w = b.word(b'O')?;
+    (w.value >= 0.0 && w.value <= f64::from(u32::MAX) && w.value.fract() == 0.0)
+        .then_some(w.value as u32)
+}
+
+/// One `O` program of the file.
+#[derive(Debug, Clone, Copy)]
+struct Program {
+    number: u32,
+    /// Offset and line number of its `O` line.
+    start: usize,
+    line: u32,
+    /// Just past its last M99 line (offset, number of the next line): a subprogram.
+    end: Option<(usize, u32)>,
+}
+
+/// A call being run.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    /// Index into `programs`.
+    prog: usize,
+    /// Where the caller goes on (offset, line number).
+    back: (usize, u32),
+    /// Runs still to come after this one.
+    repeats_left: u32,
+}
+
+/// What a line asks of the reader.
+#[derive(Debug)]
+enum Action {
+    Nothing,
+    /// The file must be indexed first.
+    Index,
+    Call {
+        prog: usize,
+        repeats: u32,
+    },
+    Return,
+    Error(Diagnostic),
+}
+
+/// Lines of a file of programs in file or execution order (see the module
+/// documentation). It is a [`LineSource`] for [`crate::Stream`], and a [`BufRead`] whose
+/// bytes are the lines in its order (for readers that take text, such as the post's
+/// verification); there a call error is an [`io::Error`] naming the line.
+#[derive(Debug)]
+pub struct ProgramReader<R> {
+    lines: LineReader<BufReader<R>>,
+    order: Order,
+    /// The programs have been indexed.
+    indexed: bool,
+    /// In file order.
+    programs: Vec<Program>,
+    /// Indexes into `programs`, by number (then file order).
+    by_number: Vec<u32>,
+    /// Execution order and the main program is not the whole file: skip the bodies.
+    skip_bodies: bool,
+    /// The next body (index into `programs`) the main program may meet.
+    next_body: usize,
+    /// Where the next line is read: offset and line number.
+    pos: usize,
+    line: u32,
+    stack: Vec<Frame>,
+    runs: u64,
+    call_lines: u64,
+    /// [`MAX_RUNS`] and [`MAX_CALL_LINES`] (smaller in tests).
+    max_runs: u64,
+    max_call_lines: u64,
+    pending: VecDeque<Diagnostic>,
+    halted: bool,
+    /// The current line as bytes, for `BufRead`.
+    out: Vec<u8>,
+    out_pos: usize,
+}
+
+fn may_matter(bytes: &[u8]) -> bool {
+    // An `O` word or an M98/M99 needs the letter; most motion lines have neither. A line
+    // the parser refuses for its length is not scanned.
+    bytes.len() <= MAX_LINE_BYTES && bytes.iter().any(|&c| matches!(c | 0x20, b'o' | b'm'))
+}
+
+fn has_m(b: &Block<'_>, code: u16) -> bool {
+    b.words()
+        .any(|w| w.letter == b'M' && w.register.is_none() && w.code() == Some(code))
+}
+
+fn err_at(line: &Line<'_>, kind: ErrorKind, span: Option<crate::ast::Span>) -> Diagnostic {
+    let (s, e) = span.map_or((0, line.bytes.len()), |sp| {
+        (
+            sp.start.saturating_sub(line.offset),
+            sp.end.saturating_sub(line.offset),
+        )
+    });
+    Diagnostic::at(
+        Severity::Error,
+        kind,
+        line.number,
+        line.offset,
+        line.bytes,
+        s,
+        e,
+    )
+}
+
+impl<R: Read + Seek> ProgramReader<R> {
+    /// Lines of `reader` (from its current position) in `order`. Nothing is read yet;
+    /// the file is indexed when the first line that needs it comes: an `M98` call, or in
+    /// execution order an `O` line. A file with neither is read once, as it stands.
+    pub fn new(reader: R, order: Order) -> Self {
+        ProgramReader {
+            lines: LineReader::new(BufReader::with_capacity(1 << 16, reader)),
+            order,
+            indexed: false,
+            programs: Vec::new(),
+            by_number: Vec::new(),
+            skip_bodies: false,
+            next_body: 0,
+            pos: 0,
+            line: 1,
+            stack: Vec::new(),
+            runs: 0,
+            call_lines: 0,
+            max_runs: MAX_RUNS,
+            max_call_lines: MAX_CALL_LINES,
+            pending: VecDeque::new(),
+            halted: false,
+            out: Vec::new(),
+            out_pos: 0,
+        }
+    }
+
+    /// Read the whole file once and note its programs.
+    fn index(&mut self) -> io::Result<()> {
+        self.indexed = true;
+        self.lines.seek_line(0, 1)?;
+        let mut programs: Vec<Program> = Vec::new();
+        // Whether lines outside the bodies hold words, and whether the current region
+        // (the lines before the first `O`, or an `O` program) has words since its last M99.
+        let mut main_words = false;
+        let mut words_after = false;
+        let mut in_program = false;
+        let mut m99_before = false;
+        let mut last = (0usize, 0u32);
+        while let Some((line, end)) = self.lines.next_line_end()? {
+            last = (end, line.number);
+            if m99_before {
+                m99_before = false;
+                if let Some(p) = programs.last_mut() {
+                    p.end = Some((line.offset, line.number));
+                }
+            }
+            let need_words = !main_words && !words_after;
+            if !need_words && !may_matter(line.bytes) {
+                continue;
+            }
+            let (number, words, m99) = match parse_line(line.bytes, line.number, line.offset) {
+                Ok(b) => (
+                    program_number(&b),
+                    b.has_words() || matches!(b.kind, BlockKind::Macro(_)),
+                    has_m(&b, 990),
+                ),
+                Err(_) => (None, true, false),
+            };
+            if let Some(n) = number {
+                main_words |= words_after;
+                if programs.len() >= MAX_PROGRAMS {
+                    self.pending.push_back(err_at(
+                        &line,
+                        ErrorKind::TooManyPrograms(MAX_PROGRAMS),
+                        None,
+                    ));
+                    break;
+                }
+                programs.push(Program {
+                    number: n,
+                    start: line.offset,
+                    line: line.number,
+                    end: None,
+                });
+                in_program = true;
+            }
+            words_after |= words;
+            if m99 && in_program {
+                m99_before = true;
+                words_after = false;
+            }
+        }
+        if m99_before {
+            if let Some(p) = programs.last_mut() {
+                p.end = Some((last.0, last.1.saturating_add(1)));
+            }
+        }
+        main_words |= words_after;
+        let mut by_number: Vec<u32> = (0..programs.len())
+            .map(|i| u32::try_from(i).unwrap_or(u32::MAX))
+            .collect();
+        by_number.sort_by_key(|&i| (programs[i as usize].number, i));
+        self.skip_bodies = self.order == Order::Execution && main_words;
+        self.programs = programs;
+        self.by_number = by_number;
+        self.next_body = 0;
+        Ok(())
+    }
+
+    /// The next line in this reader's order, or `None` at the end.
+    pub fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
+        if self.halted {
+            return Ok(None);
+        }
+        // A body ends at its last M99, which returns; this is only a guard.
+        while let Some(f) = self.stack.last() {
+            match self.programs[f.prog].end {
+                Some((end, _)) if self.pos < end => break,
+                _ => self.ret(),
+            }
+        }
+        if self.stack.is_empty() && self.skip_bodies {
+            // The main program steps over the subprogram bodies.
+            while let Some(p) = self.programs.get(self.next_body) {
+                match p.end {
+                    Some(_) if p.start > self.pos => break,
+                    Some((end, line)) if p.start == self.pos => {
+                        self.pos = end;
+                        self.line = line;
+                    }
+                    _ => {}
+                }
+                self.next_body += 1;
+            }
+        }
+        if self.lines.bytes_read() != self.pos {
+            self.lines.seek_line(self.pos, self.line)?;
+        }
+        let Some((offset, number, end)) = self
+            .lines
+            .next_line_end()?
+            .map(|(l, end)| (l.offset, l.number, end))
+        else {
+            return Ok(None);
+        };
+        self.pos = end;
+        self.line = number.saturating_add(1);
+        if !self.stack.is_empty() {
+            self.call_lines += 1;
+            if self.call_lines > self.max_call_lines {
+                let d = err_at(
+                    &self.lines.last_line(),
+                    ErrorKind::TooManyCalls {
+                        limit: self.max_call_lines,
+                        what: "lines",
+                    },
+                    None,
+                );
+                self.pending.push_back(d);
+                self.halted = true;
+                return Ok(None);
+            }
+        }
+        let action = {
+            let line = self.lines.last_line();
+            let parsed = if may_matter(line.bytes) {
+                parse_line(line.bytes, line.number, line.offset).ok()
+            } else {
+                None
+            };
+            match parsed {
+                None => Action::Nothing,
+                Some(b) if !self.indexed => {
+                    let needs_index = has_m(&b, 980)
+                        || (self.order == Order::Execution && program_number(&b).is_some());
+                    if needs_index {
+                        Action::Index
+                    } else {
+                        Action::Nothing
+                    }
+                }
+                Some(b) => action(
+                    &line,
+                    &b,
+                    self.order,
+                    &self.programs,
+                    &self.by_number,
+                    &self.stack,
+                    (self.runs, self.max_runs),
+                ),
+            }
+        };
+        match action {
+            Action::Nothing => {}
+            Action::Index => {
+                // Index, then read this line again knowing the programs.
+                self.index()?;
+                self.pos = offset;
+                self.line = number;
+                return self.next_line();
+            }
+            Action::Error(d) => self.pending.push_back(d),
+            Action::Call { prog, repeats } => {
+                self.runs += u64::from(repeats);
+                self.stack.push(Frame {
+                    prog,
+                    back: (self.pos, self.line),
+                    repeats_left: repeats - 1,
+                });
+                let p = self.programs[prog];
+                self.pos = p.start;
+                self.line = p.line;
+            }
+            Action::Return => self.ret(),
+        }
+        Ok(Some(self.lines.last_line()))
+    }
+
+    /// Return from the innermost call: run it again while repeats are left, else go
+    /// back to the caller.
+    fn ret(&mut self) {
+        if let Some(f) = self.stack.last_mut() {
+            if f.repeats_left > 0 {
+                f.repeats_left -= 1;
+                let p = self.programs[f.prog];
+                self.pos = p.start;
+                self.line = p.line;
+            } else {
+                (self.pos, self.line) = f.back;
+                self.stack.pop();
+            }
+        }
+    }
+
+    /// The next problem found with the calls (the line it concerns has been handed out).
+    pub fn take_diagnostic(&mut self) -> Option<Diagnostic> {
+        self.pending.pop_front()
+    }
+}
+
+/// What `b` (the block of `line`) asks of the reader.
+fn action(
+    line: &Line<'_>,
+    b: &Block<'_>,
+    order: Order,
+    programs: &[Program],
+    by_number: &[u32],
+    stack: &[Frame],
+    (runs, max_runs): (u64, u64),
+) -> Action {
+    if has_m(b, 990) && !stack.is_empty() && order == Order::Execution {
+        return Action::Return;
+    }
+    let Some(m98) = b
+        .words()
+        .find(|w| w.letter == b'M' && w.register.is_none() && w.code() == Some(980))
+    else {
+        return Action::Nothing;
+    };
+    let bad = |word: String, why: &'static str, span| {
+        Action::Error(err_at(line, ErrorKind::BadValue { word, why }, Some(span)))
+    };
+    let Some(p) = b.word(b'P') else {
+        return bad(
+            "M98".into(),
+            "the call needs the program number in P",
+            m98.span,
+        );
+    };
+    if !(p.value >= 0.0 && p.value <= f64::from(u32::MAX) && p.value.fract() == 0.0) {
+        return bad(
+            p.display(),
+            "the program number P is a whole number",
+            p.span,
+        );
+    }
+    let number = p.value as u32;
+    let repeats = match b.word(b'L') {
+        None => 1,
+        Some(l) if l.value > f64::from(MAX_REPEATS) => {
+            return bad(l.display(), "more than 10000 repeats", l.span)
+        }
+        Some(l) if l.value >= 0.0 && l.value.fract() == 0.0 => l.value as u32,
+        Some(l) => return bad(l.display(), "the repeat count L is a whole number", l.span),
+    };
+    let from = by_number.partition_point(|&i| programs[i as usize].number < number);
+    let mut found = by_number[from..]
+        .iter()
+        .map(|&i| i as usize)
+        .take_while(|&i| programs[i].number == number);
+    let Some(prog) = found.next() else {
+        return Action::Error(err_at(
+            line,
+            ErrorKind::UnknownProgram(number),
+            Some(p.span),
+        ));
+    };
+    if let Some(other) = found.next() {
+        return Action::Error(err_at(
+            line,
+            ErrorKind::DuplicateProgram {
+                number,
+                first: programs[prog].line,
+                second: programs[other].line,
+            },
+            Some(p.span),
+        ));
+    }
+    if programs[prog].end.is_none() {
+        return Action::Error(err_at(
+            line,
+            ErrorKind::NotASubprogram {
+                number,
+                line: programs[prog].line,
+            },
+            Some(p.span),
+        ));
+    }
+    if order == Order::File || repeats == 0 {
+        return Action::Nothing;
+    }
+    if stack.iter().any(|f| f.prog == prog) {
+        let mut chain: Vec<String> = stack
+            .iter()
+            .map(|f| format!("O{}", programs[f.prog].number))
+            .collect();
+        chain.push(format!("O{number}"));
+        return Action::Error(err_at(
+            line,
+            ErrorKind::RecursiveCall {
+                number,
+                chain: chain.join(" → "),
+            },
+            Some(p.span),
+        ));
+    }
+    if stack.len() >= MAX_NESTING {
+        return Action::Error(err_at(
+            line,
+            ErrorKind::CallsTooDeep(MAX_NESTING),
+            Some(m98.span),
+        ));
+    }
+    if runs + u64::from(repeats) > max_runs {
+        return Action::Error(err_at(
+            line,
+            ErrorKind::TooManyCalls {
+                limit: max_runs,
+                what: "subprogram runs",
+            },
+            Some(m98.span),
+        ));
+    }
+    Action::Call { prog, repeats }
+}
+
+impl<R: Read + Seek> LineSource for ProgramReader<R> {
+    fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
+        ProgramReader::next_line(self)
+    }
+
+    fn calls(&self) -> Calls {
+        match self.order {
+            Order::File => Calls::Checked,
+            Order::Execution => Calls::Followed,
+        }
+    }
+
+    fn take_diagnostic(&mut self) -> Option<Diagnostic> {
+        ProgramReader::take_diagnostic(self)
+    }
+}
+
+fn io_error(d: &Diagnostic) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!("line {}: {}", d.line, d.kind),
+    )
+}
+
+impl<R: Read + Seek> BufRead for ProgramReader<R> {
+    fn fill_buf(&mut self) -> io::Result<&[u8]> {
+        while self.out_pos >= self.out.len() {
+            if let Some(d) = self.pending.pop_front() {
+                if d.is_error() {
+                    return Err(io_error(&d));
+                }
+                continue;
+            }
+            let mut out = std::mem::take(&mut self.out);
+            out.clear();
+            self.out_pos = 0;
+            let more = match ProgramReader::next_line(self)? {
+                Some(line) => {
+                    out.extend_from_slice(line.bytes);
+                    out.push(b'\n');
+                    true
+                }
+                None => false,
+            };
+            self.out = out;
+            if !more && self.pending.is_empty() {
+                break;
+            }
+        }
+        Ok(&self.out[self.out_pos..])
+    }
+
+    fn consume(&mut self, amt: usize) {
+        self.out_pos = (self.out_pos + amt).min(self.out.len());
+    }
+}
+
+impl<R: Read + Seek> Read for ProgramReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let avail = self.fill_buf()?;
+        let n = avail.len().min(buf.len());
+        buf[..n].copy_from_slice(&avail[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interp::{Event, Move, Options};
+    use crate::stream::Stream;
+    use crate::Units;
+
+    fn opts() -> Options {
+        Options {
+            units: Units::Inch,
+            ..Options::default()
+        }
+    }
+
+    /// Moves and diagnostics of `text` in `order`.
+    fn run(text: &str, order: Order) -> (Vec<Move>, Vec<Diagnostic>) {
+        run_with(text, order, |_| {})
+    }
+
+    fn run_with(
+        text: &str,
+        order: Order,
+        setup: impl FnOnce(&mut ProgramReader<io::Cursor<&[u8]>>),
+    ) -> (Vec<Move>, Vec<Diagnostic>) {
+        let mut r = ProgramReader::new(io::Cursor::new(text.as_bytes()), order);
+        setup(&mut r);
+        let mut moves = Vec::new();
+        let mut diags = Vec::new();
+        for e in Stream::new(r, opts(), order == Order::Execution) {
+            match e.expect("reads") {
+                Event::Move(m) => moves.push(m),
+                Event::Diagnostic(d) => diags.push(d),
+            }
+        }
+        (moves, diags)
+    }
+
+    fn errors(d: &[Diagnostic]) -> Vec<&Diagnostic> {
+        d.iter().filter(|d| d.is_error()).collect()
+    }
+
+    /// Lines (number, offset, text) a reader hands out.
+    fn lines_of(text: &str, order: Order) -> Vec<(u32, usize, String)> {
+        let mut r = ProgramReader::new(io::Cursor::new(text.as_bytes()), order);
+        let mut v = Vec::new();
+        while let Some(l) = r.next_line().expect("reads") {
+            v.push((
+                l.number,
+                l.offset,
+                String::from_utf8_lossy(l.bytes).into_owned(),
+            ));
+        }
+        v
+    }
+
+    /// What `lampost post --max-bytes` writes for the FADAL.
+    const SPLIT: &str = "%\n\
+        O1001 (PART 1 OF 2)\n\
+        G0 Z1.\n\
+        X1. Y0\n\
+        G1 Z0 F10.\n\
+        G0 Z1.\n\
+        M99\n\
+        O1002 (PART 2 OF 2)\n\
+        X2.\n\
+        G1 Z0\n\
+        G0 Z1.\n\
+        M99\n\
+        O1000 (MAIN)\n\
+        G70 G90 G94 G17 G40 G80\n\
+        M98 P1001\n\
+        M98 P1002\n\
+        G0 Z2.\n\
+        M30\n\
+        %\n";
+
+    #[test]
+    fn a_split_fadal_file_runs_its_parts_in_call_order() {
+        let (moves, diags) = run(SPLIT, Order::Execution);
+        assert!(errors(&diags).is_empty(), "{diags:?}");
+        assert!(diags.is_empty(), "no warnings either: {diags:?}");
+        let lines: Vec<u32> = moves.iter().map(|m| m.line).collect();
+        // Original line numbers, in execution order.
+        assert_eq!(lines, [3, 4, 5, 6, 9, 10, 11, 17]);
+        assert_eq!(moves[4].end[0], 2.0);
+        assert_eq!(moves[7].end[2], 2.0);
+        // The lines themselves: the main program's, with each body where it is called.
+        let l = lines_of(SPLIT, Order::Execution);
+        let numbers: Vec<u32> = l.iter().map(|x| x.0).collect();
+        assert_eq!(
+            numbers,
+            [1, 13, 14, 15, 2, 3, 4, 5, 6, 7, 16, 8, 9, 10, 11, 12, 17, 18, 19]
+        );
+        for (n, off, text) in &l {
+            let at = SPLIT.lines().nth(*n as usize - 1).expect("the line exists");
+            assert_eq!(at, text);
+            assert_eq!(&SPLIT[*off..*off + text.len()], text.as_str());
+        }
+    }
+
+    #[test]
+    fn check_reads_every_line_of_every_program() {
+        // File order: an M99 ends only its subprogram, so the error in the second part and
+        // the one in the main program are both found.
+        let text = SPLIT
+            .replace("X2.\n", "X2. Q\n")
+            .replace("G0 Z2.\n", "G1 Z2. G0\n");
+        let (_, diags) = run(&text, Order::File);
+        let e = errors(&diags);
+        assert_eq!(e.len(), 2, "{diags:?}");
+        assert_eq!((e[0].line, e[1].line), (9, 17));
+        assert!(!diags
+            .iter()
+            .any(|d| matches!(d.kind, ErrorKind::NotSimulated(_))));
+        // The library's `check` is the same.
+        let e2: Vec<u32> = crate::check(text.as_bytes(), opts())
+            .iter()
+            .filter(|d| d.is_error())
+            .map(|d| d.line)
+            .collect();
+        assert_eq!(e2, [9, 17]);
+        // And a clean split file checks clean.
+        let d = crate::check(SPLIT.as_bytes(), opts());
+        assert!(d.is_empty(), "{d:?}");
+        // Check also finds calls to programs the file does not hold.
+        let text = SPLIT.replace("M98 P1002", "M98 P1003");
+        let d = crate::check(text.as_bytes(), opts());
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].kind, ErrorKind::UnknownProgram(1003));
+        assert_eq!((d[0].line, d[0].column), (16, 5));
+    }
+
+    #[test]
+    fn main_program_first_and_subprograms_after_m30() {
+        let text = "O1 (MAIN)\nG20 G90 G0 X0 Y0 Z0\nM98 P800\nG0 X5\nM98 P800 L2\nM30\n\
+                    O800 (SUB)\nG91 G1 X1 F10\nG90\nM99\n";
+        let (moves, diags) = run(text, Order::Execution);
+        assert!(diags.is_empty(), "{diags:?}");
+        let xs: Vec<f64> = moves.iter().map(|m| m.end[0]).collect();
+        assert_eq!(xs, [0.0, 1.0, 5.0, 6.0, 7.0]);
+        // Read in file order, the subprogram after M30 is checked too.
+        let bad = text.replace("G91 G1 X1", "G91 G1 X1 Y");
+        let d = crate::check(bad.as_bytes(), opts());
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].line, 8);
+    }
+
+    #[test]
+    fn repeats_nest_and_zero_repeats_skip() {
+        let text = "G20 G91 G0 X0\nM98 P1 L3\nM98 P1 L0\nM30\n\
+                    O1\nM98 P2 L2\nM99\nO2\nX1\nM99\n";
+        let (moves, diags) = run(text, Order::Execution);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(moves.len(), 1 + 6);
+        assert_eq!(moves.last().map(|m| m.end[0]), Some(6.0));
+        // L without M98 is still a FADAL subroutine call, not followed.
+        let (_, d) = run("G20 G0 X0\nL105\n", Order::Execution);
+        assert!(matches!(d[0].kind, ErrorKind::SubprogramNotFollowed(_)));
+    }
+
+    #[test]
+    fn bad_calls_are_located_errors() {
+        type Want = fn(&ErrorKind) -> bool;
+        let cases: &[(&str, u32, u32, Want)] = &[
+            ("G20 G0 X0\nM98 P77\nM30\n", 2, 5, |k| {
+                *k == ErrorKind::UnknownProgram(77)
+            }),
+            (
+                "G20 G0 X0\nM98 P5\nM30\nO5\nM98 P5\nM99\n",
+                5,
+                5,
+                |k| matches!(k, ErrorKind::RecursiveCall { number: 5, chain } if chain == "O5 → O5"),
+            ),
+            (
+                "G20 G0 X0\nM98 P5\nM30\nO5\nM98 P6\nM99\nO6\nX1 M98 P5\nM99\n",
+                8,
+                8,
+                |k| matches!(k, ErrorKind::RecursiveCall { number: 5, chain } if chain == "O5 → O6 → O5"),
+            ),
+            (
+                "G20 G0 X0\nM98 P5\nM30\nO5\nX1\nM99\nO5\nX2\nM99\n",
+                2,
+                5,
+                |k| {
+                    matches!(
+                        k,
+                        ErrorKind::DuplicateProgram {
+                            number: 5,
+                            first: 4,
+                            second: 7
+                        }
+                    )
+                },
+            ),
+            ("O1\nG20 G0 X0\nM98 P2\nM30\nO2\nX1\nM30\n", 3, 5, |k| {
+                matches!(k, ErrorKind::NotASubprogram { number: 2, line: 5 })
+            }),
+            ("G20 G0 X0\nM98 P5 L10001\nM30\nO5\nM99\n", 2, 8, |k| {
+                matches!(k, ErrorKind::BadValue { .. })
+            }),
+            ("G20 G0 X0\nM98 P5 L1.5\nM30\nO5\nM99\n", 2, 8, |k| {
+                matches!(k, ErrorKind::BadValue { .. })
+            }),
+            ("G20 G0 X0\nM98\nM30\n", 2, 1, |k| {
+                matches!(k, ErrorKind::BadValue { .. })
+            }),
+        ];
+        for (text, line, column, want) in cases {
+            let (_, diags) = run(text, Order::Execution);
+            let e = errors(&diags);
+            assert_eq!(e.len(), 1, "{text}: {diags:?}");
+            assert!(want(&e[0].kind), "{text}: {:?}", e[0].kind);
+            assert_eq!((e[0].line, e[0].column), (*line, *column), "{text}");
+        }
+    }
+
+    #[test]
+    fn nesting_is_capped() {
+        // O1 calls O2 … calls O10: nine levels, one more than followed.
+        let mut text = String::from("G20 G91 G0 X0\nM98 P1\nM30\n");
+        for k in 1..=10 {
+            text.push_str(&format!("O{k}\nX1\nM98 P{}\nM99\n", k + 1));
+        }
+        text.push_str("O11\nM99\n");
+        let (moves, diags) = run(&text, Order::Execution);
+        let e = errors(&diags);
+        assert_eq!(e.len(), 1, "{diags:?}");
+        assert_eq!(e[0].kind, ErrorKind::CallsTooDeep(MAX_NESTING));
+        // The call from O8 (depth 8) is refused, on O8's M98 line.
+        assert_eq!(e[0].line, 3 + 7 * 4 + 3);
+        assert_eq!(moves.len(), 1 + MAX_NESTING);
+        // Eight deep is followed.
+        let text = text.replace("M98 P9\n", "\n");
+        let (moves, diags) = run(&text, Order::Execution);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(moves.len(), 1 + MAX_NESTING);
+    }
+
+    #[test]
+    fn hostile_repeats_stop_at_the_caps() {
+        // 10,000 × 10,000 × … runs: stopped by the run count, quickly.
+        let mut text = String::from("G20 G91 G0 X0\nM98 P1 L10000\nM30\n");
+        for k in 1..=7 {
+            text.push_str(&format!("O{k}\nM98 P{} L10000\nM99\n", k + 1));
+        }
+        text.push_str("O8\nX1\nM99\n");
+        let (_, diags) = run_with(&text, Order::Execution, |r| r.max_runs = 50_000);
+        let e = errors(&diags);
+        assert_eq!(e.len(), 1, "{diags:?}");
+        assert!(matches!(
+            e[0].kind,
+            ErrorKind::TooManyCalls {
+                limit: 50_000,
+                what: "subprogram runs"
+            }
+        ));
+        let (moves, diags) = run_with(&text, Order::Execution, |r| r.max_call_lines = 3_000);
+        let e = errors(&diags);
+        assert_eq!(e.len(), 1, "{diags:?}");
+        assert!(
+            matches!(e[0].kind, ErrorKind::TooManyCalls { what: "lines", .. }),
+            "{e:?}"
+        );
+        assert!(moves.len() < 3_000);
+    }
+
+    #[test]
+    fn without_o_numbers_the_lines_are_the_plain_lines() {
+        let texts = [
+            "G21 G90\nG0 X1\n\nG1 Y2 F100\r\nM30\nG0 X9\n",
+            "%\nO1000 (ONE PROGRAM)\nG70 G0 X1\nM30\n%\n",
+            "G20\nG0 X1\nM99\nG0 X2\n",
+            "",
+            "no newline at the end",
+        ];
+        for text in texts {
+            let plain: Vec<(u32, usize, String)> = crate::Lines::new(text.as_bytes())
+                .map(|l| {
+                    (
+                        l.number,
+                        l.offset,
+                        String::from_utf8_lossy(l.bytes).into_owned(),
+                    )
+                })
+                .collect();
+            assert_eq!(lines_of(text, Order::File), plain, "{text}");
+            assert_eq!(lines_of(text, Order::Execution), plain, "{text}");
+            let a: Vec<_> = Stream::from_bytes(text.as_bytes(), opts(), false)
+                .map(|e| e.expect("reads"))
+                .collect();
+            let r = ProgramReader::new(io::Cursor::new(text.as_bytes()), Order::Execution);
+            let b: Vec<_> = Stream::new(r, opts(), false)
+                .map(|e| e.expect("reads"))
+                .collect();
+            assert_eq!(a, b, "{text}");
+        }
+    }
+
+    #[test]
+    fn a_subprogram_on_its_own_runs_from_the_top() {
+        let text = "O800 (SUB)\nG20 G0 X1\nM99\n";
+        let (moves, diags) = run(text, Order::Execution);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(moves.len(), 1);
+        // M99 with no O program open still ends the trace.
+        let (moves, diags) = run("G20 G0 X1\nM99\nG0 X2\n", Order::Execution);
+        assert_eq!(moves.len(), 1);
+        assert!(matches!(diags[0].kind, ErrorKind::NotSimulated(_)));
+    }
+
+    #[test]
+    fn the_bytes_in_execution_order() {
+        let mut r = ProgramReader::new(io::Cursor::new(SPLIT.as_bytes()), Order::Execution);
+        let mut s = String::new();
+        r.read_to_string(&mut s).expect("reads");
+        assert!(s.starts_with("%\nO1000 (MAIN)\nG70 G90 G94 G17 G40 G80\nM98 P1001\nO1001"));
+        assert_eq!(s.lines().count(), 19);
+        // A bad call is an I/O error naming the line.
+        let text = SPLIT.replace("M98 P1002", "M98 P9");
+        let mut r = ProgramReader::new(io::Cursor::new(text.as_bytes()), Order::Execution);
+        let e = r.read_to_string(&mut String::new()).expect_err("fails");
+        assert_eq!(
+            e.to_string(),
+            "line 16: M98 P9: this file holds no program O9"
+        );
+    }
+
+    #[test]
+    fn a_short_subprogram_called_often_stays_in_the_buffer() {
+        let text = "G20 G91 G0 X0\nM98 P1 L10000\nM30\nO1\nX1\nM99\n";
+        let (moves, diags) = run(text, Order::Execution);
+        assert!(diags.is_empty());
+        assert_eq!(moves.last().map(|m| m.end[0]), Some(10_000.0));
+    }
+}
