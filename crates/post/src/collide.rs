@@ -24,10 +24,12 @@
 //! - The head ([`PartMesh::head_hits`]): parry's shape casting (`query::cast_shapes`) of
 //!   a [`Cylinder`] against the [`TriMesh`], i.e. GJK on the cylinder and each nearby
 //!   triangle, over the whole straight move; a move of zero length is parry's static
-//!   contact query. GJK converges to a relative precision of about `5e-8` of the distances
-//!   involved, so within that band of a grazing contact the verdict may go either way
-//!   (the oracle test, `tests/collide_oracle.rs`, measures it against trimesh and a
-//!   convex-distance computation).
+//!   contact query. GJK is iterative: flat contacts (a face against the cylinder's cap or
+//!   side) come out exact to 1e-12 of the size, but against the cylinder's curved side a
+//!   head clear of an edge by less than about 1e-8 of the size can be reported touching
+//!   (seen on the unit cube; the reverse was not seen). `tests/collide_oracle.rs`
+//!   compares both queries with trimesh and exact convex distances: no disagreement
+//!   outside 1e-6 of the mesh's size.
 //!
 //! Every input must be finite; anything else is a [`CollideError`]. Degenerate meshes
 //! (zero-area triangles, duplicate vertices, a single triangle) are accepted and never
@@ -87,8 +89,10 @@ pub struct Hit {
     /// Fraction of the move (0 at its start, 1 at its end) at the first contact.
     pub t: f64,
     /// A point of the part where it is met (part frame): for a rapid, the tool tip there;
-    /// for the head, the point of the mesh it touches (or, for a head that starts inside a
-    /// closed part, the centre of the head's axis).
+    /// for the head, the point of the mesh it touches (for a head that already overlaps
+    /// the mesh at the start, a point of the mesh in the overlap as parry's penetration
+    /// query gives it, within the overlap's depth of the head; for a head that starts
+    /// inside a closed part, the centre of the head's axis).
     pub point: Vector3<f64>,
 }
 
@@ -856,6 +860,13 @@ mod tests {
     }
 
     #[test]
+    fn shareable_between_threads() {
+        fn send_sync<T: Send + Sync>() {}
+        send_sync::<PartMesh>();
+        send_sync::<CollideError>();
+    }
+
+    #[test]
     fn reports_and_solidity() {
         let c = cube();
         assert!(c.manifold().closed());
@@ -1009,6 +1020,14 @@ mod tests {
         // Beside: the cylinder spans x in [1.3, 1.7].
         assert_eq!(hh(v(1.5, 0.5, 0.5), v(1.5, 0.5, 0.5), z), None);
         assert_eq!(hh(v(1.5, -1.0, 0.5), v(1.5, 2.0, 0.5), z), None);
+        // 1e-9 beside the side face, and 1e-9 into it (flat contacts are exact).
+        assert_eq!(
+            hh(v(1.2 + 1e-9, 0.5, 0.5), v(1.2 + 1e-9, 0.5, 0.5), z),
+            None
+        );
+        assert!(hh(v(1.2 - 1e-9, 0.5, 0.5), v(1.2 - 1e-9, 0.5, 0.5), z).is_some());
+        assert_eq!(hh(v(0.5, 0.5, 2.0), v(0.5, 0.5, 0.9 + 1e-9), z), None);
+        assert!(hh(v(0.5, 0.5, 2.0), v(0.5, 0.5, 0.9 - 1e-9), z).is_some());
         // 1e-6 beside, and 1e-6 into the side face.
         assert_eq!(
             hh(v(1.2 + 1e-6, 0.5, 0.5), v(1.2 + 1e-6, 0.5, 0.5), z),
