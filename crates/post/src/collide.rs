@@ -41,7 +41,7 @@ use lampost_align::mesh::{manifold_report, ManifoldReport, Mesh};
 use nalgebra::{Matrix3, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector as PV};
 use parry3d_f64::partitioning::BvhNode;
-use parry3d_f64::query::{self, ShapeCastOptions};
+use parry3d_f64::query::{self, PointQuery, ShapeCastOptions, ShapeCastStatus};
 use parry3d_f64::shape::{Cylinder, TriMesh};
 
 use crate::error::PostError;
@@ -218,10 +218,9 @@ impl PartMesh {
         };
         let report = manifold_report(&welded);
         let solid = even_edges(&welded.triangles);
-        let hull = hull_points(&welded.vertices, scale);
-
         let tri = TriMesh::new(vertices.iter().map(pv).collect(), triangles.clone())
             .map_err(|e| CollideError::Invalid(format!("the mesh cannot be used: {e}")))?;
+        let hull = hull_points(&welded.vertices, &tri, scale);
         Ok(PartMesh {
             vertices,
             triangles,
@@ -518,11 +517,17 @@ impl PartMesh {
         let pose = Pose::from_parts(pv(&centre), Rotation::from_rotation_arc(PV::Y, pv(&u)));
         let mesh_pose = Pose::identity();
         let d = tip_b - tip_a;
+        let head = Head {
+            centre,
+            u,
+            half,
+            radius,
+        };
         if d == Vector3::zeros() {
             return match query::contact(&mesh_pose, &self.tri, &pose, &cyl, 0.0) {
                 Ok(Some(c)) => Ok(Some(Hit {
                     t: 0.0,
-                    point: nv(c.point1),
+                    point: self.overlap_witness(&head, nv(c.point1)),
                 })),
                 Ok(None) => Ok(None),
                 Err(_) => Err(CollideError::Invalid(
@@ -537,15 +542,68 @@ impl PartMesh {
             compute_impact_geometry_on_penetration: true,
         };
         match query::cast_shapes(&mesh_pose, PV::ZERO, &self.tri, &pose, pv(&d), &cyl, opts) {
-            Ok(Some(h)) => Ok(Some(Hit {
-                t: h.time_of_impact.clamp(0.0, 1.0),
-                point: nv(h.witness1),
-            })),
+            Ok(Some(h)) => {
+                let t = h.time_of_impact.clamp(0.0, 1.0);
+                let point = if h.status == ShapeCastStatus::PenetratingOrWithinTargetDist {
+                    self.overlap_witness(&head, nv(h.witness1))
+                } else {
+                    nv(h.witness1)
+                };
+                Ok(Some(Hit { t, point }))
+            }
             Ok(None) => Ok(None),
             Err(_) => Err(CollideError::Invalid(
                 "parry cannot cast a cylinder against this mesh".into(),
             )),
         }
+    }
+}
+
+/// The head at the start of a move: a cylinder of `radius` about the unit axis `u`,
+/// `half` its half length, centred at `centre`.
+struct Head {
+    centre: Vector3<f64>,
+    u: Vector3<f64>,
+    half: f64,
+    radius: f64,
+}
+
+impl Head {
+    /// Signed distance from `p` to the cylinder (negative inside).
+    fn sdf(&self, p: &Vector3<f64>) -> f64 {
+        let x = p - self.centre;
+        let s = x.dot(&self.u);
+        let qx = (x - self.u * s).norm() - self.radius;
+        let qy = s.abs() - self.half;
+        qx.max(qy).min(0.0) + qx.max(0.0).hypot(qy.max(0.0))
+    }
+}
+
+impl PartMesh {
+    /// A point of the mesh as deep in an overlapping head as can cheaply be found: parry's
+    /// penetration witness, where the head's axis crosses the mesh, or the mesh's point
+    /// nearest the head's centre, whichever lies deepest.
+    fn overlap_witness(&self, head: &Head, parry: Vector3<f64>) -> Vector3<f64> {
+        let mut best = (head.sdf(&parry), parry);
+        let bottom = head.centre - head.u * head.half;
+        let axis = head.u * (2.0 * head.half);
+        let tol = self.tol_with(&[&bottom, &head.centre]);
+        let mut candidates = vec![nv(self
+            .tri
+            .project_local_point(pv(&head.centre), false)
+            .point)];
+        for i in self.near_segment(&bottom, &axis, tol) {
+            if let Some(t) = segment_triangle(&bottom, &axis, &self.corners(i), tol) {
+                candidates.push(bottom + axis * t);
+            }
+        }
+        for c in candidates {
+            let d = head.sdf(&c);
+            if d < best.0 {
+                best = (d, c);
+            }
+        }
+        best.1
     }
 }
 
@@ -743,8 +801,10 @@ fn seg_seg_dist(p: &Vector3<f64>, q: &Vector3<f64>, r: &Vector3<f64>, s: &Vector
 }
 
 /// The vertices of the convex hull of `pts` (parry), or all of them for a flat set, a
-/// failed hull or a hull that leaves a point outside by more than the tolerance.
-fn hull_points(pts: &[Vector3<f64>], scale: f64) -> Vec<Vector3<f64>> {
+/// failed hull or a hull that leaves a vertex of `mesh` outside by more than the
+/// tolerance (checked face by face through the mesh's BVH: only boxes reaching beyond a
+/// face's plane are opened).
+fn hull_points(pts: &[Vector3<f64>], mesh: &TriMesh, scale: f64) -> Vec<Vector3<f64>> {
     let all = || pts.to_vec();
     if pts.len() < 4 || flat(pts, scale) {
         return all();
@@ -780,7 +840,22 @@ fn hull_points(pts: &[Vector3<f64>], scale: f64) -> Vec<Vector3<f64>> {
         if n.dot(&(c - a)) > 0.0 {
             n = -n;
         }
-        if pts.iter().any(|p| n.dot(&(p - a)) > tol) {
+        let limit = n.dot(&a) + tol;
+        let beyond = |lo: &Vector3<f64>, hi: &Vector3<f64>| {
+            (0..3)
+                .map(|k| (n[k] * lo[k]).max(n[k] * hi[k]))
+                .sum::<f64>()
+                > limit
+        };
+        let mut leaves = mesh
+            .bvh()
+            .leaves(|node: &BvhNode| beyond(&nv(node.mins()), &nv(node.maxs())));
+        if leaves.any(|i| {
+            mesh.indices().get(i as usize).is_some_and(|t| {
+                t.iter()
+                    .any(|&k| n.dot(&nv(mesh.vertices()[k as usize])) > limit)
+            })
+        }) {
             return all();
         }
     }
