@@ -391,7 +391,9 @@ impl PartMesh {
                     }
                 }
                 if den.abs() < 1e-9 {
-                    if s.abs() <= tol {
+                    // Nearly parallel: a crossing within reach would be at a grazing
+                    // angle, so try another ray if the plane is that close.
+                    if s.abs() <= tol + 1e-9 * reach {
                         continue 'dirs;
                     }
                     continue;
@@ -1291,5 +1293,43 @@ mod tests {
         let pl = c.placed(&f).expect("placed");
         assert_eq!(pl.bounds(), (v(0.0, 0.0, 5.0), v(1.0, 1.0, 6.0)));
         assert_eq!(pl.hull_points().len(), 8);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Triangle soups with repeated and collinear points: no panic, and the BVH's
+        /// pruning loses no contact (the same answer as every triangle tried in turn).
+        #[test]
+        fn soups_never_panic_and_pruning_is_exact(
+            pts in proptest::collection::vec((0i32..4, 0i32..4, 0i32..4), 3..12),
+            tris in proptest::collection::vec((0usize..12, 0usize..12, 0usize..12), 1..10),
+            a in (-1.0f64..5.0, -1.0f64..5.0, -1.0f64..5.0),
+            b in (-1.0f64..5.0, -1.0f64..5.0, -1.0f64..5.0),
+            r in 0.01f64..2.0,
+        ) {
+            let verts: Vec<Vector3<f64>> =
+                pts.iter().map(|&(x, y, z)| v(x as f64, y as f64, z as f64)).collect();
+            let n = verts.len();
+            let tris: Vec<[u32; 3]> = tris
+                .iter()
+                .map(|&(i, j, k)| [(i % n) as u32, (j % n) as u32, (k % n) as u32])
+                .collect();
+            let m = PartMesh::new(verts, tris).expect("valid soup");
+            let (a, b) = (v(a.0, a.1, a.2), v(b.0, b.1, b.2));
+            let got = m.segment_hits(&a, &b).expect("finite");
+            let tol = m.tol_with(&[&a, &b]);
+            let inside = m.is_solid() && m.inside(&a);
+            let brute = if inside {
+                Some(0.0)
+            } else {
+                (0..m.triangles.len() as u32)
+                    .filter_map(|i| segment_triangle(&a, &(b - a), &m.corners(i), tol))
+                    .reduce(f64::min)
+            };
+            proptest::prop_assert_eq!(got.map(|h| h.t), brute);
+            let _ = m.head_hits(&a, &b, &v(0.2, -0.3, 1.0), r, 3.0, 0.1).expect("valid head");
+            let _ = m.hull_points();
+        }
     }
 }
