@@ -17,6 +17,7 @@
 //! - `toml`: setup and job files; `nalgebra`: frames; `thiserror`: [`PostError`].
 
 mod chords;
+pub mod collide;
 pub mod error;
 pub mod frame;
 pub mod intended;

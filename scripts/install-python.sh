@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Install the Python oracle for the part-mesh collision test (crates/post/tests/
+# collide_oracle.rs): a project-local virtual environment in .tools/py with pinned
+# trimesh, numpy, scipy (trimesh's proximity queries use its k-d tree) and rtree
+# (trimesh's triangle index for ray and proximity queries).
+# No system install. Safe to run again; prints the interpreter's path.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+dest="$here/.tools/py"
+py="$dest/bin/python"
+pins=(numpy==2.4.6 scipy==1.17.1 trimesh==5.2.0 rtree==1.4.1)
+if [ ! -x "$py" ]; then
+  rm -rf "$dest"
+  python3 -m venv "$dest"
+fi
+if ! "$py" - "${pins[@]}" <<'PY' >/dev/null 2>&1
+import sys
+from importlib.metadata import version
+for pin in sys.argv[1:]:
+    name, want = pin.split("==")
+    assert version(name) == want, pin
+import numpy, scipy, trimesh, rtree  # noqa: F401
+PY
+then
+  "$py" -m pip install --quiet --disable-pip-version-check "${pins[@]}"
+fi
+"$py" -c "import trimesh, numpy, scipy, rtree; print('python oracle ready:', '$py', 'trimesh', trimesh.__version__, 'numpy', numpy.__version__, 'scipy', scipy.__version__, 'rtree', rtree.__version__)"
