@@ -150,7 +150,8 @@ fn retract_clears_the_work_at_a_tilted_index() {
     }
 }
 
-/// The work higher than the Z travel allows: refused, naming the section, nothing written.
+/// The work within the Z travel but its safe height not: refused, naming the section,
+/// nothing written.
 #[test]
 fn safe_height_beyond_travel_is_refused() {
     let dir = tempdir("safety-refuse");
@@ -162,7 +163,7 @@ fn safe_height_beyond_travel_is_refused() {
         "--index",
         "A=0,B=-20",
         "--origin",
-        "0,0,2.5",
+        "0,0,1.8",
         &fx("issue11-patch.nc"),
         "-o",
         &out.to_string_lossy(),

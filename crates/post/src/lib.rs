@@ -32,5 +32,5 @@ mod writer;
 pub use error::PostError;
 pub use frame::{read_setup, Frame};
 pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
-pub use post::{post, PostConfig, PostDialect, PostReport, Process};
+pub use post::{post, PostConfig, PostDialect, PostReport, Process, Rewind};
 pub use verify::{verify, VerifyReport};

@@ -332,7 +332,7 @@ pub fn post_points<W: Write>(
         cur = Some((j, branch));
         prev = Some(*q);
     }
-    w.finish(cfg)
+    w.finish(cfg).map(|(report, _)| report)
 }
 
 /// Replay a posted program and compare every feed point with the path of `points`

@@ -423,6 +423,41 @@ pub(crate) fn linear_scale(units: Units) -> f64 {
 /// Steps handed from the reading thread to the writing one at a time.
 const BATCH: usize = 1024;
 
+/// An output the post can start again: a first pass that guessed the safe heights
+/// wrong is thrown away (see [`post`]).
+pub trait Rewind: Write {
+    /// Discard everything written so far.
+    fn rewind_output(&mut self) -> std::io::Result<()>;
+}
+
+impl Rewind for Vec<u8> {
+    fn rewind_output(&mut self) -> std::io::Result<()> {
+        self.clear();
+        Ok(())
+    }
+}
+
+impl Rewind for std::fs::File {
+    fn rewind_output(&mut self) -> std::io::Result<()> {
+        use std::io::Seek;
+        self.set_len(0)?;
+        self.rewind()
+    }
+}
+
+impl<T: Rewind> Rewind for std::io::BufWriter<T> {
+    fn rewind_output(&mut self) -> std::io::Result<()> {
+        self.flush()?;
+        self.get_mut().rewind_output()
+    }
+}
+
+impl<T: Rewind + ?Sized> Rewind for &mut T {
+    fn rewind_output(&mut self) -> std::io::Result<()> {
+        (**self).rewind_output()
+    }
+}
+
 /// Post `sections` for `machine` to `out`.
 ///
 /// Two threads: one reads, parses and interprets the input into intended steps (the
@@ -430,20 +465,51 @@ const BATCH: usize = 1024;
 /// of [`BATCH`] steps pass between them over a bounded channel (at most four in flight,
 /// so memory stays flat). The output is the same as one thread's, byte for byte: the
 /// writing side consumes the steps in input order. An error on either side stops both.
-pub fn post<W: Write>(
+///
+/// Safe heights need all of the work before the first retract. The first pass assumes
+/// the work known beforehand (a part or stock; the machine's clearance otherwise) and the
+/// reading thread gathers every feed tip as it goes; at the end every safe height the
+/// pass used (each index and each rotary move) is worked out again over all the work.
+/// When they are all the same numbers (the usual case: the clearance is above the
+/// work), the program stands as written, exactly as a post that knew the work first
+/// would have written it. When any differs, `out` is rewound and a second pass writes the
+/// program with the true safe heights.
+pub fn post<W: Rewind>(
     machine: &Machine,
     sections: &[Section],
     cfg: &PostConfig,
+    mut out: W,
+    mut progress: impl FnMut(usize),
+) -> Result<PostReport, PostError> {
+    let extra = cfg.work.clone().unwrap_or_else(WorkBounds::empty);
+    let guess = SafeHeights::new(machine, cfg.head, extra.clone())?;
+    let (report, seen, used) = post_pass(machine, sections, cfg, guess, &mut out, &mut progress)?;
+    let mut all = seen;
+    all.union(&extra);
+    let truth = SafeHeights::new(machine, cfg.head, all)?;
+    let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
+    if used
+        .iter()
+        .all(|u| same(truth.over_move(&u.from, &u.to), u.over) && same(truth.at(&u.to), u.at))
+    {
+        return Ok(report);
+    }
+    out.rewind_output()?;
+    let (report, _, _) = post_pass(machine, sections, cfg, truth, &mut out, &mut progress)?;
+    Ok(report)
+}
+
+/// One pass of [`post`] with the given safe heights: the report, every feed tip the
+/// reading thread saw, and the safe heights the writer used.
+fn post_pass<W: Write>(
+    machine: &Machine,
+    sections: &[Section],
+    cfg: &PostConfig,
+    heights: SafeHeights<'_>,
     out: W,
     progress: impl FnMut(usize),
-) -> Result<PostReport, PostError> {
+) -> Result<(PostReport, WorkBounds, Vec<HeightUsed>), PostError> {
     let opts = cfg.intended;
-    // The work, before anything is written: the safe heights need all of it.
-    let mut work = WorkBounds::of_program(machine, sections, opts)?;
-    if let Some(extra) = &cfg.work {
-        work.union(extra);
-    }
-    let heights = SafeHeights::new(machine, cfg.head, work)?;
     let mut planner = Planner {
         m: machine,
         sections,
@@ -460,6 +526,7 @@ pub fn post<W: Write>(
         let reader = std::thread::Builder::new()
             .name("lampost-read".into())
             .spawn_scoped(scope, move || {
+                let mut seen = WorkBounds::empty();
                 let fresh = || {
                     back_rx.try_recv().unwrap_or_else(|_| Batch {
                         steps: Vec::with_capacity(BATCH),
@@ -470,6 +537,7 @@ pub fn post<W: Write>(
                 for step in Intended::new(machine, sections, opts) {
                     let failed = step.is_err();
                     let planned = step.map(|s| {
+                        seen.add_step(&s);
                         let end = planner.plan(&s, &mut batch.points);
                         (s, end)
                     });
@@ -478,13 +546,14 @@ pub fn post<W: Write>(
                         let full = std::mem::replace(&mut batch, fresh());
                         // A closed channel: the writer stopped (an error); so do we.
                         if tx.send(full).is_err() || failed {
-                            return;
+                            return seen;
                         }
                     }
                 }
                 if !batch.steps.is_empty() {
                     let _ = tx.send(batch);
                 }
+                seen
             })
             .map_err(|e| PostError::Io(format!("cannot start the reading thread: {e}")))?;
         let result = post_steps(
@@ -501,11 +570,22 @@ pub fn post<W: Write>(
             },
         );
         // `post_steps` has dropped the receiver, so the reader cannot block on a send.
-        if let Err(panic) = reader.join() {
-            std::panic::resume_unwind(panic);
-        }
-        result
+        let seen = match reader.join() {
+            Ok(seen) => seen,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        result.map(|(report, used)| (report, seen, used))
     })
+}
+
+/// A safe height the writer used: the rotary move `from` → `to` at `over`, then `at` at
+/// `to`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct HeightUsed {
+    pub(crate) from: [f64; 2],
+    pub(crate) to: [f64; 2],
+    pub(crate) over: f64,
+    pub(crate) at: f64,
 }
 
 /// [`post`] over batches of steps, on the calling thread: the rotaries of each section
@@ -520,7 +600,7 @@ fn post_steps<W: Write>(
     mut progress: impl FnMut(usize),
     batches: impl Iterator<Item = Batch>,
     mut give_back: impl FnMut(Batch),
-) -> Result<PostReport, PostError> {
+) -> Result<(PostReport, Vec<HeightUsed>), PostError> {
     let mut w = Writer::new(machine, cfg, heights, out)?;
     w.preamble(cfg)?;
     let mut cur_key: Option<(usize, usize)> = None;
@@ -670,6 +750,73 @@ fn post_steps<W: Write>(
 #[cfg(test)]
 mod tests {
     use super::arc_extremes;
+
+    /// The speculative first pass of `post` gives exactly what a post that read the work
+    /// first gives, whether its guess of the safe heights holds (clearance above the work)
+    /// or not (the part tilted and raised: a second pass), on both heads and with a stock.
+    #[test]
+    fn post_equals_a_post_that_knew_the_work_first() {
+        use super::*;
+        use crate::frame::Frame;
+        use crate::intended::Source;
+        let m = Machine::builtin("fadal-lamp", &[]).expect("machine");
+        let program = "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG1 X1.\nG1 Y0.5\nG2 X0.5 Y1. I-0.5 J0\nG1 X0\nG0 Z0.2\nG0 X2 Y2\nG1 Z0\nG1 X3\nG0 Z0.2\nM30\n";
+        let mut reruns = 0;
+        for (rot, z, head, stock) in [
+            ([0.0, 0.0], 0.0, "spindle", None),
+            ([0.0, 0.0], 9.9, "spindle", None),
+            ([0.0, -20.0], 1.0, "laser", None),
+            ([30.0, 45.0], 0.5, "spindle", None),
+            ([0.0, 0.0], 0.0, "spindle", Some(9.95)),
+            ([90.0, -30.0], 0.2, "laser", Some(1.0)),
+        ] {
+            let secs = vec![Section {
+                name: "t.nc".into(),
+                source: Source::Bytes(program.as_bytes().to_vec()),
+                frame: Frame::translation(Vector3::new(0.0, 0.0, z)),
+                orient: Orient::Index(rot),
+                layers: None,
+            }];
+            let mut extra = WorkBounds::empty();
+            if let Some(top) = stock {
+                extra.add_points([Vector3::new(-1.0, -1.0, -1.0), Vector3::new(4.0, 4.0, top)]);
+            }
+            let cfg = PostConfig {
+                head: m.head(head).expect("head"),
+                process: Process::Deposit { power: 500.0 },
+                dialect: PostDialect::Fadal,
+                renumber: None,
+                tolerance: 0.0005,
+                intended: IntendedOptions {
+                    convert_units: false,
+                    e_extrusion: false,
+                },
+                near: [0.0, 0.0],
+                program_number: 1000,
+                header: vec!["t".into()],
+                verify_tolerance: 0.001,
+                work: stock.map(|_| extra.clone()),
+            };
+            let mut spec = Vec::new();
+            let r = post(&m, &secs, &cfg, &mut spec, |_| {}).expect("posts");
+            let mut all = WorkBounds::of_program(&m, &secs, cfg.intended).expect("bounds");
+            all.union(&extra);
+            let truth = SafeHeights::new(&m, cfg.head, all).expect("heights");
+            let guess = SafeHeights::new(&m, cfg.head, extra.clone()).expect("heights");
+            if truth.at(&rot).to_bits() != guess.at(&rot).to_bits() {
+                reruns += 1;
+            }
+            let mut known = Vec::new();
+            let (k, _, _) = post_pass(&m, &secs, &cfg, truth, &mut known, |_| {}).expect("posts");
+            assert_eq!(
+                String::from_utf8_lossy(&spec),
+                String::from_utf8_lossy(&known),
+                "{rot:?} {head}"
+            );
+            assert_eq!(r, k);
+        }
+        assert!(reruns >= 2, "the second pass was not exercised ({reruns})");
+    }
 
     /// The extremes found are those of a dense sampling of the arc (to the sampling's
     /// resolution), for arcs both ways, short and long, starting anywhere.

@@ -16,7 +16,8 @@ use crate::error::PostError;
 use crate::intended::{Orient, Step};
 use crate::post::{
     axis_letters, check_height, code_words, emitter, index_maps, linear_scale, program_units,
-    write_header, written_rotary, written_tip, EndCheck, PostConfig, PostReport, Process,
+    write_header, written_rotary, written_tip, EndCheck, HeightUsed, PostConfig, PostReport,
+    Process,
 };
 use crate::safety::SafeHeights;
 
@@ -91,6 +92,8 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) codes: Codes,
     /// Inverse-time feeds (G93) in force.
     pub(crate) inverse_time: bool,
+    /// Every safe height used, for [`crate::post::post`]'s check of its first pass.
+    pub(crate) heights_used: Vec<HeightUsed>,
 }
 
 impl<'m, W: Write> Writer<'m, W> {
@@ -137,6 +140,7 @@ impl<'m, W: Write> Writer<'m, W> {
             in_run: false,
             codes: Codes::of(machine)?,
             inverse_time: false,
+            heights_used: Vec::new(),
         })
     }
 
@@ -231,7 +235,15 @@ impl<'m, W: Write> Writer<'m, W> {
         let split = self.offset();
         self.report.split_points.push(split);
         let from = self.rot.unwrap_or(near);
-        self.safe = self.heights.over_move(&from, &rot);
+        let over = self.heights.over_move(&from, &rot);
+        let at = self.heights.at(&rot);
+        self.heights_used.push(HeightUsed {
+            from,
+            to: rot,
+            over,
+            at,
+        });
+        self.safe = over;
         check_height(&self.heights, self.safe, file, line, &rot)?;
         self.lift(file, line)?;
         self.rot = Some(rot);
@@ -247,7 +259,7 @@ impl<'m, W: Write> Writer<'m, W> {
         )?;
         self.report.indexes.push(rot);
         self.report.moves += 1;
-        self.safe = self.heights.at(&rot);
+        self.safe = at;
         check_height(&self.heights, self.safe, file, line, &rot)?;
         self.in_run = false;
         Ok(())
@@ -387,7 +399,10 @@ impl<'m, W: Write> Writer<'m, W> {
 
     /// The postamble: laser off, coolant and spindle off, the lift to the safe height,
     /// the program end; the report.
-    pub(crate) fn finish(mut self, cfg: &PostConfig) -> Result<PostReport, PostError> {
+    pub(crate) fn finish(
+        mut self,
+        cfg: &PostConfig,
+    ) -> Result<(PostReport, Vec<HeightUsed>), PostError> {
         self.report.body.1 = self.offset();
         self.laser_off()?;
         self.per_minute()?;
@@ -408,7 +423,7 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         self.report.verify.moves = self.report.moves;
         self.em.finish()?;
-        Ok(self.report)
+        Ok((self.report, self.heights_used))
     }
 
     /// Bytes of output so far (finished lines).
