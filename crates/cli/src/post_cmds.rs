@@ -71,12 +71,85 @@ pub struct Placement {
     /// Stock as a box in the part frame, X0,Y0,Z0,X1,Y1,Z1 (machine units): safe heights clear it.
     #[arg(long, allow_hyphen_values = true)]
     pub stock: Option<String>,
+    /// The part as an STL mesh in the part frame: safe heights clear it, and no rapid's
+    /// tool tip or head (the machine file's head_radius, head_length) may meet it.
+    #[arg(long)]
+    pub part: Option<String>,
+    /// Units of the --part mesh (default: the machine's).
+    #[arg(long, value_parser = ["inch", "mm"])]
+    pub part_units: Option<String>,
 }
 
-/// The work given besides the program's feed tips (`--stock`).
-fn extra_work(pl: &Placement) -> Result<Option<WorkBounds>, CliError> {
-    let Some(text) = &pl.stock else {
+/// The `--part` mesh, in the machine's units, with a warning when it is not closed.
+fn part_mesh(
+    pl: &Placement,
+    m: &Machine,
+) -> Result<Option<std::sync::Arc<lampost_post::collide::PartMesh>>, CliError> {
+    let Some(path) = &pl.part else {
         return Ok(None);
+    };
+    let bytes = std::fs::read(path).map_err(|e| {
+        CliError::usage(format!(
+            "error: cannot read {path}: {e}\n  = help: give the part as an STL file (ASCII or binary)\n"
+        ))
+    })?;
+    let mesh = lampost_align::mesh::read_stl(&bytes).map_err(|e| {
+        CliError::failed(format!(
+            "error: {path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
+        ))
+    })?;
+    let bad = |e: lampost_post::collide::CollideError| {
+        CliError::failed(format!(
+            "error: {path}: {e}\n  = help: export the part as an STL with finite coordinates\n"
+        ))
+    };
+    let mut part = lampost_post::collide::PartMesh::from_mesh(&mesh).map_err(bad)?;
+    let machine_mm = m.units == lampost_kinematics::Units::Mm;
+    let factor = match (pl.part_units.as_deref(), machine_mm) {
+        (Some("mm"), false) => 1.0 / 25.4,
+        (Some("inch"), true) => 25.4,
+        _ => 1.0,
+    };
+    if factor != 1.0 {
+        part = part.scaled(factor).map_err(bad)?;
+    }
+    // A mesh in other units than it is read in is far larger (or smaller) than the machine.
+    let (lo, hi) = part.bounds();
+    let size = (hi - lo).norm();
+    let travel = Vector3::new(
+        m.linear[0].limits.1 - m.linear[0].limits.0,
+        m.linear[1].limits.1 - m.linear[1].limits.0,
+        m.linear[2].limits.1 - m.linear[2].limits.0,
+    )
+    .norm();
+    if size > 5.0 * travel {
+        let units = if machine_mm { "mm" } else { "inch" };
+        return Err(CliError::failed(format!(
+            "error: {path}: the part is {size:.1} {units} across, {:.0} times the machine's travel ({travel:.1} {units})\n  = help: is the mesh in other units? give --part-units mm or --part-units inch\n",
+            size / travel
+        )));
+    }
+    let report = part.manifold();
+    if !report.closed() {
+        eprintln!(
+            "warning: {path} is not a closed manifold ({} boundary edges, {} edges shared by more than two triangles, {} degenerate triangles): it is checked as a surface only",
+            report.boundary_edges, report.non_manifold_edges, report.degenerate_triangles
+        );
+    }
+    Ok(Some(std::sync::Arc::new(part)))
+}
+
+/// The work given besides the program's feed tips (`--stock`, the `--part` mesh's hull).
+fn extra_work(
+    pl: &Placement,
+    part: Option<&lampost_post::collide::PartMesh>,
+) -> Result<Option<WorkBounds>, CliError> {
+    let mut w = WorkBounds::empty();
+    if let Some(p) = part {
+        w.add_points(p.hull_points().iter().copied());
+    }
+    let Some(text) = &pl.stock else {
+        return Ok(part.map(|_| w));
     };
     let (a, b) = text
         .match_indices(',')
@@ -88,7 +161,6 @@ fn extra_work(pl: &Placement) -> Result<Option<WorkBounds>, CliError> {
             ))
         })?;
     let (lo, hi) = (vector("--stock", a)?, vector("--stock", b)?);
-    let mut w = WorkBounds::empty();
     let mut bx = WorkBounds::empty();
     bx.add(&lo);
     bx.add(&hi);
@@ -105,6 +177,9 @@ fn per_point_input(
     pl: &Placement,
     input: &str,
 ) -> Result<(Frame, Vec<lampost_post::pointwise::PathPoint>, String), CliError> {
+    if pl.part.is_some() {
+        return Err(CliError::usage("error: --part checks rapids of planar programs against the part; a per-point path is not checked against a mesh yet: leave out --part (use --stock for safe heights)\n".to_string()));
+    }
     if pl.index.is_some() || pl.job.is_some() || pl.layer_axis.is_some() {
         return Err(CliError::usage("error: a per-point path carries its own tool axis: use --setup or --origin, not --index, --job or a layer schedule\n".to_string()));
     }
@@ -376,6 +451,7 @@ fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
 
 /// The post configuration from the options.
 pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostConfig, CliError> {
+    let part = part_mesh(&a.place, m)?;
     let process = match a.process.as_str() {
         "deposit" => Process::Deposit { power: a.power },
         "machine" => Process::Machine {
@@ -474,7 +550,8 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         program_number: a.program_number,
         header,
         verify_tolerance: 2.0 * tolerance,
-        work: extra_work(&a.place)?,
+        work: extra_work(&a.place, part.as_deref())?,
+        part,
     })
 }
 
@@ -702,6 +779,7 @@ pub fn verify(
     // One file, or DNC pieces in order; FADAL subprograms are followed.
     let f = crate::posted::open(posted)?;
     let located = |e| post_error(crate::posted::locate(posted, e));
+    let part = part_mesh(place, &m)?;
     let v = if is_per_point(place, input) {
         let (frame, pts, _) = per_point_input(place, input.unwrap_or("-"))?;
         lampost_post::pointwise::verify_points(
@@ -711,7 +789,7 @@ pub fn verify(
             h,
             f,
             tol,
-            extra_work(place)?.as_ref(),
+            extra_work(place, None)?.as_ref(),
         )
         .map_err(located)?
     } else {
@@ -720,7 +798,8 @@ pub fn verify(
             convert_units: place.convert_units,
             e_extrusion: place.e_extrusion,
         };
-        lampost_post::verify(&m, &secs, h, opts, f, tol, extra_work(place)?.as_ref())
+        let work = extra_work(place, part.as_deref())?;
+        lampost_post::verify(&m, &secs, h, opts, f, tol, work.as_ref(), part.as_deref())
             .map_err(located)?
     };
     let s = if json {

@@ -705,3 +705,169 @@ fn stock_box_raises_the_retracts() {
         stderr(&o)
     );
 }
+
+/// An ASCII STL box from `lo` to `hi`; without its top face when `open`.
+fn box_stl(lo: [f64; 3], hi: [f64; 3], open: bool) -> String {
+    let c = |i: usize| {
+        [
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        ]
+    };
+    // Faces as corner quads, outward by the right-hand rule.
+    let mut faces = vec![
+        [0, 2, 3, 1], // bottom (z = lo)
+        [0, 1, 5, 4], // y = lo
+        [2, 6, 7, 3], // y = hi
+        [0, 4, 6, 2], // x = lo
+        [1, 3, 7, 5], // x = hi
+    ];
+    if !open {
+        faces.push([4, 5, 7, 6]); // top
+    }
+    let mut s = String::from("solid box\n");
+    for f in faces {
+        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            s += "facet normal 0 0 0\nouter loop\n";
+            for v in t {
+                let p = c(v);
+                s += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
+            }
+            s += "endloop\nendfacet\n";
+        }
+    }
+    s + "endsolid box\n"
+}
+
+/// `--part`: the part's hull raises the safe heights; a vertical approach through an
+/// overhang of the part is refused by the post and by verify; an open mesh is warned
+/// about and still checked; a mesh in other units, and `--part` with a per-point path,
+/// are refused with what to do.
+#[test]
+fn part_mesh_collisions() {
+    let dir = tempdir("safety-part");
+    let input = fx("issue11-patch.nc");
+    let base = write(
+        &dir,
+        "base.stl",
+        &box_stl([-1.0, -1.0, -2.0], [2.0, 2.0, 0.0], false),
+    );
+    let post = |part: &str, out: &Path, extra: &[&str]| {
+        let o_s = out.to_string_lossy().into_owned();
+        let mut args = vec![
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            "--head",
+            "spindle",
+            input.as_str(),
+            "-o",
+            o_s.as_str(),
+            "--part",
+            part,
+        ];
+        args.extend_from_slice(extra);
+        lampost(&args)
+    };
+    let verify = |part: &str, out: &Path| {
+        let o_s = out.to_string_lossy().into_owned();
+        lampost(&[
+            "verify",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            "--head",
+            "spindle",
+            input.as_str(),
+            o_s.as_str(),
+            "--part",
+            part,
+        ])
+    };
+    // The patch deposited on top of a block: posts, verifies.
+    let out = dir.join("on-block.nc");
+    let o = post(&base, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = verify(&base, &out);
+    assert!(v.status.success(), "{}", stderr(&v));
+    // An overhang above the patch's start: the vertical approach would pass through it.
+    let over = write(
+        &dir,
+        "overhang.stl",
+        &box_stl([-0.5, -0.5, 1.0], [0.5, 0.5, 1.5], false),
+    );
+    let out2 = dir.join("overhang.nc");
+    let o = post(&over, &out2, &[]);
+    assert!(!o.status.success(), "posted through an overhang");
+    assert!(
+        stderr(&o).contains("meets the part") || stderr(&o).contains("against the part"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out2.exists());
+    // The program posted without the part fails verify with it.
+    let plain = dir.join("plain.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        "--head",
+        "spindle",
+        input.as_str(),
+        "-o",
+        &plain.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = verify(&over, &plain);
+    assert!(
+        !v.status.success(),
+        "verify passed a rapid through the part"
+    );
+    // An open mesh: a warning, still checked.
+    let open = write(
+        &dir,
+        "open.stl",
+        &box_stl([-0.5, -0.5, 1.0], [0.5, 0.5, 1.5], true),
+    );
+    let o = post(&open, &dir.join("open.nc"), &[]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("not a closed manifold"),
+        "{}",
+        stderr(&o)
+    );
+    // A block given in mm to the inch FADAL without --part-units: refused; with it, posts.
+    let mm = write(
+        &dir,
+        "mm.stl",
+        &box_stl([-25.4, -25.4, -500.0], [1000.0, 1000.0, 0.0], false),
+    );
+    let o = post(&mm, &dir.join("mm.nc"), &[]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--part-units"),
+        "{}",
+        stderr(&o)
+    );
+    let o = post(&mm, &dir.join("mm.nc"), &["--part-units", "mm"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A per-point path with --part.
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &fx("tilted-arc.csv"),
+        "--part",
+        &base,
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--part"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -75,6 +75,9 @@ pub struct PostConfig {
     /// Work besides the program's own feed tips (a part or stock), part frame: the safe
     /// heights clear it too.
     pub work: Option<crate::safety::WorkBounds>,
+    /// The part as a mesh (part frame): no rapid's tip path and no head meets it (checked
+    /// in-process on every rapid written). Its hull points belong in `work` too.
+    pub part: Option<std::sync::Arc<crate::collide::PartMesh>>,
 }
 
 /// What a post did.
@@ -796,6 +799,7 @@ mod tests {
                 header: vec!["t".into()],
                 verify_tolerance: 0.001,
                 work: stock.map(|_| extra.clone()),
+                part: None,
             };
             let mut spec = Vec::new();
             let r = post(&m, &secs, &cfg, &mut spec, |_| {}).expect("posts");

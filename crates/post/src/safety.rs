@@ -238,3 +238,77 @@ pub fn approach_lift(m: &Machine) -> f64 {
         lampost_kinematics::Units::Mm => 2.5,
     }
 }
+
+/// The part-mesh check of one rapid, shared by the post's in-process check and `verify`:
+/// from joints `xs` (rotaries `rs`) to `xe` (`re`), the tool tip's path and the head (a
+/// cylinder of the machine's `head_radius` and `head_length` along the tool axis, from
+/// the tip) must not meet the part. A table turn is checked at table positions at most
+/// 1° apart, the head standing. A lift off the end of a run (`lifting`) starts on the
+/// work: its first approach lift is not checked. `Err` holds what was met, for a
+/// message.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn rapid_meets_part(
+    m: &Machine,
+    head: usize,
+    part: &crate::collide::PartMesh,
+    xs: &[f64; 3],
+    rs: &[f64; 2],
+    xe: &[f64; 3],
+    re: &[f64; 2],
+    lifting: bool,
+) -> Result<Option<String>, PostError> {
+    let pose = |x: &[f64; 3], r: &[f64; 2]| {
+        let p = m.forward(
+            &lampost_kinematics::Joints {
+                linear: *x,
+                rotary: *r,
+            },
+            head,
+        );
+        (p.tip, p.axis.normalize())
+    };
+    let (radius, length) = (m.head_radius(), m.head_length());
+    if rs != re {
+        let span = (re[0] - rs[0]).abs().max((re[1] - rs[1]).abs());
+        let n = (span.ceil() as usize).clamp(1, 100_000);
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let r = [rs[0] + (re[0] - rs[0]) * t, rs[1] + (re[1] - rs[1]) * t];
+            let x = [
+                xs[0] + (xe[0] - xs[0]) * t,
+                xs[1] + (xe[1] - xs[1]) * t,
+                xs[2] + (xe[2] - xs[2]) * t,
+            ];
+            let (tip, axis) = pose(&x, &r);
+            if let Some(h) = part.head_hits(&tip, &tip, &axis, radius, length, 0.0)? {
+                return Ok(Some(format!(
+                    "the table turning through {:.3}°, {:.3}° brings the part against the head at ({:.4}, {:.4}, {:.4})",
+                    r[0], r[1], h.point.x, h.point.y, h.point.z
+                )));
+            }
+        }
+        return Ok(None);
+    }
+    let (mut a, axis) = pose(xs, rs);
+    let (b, _) = pose(xe, re);
+    if lifting {
+        let len = (b - a).norm();
+        if len <= approach_lift(m) {
+            return Ok(None);
+        }
+        a += (b - a) * (approach_lift(m) / len);
+    }
+    if let Some(h) = part.segment_hits(&a, &b)? {
+        return Ok(Some(format!(
+            "a rapid's tool tip meets the part at ({:.4}, {:.4}, {:.4})",
+            h.point.x, h.point.y, h.point.z
+        )));
+    }
+    if let Some(h) = part.head_hits(&a, &b, &axis, radius, length, 0.0)? {
+        return Ok(Some(format!(
+            "a rapid brings the head (radius {radius}, length {length}) against the part at ({:.4}, {:.4}, {:.4})",
+            h.point.x, h.point.y, h.point.z
+        )));
+    }
+    Ok(None)
+}

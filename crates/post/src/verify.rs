@@ -172,6 +172,7 @@ impl ArcPoints {
 }
 
 /// Replay `posted` and compare it with the intended path of `sections`.
+#[allow(clippy::too_many_arguments)]
 pub fn verify<R: BufRead>(
     machine: &Machine,
     sections: &[Section],
@@ -180,6 +181,7 @@ pub fn verify<R: BufRead>(
     posted: R,
     tolerance: f64,
     work: Option<&WorkBounds>,
+    part: Option<&crate::collide::PartMesh>,
 ) -> Result<VerifyReport, PostError> {
     check_tolerance(tolerance)?;
     // The work the rapids must clear: the input's feed tips (a pass of its own) and the
@@ -189,6 +191,7 @@ pub fn verify<R: BufRead>(
         bounds.union(w);
     }
     let mut safety = Safety::new(machine, head, bounds);
+    safety.part = part;
     let units = match machine.units {
         MUnits::Inch => Units::Inch,
         MUnits::Mm => Units::Mm,
@@ -481,6 +484,11 @@ pub(crate) struct Safety<'m> {
     entering: Option<(f64, u32)>,
     /// The longest feed onto a start (the approach stops this far above it).
     lift: f64,
+    /// The part, for collision checks of every rapid.
+    pub(crate) part: Option<&'m crate::collide::PartMesh>,
+    /// A move has been made: where the head is is known (the first move starts from
+    /// wherever the machine stands, not from the interpreter's zero).
+    started: bool,
 }
 
 impl<'m> Safety<'m> {
@@ -502,6 +510,8 @@ impl<'m> Safety<'m> {
             down: None,
             entering: None,
             lift: crate::safety::approach_lift(m),
+            part: None,
+            started: false,
         }
     }
 
@@ -591,6 +601,7 @@ impl<'m> Safety<'m> {
 
     /// A feed to `x`.
     pub(crate) fn feed(&mut self, x: &[f64; 3], line: u32) -> Result<(), PostError> {
+        self.started = true;
         if let Some((z, _)) = self.entering.take() {
             if z - x[2] > self.lift + self.eps {
                 return Err(Self::fail(
@@ -627,6 +638,15 @@ impl<'m> Safety<'m> {
         self.entering = Some((xe[2], line));
         let turns = rs != re;
         let vertical = !turns && xs[0] == xe[0] && xs[1] == xe[1];
+        let known = std::mem::replace(&mut self.started, true);
+        if let (Some(part), true) = (self.part, known) {
+            let lifting = vertical && xe[2] > xs[2] && self.down.is_some();
+            if let Some(what) =
+                crate::safety::rapid_meets_part(self.m, self.head, part, xs, rs, xe, re, lifting)?
+            {
+                return Err(Self::fail(line, what));
+            }
+        }
         if vertical {
             if xe[2] < xs[2] {
                 // Coming down: the approach onto a start, if it goes below the safe height.

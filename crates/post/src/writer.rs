@@ -94,6 +94,8 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) inverse_time: bool,
     /// Every safe height used, for [`crate::post::post`]'s check of its first pass.
     pub(crate) heights_used: Vec<HeightUsed>,
+    /// The part, for the collision check of every rapid written.
+    pub(crate) part: Option<std::sync::Arc<crate::collide::PartMesh>>,
 }
 
 impl<'m, W: Write> Writer<'m, W> {
@@ -141,6 +143,7 @@ impl<'m, W: Write> Writer<'m, W> {
             codes: Codes::of(machine)?,
             inverse_time: false,
             heights_used: Vec::new(),
+            part: cfg.part.clone(),
         })
     }
 
@@ -246,6 +249,13 @@ impl<'m, W: Write> Writer<'m, W> {
         self.safe = over;
         check_height(&self.heights, self.safe, file, line, &rot)?;
         self.lift(file, line)?;
+        if let (Some(part), Some(p), Some(old)) = (&self.part, self.pos, self.rot) {
+            if let Some(what) =
+                crate::safety::rapid_meets_part(self.m, self.head, part, &p, &old, &p, &rot, false)?
+            {
+                return Err(PostError::Verify(format!("{file}:{line}: {what}")));
+            }
+        }
         self.rot = Some(rot);
         self.jmap = index_maps(self.m, self.head, &rot).0;
         self.rot_sc = [sin_cos_deg(rot[0]), sin_cos_deg(rot[1])];
@@ -593,6 +603,30 @@ impl<'m, W: Write> Writer<'m, W> {
                 "{file}:{line}: a rapid to ({:.4}, {:.4}, {:.4}) travels below the safe height {:.4}",
                 x[0], x[1], x[2], self.safe
             )));
+        }
+        if let (Some(part), Some(p)) = (&self.part, self.pos) {
+            // As written: the values rounded to the output resolution.
+            let w = |v: &[f64; 3]| {
+                [
+                    q(v[0]) / self.scale,
+                    q(v[1]) / self.scale,
+                    q(v[2]) / self.scale,
+                ]
+            };
+            let rot = self.rot.unwrap_or([0.0; 2]);
+            let lifting = vertical && self.in_run && x[2] > p[2];
+            if let Some(what) = crate::safety::rapid_meets_part(
+                self.m,
+                self.head,
+                part,
+                &w(&p),
+                &rot,
+                &w(x),
+                &rot,
+                lifting,
+            )? {
+                return Err(PostError::Verify(format!("{file}:{line}: {what}")));
+            }
         }
         Ok(())
     }

@@ -36,6 +36,7 @@ fn config(m: &Machine, process: Process) -> PostConfig {
         header: vec!["prop".into()],
         verify_tolerance: 0.001,
         work: None,
+        part: None,
     }
 }
 
@@ -57,7 +58,7 @@ proptest! {
         let mut out = Vec::new();
         match post(&m, &secs, &cfg, &mut out, |_| {}) {
             Ok(_) => {
-                let v = verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001, None).expect("verifies");
+                let v = verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001, None, None).expect("verifies");
                 // Chord midpoints are compared too: up to the chord tolerance, plus rounding.
                 prop_assert!(v.max_position_error < cfg.tolerance + 2e-4, "{v:?}");
                 prop_assert!(v.max_axis_error_deg < 1e-3, "{v:?}");
@@ -101,8 +102,17 @@ fn a_grid_of_indexes_all_post_and_verify() {
             )];
             let mut out = Vec::new();
             post(&m, &secs, &cfg, &mut out, |_| {}).unwrap_or_else(|e| panic!("A={a} B={b}: {e}"));
-            let v =
-                verify(&m, &secs, cfg.head, cfg.intended, &out[..], 0.001, None).expect("verifies");
+            let v = verify(
+                &m,
+                &secs,
+                cfg.head,
+                cfg.intended,
+                &out[..],
+                0.001,
+                None,
+                None,
+            )
+            .expect("verifies");
             assert!(
                 v.max_position_error < cfg.tolerance + 2e-4 && v.compared >= 7,
                 "A={a} B={b}: {v:?}"

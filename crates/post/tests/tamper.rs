@@ -133,6 +133,7 @@ fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
         header: vec!["tamper".into()],
         verify_tolerance: 2.0 * tolerance,
         work: None,
+        part: None,
     }
 }
 
@@ -404,6 +405,7 @@ fn random_programs_post_verify_and_tampering_is_caught() {
                 cfg.intended,
                 t.as_bytes(),
                 cfg.verify_tolerance,
+                None,
                 None,
             )
         };
