@@ -3,8 +3,12 @@ with numpy, line by line: read each block, pick out its words, turn the point by
 rotation about the pivot, write the block back. Arcs get what they need to stay correct:
 with the table untilted (B = 0) an arc stays an arc and its centre offset I, J turns with
 the table; tilted, the arc is no longer in the machine's XY plane, so it is written as
-chords to the same tolerance `lampost post` uses (0.01 mm). (It keeps no limits and does
-no verification, so it still does less than `lampost post`.)
+chords to the same tolerance `lampost post` uses (0.01 mm). Travel is rebuilt as the post
+rebuilds it, so the output keeps the same safety rules: off the end of a run straight up to
+the safe height (the cell's 150 mm clearance, above this program's work), across there,
+straight down to 2.5 mm above the next start, and in at the feed; a lift and M2 at the end.
+(It keeps no limits, writes no process codes and does no verification, so it still does
+less than `lampost post`.)
 
 Usage: python3 post_baseline.py IN OUT B_DEG C_DEG H
 """
@@ -15,6 +19,8 @@ import sys
 import numpy as np
 
 TOLERANCE = 0.01  # mm, chord tolerance
+SAFE = 150.0  # mm, the NRC cell's clearance_z (the bench's work is far below it)
+LIFT = 2.5  # mm, the approach lift
 
 
 def main():
@@ -28,26 +34,53 @@ def main():
     word = re.compile(r"([XYZIJ])(-?\d*\.?\d+)")
     gword = re.compile(r"G0*([0-3])(?![\d.])")
     feedword = re.compile(r"F(\d*\.?\d+)")
+    endword = re.compile(r"M0*(2|30)(?![\d.])")
     pos = np.zeros(3)
     motion = 0
+    in_run = False
+    ended = False
+    feed = "300"
     with open(src) as f, open(dst, "w") as out:
         for line in f:
             found = word.findall(line)
             if not found:
-                out.write(line)
+                if endword.search(line):
+                    # The program end: lift first.
+                    if in_run:
+                        out.write("G0 Z%.3f\n" % SAFE)
+                        in_run = False
+                    ended = True
+                if line.strip() != "%":
+                    out.write(line)
                 continue
             g = gword.search(line)
             if g:
                 motion = int(g.group(1))
+            fw = feedword.search(line)
+            if fw:
+                feed = fw.group(1)
             arc = motion >= 2
+            start = pos.copy()
             if arc:
-                start = pos.copy()
                 ij = np.zeros(2)
             for letter, value in found:
                 if letter in "IJ":
                     ij["IJ".index(letter)] = float(value)
                 else:
                     pos["XYZ".index(letter)] = float(value)
+            if motion == 0:
+                # Travel: only its ends matter. Lift off the end of a run.
+                if in_run:
+                    out.write("G0 Z%.3f\n" % SAFE)
+                    in_run = False
+                continue
+            if not in_run:
+                # Over the start at the safe height, down to just above it, in at the feed.
+                s0 = m @ (start - pivot) + pivot
+                out.write("G0 X%.3f Y%.3f\n" % (-s0[0], -s0[1]))
+                out.write("G0 Z%.3f\n" % min(s0[2] + LIFT, SAFE))
+                out.write("G1 Z%.3f F%s\n" % (s0[2], feed))
+                in_run = True
             if arc and tilted:
                 # Chords: the arc in its own plane, then turned like every point.
                 centre = start[:2] + ij
@@ -81,6 +114,8 @@ def main():
                 out.write("%s X%.3f Y%.3f Z%.3f I%.3f J%.3f\n" % (rest, -q[0], -q[1], q[2], -ij[0], -ij[1]))
             else:
                 out.write("%s X%.3f Y%.3f Z%.3f\n" % (rest, -q[0], -q[1], q[2]))
+        if not ended:
+            out.write("G0 Z%.3f\nM2\n" % SAFE)
 
 if __name__ == "__main__":
     main()

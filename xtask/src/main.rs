@@ -222,7 +222,7 @@ fn bench_post() -> Result<(), String> {
                 let checked = dir.join(format!("numpy-b{b}-indexed.nc"));
                 let verdict = std::fs::read(&script_out)
                     .and_then(|body| {
-                        let mut text = format!("G21 G90 G94\nG0 B{b} C{c}\n").into_bytes();
+                        let mut text = format!("G21 G90 G94\nG0 Z150\nG0 B{b} C{c}\n").into_bytes();
                         text.extend_from_slice(&body);
                         std::fs::write(&checked, text)
                     })
