@@ -871,3 +871,50 @@ fn part_mesh_collisions() {
         stderr(&o)
     );
 }
+
+/// The machine file's resolution is honoured: on a FADAL whose linear axes step 0.001 in
+/// and rotaries 0.01°, every word written lies on those grids, and the program verifies.
+#[test]
+fn machine_resolution_is_honoured() {
+    let dir = tempdir("safety-resolution");
+    let o = lampost(&["machines", "show", "fadal-lamp"]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let mut parts: Vec<String> = text.split("[[rotary]]").map(str::to_string).collect();
+    parts[0] = parts[0].replace("resolution = 0.0001", "resolution = 0.001");
+    for p in parts.iter_mut().skip(1) {
+        *p = p.replacen("resolution = 0.001", "resolution = 0.01", 1);
+    }
+    let coarse = write(&dir, "coarse.toml", &parts.join("[[rotary]]"));
+    let out = dir.join("coarse.nc");
+    let input = fx("issue11-patch.nc");
+    let args = [
+        "--machine",
+        coarse.as_str(),
+        "--index",
+        "A=10.123,B=-20.127",
+        "--head",
+        "spindle",
+    ];
+    let mut post = vec!["post"];
+    post.extend_from_slice(&args);
+    let o_s = out.to_string_lossy().into_owned();
+    post.extend_from_slice(&[input.as_str(), "-o", o_s.as_str()]);
+    let o = lampost(&post);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let on = |v: f64, step: f64| ((v / step).round() * step - v).abs() < 1e-9;
+    for (_, j) in moves(&posted) {
+        for k in 0..3 {
+            assert!(on(j[k], 0.001), "{j:?} off the 0.001 grid\n{posted}");
+        }
+        for k in 3..5 {
+            assert!(on(j[k], 0.01), "{j:?} off the 0.01° grid\n{posted}");
+        }
+    }
+    let mut verify = vec!["verify"];
+    verify.extend_from_slice(&args);
+    verify.extend_from_slice(&[input.as_str(), o_s.as_str()]);
+    let v = lampost(&verify);
+    assert!(v.status.success(), "{}", stderr(&v));
+}

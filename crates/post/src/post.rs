@@ -681,9 +681,10 @@ fn post_steps<W: Write>(
                 need_approach = true;
                 continue;
             }
+            let on_grid = w.on_grid(&start);
             let at_start = w
                 .pos
-                .is_some_and(|p| (0..3).all(|k| (p[k] - start[k]).abs() <= 1e-6));
+                .is_some_and(|p| (0..3).all(|k| (p[k] - on_grid[k]).abs() <= 1e-6));
             if need_approach || !at_start {
                 w.approach(&start, step.feed, file, step.line)?;
                 need_approach = false;

@@ -96,6 +96,10 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) heights_used: Vec<HeightUsed>,
     /// The part, for the collision check of every rapid written.
     pub(crate) part: Option<std::sync::Arc<crate::collide::PartMesh>>,
+    /// Machine resolutions coarser than the output's (0.0001 in, 0.001 mm, 0.001°): every
+    /// value written lands on the machine's grid, so the controller runs what was checked.
+    pub(crate) lin_snap: [Option<f64>; 3],
+    pub(crate) rot_snap: [Option<f64>; 2],
 }
 
 impl<'m, W: Write> Writer<'m, W> {
@@ -144,7 +148,46 @@ impl<'m, W: Write> Writer<'m, W> {
             inverse_time: false,
             heights_used: Vec::new(),
             part: cfg.part.clone(),
+            lin_snap: [0, 1, 2].map(|k| {
+                let r = machine.linear[k].resolution;
+                (r * linear_scale(units) > 1.0 + 1e-9).then_some(r)
+            }),
+            rot_snap: [0, 1].map(|k| {
+                let r = machine.rotary[k].resolution;
+                (r * 1e3 > 1.0 + 1e-9).then_some(r)
+            }),
         })
+    }
+
+    /// Joints `x` on the machine's linear grid (unchanged where the output's is coarser).
+    #[inline]
+    pub(crate) fn on_grid(&self, x: &[f64; 3]) -> [f64; 3] {
+        let mut y = *x;
+        for (v, r) in y.iter_mut().zip(self.lin_snap) {
+            if let Some(r) = r {
+                *v = round_half_away(*v / r) * r;
+            }
+        }
+        y
+    }
+
+    /// A height on the machine's Z grid, at or above `z`.
+    fn up_on_grid(&self, z: f64) -> f64 {
+        match self.lin_snap[2] {
+            Some(r) => (z / r).ceil() * r,
+            None => z,
+        }
+    }
+
+    /// Rotaries on the machine's rotary grid.
+    pub(crate) fn rot_on_grid(&self, rot: &[f64; 2]) -> [f64; 2] {
+        let mut y = *rot;
+        for (v, r) in y.iter_mut().zip(self.rot_snap) {
+            if let Some(r) = r {
+                *v = round_half_away(*v / r) * r;
+            }
+        }
+        y
     }
 
     /// The header, the modal preamble and the machining options (tool change, work
@@ -233,6 +276,7 @@ impl<'m, W: Write> Writer<'m, W> {
         file: &str,
         line: u32,
     ) -> Result<(), PostError> {
+        let rot = self.rot_on_grid(&rot);
         self.laser_off()?;
         self.per_minute()?;
         let split = self.offset();
@@ -302,7 +346,7 @@ impl<'m, W: Write> Writer<'m, W> {
         self.travel(file, line)?;
         let lift = crate::safety::approach_lift(self.m);
         let mut above = *start;
-        above[2] = self.pos.map_or(self.safe, |p| p[2].max(self.safe));
+        above[2] = self.up_on_grid(self.pos.map_or(self.safe, |p| p[2].max(self.safe)));
         self.linear(0.0, &above, None, file, line, false)?;
         let mut near_start = *start;
         near_start[2] = (start[2] + lift).min(self.safe);
@@ -322,8 +366,9 @@ impl<'m, W: Write> Writer<'m, W> {
         file: &str,
         line: u32,
     ) -> Result<(), PostError> {
-        let x = [j[0], j[1], j[2]];
-        let rot = [j[3], j[4]];
+        let x = self.on_grid(&[j[0], j[1], j[2]]);
+        let rot = self.rot_on_grid(&[j[3], j[4]]);
+        let j = &[x[0], x[1], x[2], rot[0], rot[1]];
         self.check(file, line, &x, &rot)?;
         let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
         match per_min {
@@ -377,6 +422,7 @@ impl<'m, W: Write> Writer<'m, W> {
         file: &str,
     ) -> Result<(), PostError> {
         let g = if ccw { 3.0 } else { 2.0 };
+        let (end, c) = (&self.on_grid(end), &self.on_grid(c));
         let rot_now = self.rot.unwrap_or([0.0; 2]);
         self.check(file, step.line, end, &rot_now)?;
         // Travel limits along the arc: its extreme points in X and Y.
@@ -634,7 +680,7 @@ impl<'m, W: Write> Writer<'m, W> {
     /// Raise the head to the safe height where it is (the lift off an end), or write
     /// the height alone when the position is not known yet (the program's first move).
     pub(crate) fn lift(&mut self, file: &str, line: u32) -> Result<(), PostError> {
-        let z = self.safe;
+        let z = self.up_on_grid(self.safe);
         match self.pos {
             Some(p) => {
                 if round_half_away(p[2] * self.scale) < round_half_away(z * self.scale) {
@@ -663,6 +709,8 @@ impl<'m, W: Write> Writer<'m, W> {
         line: u32,
         step_end: bool,
     ) -> Result<(), PostError> {
+        let grid = self.on_grid(x);
+        let x = &grid;
         let rot = self.rot.unwrap_or([0.0; 2]);
         // A rapid to where the head already is says nothing.
         if g == 0.0
