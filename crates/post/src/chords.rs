@@ -15,7 +15,8 @@ use lampost_kinematics::Affine;
 use pulp::{Arch, Simd, WithSimd};
 
 use crate::intended::Step;
-use crate::post::{joints, written_tip, PlannedPoint};
+use crate::pipeline::PlannedPoint;
+use crate::post::{joints, written_tip};
 use crate::verify::ArcPoints;
 
 /// One arc's chord points under one index: what every point of it is worked out from.

@@ -6,22 +6,30 @@
 //!
 //! Pipeline (each stage streams): text → [`lampost_gcode::Stream`] (moves in the program
 //! frame) → [`intended::Intended`] (placed in the part frame by a [`frame::Frame`], with
-//! the tool axis each move should have) → [`post::post`] (rotaries per section or layer
+//! the tool axis each move should have) → [`pipeline::post`] (rotaries per section or layer
 //! by inverse kinematics, retract before every re-index, joint positions, process codes,
 //! limits on every point) → dialect text. [`verify::verify`] reads a posted program back
 //! and compares every feed point with the same intended path.
 //!
+//! Every block is written by one writer (`writer.rs`), whichever path made it: planar
+//! programs and per-point paths ([`pointwise`]). Safe heights over the work
+//! ([`safety`]) decide every retract; with a part mesh ([`collide`]) every rapid is
+//! checked against it.
+//!
 //! ## Why these dependencies
 //! - `lampost-gcode`, `lampost-kinematics`: reading programs, writing them, the machines;
-//! - `lampost-align`: the setup file format `lampost align` writes;
+//! - `lampost-align`: the setup file format `lampost align` writes, and its STL meshes;
+//! - `parry3d-f64`: the part mesh's collision queries;
 //! - `toml`: setup and job files; `nalgebra`: frames; `thiserror`: [`PostError`].
 
+mod check;
 mod chords;
 pub mod collide;
 pub mod error;
 pub mod frame;
 pub mod intended;
 mod orient;
+pub mod pipeline;
 pub mod pointwise;
 pub mod post;
 pub mod safety;
@@ -32,5 +40,6 @@ mod writer;
 pub use error::PostError;
 pub use frame::{read_setup, Frame};
 pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
-pub use post::{post, PostConfig, PostDialect, PostReport, Process, Rewind};
+pub use pipeline::{post, Rewind};
+pub use post::{PostConfig, PostDialect, PostReport, Process};
 pub use verify::{verify, VerifyReport};

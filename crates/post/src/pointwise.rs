@@ -263,7 +263,7 @@ impl Ctx<'_> {
 }
 
 /// Post a path of points with their own tool axis (program frame `frame`), through the
-/// same [`Writer`] as planar programs: preamble and machining options, a retract to a
+/// same writer (`writer.rs`) as planar programs: preamble and machining options, a retract to a
 /// height safe over the whole rotary move before the first point and every branch flip,
 /// the approach, process codes, travel limits on every point, split points, postamble.
 pub fn post_points<W: Write>(

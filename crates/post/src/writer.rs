@@ -10,14 +10,14 @@ use lampost_gcode::emit::round_half_away;
 use lampost_gcode::Emitter;
 use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Affine, Machine};
-use nalgebra::Vector3;
 
+use crate::check::FeedCheck;
 use crate::error::PostError;
-use crate::intended::{Orient, Step};
+use crate::intended::Step;
+use crate::pipeline::HeightUsed;
 use crate::post::{
     axis_letters, check_height, code_words, emitter, index_maps, linear_scale, program_units,
-    write_header, written_rotary, written_tip, EndCheck, HeightUsed, PostConfig, PostReport,
-    Process,
+    write_header, PostConfig, PostReport, Process,
 };
 use crate::safety::SafeHeights;
 
@@ -64,25 +64,11 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) pos: Option<[f64; 3]>,
     /// The last written linear words, in output resolution units.
     pub(crate) written: [Option<i64>; 3],
-    /// The feed step being written, for the in-process verification.
-    pub(crate) step: Option<Step>,
-    /// (rotary, tip map of it as written), for forward kinematics.
-    pub(crate) fk_cache: ([f64; 2], Affine),
-    /// The tool axis (part frame) at the written rotary, with `fk_cache`.
-    pub(crate) fk_axis: Vector3<f64>,
-    /// The current section's orientation rule and its layer's program +Z.
-    pub(crate) orient: Orient,
-    pub(crate) program_z: Vector3<f64>,
-    /// The intended tool axis for the current orientation: (orientation, axis).
-    pub(crate) want_axis: Option<(Orient, Vector3<f64>)>,
-    /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
-    pub(crate) axis_err: Option<(Vector3<f64>, Vector3<f64>, f64)>,
+    /// The in-process check of written feed points.
+    pub(crate) feed_check: FeedCheck,
     pub(crate) head: usize,
-    pub(crate) tol: f64,
     /// 10^decimals of the linear words.
     pub(crate) scale: f64,
-    /// A point planned on the reading thread: (joints, is the step's end, its check).
-    pub(crate) planned_check: Option<([f64; 3], bool, EndCheck)>,
     /// The safe heights, and that of the table position in force.
     pub(crate) heights: SafeHeights<'m>,
     pub(crate) safe: f64,
@@ -92,7 +78,7 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) codes: Codes,
     /// Inverse-time feeds (G93) in force.
     pub(crate) inverse_time: bool,
-    /// Every safe height used, for [`crate::post::post`]'s check of its first pass.
+    /// Every safe height used, for [`crate::pipeline::post`]'s check of its first pass.
     pub(crate) heights_used: Vec<HeightUsed>,
     /// The part, for the collision check of every rapid written.
     pub(crate) part: Option<std::sync::Arc<crate::collide::PartMesh>>,
@@ -130,17 +116,9 @@ impl<'m, W: Write> Writer<'m, W> {
             laser: false,
             pos: None,
             written: [None; 3],
-            step: None,
-            fk_cache: ([f64::NAN; 2], index_maps(machine, cfg.head, &[0.0; 2]).1),
-            fk_axis: Vector3::z(),
-            orient: Orient::ToolAxis,
-            program_z: Vector3::z(),
-            want_axis: None,
-            axis_err: None,
+            feed_check: FeedCheck::new(machine, cfg),
             head: cfg.head,
-            tol: cfg.verify_tolerance,
             scale: linear_scale(units),
-            planned_check: None,
             safe: heights.at(&cfg.near),
             heights,
             in_run: false,
@@ -506,90 +484,19 @@ impl<'m, W: Write> Writer<'m, W> {
         Ok(())
     }
 
-    /// Check a written feed point: the joints as the text gives them (rounded to the
-    /// output resolution), through forward kinematics, against the intended move.
+    /// Check a written feed point (see [`FeedCheck::point`]).
+    #[inline]
     pub(crate) fn verify_point(&mut self, x: &[f64; 3], is_end: bool) -> Result<(), PostError> {
-        // The fields used, not the whole step (a copy of it costs as much as the check).
-        let Some((line, orient, program_z)) = self
-            .step
-            .as_ref()
-            .map(|s| (s.line, self.orient, self.program_z))
-        else {
-            return Ok(());
-        };
         let rot = self.rot.unwrap_or([0.0; 2]);
-        if self.fk_cache.0 != rot {
-            let (_, inv) = written_rotary(&rot);
-            self.fk_cache = (rot, self.m.tip_map(&inv, self.head));
-            self.fk_axis = self.m.machine_to_part_sc(&inv, &self.m.tool_axis)
-                - self.m.machine_to_part_sc(&inv, &Vector3::zeros());
-        }
-        let err = match self.planned_check {
-            // Worked out on the reading thread, for these very joints (with the same
-            // end-or-path rule).
-            Some((j, end, e)) if end == is_end && j == *x => e,
-            _ => {
-                let tip = written_tip(&self.fk_cache.1, self.scale, x);
-                match &self.step {
-                    Some(step) if is_end => (tip - step.end).norm(),
-                    Some(step) => crate::verify::dist_to(step, &tip),
-                    None => 0.0,
-                }
-            }
-        };
-        if err > self.tol {
-            let tip = written_tip(&self.fk_cache.1, self.scale, x);
-            return Err(PostError::Verify(format!(
-                "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
-                line, tip.x, tip.y, tip.z, self.tol
-            )));
-        }
-        let axis = self.fk_axis;
-        let want = match self.want_axis {
-            Some((o, a)) if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) => a,
-            _ => {
-                self.axis_err = None;
-                let a = match orient {
-                    Orient::ToolAxis => program_z.normalize(),
-                    Orient::Index(r) => {
-                        self.m
-                            .forward(
-                                &lampost_kinematics::Joints {
-                                    linear: [0.0; 3],
-                                    rotary: r,
-                                },
-                                self.head,
-                            )
-                            .axis
-                    }
-                };
-                self.want_axis = Some((orient, a));
-                a
-            }
-        };
-        // The axis error changes only with the rotaries or the intended axis.
-        let ang = match self.axis_err {
-            Some((a, w, e)) if a == axis && w == want => e,
-            _ => {
-                let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
-                self.axis_err = Some((axis, want, e));
-                e
-            }
-        };
-        let v = &mut self.report.verify;
-        v.compared += 1;
-        if err > v.max_position_error {
-            v.max_position_error = err;
-            v.worst_line = line;
-        }
-        v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
-        if ang > 0.01 {
-            return Err(PostError::Verify(format!(
-                "input line {}: the tool axis is {ang:.4}° off",
-                line
-            )));
-        }
-        Ok(())
+        self.feed_check.point(
+            self.m,
+            self.head,
+            self.scale,
+            &rot,
+            &mut self.report.verify,
+            x,
+            is_end,
+        )
     }
 
     pub(crate) fn note_limits(&mut self, joints: &[f64; 5]) {

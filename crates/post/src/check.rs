@@ -1,0 +1,145 @@
+//! The in-process check of written feed points: the joints as the text gives them
+//! (rounded to the output resolution), through the written index's tip map, against the
+//! intended move; the tool axis against the intended one. Its caches keep the forward
+//! kinematics and the axis comparison per table position and orientation.
+
+use lampost_kinematics::{Affine, Machine};
+use nalgebra::Vector3;
+
+use crate::error::PostError;
+use crate::intended::{Orient, Step};
+use crate::post::{index_maps, written_rotary, written_tip, EndCheck, PostConfig};
+use crate::verify::VerifyReport;
+
+/// What the check of written feed points keeps between points.
+#[derive(Debug)]
+pub(crate) struct FeedCheck {
+    /// The feed step being written, for the in-process verification.
+    pub(crate) step: Option<Step>,
+    /// (rotary, tip map of it as written), for forward kinematics.
+    pub(crate) fk_cache: ([f64; 2], Affine),
+    /// The tool axis (part frame) at the written rotary, with `fk_cache`.
+    pub(crate) fk_axis: Vector3<f64>,
+    /// The current section's orientation rule and its layer's program +Z.
+    pub(crate) orient: Orient,
+    pub(crate) program_z: Vector3<f64>,
+    /// The intended tool axis for the current orientation: (orientation, axis).
+    pub(crate) want_axis: Option<(Orient, Vector3<f64>)>,
+    /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
+    pub(crate) axis_err: Option<(Vector3<f64>, Vector3<f64>, f64)>,
+    /// The largest distance a written point may have from the intended path.
+    pub(crate) tol: f64,
+    /// A point planned on the reading thread: (joints, is the step's end, its check).
+    pub(crate) planned_check: Option<([f64; 3], bool, EndCheck)>,
+}
+
+impl FeedCheck {
+    pub(crate) fn new(machine: &Machine, cfg: &PostConfig) -> Self {
+        FeedCheck {
+            step: None,
+            fk_cache: ([f64::NAN; 2], index_maps(machine, cfg.head, &[0.0; 2]).1),
+            fk_axis: Vector3::z(),
+            orient: Orient::ToolAxis,
+            program_z: Vector3::z(),
+            want_axis: None,
+            axis_err: None,
+            tol: cfg.verify_tolerance,
+            planned_check: None,
+        }
+    }
+
+    /// Check a written feed point: the joints as the text gives them (rounded to the
+    /// output resolution), through forward kinematics, against the intended move.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn point(
+        &mut self,
+        m: &Machine,
+        head: usize,
+        scale: f64,
+        rot: &[f64; 2],
+        report: &mut VerifyReport,
+        x: &[f64; 3],
+        is_end: bool,
+    ) -> Result<(), PostError> {
+        // The fields used, not the whole step (a copy of it costs as much as the check).
+        let Some((line, orient, program_z)) = self
+            .step
+            .as_ref()
+            .map(|s| (s.line, self.orient, self.program_z))
+        else {
+            return Ok(());
+        };
+        let rot = *rot;
+        if self.fk_cache.0 != rot {
+            let (_, inv) = written_rotary(&rot);
+            self.fk_cache = (rot, m.tip_map(&inv, head));
+            self.fk_axis = m.machine_to_part_sc(&inv, &m.tool_axis)
+                - m.machine_to_part_sc(&inv, &Vector3::zeros());
+        }
+        let err = match self.planned_check {
+            // Worked out on the reading thread, for these very joints (with the same
+            // end-or-path rule).
+            Some((j, end, e)) if end == is_end && j == *x => e,
+            _ => {
+                let tip = written_tip(&self.fk_cache.1, scale, x);
+                match &self.step {
+                    Some(step) if is_end => (tip - step.end).norm(),
+                    Some(step) => crate::verify::dist_to(step, &tip),
+                    None => 0.0,
+                }
+            }
+        };
+        if err > self.tol {
+            let tip = written_tip(&self.fk_cache.1, scale, x);
+            return Err(PostError::Verify(format!(
+                "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
+                line, tip.x, tip.y, tip.z, self.tol
+            )));
+        }
+        let axis = self.fk_axis;
+        let want = match self.want_axis {
+            Some((o, a)) if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) => a,
+            _ => {
+                self.axis_err = None;
+                let a = match orient {
+                    Orient::ToolAxis => program_z.normalize(),
+                    Orient::Index(r) => {
+                        m.forward(
+                            &lampost_kinematics::Joints {
+                                linear: [0.0; 3],
+                                rotary: r,
+                            },
+                            head,
+                        )
+                        .axis
+                    }
+                };
+                self.want_axis = Some((orient, a));
+                a
+            }
+        };
+        // The axis error changes only with the rotaries or the intended axis.
+        let ang = match self.axis_err {
+            Some((a, w, e)) if a == axis && w == want => e,
+            _ => {
+                let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
+                self.axis_err = Some((axis, want, e));
+                e
+            }
+        };
+        let v = report;
+        v.compared += 1;
+        if err > v.max_position_error {
+            v.max_position_error = err;
+            v.worst_line = line;
+        }
+        v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
+        if ang > 0.01 {
+            return Err(PostError::Verify(format!(
+                "input line {}: the tool axis is {ang:.4}° off",
+                line
+            )));
+        }
+        Ok(())
+    }
+}
