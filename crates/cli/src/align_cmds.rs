@@ -475,16 +475,7 @@ pub fn register(
     json: bool,
 ) -> Result<(), CliError> {
     let (name, pts) = read_points(file)?;
-    let bytes = std::fs::read(mesh_path).map_err(|e| {
-        CliError::usage(format!(
-            "error: cannot read {mesh_path}: {e}\n  = help: give an STL file (ASCII or binary)\n"
-        ))
-    })?;
-    let mesh = lampost_align::mesh::read_stl(&bytes).map_err(|e| {
-        CliError::failed(format!(
-            "error: {mesh_path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
-        ))
-    })?;
+    let mesh = read_mesh(mesh_path)?;
     let report = lampost_align::mesh::manifold_report(&mesh);
     let mut warnings = Vec::new();
     if !report.closed() {
@@ -543,4 +534,18 @@ pub fn register(
         }
         write_text(s)
     }
+}
+
+/// An STL file (ASCII or binary) as a mesh, with located errors.
+pub fn read_mesh(path: &str) -> Result<lampost_align::mesh::Mesh, CliError> {
+    let bytes = std::fs::read(path).map_err(|e| {
+        CliError::usage(format!(
+            "error: cannot read {path}: {e}\n  = help: give an STL file (ASCII or binary)\n"
+        ))
+    })?;
+    lampost_align::mesh::read_stl(&bytes).map_err(|e| {
+        CliError::failed(format!(
+            "error: {path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
+        ))
+    })
 }

@@ -88,16 +88,7 @@ fn part_mesh(
     let Some(path) = &pl.part else {
         return Ok(None);
     };
-    let bytes = std::fs::read(path).map_err(|e| {
-        CliError::usage(format!(
-            "error: cannot read {path}: {e}\n  = help: give the part as an STL file (ASCII or binary)\n"
-        ))
-    })?;
-    let mesh = lampost_align::mesh::read_stl(&bytes).map_err(|e| {
-        CliError::failed(format!(
-            "error: {path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
-        ))
-    })?;
+    let mesh = crate::align_cmds::read_mesh(path)?;
     let bad = |e: lampost_post::collide::CollideError| {
         CliError::failed(format!(
             "error: {path}: {e}\n  = help: export the part as an STL with finite coordinates\n"

@@ -192,37 +192,14 @@ impl<'m> SafeHeights<'m> {
     /// A height safe for the whole rotary move from `from` to `to` (both axes turning
     /// together, linearly).
     pub fn over_move(&self, from: &[f64; 2], to: &[f64; 2]) -> f64 {
-        let span = (to[0] - from[0]).abs().max((to[1] - from[1]).abs());
-        let n = (span.ceil() as usize).clamp(1, 100_000);
-        let mut top = f64::NEG_INFINITY;
-        for k in 0..=n {
-            let t = k as f64 / n as f64;
-            let r = [
-                from[0] + (to[0] - from[0]) * t,
-                from[1] + (to[1] - from[1]) * t,
-            ];
-            if let Some(h) = self.work_top(&r) {
-                top = top.max(h);
-            }
-        }
+        let top = sweep_positions(from, to)
+            .filter_map(|(_, r)| self.work_top(&r))
+            .fold(f64::NEG_INFINITY, f64::max);
         if !top.is_finite() {
             return self.clearance;
         }
-        // Between samples (at most 1° apart) a point at distance d from an axis rises at
-        // most d·(1 − cos 0.5°) above the higher neighbouring sample.
-        let reach = self.work.extremes().map(|c| c.norm()).fold(0.0, f64::max)
-            + self
-                .m
-                .rotary
-                .iter()
-                .map(|r| r.pivot.norm())
-                .fold(0.0, f64::max);
-        let slack = if n > 1 {
-            reach * (1.0 - 0.5f64.to_radians().cos())
-        } else {
-            0.0
-        };
-        self.clearance.max(top + self.margin + slack)
+        self.clearance
+            .max(top + self.margin + sweep_slack(self.m, &self.work, from, to))
     }
 
     /// The top of the machine's Z travel.
@@ -269,11 +246,7 @@ pub(crate) fn rapid_meets_part(
     };
     let (radius, length) = (m.head_radius(), m.head_length());
     if rs != re {
-        let span = (re[0] - rs[0]).abs().max((re[1] - rs[1]).abs());
-        let n = (span.ceil() as usize).clamp(1, 100_000);
-        for k in 0..=n {
-            let t = k as f64 / n as f64;
-            let r = [rs[0] + (re[0] - rs[0]) * t, rs[1] + (re[1] - rs[1]) * t];
+        for (t, r) in sweep_positions(rs, re) {
             let x = [
                 xs[0] + (xe[0] - xs[0]) * t,
                 xs[1] + (xe[1] - xs[1]) * t,
@@ -311,4 +284,37 @@ pub(crate) fn rapid_meets_part(
         )));
     }
     Ok(None)
+}
+
+/// Table positions along a rotary move from `from` to `to` (both axes turning together,
+/// linearly), at most 1° apart, both ends included: (fraction of the move, position).
+pub(crate) fn sweep_positions(
+    from: &[f64; 2],
+    to: &[f64; 2],
+) -> impl Iterator<Item = (f64, [f64; 2])> {
+    let (from, to) = (*from, *to);
+    let span = (to[0] - from[0]).abs().max((to[1] - from[1]).abs());
+    let n = (span.ceil() as usize).clamp(1, 100_000);
+    (0..=n).map(move |k| {
+        let t = k as f64 / n as f64;
+        (
+            t,
+            [
+                from[0] + (to[0] - from[0]) * t,
+                from[1] + (to[1] - from[1]) * t,
+            ],
+        )
+    })
+}
+
+/// How far a point of `work` can rise between two of [`sweep_positions`] (at most 1°
+/// apart): a point at distance d from an axis rises at most d·(1 − cos 0.5°) above the
+/// higher of its neighbouring samples. Zero for a move of one step.
+pub(crate) fn sweep_slack(m: &Machine, work: &WorkBounds, from: &[f64; 2], to: &[f64; 2]) -> f64 {
+    if (to[0] - from[0]).abs().max((to[1] - from[1]).abs()) <= 1.0 {
+        return 0.0;
+    }
+    let reach = work.extremes().map(|c| c.norm()).fold(0.0, f64::max)
+        + m.rotary.iter().map(|r| r.pivot.norm()).fold(0.0, f64::max);
+    reach * (1.0 - 0.5f64.to_radians().cos())
 }

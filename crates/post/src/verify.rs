@@ -699,26 +699,8 @@ impl<'m> Safety<'m> {
         if self.work.is_empty() {
             return Ok(());
         }
-        let span = (to[0] - from[0]).abs().max((to[1] - from[1]).abs());
-        let n = (span.ceil() as usize).clamp(1, 100_000);
-        let reach = self.work.extremes().map(|c| c.norm()).fold(0.0, f64::max)
-            + self
-                .m
-                .rotary
-                .iter()
-                .map(|r| r.pivot.norm())
-                .fold(0.0, f64::max);
-        let slack = if n > 1 {
-            reach * (1.0 - 0.5f64.to_radians().cos())
-        } else {
-            0.0
-        };
-        for k in 0..=n {
-            let t = k as f64 / n as f64;
-            let r = [
-                from[0] + (to[0] - from[0]) * t,
-                from[1] + (to[1] - from[1]) * t,
-            ];
+        let slack = crate::safety::sweep_slack(self.m, &self.work, from, to);
+        for (_, r) in crate::safety::sweep_positions(from, to) {
             let h = self.height(x, &r);
             if h < self.margin + slack - self.eps {
                 return Err(Self::fail(
