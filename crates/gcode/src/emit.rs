@@ -175,7 +175,7 @@ const FAST_MAX: [f64; 10] = {
 /// Written in place: 32 bytes are made room for, the digits go straight to where
 /// they belong (left to right, the digit count worked out first), and the line is cut
 /// back to the text.
-#[inline]
+#[inline(always)]
 fn push_scaled<const D: usize>(out: &mut Vec<u8>, n: i64) {
     const { assert!(D >= 1 && D <= 8) };
     let p = 10u64.pow(D as u32);

@@ -499,6 +499,7 @@ impl<'m, W: Write> Writer<'m, W> {
         )
     }
 
+    #[inline]
     pub(crate) fn note_limits(&mut self, joints: &[f64; 5]) {
         for (k, v) in joints.iter().enumerate() {
             let e = &mut self.report.limits_used[k];
@@ -507,6 +508,7 @@ impl<'m, W: Write> Writer<'m, W> {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn check(
         &self,
         file: &str,
