@@ -7,25 +7,6 @@ mod common;
 
 use common::*;
 
-/// rs274's printed resolution: half of 1e-4, plus rounding slack.
-const TOL: f64 = 0.5e-4 + 1e-9;
-
-/// Drop what standalone rs274 cannot run: LinuxCNC's TCP mode switches (M428/M429,
-/// which only the machine's kinematics module knows) and HAL pin reads.
-fn prepare(text: &str) -> String {
-    text.lines()
-        .filter(|l| {
-            let t = l.trim().to_ascii_lowercase();
-            !(t.starts_with("m428") || t.starts_with("m429") || t.contains("_hal["))
-        })
-        .map(|l| format!("{l}\n"))
-        .collect()
-}
-
-fn axis(v: &serde_json::Value, a: &str) -> f64 {
-    v.get(a).and_then(serde_json::Value::as_f64).unwrap_or(0.0)
-}
-
 #[test]
 fn trace_matches_rs274_on_linuxcnc_corpus() {
     let Some(shared) = shared() else {
@@ -60,80 +41,10 @@ fn trace_matches_rs274_on_linuxcnc_corpus() {
             String::from_utf8_lossy(&out.stderr)
         );
         let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
-        let moves = doc["moves"].as_array().expect("moves");
-        assert_eq!(
-            moves.len(),
-            canon.len(),
-            "{}: {} moves, rs274 {}",
-            path.display(),
-            moves.len(),
-            canon.len()
-        );
-        for (m, c) in moves.iter().zip(&canon) {
-            let end = &m["end"];
-            let g = m["g"].as_str().expect("g");
-            let (ours, theirs): (Vec<f64>, Vec<f64>) = match c.kind.as_str() {
-                "ARC_FEED" => {
-                    assert!(
-                        g == "G2" || g == "G3",
-                        "{}: line {} is {g}, rs274 ARC_FEED",
-                        path.display(),
-                        m["line"]
-                    );
-                    let plane = m["kind"]["plane"].as_str().expect("plane");
-                    let (u, v, n, ui, vi) = match plane {
-                        "XY" => ("X", "Y", "Z", 0, 1),
-                        "XZ" => ("Z", "X", "Y", 2, 0),
-                        _ => ("Y", "Z", "X", 1, 2),
-                    };
-                    let center = m["kind"]["center"].as_array().expect("center");
-                    let turns = m["kind"]["turns"].as_f64().expect("turns");
-                    let rot = if g == "G2" { -turns } else { turns };
-                    let ours = vec![
-                        axis(end, u),
-                        axis(end, v),
-                        center[ui].as_f64().expect("c"),
-                        center[vi].as_f64().expect("c"),
-                        rot,
-                        axis(end, n),
-                        axis(end, "A"),
-                        axis(end, "B"),
-                        axis(end, "C"),
-                    ];
-                    (ours, c.args[..9].to_vec())
-                }
-                kind => {
-                    let want = if kind == "STRAIGHT_TRAVERSE" {
-                        "G0"
-                    } else {
-                        "G1"
-                    };
-                    assert_eq!(
-                        g,
-                        want,
-                        "{}: our line {} vs rs274 {kind}",
-                        path.display(),
-                        m["line"]
-                    );
-                    let ours = ["X", "Y", "Z", "A", "B", "C"]
-                        .iter()
-                        .map(|a| axis(end, a))
-                        .collect();
-                    (ours, c.args[..6].to_vec())
-                }
-            };
-            for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
-                total += 1;
-                if format!("{a:.4}").parse::<f64>().ok() == Some(*b) {
-                    exact += 1;
-                }
-                assert!(
-                    (a - b).abs() <= TOL,
-                    "{}: source line {}, value {i}: lampost {a} vs rs274 {b} (rs274 output line {})",
-                    path.display(), m["line"], c.line
-                );
-            }
-        }
+        let (n, same) =
+            compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        total += n;
+        exact += same;
     }
     eprintln!(
         "rs274 comparison: {total} coordinates, {exact} identical after rounding to 4 decimals"
@@ -245,7 +156,7 @@ fn posted_iso_output_reads_the_same_in_rs274() {
             for (a, b) in ours.iter().zip(&theirs) {
                 total += 1;
                 assert!(
-                    (a - b).abs() <= TOL,
+                    (a - b).abs() <= RS274_TOL,
                     "run {k}, posted line {}: lampost {a} vs rs274 {b}",
                     m["line"]
                 );
