@@ -176,12 +176,103 @@ pub fn display_name(path: &str) -> String {
     }
 }
 
+/// Temporary files alive now: removed if the process is interrupted (SIGINT, SIGTERM,
+/// SIGHUP), so no run leaves one behind.
+static LIVE_TEMPS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    LIVE_TEMPS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// On SIGINT, SIGTERM or SIGHUP: remove every temporary file alive, then exit with 130.
+pub fn remove_temps_on_signal() {
+    let _ = ctrlc::set_handler(|| {
+        for p in live().drain(..) {
+            let _ = fs::remove_file(p);
+        }
+        std::process::exit(130);
+    });
+}
+
+/// The one temporary-file helper: a file created beside its target (for standard
+/// output, in the temporary folder), removed when dropped, on an interrupt, or on any
+/// error; [`TempFile::persist`] renames it over the target.
+#[derive(Debug)]
+pub struct TempFile {
+    path: PathBuf,
+}
+
+impl TempFile {
+    /// A new, empty temporary file for `target` (`None` or `-`: standard output).
+    pub fn beside(target: Option<&str>) -> Result<(TempFile, File), CliError> {
+        let target = target.filter(|t| *t != "-");
+        let dir = match target {
+            // A bare name: its folder is the current one (a rename never crosses file
+            // systems).
+            Some(t) => Path::new(t)
+                .parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
+            None => std::env::temp_dir(),
+        };
+        let name = target
+            .and_then(|t| Path::new(t).file_name())
+            .map_or_else(|| "stdout".into(), |n| n.to_string_lossy().into_owned());
+        let mut k = 0u32;
+        loop {
+            let path = dir.join(format!(".{name}.{}.{k}.tmp", std::process::id()));
+            match fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(f) => {
+                    live().push(path.clone());
+                    return Ok((TempFile { path }, f));
+                }
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists && k < 1000 => k += 1,
+                Err(e) => {
+                    return Err(CliError::usage(format!(
+                        "error: cannot write {}: {e}\n  = help: check that the folder exists and is writable",
+                        path.display()
+                    )))
+                }
+            }
+        }
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Rename it over `target`.
+    pub fn persist(self, target: &Path) -> Result<(), CliError> {
+        fs::rename(&self.path, target).map_err(|e| {
+            CliError::usage(format!("error: cannot write {}: {e}", target.display()))
+        })?;
+        live().retain(|p| p != &self.path);
+        std::mem::forget(self);
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = fs::remove_file(&self.path);
+        live().retain(|p| p != &self.path);
+    }
+}
+
 /// Where output goes: stdout, or a temporary file beside the target that is renamed
 /// over it only on [`Output::commit`]; dropped uncommitted, the temporary file is
 /// removed, so a failed run never leaves a half-written file.
 pub struct Output {
     writer: Option<BufWriter<Box<dyn Write>>>,
-    temp: Option<PathBuf>,
+    temp: Option<TempFile>,
     target: Option<PathBuf>,
 }
 
@@ -206,26 +297,11 @@ impl Output {
                 target: None,
             }),
             Some(p) => {
-                let target = PathBuf::from(p);
-                let dir = target
-                    .parent()
-                    .filter(|d| !d.as_os_str().is_empty())
-                    .unwrap_or(Path::new("."));
-                let name = target
-                    .file_name()
-                    .map(|n| n.to_string_lossy().into_owned())
-                    .unwrap_or_else(|| "out".into());
-                let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-                let f = File::create(&temp).map_err(|e| {
-                    CliError::usage(format!(
-                        "error: cannot write {}: {e}\n  = help: check that the folder exists and is writable",
-                        temp.display()
-                    ))
-                })?;
+                let (temp, f) = TempFile::beside(Some(p))?;
                 Ok(Output {
                     writer: Some(BufWriter::with_capacity(1 << 16, Box::new(f))),
                     temp: Some(temp),
-                    target: Some(target),
+                    target: Some(PathBuf::from(p)),
                 })
             }
         }
@@ -245,10 +321,7 @@ impl Output {
             w.flush().map_err(|e| CliError::write(&e))?;
         }
         if let (Some(temp), Some(target)) = (self.temp.take(), self.target.take()) {
-            fs::rename(&temp, &target).map_err(|e| {
-                let _ = fs::remove_file(&temp);
-                CliError::usage(format!("error: cannot write {}: {e}", target.display()))
-            })?;
+            temp.persist(&target)?;
         }
         Ok(())
     }
@@ -261,9 +334,8 @@ fn unreachable_writer() -> &'static mut dyn Write {
 
 impl Drop for Output {
     fn drop(&mut self) {
+        // The writer first (it holds the file), then the temporary file goes.
         self.writer.take();
-        if let Some(temp) = self.temp.take() {
-            let _ = fs::remove_file(temp);
-        }
+        self.temp.take();
     }
 }

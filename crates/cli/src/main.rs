@@ -754,6 +754,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
 
 fn main() {
     let cli = Cli::parse();
+    io::remove_temps_on_signal();
     if let Err(e) = run(cli) {
         if e.code == report::QUIET_EXIT {
             // The reader of our output went away (e.g. `| head`): stop quietly.

@@ -546,44 +546,6 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
     })
 }
 
-/// A temporary file beside `target` (or in the temp folder), removed unless persisted.
-struct Temp {
-    path: PathBuf,
-    keep: bool,
-}
-
-impl Temp {
-    fn beside(target: Option<&str>) -> Self {
-        let dir = target
-            .and_then(|t| {
-                Path::new(t)
-                    .parent()
-                    .filter(|d| !d.as_os_str().is_empty())
-                    .map(Path::to_path_buf)
-            })
-            .unwrap_or_else(std::env::temp_dir);
-        let name = format!(
-            ".lampost-post-{}-{}.tmp",
-            std::process::id(),
-            target.map_or("stdout".into(), |t| Path::new(t)
-                .file_name()
-                .map_or("out".into(), |n| n.to_string_lossy().into_owned()))
-        );
-        Temp {
-            path: dir.join(name),
-            keep: false,
-        }
-    }
-}
-
-impl Drop for Temp {
-    fn drop(&mut self) {
-        if !self.keep {
-            let _ = std::fs::remove_file(&self.path);
-        }
-    }
-}
-
 fn werr(e: std::io::Error) -> CliError {
     CliError::write(&e)
 }
@@ -610,10 +572,7 @@ pub fn post(
             ));
         }
     }
-    let tmp = Temp::beside(output);
-    let file = std::fs::File::create(&tmp.path).map_err(|e| {
-        CliError::usage(format!("error: cannot write {}: {e}\n", tmp.path.display()))
-    })?;
+    let (tmp, file) = crate::io::TempFile::beside(output)?;
     let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
     let (report, cfg) = if is_per_point(&a.place, input) {
         // The per-point post, then its verification of what was written.
@@ -630,7 +589,7 @@ pub fn post(
             lampost_post::pointwise::post_points(&m, &pts, &frame, &name, &cfg, &mut bw)
                 .map_err(post_error)?;
         bw.flush().map_err(werr)?;
-        let posted = std::fs::File::open(&tmp.path).map_err(werr)?;
+        let posted = std::fs::File::open(tmp.path()).map_err(werr)?;
         report.verify = lampost_post::pointwise::verify_points(
             &m,
             &pts,
@@ -666,11 +625,20 @@ pub fn post(
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
-    let total = std::fs::metadata(&tmp.path).map_err(werr)?.len();
+    let total = std::fs::metadata(tmp.path()).map_err(werr)?.len();
+    // Everything to write is staged in temporary files first, and renamed into place
+    // together at the end: the program (or all its pieces) and the report.
+    let mut staged: Vec<(crate::io::TempFile, PathBuf)> = Vec::new();
     let mut written: Vec<String> = Vec::new();
-    match (max_bytes, output) {
+    let mut whole = Some(tmp);
+    let file_out = output.filter(|o| *o != "-");
+    match (max_bytes, file_out) {
         (Some(max), Some(out)) if total as usize > max => {
-            let mut f = std::fs::File::open(&tmp.path).map_err(werr)?;
+            let path = whole
+                .as_ref()
+                .map(|t| t.path().to_path_buf())
+                .unwrap_or_default();
+            let mut f = std::fs::File::open(&path).map_err(werr)?;
             let pieces = lampost_post::split::split(
                 &mut f,
                 total,
@@ -686,14 +654,20 @@ pub fn post(
                 } else {
                     numbered(out, p.number)
                 };
-                let mut o = crate::io::Output::create(Some(&name))?;
-                o.writer().write_all(&p.text).map_err(werr)?;
-                o.commit()?;
+                let (t, mut f) = crate::io::TempFile::beside(Some(&name))?;
+                f.write_all(&p.text).map_err(werr)?;
+                f.flush().map_err(werr)?;
+                staged.push((t, PathBuf::from(&name)));
                 written.push(name);
             }
         }
-        // Fits as it is.
-        _ => written.push(persist(&tmp, output)?),
+        (_, Some(out)) => {
+            if let Some(t) = whole.take() {
+                staged.push((t, PathBuf::from(out)));
+            }
+            written.push(out.to_string());
+        }
+        (_, None) => written.push("<stdout>".into()),
     }
     if let Some(path) = json_report {
         let limits: Vec<serde_json::Value> = report
@@ -706,13 +680,39 @@ pub fn post(
             "indexes": report.indexes, "verify": v, "bytes": total, "files": written,
             "time_s": t0.elapsed().as_secs_f64(),
         });
-        let mut o = crate::io::Output::create(Some(path))?;
-        o.writer()
-            .write_all(format!("{j}\n").as_bytes())
-            .map_err(werr)?;
-        o.commit()?;
+        if path == "-" {
+            println!("{j}");
+        } else {
+            let (t, mut f) = crate::io::TempFile::beside(Some(path))?;
+            f.write_all(format!("{j}\n").as_bytes()).map_err(werr)?;
+            staged.push((t, PathBuf::from(path)));
+        }
+    }
+    for (t, target) in staged {
+        t.persist(&target)?;
+    }
+    if let Some(out) = file_out {
+        remove_stale_pieces(out, written.len());
+    } else if let Some(t) = whole {
+        let mut f = std::fs::File::open(t.path()).map_err(werr)?;
+        let mut out = std::io::stdout().lock();
+        std::io::copy(&mut f, &mut out).map_err(werr)?;
+        out.flush().map_err(werr)?;
     }
     Ok(())
+}
+
+/// Pieces of an earlier split of `out` beyond the `count` files this run wrote (`OUT.NNN`
+/// numbered on from there) are stale: removed, so a set on disk is always one run's.
+fn remove_stale_pieces(out: &str, count: usize) {
+    let first = if count > 1 { count + 1 } else { 1 };
+    for n in first.. {
+        let stale = numbered(out, n);
+        if std::fs::remove_file(&stale).is_err() {
+            break;
+        }
+        eprintln!("removed {stale}: a piece of an earlier split");
+    }
 }
 
 /// The smallest `--max-bytes`: a piece must hold the header and preamble.
@@ -729,23 +729,6 @@ fn numbered(out: &str, n: usize) -> String {
     p.with_file_name(format!("{stem}.{n:03}{ext}"))
         .to_string_lossy()
         .into_owned()
-}
-
-fn persist(tmp: &Temp, output: Option<&str>) -> Result<String, CliError> {
-    match output {
-        Some(o) if o != "-" => {
-            std::fs::rename(&tmp.path, o)
-                .map_err(|e| CliError::usage(format!("error: cannot write {o}: {e}\n")))?;
-            Ok(o.to_string())
-        }
-        _ => {
-            let mut f = std::fs::File::open(&tmp.path).map_err(werr)?;
-            let mut out = std::io::stdout().lock();
-            std::io::copy(&mut f, &mut out).map_err(werr)?;
-            out.flush().map_err(werr)?;
-            Ok("<stdout>".into())
-        }
-    }
 }
 
 #[allow(clippy::too_many_arguments)]

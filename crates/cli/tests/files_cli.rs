@@ -1,0 +1,165 @@
+//! Nothing stale or partial (issue 13, item 3): temporary files beside their target and
+//! removed on an interrupt; a split written as a set, with stale pieces of an earlier
+//! split removed; `-o` and `--json-report` committed together or not at all.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use std::process::Command;
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn fx(name: &str) -> String {
+    root()
+        .join("fixtures/post")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn temps(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.ends_with(".tmp"))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// A long planar program (to interrupt a post of it).
+fn long_program(lines: usize) -> String {
+    let mut s = String::from("G21 G90\nG0 X0 Y0 Z1\nG1 Z0 F600\n");
+    for i in 0..lines {
+        let x = (i % 200) as f64 * 0.1;
+        let y = ((i / 200) % 200) as f64 * 0.1;
+        s += &format!("G1 X{x:.3} Y{y:.3}\n");
+    }
+    s + "G0 Z5\nM30\n"
+}
+
+#[test]
+fn an_interrupted_post_leaves_no_temporary_file() {
+    let dir = tempdir("files-signal");
+    let input = dir.join("long.nc");
+    std::fs::write(&input, long_program(400_000)).expect("write");
+    let out = dir.join("out.nc");
+    for signal in ["-TERM", "-INT"] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_lampost"))
+            .args(["post", "--machine", "nrc-lc", "--index", "B=30,C=45"])
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("spawn");
+        // Wait until the temporary file exists, then interrupt.
+        let t0 = std::time::Instant::now();
+        while temps(&dir).is_empty() && t0.elapsed().as_secs() < 20 {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        assert!(!temps(&dir).is_empty(), "no temporary file seen");
+        let killed = Command::new("kill")
+            .arg(signal)
+            .arg(child.id().to_string())
+            .status()
+            .expect("kill");
+        assert!(killed.success());
+        let status = child.wait().expect("wait");
+        assert!(
+            !status.success(),
+            "{signal}: the post finished before the signal"
+        );
+        assert!(temps(&dir).is_empty(), "{signal}: left {:?}", temps(&dir));
+        assert!(!out.exists(), "{signal}: a partial output");
+    }
+}
+
+#[test]
+fn a_bare_output_name_is_written_beside_itself() {
+    let dir = tempdir("files-bare");
+    // The temporary folder does not exist: the temporary file must not go there.
+    let o = Command::new(env!("CARGO_BIN_EXE_lampost"))
+        .current_dir(&dir)
+        .env("TMPDIR", dir.join("no-such-folder"))
+        .args([
+            "post",
+            "--machine",
+            "nrc-lc",
+            &fx("patch-20mm.nc"),
+            "-o",
+            "out.nc",
+        ])
+        .output()
+        .expect("run");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.join("out.nc").exists());
+    assert!(temps(&dir).is_empty());
+}
+
+#[test]
+fn a_split_is_one_runs_set_and_the_report_commits_with_it() {
+    let dir = tempdir("files-split");
+    let out = dir.join("arc.nc");
+    let o_s = out.to_string_lossy().into_owned();
+    let post = |max: &str| {
+        lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--index",
+            "B=30,C=45",
+            "--convert-units",
+            &fx("wall.nc"),
+            "-o",
+            &o_s,
+            "--max-bytes",
+            max,
+        ])
+    };
+    let pieces = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .expect("dir")
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("arc.0"))
+            .collect();
+        v.sort();
+        v
+    };
+    let o = post("600");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let many = pieces(&dir);
+    assert!(many.len() >= 3, "{many:?}");
+    let o = post("1500");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let fewer = pieces(&dir);
+    assert!(fewer.len() < many.len(), "stale pieces left: {fewer:?}");
+    // Unsplit: no piece of the earlier split remains.
+    let o = post("100000000");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(pieces(&dir).is_empty(), "{:?}", pieces(&dir));
+    assert!(out.exists());
+    // A report that cannot be written: nothing is renamed into place.
+    let out2 = dir.join("second.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &fx("patch-20mm.nc"),
+        "-o",
+        &out2.to_string_lossy(),
+        "--json-report",
+        &dir.join("no-such-folder/r.json").to_string_lossy(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        !out2.exists(),
+        "-o renamed into place although the report failed"
+    );
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+}
