@@ -421,6 +421,9 @@ pub struct PostArgs {
     /// Program number (FADAL O word).
     #[arg(long, default_value_t = 1000)]
     pub program_number: u32,
+    /// The largest posted program, as a multiple of the input's size (at least 16 MiB).
+    #[arg(long, default_value_t = 50.0)]
+    pub max_growth: f64,
 }
 
 /// The head a process uses unless one is named: laser for deposition, spindle for
@@ -543,7 +546,29 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         verify_tolerance: 2.0 * tolerance,
         work: extra_work(&a.place, part.as_deref())?,
         part,
+        max_output_bytes: Some(output_bound(
+            a.max_growth,
+            sections
+                .iter()
+                .map(|s| match &s.source {
+                    Source::Path(p) => std::fs::metadata(p).map_or(0, |m| m.len()),
+                    Source::Bytes(b) => b.len() as u64,
+                })
+                .sum(),
+        )?),
     })
+}
+
+/// The bound on a posted program's size: `growth` times the input's `bytes`, at least
+/// 16 MiB.
+fn output_bound(growth: f64, bytes: u64) -> Result<u64, CliError> {
+    if !(growth.is_finite() && growth >= 1.0) {
+        return Err(CliError::usage(format!(
+            "error: --max-growth {growth}: give a number of at least 1 (the output may be that many times the input)\n"
+        )));
+    }
+    let bound = (growth * bytes as f64).min(u64::MAX as f64) as u64;
+    Ok(bound.max(16 << 20))
 }
 
 fn werr(e: std::io::Error) -> CliError {
@@ -578,6 +603,11 @@ pub fn post(
         // The per-point post, then its verification of what was written.
         let (frame, pts, name) = per_point_input(&a.place, input.unwrap_or("-"))?;
         let mut cfg = config(&m, a, &[])?;
+        let csv_bytes = input
+            .filter(|i| *i != "-")
+            .and_then(|i| std::fs::metadata(i).ok())
+            .map_or(0, |md| md.len());
+        cfg.max_output_bytes = Some(output_bound(a.max_growth, csv_bytes)?);
         let short = Path::new(&name)
             .file_name()
             .map_or(name.clone(), |n| n.to_string_lossy().into_owned());

@@ -163,3 +163,51 @@ fn a_split_is_one_runs_set_and_the_report_commits_with_it() {
     );
     assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
 }
+
+/// Output growth is bounded (issue 13): 100 blocks of a 300-turn helix at a tilted index
+/// would be linearised into about 1.5 million lines; the post stops at its bound (50×
+/// the input, at least 16 MiB) with the line, and writes nothing.
+#[test]
+fn output_growth_is_bounded() {
+    let dir = tempdir("files-growth");
+    let mut text = String::from("G21 G90\nG0 X-10 Y0 Z1\nG1 Z0 F100\n");
+    for _ in 0..100 {
+        text += "G2 X-10 Y0 I5 J0 P300\n";
+    }
+    text += "G0 Z5\nM30\n";
+    let input = dir.join("helix.nc");
+    std::fs::write(&input, text).expect("write");
+    let out = dir.join("out.nc");
+    let t0 = std::time::Instant::now();
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=30,C=45",
+        &input.to_string_lossy(),
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(!o.status.success(), "posted a helix of 30,000 turns");
+    assert!(
+        stderr(&o).contains("bytes") && stderr(&o).contains("--max-growth"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists() && temps(&dir).is_empty());
+    assert!(t0.elapsed().as_secs() < 60);
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &input.to_string_lossy(),
+        "--max-growth",
+        "0.5",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--max-growth"),
+        "{}",
+        stderr(&o)
+    );
+}

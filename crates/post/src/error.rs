@@ -67,6 +67,16 @@ pub enum PostError {
         /// The table position.
         rot: [f64; 2],
     },
+    /// The program grows beyond the bound on output size.
+    #[error("{file}:{line}: the posted program passes {limit} bytes here (the bound on its size)")]
+    TooLarge {
+        /// Input name.
+        file: String,
+        /// Input line being written.
+        line: u32,
+        /// The bound.
+        limit: u64,
+    },
     /// A kinematic problem (unreachable orientation, bad machine).
     #[error("{context}{err}")]
     Kin {
@@ -110,6 +120,7 @@ impl PostError {
             PostError::Units { .. } => "post with --convert-units to scale the program, or output the program in the machine's units",
             PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits",
             PostError::SafeHeight { .. } => "place the part lower (--origin or the setup), choose an index that keeps it lower, or check clearance_z, safe_margin and the Z limits in the machine file",
+            PostError::TooLarge { .. } => "an arc of many turns or a fine chord tolerance at a tilted index makes many lines: raise --max-growth, or keep arcs in the index's plane",
             PostError::Kin { .. } => "choose an orientation within the rotary limits, or re-fixture the part",
             PostError::File { .. } => "fix the file; see docs/post.md for its keys",
             PostError::Empty(_) => "give a program with moves",

@@ -322,6 +322,7 @@ mod tests {
                 verify_tolerance: 0.001,
                 work: stock.map(|_| extra.clone()),
                 part: None,
+                max_output_bytes: None,
             };
             let mut spec = Vec::new();
             let r = post(&m, &secs, &cfg, &mut spec, |_| {}).expect("posts");

@@ -78,6 +78,10 @@ pub struct PostConfig {
     /// The part as a mesh (part frame): no rapid's tip path and no head meets it (checked
     /// in-process on every rapid written). Its hull points belong in `work` too.
     pub part: Option<std::sync::Arc<crate::collide::PartMesh>>,
+    /// The largest program the post may write, in bytes (a bound on output growth: a
+    /// 300-turn helix linearised at a tilted index is thousands of lines); `None`: no
+    /// bound.
+    pub max_output_bytes: Option<u64>,
 }
 
 /// What a post did.

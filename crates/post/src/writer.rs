@@ -86,6 +86,8 @@ pub(crate) struct Writer<'m, W: Write> {
     /// value written lands on the machine's grid, so the controller runs what was checked.
     pub(crate) lin_snap: [Option<f64>; 3],
     pub(crate) rot_snap: [Option<f64>; 2],
+    /// The bound on the program's size (bytes).
+    pub(crate) max_bytes: u64,
 }
 
 impl<'m, W: Write> Writer<'m, W> {
@@ -130,6 +132,7 @@ impl<'m, W: Write> Writer<'m, W> {
                 let r = machine.linear[k].resolution;
                 (r * linear_scale(units) > 1.0 + 1e-9).then_some(r)
             }),
+            max_bytes: cfg.max_output_bytes.unwrap_or(u64::MAX),
             rot_snap: [0, 1].map(|k| {
                 let r = machine.rotary[k].resolution;
                 (r * 1e3 > 1.0 + 1e-9).then_some(r)
@@ -382,7 +385,7 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         self.report.moves += 1;
         self.in_run = true;
-        Ok(())
+        self.within_size(file, line)
     }
 
     /// An arc kept as an arc (its plane is the machine's XY plane): `G2`/`G3` from joints
@@ -428,7 +431,7 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         self.pos = Some(*end);
         self.report.moves += 1;
-        Ok(())
+        self.within_size(file, step.line)
     }
 
     /// The postamble: laser off, coolant and spindle off, the lift to the safe height,
@@ -667,6 +670,19 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         self.pos = Some(*x);
         self.report.moves += 1;
+        self.within_size(file, line)
+    }
+
+    /// The program so far within its bound on size.
+    #[inline]
+    fn within_size(&self, file: &str, line: u32) -> Result<(), PostError> {
+        if self.offset() > self.max_bytes {
+            return Err(PostError::TooLarge {
+                file: file.to_string(),
+                line,
+                limit: self.max_bytes,
+            });
+        }
         Ok(())
     }
 }

@@ -37,6 +37,7 @@ fn config(m: &Machine, process: Process) -> PostConfig {
         verify_tolerance: 0.001,
         work: None,
         part: None,
+        max_output_bytes: None,
     }
 }
 

@@ -134,6 +134,7 @@ fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
         verify_tolerance: 2.0 * tolerance,
         work: None,
         part: None,
+        max_output_bytes: None,
     }
 }
 
