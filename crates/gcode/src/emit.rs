@@ -465,6 +465,17 @@ fn format_value_slow(
     s
 }
 
+/// The emitter's guard: a non-finite number is an error, never text.
+fn not_finite(letter: u8, v: f64) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!(
+            "refused to write {}{v}: a word must hold a finite number",
+            char::from(letter)
+        ),
+    )
+}
+
 impl<W: Write> Emitter<W> {
     /// An emitter writing to `out`.
     pub fn new(out: W, opts: EmitOptions) -> Self {
@@ -691,6 +702,9 @@ impl<W: Write> Emitter<W> {
     /// Write a block made of words (letter, value) and an optional comment, in the
     /// dialect (or ISO spelling when verbatim), numbered when renumbering.
     pub fn words(&mut self, words: &[(u8, f64)], comment: Option<&str>) -> io::Result<()> {
+        if let Some(&(l, v)) = words.iter().find(|(_, v)| !v.is_finite()) {
+            return Err(not_finite(l, v));
+        }
         self.frame_start(false)?;
         self.line.truncate(self.start);
         self.last_percent = false;
@@ -735,6 +749,15 @@ impl<W: Write> Emitter<W> {
         scale: f64,
         feed: Option<f64>,
     ) -> io::Result<()> {
+        if !g.is_finite() {
+            return Err(not_finite(b'G', g));
+        }
+        if let Some(&(l, v, _)) = axes.iter().find(|(_, v, _)| !v.is_finite()) {
+            return Err(not_finite(l, v));
+        }
+        if let Some(f) = feed.filter(|f| !f.is_finite()) {
+            return Err(not_finite(b'F', f));
+        }
         self.frame_start(false)?;
         self.line.truncate(self.start);
         self.last_percent = false;
@@ -1019,6 +1042,23 @@ mod tests {
                     "{v} {d}"
                 );
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod finite_guard {
+    use super::*;
+
+    /// A non-finite number never becomes text: `words` and `motion` refuse it.
+    #[test]
+    fn non_finite_words_are_errors() {
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut e = Emitter::new(Vec::new(), EmitOptions::default());
+            assert!(e.words(&[(b'G', 1.0), (b'X', v)], None).is_err());
+            assert!(e.motion(1.0, &[(b'X', v, 0)], 1e4, None).is_err());
+            assert!(e.motion(1.0, &[(b'X', 1.0, 10_000)], 1e4, Some(v)).is_err());
+            assert!(e.finish().is_ok());
         }
     }
 }
