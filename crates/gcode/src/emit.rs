@@ -1002,12 +1002,14 @@ mod tests {
                 let mut w = vec![(b'G', *g)];
                 w.extend(axes.iter().copied());
                 w.extend(feed.map(|f| (b'F', f)));
-                a.words(&w, None).expect("a Vec takes any write");
                 let scaled: Vec<(u8, f64, i64)> = axes
                     .iter()
                     .map(|&(l, v)| (l, v, round_half_away(v * scale) as i64))
                     .collect();
-                b.motion(*g, &scaled, *scale, *feed).expect("a Vec takes any write");
+                // A non-finite number is refused by both, alike (the guard).
+                let (ra, rb) = (a.words(&w, None), b.motion(*g, &scaled, *scale, *feed));
+                prop_assert_eq!(ra.is_err(), rb.is_err());
+                prop_assert_eq!(ra.is_err(), w.iter().any(|(_, v)| !v.is_finite()));
             }
             let (a, b) = (a.finish().expect("a Vec takes any write"), b.finish().expect("a Vec takes any write"));
             prop_assert_eq!(String::from_utf8_lossy(&b), String::from_utf8_lossy(&a));
