@@ -195,6 +195,8 @@ struct Words<'b, 'a> {
     bare: u16,
     /// The first verbatim text of the block, if any.
     first_text: Option<&'b crate::ast::Text<'a>>,
+    /// A verbatim text that is not bare axis letters.
+    odd_text: bool,
 }
 
 impl<'b, 'a> Words<'b, 'a> {
@@ -368,6 +370,7 @@ impl Interpreter {
             ms: smallvec::SmallVec::new(),
             bare: 0,
             first_text: None,
+            odd_text: false,
         };
         self.collect(b, &mut w)?;
         // A block of an M-code lampost does not act on (a firmware or control setting:
@@ -378,7 +381,12 @@ impl Interpreter {
             // Verbatim text stands only where a code may carry it (the parser reads it
             // after a setting M-code, a T word or a homing code); a bare letter is an axis
             // only for homing.
-            if !settings && !homing && (w.bare != 0 || !w.gs.is_empty()) {
+            let misplaced = if homing {
+                w.odd_text
+            } else {
+                w.bare != 0 || !w.gs.is_empty()
+            };
+            if !settings && misplaced {
                 let letter = t.text.chars().next().unwrap_or('?').to_ascii_uppercase();
                 return Err(diag(
                     b,
@@ -407,8 +415,12 @@ impl Interpreter {
                 Item::Word(word) => word,
                 Item::Comment(_) => continue,
                 Item::Text(t) => {
-                    w.bare |= t.bare_axes();
-                    w.first_text = w.first_text.or(Some(t));
+                    let axes = t.bare_axes();
+                    w.bare |= axes;
+                    w.odd_text |= axes == 0;
+                    if w.first_text.is_none() || axes == 0 {
+                        w.first_text = Some(t);
+                    }
                     continue;
                 }
             };

@@ -528,6 +528,22 @@ pub fn parse_line_with<'a>(
                     Err(e) => return Err(e),
                 }
             }
+            _ if lenient && !c.is_ascii_alphabetic() => {
+                // A firmware code's own token that is no word (`: 2`, `1`): verbatim.
+                let mut end = i + 1;
+                while end < bytes.len() && !matches!(bytes[end], b' ' | b'\t' | b';' | b'(') {
+                    end = if bytes[end] == b'"' {
+                        string_end(bytes, end)
+                    } else {
+                        end + 1
+                    };
+                }
+                block.items.push(Item::Text(Text {
+                    text: &text[i..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
+            }
             b'0'..=b'9' | b'+' | b'-' | b'.' => {
                 let end = match number(&text[i..]) {
                     Ok((rest, _)) => bytes.len() - rest.len(),

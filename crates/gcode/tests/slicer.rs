@@ -83,6 +83,8 @@ fn homing_with_bare_axis_letters() {
     assert_eq!(errors.len(), 1);
     let (_, errors) = run("T1 X\n");
     assert_eq!(errors.len(), 1, "{errors:?}");
+    let (_, errors) = run("G28 X judge\n");
+    assert_eq!(errors.len(), 1, "{errors:?}");
 }
 
 #[test]
