@@ -376,8 +376,8 @@ impl Interpreter {
         // A block of an M-code lampost does not act on (a firmware or control setting:
         // `M201 X4000 Y4000`, `M205 X1 Y1 Z1 E1`) and no G-code: its words are its own.
         let settings = w.gs.is_empty() && w.ms.iter().any(|&(_, c)| !m_known(c));
-        let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
         if let Some(t) = w.first_text {
+            let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
             // Verbatim text stands only where a code may carry it (the parser reads it
             // after a setting M-code, a T word or a homing code); a bare letter is an axis
             // only for homing.

@@ -494,7 +494,7 @@ pub fn parse_line_with<'a>(
                             span: Span::new(offset + start, offset + end),
                         }));
                         i = end;
-                        let code = if letter == b'G' || letter == b'M' {
+                        let code = if letter == b'M' || letter == b'G' && !lenient {
                             Word::code_of(value)
                         } else {
                             None
