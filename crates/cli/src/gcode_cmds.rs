@@ -262,6 +262,9 @@ fn move_json(m: &Move) -> serde_json::Value {
     if let Some(e) = m.extrusion {
         v["extrusion"] = serde_json::json!(e);
     }
+    if let Some(e) = m.extruded {
+        v["extruded"] = serde_json::json!(e);
+    }
     v
 }
 

@@ -53,7 +53,12 @@ impl Word<'_> {
     /// The G or M code number times ten, if the value has at most one decimal
     /// (`G31.1` gives 311, `G1` gives 10).
     pub fn code(&self) -> Option<u16> {
-        let tenths = self.value * 10.0;
+        Self::code_of(self.value)
+    }
+
+    /// [`Word::code`] of a value.
+    pub fn code_of(value: f64) -> Option<u16> {
+        let tenths = value * 10.0;
         let rounded = crate::emit::round_half_away(tenths);
         if (tenths - rounded).abs() < 1e-6 && (0.0..=65535.0).contains(&rounded) {
             Some(rounded as u16)
@@ -83,6 +88,33 @@ pub struct Comment<'a> {
     pub span: Span,
 }
 
+/// Text a control reads but lampost keeps verbatim and does not interpret: a letter
+/// with no number (`X` in `G28 X`, `R` in `T0 R`), a letter with a string or a bare
+/// token (`P "MINI"`, `A3DBenchy.stl`, `judge_flag`), the message of `M117`/`M118`.
+/// Read only where a firmware code may carry such words (see `docs/gcode.md`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Text<'a> {
+    /// As written, from its first to its last byte.
+    pub text: &'a str,
+    /// Where it stands.
+    pub span: Span,
+}
+
+impl Text<'_> {
+    /// The axis letters this text names when it is made of axis letters alone
+    /// (`X`, `XY`, `x y` as separate texts): bit `i` for `AXES[i]`; 0 otherwise.
+    pub fn bare_axes(&self) -> u16 {
+        let mut bits = 0u16;
+        for c in self.text.bytes() {
+            match crate::modal::axis_index(c.to_ascii_uppercase()) {
+                Some(i) => bits |= 1 << i,
+                None => return 0,
+            }
+        }
+        bits
+    }
+}
+
 /// A word or a comment, in the order written.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Item<'a> {
@@ -90,6 +122,8 @@ pub enum Item<'a> {
     Word(Word<'a>),
     /// A comment.
     Comment(Comment<'a>),
+    /// Verbatim text that is neither (see [`Text`]).
+    Text(Text<'a>),
 }
 
 /// The kind of macro line, kept verbatim.
@@ -163,7 +197,7 @@ impl<'a> Block<'a> {
     pub fn words(&self) -> impl Iterator<Item = &Word<'a>> + '_ {
         self.items.iter().filter_map(|i| match i {
             Item::Word(w) => Some(w),
-            Item::Comment(_) => None,
+            Item::Comment(_) | Item::Text(_) => None,
         })
     }
 
@@ -171,7 +205,15 @@ impl<'a> Block<'a> {
     pub fn comments(&self) -> impl Iterator<Item = &Comment<'a>> + '_ {
         self.items.iter().filter_map(|i| match i {
             Item::Comment(c) => Some(c),
-            Item::Word(_) => None,
+            Item::Word(_) | Item::Text(_) => None,
+        })
+    }
+
+    /// The verbatim texts of the block (see [`Text`]), in order.
+    pub fn texts(&self) -> impl Iterator<Item = &Text<'a>> + '_ {
+        self.items.iter().filter_map(|i| match i {
+            Item::Text(t) => Some(t),
+            Item::Word(_) | Item::Comment(_) => None,
         })
     }
 
@@ -212,6 +254,7 @@ impl<'a> Block<'a> {
                     (Item::Comment(x), Item::Comment(y)) => {
                         x.style == y.style && x.text.trim_end() == y.text.trim_end()
                     }
+                    (Item::Text(x), Item::Text(y)) => x.text == y.text,
                     _ => false,
                 })
     }

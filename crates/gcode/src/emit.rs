@@ -680,6 +680,10 @@ impl<W: Write> Emitter<W> {
                     self.after(w.letter, w.value);
                     self.push_word(w.letter, w.register, w.value, Some(w.text));
                 }
+                Item::Text(t) => {
+                    self.separate();
+                    self.line.extend_from_slice(t.text.as_bytes());
+                }
                 Item::Comment(c) => {
                     self.separate();
                     match c.style {

@@ -113,8 +113,14 @@ pub struct Move {
     pub end: Position,
     /// Feed (units/min, or 1/min in inverse time); 0 for rapids.
     pub feed: f64,
-    /// Extruder E at the end (slicer programs), when E means extrusion.
+    /// Extruder E at the end (slicer programs), when E means extrusion: the extruder's
+    /// position as the program counts it (G92 E sets it; under M83 each E adds to it).
     pub extrusion: Option<f64>,
+    /// How much E grew along this move (negative: a retract), when E means extrusion:
+    /// the E word itself under M83 (or G91), its difference from the last E under M82;
+    /// 0 for a move with no E word, and for the second and later moves of one block.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extruded: Option<f64>,
     /// Modal state in force.
     pub modal: Modal,
     /// Source line.
@@ -159,6 +165,10 @@ pub struct Interpreter {
     home30: Position,
     canned: CannedParams,
     extrusion: f64,
+    /// The E change of the block being run, not yet given to a move.
+    pending_e: f64,
+    /// M83 in force (relative extrusion).
+    e_relative: bool,
     ended: bool,
     warned_after_end: bool,
     calls: Calls,
@@ -181,6 +191,12 @@ struct Words<'b, 'a> {
     gs: smallvec::SmallVec<[(&'b Word<'a>, u16, GGroup); 4]>,
     by_group: [u8; GROUPS],
     ms: smallvec::SmallVec<[(&'b Word<'a>, u16); 4]>,
+    /// Axes named by bare letters (`G28 X`), bit `i` for `AXES[i]`.
+    bare: u16,
+    /// The first verbatim text of the block, if any.
+    first_text: Option<&'b crate::ast::Text<'a>>,
+    /// A verbatim text that is not bare axis letters.
+    odd_text: bool,
 }
 
 impl<'b, 'a> Words<'b, 'a> {
@@ -241,6 +257,8 @@ impl Interpreter {
             home30: [0.0; 9],
             canned: CannedParams::default(),
             extrusion: 0.0,
+            pending_e: 0.0,
+            e_relative: false,
             ended: false,
             warned_after_end: false,
             calls: Calls::NotFollowed,
@@ -350,21 +368,62 @@ impl Interpreter {
             gs: smallvec::SmallVec::new(),
             by_group: [0; GROUPS],
             ms: smallvec::SmallVec::new(),
+            bare: 0,
+            first_text: None,
+            odd_text: false,
         };
         self.collect(b, &mut w)?;
-        self.block_axes = 0;
-        for (i, &l) in AXES.iter().enumerate() {
-            if w.word(l).is_some() {
-                self.block_axes |= 1 << i;
+        // A block of an M-code lampost does not act on (a firmware or control setting:
+        // `M201 X4000 Y4000`, `M205 X1 Y1 Z1 E1`) and no G-code: its words are its own.
+        let settings = w.gs.is_empty() && w.ms.iter().any(|&(_, c)| !m_known(c));
+        if let Some(t) = w.first_text {
+            let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
+            // Verbatim text stands only where a code may carry it (the parser reads it
+            // after a setting M-code, a T word or a homing code); a bare letter is an axis
+            // only for homing.
+            let misplaced = if homing {
+                w.odd_text
+            } else {
+                w.bare != 0 || !w.gs.is_empty()
+            };
+            if !settings && misplaced {
+                let letter = t.text.chars().next().unwrap_or('?').to_ascii_uppercase();
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::LetterWithoutNumber(letter),
+                    Some(t.span),
+                ));
             }
         }
+        self.block_axes = 0;
+        if !settings {
+            for (i, &l) in AXES.iter().enumerate() {
+                if w.word(l).is_some() {
+                    self.block_axes |= 1 << i;
+                }
+            }
+            self.block_axes |= w.bare;
+        }
         self.axes_named |= self.block_axes;
-        self.execute(b, &w, out)
+        self.execute(b, &w, settings, out)
     }
 
     fn collect<'b, 'a>(&self, b: &'b Block<'a>, w: &mut Words<'b, 'a>) -> Res<()> {
         for item in &b.items {
-            let Item::Word(word) = item else { continue };
+            let word = match item {
+                Item::Word(word) => word,
+                Item::Comment(_) => continue,
+                Item::Text(t) => {
+                    let axes = t.bare_axes();
+                    w.bare |= axes;
+                    w.odd_text |= axes == 0;
+                    if w.first_text.is_none() || axes == 0 {
+                        w.first_text = Some(t);
+                    }
+                    continue;
+                }
+            };
             match word.letter {
                 b'G' => {
                     let code = word.code().ok_or_else(|| {
@@ -489,8 +548,13 @@ impl Interpreter {
         &mut self,
         b: &Block<'_>,
         w: &Words<'_, '_>,
+        settings: bool,
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
+        self.pending_e = 0.0;
+        if settings {
+            return self.settings(w);
+        }
         if w.word(b'O').is_some() && crate::program::program_number(b).is_some() {
             self.open_programs = self.open_programs.saturating_add(1);
         }
@@ -518,7 +582,10 @@ impl Interpreter {
             m.feed = f.value;
         }
         if let Some(s) = w.get(b'S') {
-            m.speed = s;
+            // With G4, S is the dwell in seconds (Marlin, RepRap).
+            if !w.has_g(40) {
+                m.speed = s;
+            }
         }
         if let Some(t) = w.word(b'T') {
             if t.value < 0.0 || t.value.fract() != 0.0 {
@@ -555,6 +622,8 @@ impl Interpreter {
                     m.flood = false;
                 }
                 20 | 300 => stop_after = true,
+                820 => self.e_relative = false,
+                830 => self.e_relative = true,
                 980 if self.calls == Calls::NotFollowed => {
                     let mut what = mw.display_code();
                     for word in [w.word(b'P'), w.word(b'L')].into_iter().flatten() {
@@ -589,7 +658,8 @@ impl Interpreter {
                     }
                     m.work_offset = WorkOffset::Fixture(e.value as u8);
                 }
-                EWord::Extrusion => self.extrusion = e.value,
+                // Read below, once the block's distance mode is known.
+                EWord::Extrusion => {}
             }
         }
         // FADAL L words outside canned cycles call subroutines (with M98, L is the
@@ -747,6 +817,20 @@ impl Interpreter {
                 self.canned = CannedParams::default();
             }
         }
+        if self.opts.e_word == EWord::Extrusion {
+            if let Some(e) = w.word(b'E') {
+                if w.has_g(920) {
+                    // G92 E: the extruder's position is set; nothing moves.
+                    self.extrusion = e.value;
+                } else if self.e_relative || self.modal.distance == Distance::Incremental {
+                    self.extrusion += e.value;
+                    self.pending_e = e.value;
+                } else {
+                    self.pending_e = e.value - self.extrusion;
+                    self.extrusion = e.value;
+                }
+            }
+        }
         // Offsets change only through E, G54…, units and the non-modal codes.
         let offsets_may_change = w.word(b'E').is_some()
             || w.by_group[GGroup::CoordSystem as usize] != 0
@@ -763,22 +847,11 @@ impl Interpreter {
                 continue;
             }
             match c {
-                40 if w.get(b'P').is_none() && w.get(b'X').is_none() => {
-                    return Err(diag(
-                        b,
-                        Severity::Error,
-                        ErrorKind::BadValue {
-                            word: gw.display_code(),
-                            why: "dwell needs its time in P",
-                        },
-                        Some(gw.span),
-                    ));
-                }
                 100 => {
                     axes_used = true;
                     self.g10(b, w, gw)?;
                 }
-                280 | 300 => {
+                280 | 300 | 1610 | 1620 => {
                     axes_used = true;
                     self.home(b, w, c, out);
                 }
@@ -794,7 +867,9 @@ impl Interpreter {
                 }
                 920 => {
                     axes_used = true;
-                    if !w.has_axes() {
+                    let extruder_only =
+                        self.opts.e_word == EWord::Extrusion && w.word(b'E').is_some();
+                    if !w.has_axes() && !extruder_only {
                         return Err(diag(
                             b,
                             Severity::Error,
@@ -859,6 +934,9 @@ impl Interpreter {
         if offsets_may_change {
             self.refresh_offset();
         }
+        // In slicer programs (E is extrusion) a motion code with no axis words moves
+        // nothing: `G1 E.8 F2400` (unretract) and `G1 F1200` set E and F only.
+        let explicit_motion = explicit_motion && self.opts.e_word != EWord::Extrusion;
         if !axes_used && (w.has_axes() || explicit_motion) {
             let probe = w.has_g(310) || w.has_g(311);
             self.motion(b, w, g53, probe, out)?;
@@ -924,18 +1002,24 @@ impl Interpreter {
     }
 
     fn home(&mut self, b: &Block<'_>, w: &Words<'_, '_>, code: u16, out: &mut impl FnMut(Event)) {
-        let home = if code == 280 {
-            self.home28
-        } else {
+        let home = if code == 300 {
             self.home30
+        } else {
+            self.home28
         };
+        // G161/G162 (home to the minimum or maximum stops) name axes without an
+        // intermediate point; their home is taken as G28's.
+        let via = matches!(code, 280 | 300);
         let start = self.pos;
         let mut inter = self.pos;
         let mut target = self.pos;
-        let any = w.has_axes();
+        let numbered = w.has_axes();
+        let any = numbered || w.bare != 0;
         let off = self.offset();
         for (a, &l) in AXES.iter().enumerate() {
             match w.get(l) {
+                _ if w.bare & (1 << a) != 0 => target[a] = home[a],
+                Some(_) if !via => target[a] = home[a],
                 Some(v) => {
                     inter[a] = match self.modal.distance {
                         Distance::Absolute => v + off[a],
@@ -954,6 +1038,7 @@ impl Interpreter {
                 end: this.to_program(e),
                 feed: 0.0,
                 extrusion: this.extrusion_now(),
+                extruded: this.extruded_now(),
                 modal: this.modal,
                 line: b.line,
                 origin: Origin::Home,
@@ -961,7 +1046,7 @@ impl Interpreter {
                 block_axes: this.block_axes,
             }));
         };
-        if any {
+        if numbered && via {
             mv(start, inter, self);
         }
         mv(inter, target, self);
@@ -970,6 +1055,29 @@ impl Interpreter {
 
     fn extrusion_now(&self) -> Option<f64> {
         (self.opts.e_word == EWord::Extrusion).then_some(self.extrusion)
+    }
+
+    /// The block's E change for the move being sent (the first of the block gets it).
+    fn extruded_now(&mut self) -> Option<f64> {
+        let e = std::mem::take(&mut self.pending_e);
+        (self.opts.e_word == EWord::Extrusion).then_some(e)
+    }
+
+    /// A block of setting M-codes (see [`m_known`]): the known codes among them act,
+    /// the words are the settings' own. Nothing moves.
+    fn settings(&mut self, w: &Words<'_, '_>) -> Res<()> {
+        for &(_, code) in &w.ms {
+            match code {
+                820 => self.e_relative = false,
+                830 => self.e_relative = true,
+                20 | 300 => {
+                    self.ended = true;
+                    self.open_programs = 0;
+                }
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     fn target(&self, w: &Words<'_, '_>, g53: bool) -> Position {
@@ -1048,6 +1156,7 @@ impl Interpreter {
             end: self.to_program(end),
             feed,
             extrusion: self.extrusion_now(),
+            extruded: self.extruded_now(),
             modal: self.modal,
             line: b.line,
             origin,

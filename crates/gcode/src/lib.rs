@@ -32,12 +32,12 @@ pub mod parse;
 pub mod program;
 pub mod stream;
 
-pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Word};
+pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Text, Word};
 pub use diag::{Diagnostic, ErrorKind, Severity, Snippet};
 pub use emit::{Dialect, EmitOptions, Emitter};
 pub use interp::{Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin};
 pub use lines::{Line, LineReader, Lines};
 pub use modal::{Modal, Plane, Position, Units, AXES};
-pub use parse::{parse_line, parse_line_into};
+pub use parse::{parse_line, parse_line_into, parse_line_with};
 pub use program::{Order, ProgramReader};
 pub use stream::{check, LineSource, Stream};

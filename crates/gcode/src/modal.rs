@@ -290,9 +290,20 @@ pub fn g_group(code: u16) -> Option<GGroup> {
     use GGroup::*;
     Some(match code {
         0 | 10 | 20 | 30 | 330 | 331 | 382..=385 | 730 | 740 | 760 | 800 | 810..=890 => Motion,
-        40 | 100 | 280 | 281 | 290 | 300 | 301 | 310 | 311 | 450..=480 | 520 | 920..=923 => {
-            NonModal
-        }
+        40
+        | 100
+        | 280
+        | 281
+        | 290
+        | 300
+        | 301
+        | 310
+        | 311
+        | 450..=480
+        | 520
+        | 920..=923
+        | 1610
+        | 1620 => NonModal,
         90 | 530 => Modifier,
         150 | 160 => Polar,
         170 | 180 | 190 => Plane,
@@ -323,6 +334,19 @@ pub fn m_group(code: u16) -> Option<&'static str> {
         480..=530 => Some("override"),
         _ => None,
     }
+}
+
+/// True for the M-codes the interpreter acts on (program stops and ends, spindle,
+/// tool change, coolant, overrides, subprogram calls and returns, M82/M83 extrusion
+/// modes), given as ten times their number. Any other M-code is a *setting* of the
+/// control or firmware (`M104 S200`, `M201 X4000`, `M205 X1 Y1 Z1 E1`): in a block with
+/// no G-code its words are its own, never positions, feeds or tools.
+pub fn m_known(code: u16) -> bool {
+    matches!(
+        code,
+        0 | 10 | 20 | 30 | 40 | 50 | 60 | 70 | 80 | 90 | 300 | 480
+            ..=530 | 600 | 610 | 820 | 830 | 980 | 990
+    )
 }
 
 /// Format a code given as ten times its number: 311 → "31.1", 10 → "1".

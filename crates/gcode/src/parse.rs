@@ -11,7 +11,7 @@ use nom::combinator::{opt, recognize};
 use nom::sequence::{pair, tuple};
 use nom::IResult;
 
-use crate::ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Word};
+use crate::ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Text, Word};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 
 /// Lines longer than this are refused without being read word by word.
@@ -177,6 +177,80 @@ fn is_oword(rest: &str) -> bool {
     OWORD_KEYWORDS.contains(&word.as_str())
 }
 
+/// The end of the string that opens at `open` (a `"`): one past its closing quote, or
+/// the end of the line when it is not closed.
+fn string_end(bytes: &[u8], open: usize) -> usize {
+    memchr::memchr(b'"', &bytes[open + 1..]).map_or(bytes.len(), |rel| open + 2 + rel)
+}
+
+/// In a block whose words may be a firmware code's own (after an M-code lampost does
+/// not act on, a T word, or a homing code): where the word starting at `start` (its
+/// letter) is really verbatim text, the end of that text; `None` when it is an ordinary
+/// word. Text is a letter alone (`X` in `G28 X`, `R` in `T0 R`), a letter and a string
+/// (`P "MINI"`, `P"Input shaper"`), or a token that is not letters and numbers in turn
+/// (`A3DBenchy.stl`, `judge_flag`); a token runs to a blank, `;` or `(` outside quotes.
+fn text_token(text: &str, start: usize) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let mut k = start + 1;
+    while k < bytes.len() && !matches!(bytes[k], b' ' | b'\t' | b';' | b'(') {
+        k = if bytes[k] == b'"' {
+            string_end(bytes, k)
+        } else {
+            k + 1
+        };
+    }
+    if k == start + 1 {
+        // A letter alone: a number or a string may follow after blanks.
+        let mut m = k;
+        while m < bytes.len() && (bytes[m] == b' ' || bytes[m] == b'\t') {
+            m += 1;
+        }
+        return match bytes.get(m) {
+            Some(b'"') => Some(string_end(bytes, m)),
+            Some(c) if c.is_ascii_digit() || matches!(c, b'+' | b'-' | b'.') => None,
+            _ => Some(k),
+        };
+    }
+    // Letters and numbers in turn (`X4000Y4000`) are words.
+    let mut p = start;
+    while p < k {
+        if !bytes[p].is_ascii_alphabetic() {
+            return Some(k);
+        }
+        p += 1;
+        let len = match fast_number(&bytes[p..k]) {
+            Some((len, _)) => len,
+            None => match number(&text[p..k]) {
+                Ok((rest, _)) => k - p - rest.len(),
+                Err(_) => return Some(k),
+            },
+        };
+        p += len;
+    }
+    None
+}
+
+/// An exponent right after a number's digits, when exponents are read: a lower-case
+/// `e`, an optional sign and at least one digit (`1e-05`, `2.5e3`). The end of the
+/// exponent, or `None`.
+fn exponent_end(bytes: &[u8], end: usize) -> Option<usize> {
+    if bytes.get(end) != Some(&b'e')
+        || end == 0
+        || !bytes[end - 1].is_ascii_digit() && bytes[end - 1] != b'.'
+    {
+        return None;
+    }
+    let mut k = end + 1;
+    if matches!(bytes.get(k), Some(b'+' | b'-')) {
+        k += 1;
+    }
+    let digits = bytes[k.min(bytes.len())..]
+        .iter()
+        .take_while(|c| c.is_ascii_digit())
+        .count();
+    (digits > 0).then_some(k + digits)
+}
+
 /// Parse one line (without its line ending) into a block.
 ///
 /// `line_no` is 1-based; `offset` is the byte offset of the line's first byte in the
@@ -194,6 +268,21 @@ pub fn parse_line_into<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
+) -> Result<(), Diagnostic> {
+    parse_line_with(line, line_no, offset, block, false)
+}
+
+/// [`parse_line_into`], reading number exponents when `exponents` is set (slicer
+/// programs, where E is extrusion): a lower-case `e` directly after a number's digits,
+/// with an optional sign and digits, is that number's exponent (`X1e-05`). An upper-case
+/// `E` always starts a word (`X1E-5` is X1 and E-5), and without `exponents` so does a
+/// lower-case one (E is a FADAL fixture offset there: `X1e5` is X1 E5).
+pub fn parse_line_with<'a>(
+    line: &'a [u8],
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    exponents: bool,
 ) -> Result<(), Diagnostic> {
     let err = |kind: ErrorKind, start: usize, end: usize| {
         Diagnostic::at(Severity::Error, kind, line_no, offset, line, start, end)
@@ -254,6 +343,8 @@ pub fn parse_line_into<'a>(
     // Letters seen so far (bit per letter) and FADAL R registers seen.
     let mut seen: u32 = 0;
     let mut seen_reg: u16 = 0;
+    // The block's words may be a firmware code's own (see `text_token`).
+    let mut lenient = false;
     while i < bytes.len() {
         let c = bytes[i];
         match c {
@@ -283,9 +374,27 @@ pub fn parse_line_into<'a>(
                 block.items.clear();
                 return Ok(());
             }
+            b'"' if lenient => {
+                let end = string_end(bytes, i);
+                block.items.push(Item::Text(Text {
+                    text: &text[i..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
+            }
             b'a'..=b'z' | b'A'..=b'Z' => {
                 let letter = c.to_ascii_uppercase();
                 let start = i;
+                if lenient {
+                    if let Some(end) = text_token(text, start) {
+                        block.items.push(Item::Text(Text {
+                            text: &text[start..end],
+                            span: Span::new(offset + start, offset + end),
+                        }));
+                        i = end;
+                        continue;
+                    }
+                }
                 let mut j = i + 1;
                 while j < bytes.len() && (bytes[j] == b' ' || bytes[j] == b'\t') {
                     j += 1;
@@ -336,6 +445,20 @@ pub fn parse_line_into<'a>(
                         )),
                     },
                 };
+                let scanned = match scanned {
+                    Ok((end, value)) if exponents => match exponent_end(bytes, end) {
+                        Some(e) => text[j..e]
+                            .parse::<f64>()
+                            .ok()
+                            .filter(|v| v.is_finite())
+                            .map(|v| (e, v))
+                            .ok_or_else(|| {
+                                err(ErrorKind::BadNumber(text[j..e].to_string()), start, e)
+                            }),
+                        None => Ok((end, value)),
+                    },
+                    s => s,
+                };
                 match scanned {
                     Ok((end, value)) => {
                         let num = &text[j..end];
@@ -371,9 +494,55 @@ pub fn parse_line_into<'a>(
                             span: Span::new(offset + start, offset + end),
                         }));
                         i = end;
+                        let code = if letter == b'M' || letter == b'G' && !lenient {
+                            Word::code_of(value)
+                        } else {
+                            None
+                        };
+                        if !lenient {
+                            lenient = match (letter, code) {
+                                (b'T', _) => true,
+                                (b'G', Some(c)) => matches!(c, 280 | 300 | 1610 | 1620),
+                                (b'M', Some(c)) => !crate::modal::m_known(c),
+                                _ => false,
+                            };
+                        }
+                        if letter == b'M' && matches!(code, Some(1170 | 1180)) {
+                            // The rest of the line, to a `;` comment, is a message.
+                            let mut k = end;
+                            while k < bytes.len() && (bytes[k] == b' ' || bytes[k] == b'\t') {
+                                k += 1;
+                            }
+                            let stop =
+                                memchr::memchr(b';', &bytes[k..]).map_or(bytes.len(), |r| k + r);
+                            let msg = text[k..stop].trim_end();
+                            if !msg.is_empty() {
+                                block.items.push(Item::Text(Text {
+                                    text: msg,
+                                    span: Span::new(offset + k, offset + k + msg.len()),
+                                }));
+                            }
+                            i = stop;
+                        }
                     }
                     Err(e) => return Err(e),
                 }
+            }
+            _ if lenient && !c.is_ascii_alphabetic() => {
+                // A firmware code's own token that is no word (`: 2`, `1`): verbatim.
+                let mut end = i + 1;
+                while end < bytes.len() && !matches!(bytes[end], b' ' | b'\t' | b';' | b'(') {
+                    end = if bytes[end] == b'"' {
+                        string_end(bytes, end)
+                    } else {
+                        end + 1
+                    };
+                }
+                block.items.push(Item::Text(Text {
+                    text: &text[i..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
             }
             b'0'..=b'9' | b'+' | b'-' | b'.' => {
                 let end = match number(&text[i..]) {

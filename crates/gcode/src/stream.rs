@@ -5,9 +5,9 @@ use std::io::{self, BufRead};
 
 use crate::ast::Block;
 use crate::diag::{Diagnostic, ErrorKind, Severity};
-use crate::interp::{Calls, Event, Interpreter, Options};
+use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
-use crate::parse::parse_line_into;
+use crate::parse::parse_line_with;
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
@@ -49,6 +49,8 @@ pub struct Stream<S> {
     stopped: bool,
     finished: bool,
     any_content: bool,
+    /// Numbers may have exponents (E is extrusion: see [`parse_line_with`]).
+    exponents: bool,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -66,6 +68,7 @@ impl<S: LineSource> Stream<S> {
             stopped: false,
             finished: false,
             any_content: false,
+            exponents: opts.e_word == EWord::Extrusion,
         }
     }
 
@@ -128,7 +131,14 @@ impl<S: LineSource> Iterator for Stream<S> {
             // (one move per line is the rule), the rest wait in the queue.
             let mut first: Option<Event> = None;
             let mut block = Block::empty(line.number, line.offset);
-            let failed = match parse_line_into(line.bytes, line.number, line.offset, &mut block) {
+            let parsed = parse_line_with(
+                line.bytes,
+                line.number,
+                line.offset,
+                &mut block,
+                self.exponents,
+            );
+            let failed = match parsed {
                 Ok(()) => match self.interp.block(&block, &mut |e| {
                     if first.is_none() {
                         first = Some(e);

@@ -180,7 +180,6 @@ pub struct Intended<'a> {
     layer: usize,
     layer_z: Option<f64>,
     moves_in_section: usize,
-    last_e: f64,
     done: bool,
     /// The last move's end, in the program and the part frame, with its (section,
     /// layer): the next move starts there, so its start needs no transform.
@@ -219,7 +218,6 @@ impl<'a> Intended<'a> {
             layer: 0,
             layer_z: None,
             moves_in_section: 0,
-            last_e: 0.0,
             done: false,
             last_end: None,
             frame_cache: None,
@@ -270,7 +268,6 @@ impl<'a> Intended<'a> {
                 self.layer = 0;
                 self.layer_z = None;
                 self.moves_in_section = 0;
-                self.last_e = 0.0;
             }
             let ev = self.stream.as_mut().and_then(Iterator::next);
             let ev = match ev {
@@ -365,13 +362,11 @@ impl<'a> Intended<'a> {
                 }
             }
             let frame = self.frame(sec, self.layer);
+            // A feed deposits exactly when E grows along it (absolute or relative E, the
+            // interpreter gives the growth); E-only and F-only blocks are no moves.
             let deposit = is_feed
-                && match m.extrusion {
-                    Some(e) if self.opts.e_extrusion => {
-                        let grows = e > self.last_e + 1e-12;
-                        self.last_e = e;
-                        grows
-                    }
+                && match m.extruded {
+                    Some(grown) if self.opts.e_extrusion => grown > 0.0,
                     _ => true,
                 };
             let kind = match m.kind {
