@@ -131,8 +131,24 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
                 )));
             }
         }
-        if !p.center.iter().all(|x| x.is_finite()) {
+        if !p
+            .center
+            .iter()
+            .chain(p.rotary.iter())
+            .all(|x| x.is_finite())
+        {
             return Err(AlignError::NotFinite(p.row));
+        }
+        if let Some(&value) = p
+            .center
+            .iter()
+            .chain(p.rotary.iter())
+            .find(|x| x.abs() > crate::fit::MAX_COORD)
+        {
+            return Err(AlignError::TooLarge {
+                index: p.row,
+                value,
+            });
         }
     }
     if poses.len() < need {
@@ -223,7 +239,7 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
             b[3 * i + r] = p.center[r] * w;
         }
     }
-    let svd = a.clone().svd(true, true);
+    let svd = crate::fit::svd_capped(a.clone(), true, true, "Method III")?;
     let sv = svd.singular_values.clone();
     let smax = sv.max();
     let smin = sv.min();
@@ -478,7 +494,7 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     for _ in 0..50 {
         let j = jac(&x);
         let r = resid(&x);
-        let svd = j.svd(true, true);
+        let svd = crate::fit::svd_capped(j, true, true, "axis-line")?;
         let step = svd
             .solve(&(-&r), 1e-12 * svd.singular_values.max())
             .map_err(|_| AlignError::Degenerate("the axis fit failed".into()))?;
@@ -489,11 +505,14 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         }
     }
     if !converged {
-        return Err(AlignError::NoConvergence("axis-line"));
+        return Err(AlignError::NoConvergence(
+            "axis-line",
+            "50 Gauss–Newton steps did not settle the axis lines (the poses may not fit two fixed axes)",
+        ));
     }
     let j = jac(&x);
     let r = resid(&x);
-    let jsv = j.clone().svd(false, false).singular_values;
+    let jsv = crate::fit::svd_capped(j.clone(), false, false, "axis-line")?.singular_values;
     let condition = jsv.max() / jsv.min().max(f64::MIN_POSITIVE);
     if jsv.min() <= 1e-9 * jsv.max() {
         return Err(AlignError::Degenerate(
@@ -682,7 +701,22 @@ pub fn axes_from_circles(m: &Machine, poses: &[Pose]) -> Result<AxisErrors, Alig
 }
 
 /// Method II: the 2³ factorial design of paper 000's Table 1 around a start centre.
-pub fn factorial_design(start: P3, step: f64) -> Vec<(usize, [i8; 3], P3)> {
+/// Refuses a start or step beyond ±[`crate::fit::MAX_COORD`] (or a step that is not
+/// positive): no machine has such a centre, and the runs' centres would overflow.
+pub fn factorial_design(start: P3, step: f64) -> Result<Vec<(usize, [i8; 3], P3)>, AlignError> {
+    if !(step.is_finite() && step > 0.0 && step <= crate::fit::MAX_COORD) {
+        return Err(AlignError::Degenerate(format!(
+            "the step {step:e} must be positive and at most 1e9 of the unit"
+        )));
+    }
+    if let Some(&value) = start
+        .iter()
+        .find(|x| !x.is_finite() || x.abs() > crate::fit::MAX_COORD)
+    {
+        return Err(AlignError::Degenerate(format!(
+            "the start coordinate {value:e} is beyond ±1e9 of the unit"
+        )));
+    }
     let mut v = Vec::new();
     let mut run = 1;
     for sx in [1i8, -1] {
@@ -694,7 +728,7 @@ pub fn factorial_design(start: P3, step: f64) -> Vec<(usize, [i8; 3], P3)> {
             }
         }
     }
-    v
+    Ok(v)
 }
 
 /// Method II's regression (eq. 18): variation = β₀ + β₁x + β₂y + β₃z in coded levels.
@@ -721,6 +755,18 @@ pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
             got: rows.len(),
         });
     }
+    for (i, (c, var)) in rows.iter().enumerate() {
+        if let Some(&value) = c
+            .iter()
+            .chain(std::iter::once(var))
+            .find(|x| !x.is_finite() || x.abs() > crate::fit::MAX_COORD)
+        {
+            return Err(AlignError::TooLarge {
+                index: i + 1,
+                value,
+            });
+        }
+    }
     let mean = rows.iter().fold(P3::zeros(), |a, r| a + r.0) / rows.len() as f64;
     let half = rows
         .iter()
@@ -739,7 +785,7 @@ pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
         }
     });
     let b = DVector::from_fn(rows.len(), |i, _| rows[i].1);
-    let svd = a.clone().svd(true, true);
+    let svd = crate::fit::svd_capped(a.clone(), true, true, "factorial regression")?;
     if svd.singular_values.min() <= 1e-9 * svd.singular_values.max() {
         return Err(AlignError::Degenerate(
             "the runs do not vary x, y and z independently: use the full 2³ design".into(),
@@ -762,12 +808,19 @@ pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
         .min_by(|x, y| x.1 .1.total_cmp(&y.1 .1))
         .map(|(i, r)| (i, r.0))
         .unwrap_or((0, mean));
+    let rms = (res.norm_squared() / rows.len() as f64).sqrt();
+    crate::fit::finite_result(
+        "factorial regression",
+        &[
+            beta[0], beta[1], beta[2], beta[3], proposed.x, proposed.y, proposed.z, rms,
+        ],
+    )?;
     Ok(FactorialFit {
         coefficients: [beta[0], beta[1], beta[2], beta[3]],
         best_run: bi + 1,
         best_center: [br.x, br.y, br.z],
         proposed_center: [proposed.x, proposed.y, proposed.z],
-        rms: (res.norm_squared() / rows.len() as f64).sqrt(),
+        rms,
     })
 }
 
@@ -813,6 +866,17 @@ pub fn updated_machine(
             "the poses do not fix R; nothing to write".into(),
         ));
     };
+    let mut numbers: Vec<f64> = r.iter().chain(home.iter()).copied().collect();
+    numbers.extend(res.u_r.iter().flatten());
+    numbers.push(res.rms);
+    for a in res.axes.iter().flatten() {
+        numbers.extend(a.direction.iter().chain(a.point.iter()));
+    }
+    if !numbers.iter().all(|x| x.is_finite()) {
+        return Err(AlignError::Degenerate(
+            "the calibration has a non-finite number (R, its uncertainty u_R, or the rms): no machine file is written from it".into(),
+        ));
+    }
     match &res.axes {
         Some(axes) => {
             for (i, a) in axes.iter().enumerate() {
@@ -847,8 +911,17 @@ pub fn updated_machine(
 }
 
 /// Condition of a pose set for Method III, before anyone probes: (condition number, the
-/// line of solutions' direction when rank-deficient).
-pub fn pose_conditioning(m: &Machine, rotary: &[[f64; 2]]) -> (f64, Option<[f64; 3]>) {
+/// line of solutions' direction when rank-deficient). Refuses a set that fixes nothing
+/// at all (no poses, or every pose at the same angles).
+pub fn pose_conditioning(
+    m: &Machine,
+    rotary: &[[f64; 2]],
+) -> Result<(f64, Option<[f64; 3]>), AlignError> {
+    if rotary.is_empty() {
+        return Err(AlignError::Degenerate(
+            "the pose set is empty: it fixes nothing".into(),
+        ));
+    }
     let poses: Vec<Pose> = rotary
         .iter()
         .enumerate()
@@ -862,9 +935,14 @@ pub fn pose_conditioning(m: &Machine, rotary: &[[f64; 2]]) -> (f64, Option<[f64;
             }
         })
         .collect();
-    match method_iii(m, &poses) {
-        Ok(r) => (r.condition, r.line.map(|l| l.direction)),
-        Err(_) => (f64::INFINITY, None),
+    let r = method_iii(m, &poses)?;
+    match (&r.r, &r.line) {
+        (Some(_), _) => Ok((r.condition, None)),
+        (None, Some(l)) => Ok((r.condition, Some(l.direction))),
+        (None, None) => Err(AlignError::Degenerate(format!(
+            "the pose set fixes nothing about R and the centre: {}",
+            r.notes.join("; ")
+        ))),
     }
 }
 
@@ -926,6 +1004,55 @@ mod tests {
             assert!((got - r).norm() < 1e-9, "{:?}: {got:?}", res.method);
             assert!((P3::from(res.pivot.expect("pivot")) - c).norm() < 1e-9);
         }
+    }
+
+    #[test]
+    fn no_machine_file_from_a_non_finite_uncertainty() {
+        let m = fadal();
+        let r = P3::new(-4.877, 1.4798, 7.0918);
+        let b0 = P3::new(3.0, -2.0, 1.0);
+        let c = b0 - r;
+        let truth = [(m.rotary[0].axis, c), (m.rotary[1].axis, c)];
+        let poses = exact(&m, &truth, b0, &poses8());
+        let mut res = method_iii(&m, &poses).expect("III");
+        assert!(updated_machine(&m, &res).is_ok());
+        res.u_r = Some([f64::INFINITY, 0.0, 0.0]);
+        let e = updated_machine(&m, &res).expect_err("refused");
+        assert!(e.to_string().contains("no machine file"), "{e}");
+    }
+
+    #[test]
+    fn pose_sets_that_fix_nothing_are_refused() {
+        let m = fadal();
+        assert!(pose_conditioning(&m, &[]).is_err());
+        assert!(pose_conditioning(&m, &[[10.0, 0.0]; 4]).is_err());
+        assert!(pose_conditioning(&m, &poses8()).is_ok_and(|(c, l)| c.is_finite() && l.is_none()));
+    }
+
+    #[test]
+    fn huge_pose_coordinates_are_refused() {
+        let m = fadal();
+        let mut poses = exact(
+            &m,
+            &[
+                (m.rotary[0].axis, P3::zeros()),
+                (m.rotary[1].axis, P3::zeros()),
+            ],
+            P3::new(1.0, 0.0, 0.0),
+            &poses8(),
+        );
+        poses[2].center.x = 1e200;
+        for r in [
+            method_i(&m, &poses),
+            method_iii(&m, &poses),
+            method_fit(&m, &poses),
+        ] {
+            assert!(
+                matches!(r, Err(AlignError::TooLarge { index: 3, .. })),
+                "{r:?}"
+            );
+        }
+        assert!(factorial_design(P3::new(1e308, 0.0, 0.0), 1e308).is_err());
     }
 
     #[test]
@@ -1013,7 +1140,7 @@ mod tests {
 
     #[test]
     fn factorial_and_laser() {
-        let runs = factorial_design(P3::new(-4.9, 1.5, 7.1), 0.01);
+        let runs = factorial_design(P3::new(-4.9, 1.5, 7.1), 0.01).expect("design");
         assert_eq!(runs.len(), 8);
         assert_eq!(runs[0].1, [1, 1, 1]);
         assert_eq!(runs[7].1, [-1, -1, -1]);

@@ -28,9 +28,17 @@ pub enum AlignError {
     /// NaN or infinity in the input.
     #[error("point {0} is not finite")]
     NotFinite(usize),
+    /// A coordinate whose magnitude no machine measures (beyond [`crate::fit::MAX_COORD`]).
+    #[error("point {index} has a coordinate {value:e}, beyond ±1e9 of the unit")]
+    TooLarge {
+        /// 1-based index of the point (or the pose's row).
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
     /// The iteration did not settle.
-    #[error("the {0} fit did not converge")]
-    NoConvergence(&'static str),
+    #[error("the {0} fit did not converge, because {1}")]
+    NoConvergence(&'static str, &'static str),
 }
 
 impl AlignError {
@@ -41,7 +49,8 @@ impl AlignError {
             AlignError::DuplicatePoints { .. } => "remove the repeated point, or probe a different place",
             AlignError::Degenerate(_) => "spread the points: a sphere needs points off one plane, a plane points off one line",
             AlignError::NotFinite(_) => "check the point file",
-            AlignError::NoConvergence(_) => "check the points for outliers; the shape may not fit them",
+            AlignError::TooLarge { .. } => "no machine measures that far: check the units and the numbers in the file",
+            AlignError::NoConvergence(..) => "check the points for outliers; the shape may not fit them",
         }
     }
 }

@@ -82,10 +82,30 @@ pub struct CircleFit {
     pub u_radius: Option<f64>,
 }
 
-/// Refuse too few, non-finite or repeated points.
+/// The largest coordinate magnitude a fit accepts, in the points' unit: no machine
+/// measures beyond it, and below it squares and sums of squares cannot overflow.
+pub const MAX_COORD: f64 = 1e9;
+
+/// Iterations a Levenberg–Marquardt fit may take before it says it did not converge.
+pub const MAX_ITERATIONS: usize = 200;
+
+/// A number with −0 made +0, so that `-0 0 1` and `0 0 1` are one point.
+pub fn unsigned_zero(x: f64) -> f64 {
+    x + 0.0
+}
+
+/// Refuse too few, non-finite, out-of-range or repeated points.
 pub fn check_points(pts: &[P3], fit: &'static str, need: usize) -> Result<(), AlignError> {
     if let Some(i) = pts.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
         return Err(AlignError::NotFinite(i + 1));
+    }
+    for (i, p) in pts.iter().enumerate() {
+        if let Some(&value) = p.iter().find(|x| x.abs() > MAX_COORD) {
+            return Err(AlignError::TooLarge {
+                index: i + 1,
+                value,
+            });
+        }
     }
     if pts.len() < need {
         return Err(AlignError::TooFewPoints {
@@ -99,7 +119,7 @@ pub fn check_points(pts: &[P3], fit: &'static str, need: usize) -> Result<(), Al
         pts[a]
             .iter()
             .zip(pts[b].iter())
-            .map(|(x, y)| x.total_cmp(y))
+            .map(|(x, y)| unsigned_zero(*x).total_cmp(&unsigned_zero(*y)))
             .find(|o| o.is_ne())
             .unwrap_or(std::cmp::Ordering::Equal)
     });
@@ -113,6 +133,37 @@ pub fn check_points(pts: &[P3], fit: &'static str, need: usize) -> Result<(), Al
         }
     }
     Ok(())
+}
+
+/// A singular value decomposition with an iteration cap (nalgebra's default has none,
+/// and loops on non-finite input).
+pub(crate) fn svd_capped(
+    a: DMatrix<f64>,
+    u: bool,
+    v: bool,
+    what: &'static str,
+) -> Result<nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>, AlignError> {
+    if !a.iter().all(|x| x.is_finite()) {
+        return Err(AlignError::Degenerate(format!(
+            "the {what} fit met a non-finite number (the input's magnitudes overflow)"
+        )));
+    }
+    a.try_svd(u, v, f64::EPSILON, 10_000)
+        .ok_or(AlignError::NoConvergence(
+            what,
+            "its singular value decomposition did not settle in 10000 iterations",
+        ))
+}
+
+/// Refuse a result with a non-finite number in it: never print one.
+pub(crate) fn finite_result(what: &'static str, vals: &[f64]) -> Result<(), AlignError> {
+    if vals.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(AlignError::Degenerate(format!(
+            "the {what} fit gave a non-finite number (the points' spread overflows or vanishes)"
+        )))
+    }
 }
 
 fn centroid(pts: &[P3]) -> P3 {
@@ -146,59 +197,99 @@ pub fn orient_normal(n: P3) -> P3 {
     }
 }
 
+/// RMS and largest magnitude, scaled before squaring so that neither overflows.
 fn rms_max(r: &[f64]) -> (f64, f64) {
-    let ss: f64 = r.iter().map(|x| x * x).sum();
-    (
-        (ss / r.len() as f64).sqrt(),
-        r.iter().fold(0.0, |m, x| f64::max(m, x.abs())),
-    )
+    let big = r.iter().fold(0.0, |m, x| f64::max(m, x.abs()));
+    if big == 0.0 || r.is_empty() {
+        return (0.0, big);
+    }
+    let ss: f64 = r.iter().map(|x| (x / big) * (x / big)).sum();
+    (big * (ss / r.len() as f64).sqrt(), big)
 }
 
-/// Parameters, residuals and Jacobian at the solution.
-type Solved = (DVector<f64>, DVector<f64>, DMatrix<f64>);
+/// The solution: parameters, each point's residual, and JᵀJ there (p × p).
+type Solved = (DVector<f64>, Vec<f64>, DMatrix<f64>);
 
-/// Levenberg–Marquardt on `p` parameters. `eval` fills residuals and the Jacobian.
+/// Σr², JᵀJ and Jᵀr in one O(n) pass, without storing the n × p Jacobian.
+fn normal_equations(
+    x: &DVector<f64>,
+    n: usize,
+    row: &impl Fn(&DVector<f64>, usize) -> (f64, [f64; 4]),
+) -> (f64, DMatrix<f64>, DVector<f64>) {
+    let p = x.len();
+    let mut jtj = DMatrix::zeros(p, p);
+    let mut jtr = DVector::zeros(p);
+    let mut cost = 0.0;
+    for i in 0..n {
+        let (r, g) = row(x, i);
+        cost += r * r;
+        for a in 0..p {
+            jtr[a] += g[a] * r;
+            for b in 0..=a {
+                jtj[(a, b)] += g[a] * g[b];
+            }
+        }
+    }
+    for a in 0..p {
+        for b in 0..a {
+            jtj[(b, a)] = jtj[(a, b)];
+        }
+    }
+    (cost, jtj, jtr)
+}
+
+/// Levenberg–Marquardt on `p ≤ 4` parameters over `n` points; `row(x, i)` gives point
+/// i's residual and its gradient (entries past `p` unused). Each iteration is one O(n)
+/// pass per trial step; at most [`MAX_ITERATIONS`] iterations.
 fn levenberg_marquardt(
     mut x: DVector<f64>,
     n: usize,
     name: &'static str,
-    eval: impl Fn(&DVector<f64>, &mut DVector<f64>, &mut DMatrix<f64>),
+    row: impl Fn(&DVector<f64>, usize) -> (f64, [f64; 4]),
 ) -> Result<Solved, AlignError> {
     let p = x.len();
-    let mut r = DVector::zeros(n);
-    let mut j = DMatrix::zeros(n, p);
-    eval(&x, &mut r, &mut j);
-    let mut cost = r.norm_squared();
+    let residuals = |x: &DVector<f64>| (0..n).map(|i| row(x, i).0).collect::<Vec<f64>>();
+    if !x.iter().all(|v| v.is_finite()) {
+        return Err(AlignError::NoConvergence(
+            name,
+            "its algebraic start is not finite (the points fix no such shape)",
+        ));
+    }
+    let (mut cost, mut jtj, mut g) = normal_equations(&x, n, &row);
+    if !cost.is_finite() {
+        return Err(AlignError::NoConvergence(
+            name,
+            "the residuals at its start overflow",
+        ));
+    }
     let mut lambda = 1e-6;
-    for _ in 0..500 {
-        let jtj = j.transpose() * &j;
-        let g = j.transpose() * &r;
+    for _ in 0..MAX_ITERATIONS {
         let mut improved = false;
         for _ in 0..30 {
             let mut a = jtj.clone();
             for k in 0..p {
                 a[(k, k)] += lambda * jtj[(k, k)].max(1e-300);
             }
-            let Some(step) = a.clone().cholesky().map(|c| c.solve(&(-&g))) else {
+            let Some(step) = a.cholesky().map(|c| c.solve(&(-&g))) else {
                 lambda *= 10.0;
                 continue;
             };
             let xn = &x + &step;
-            let mut rn = DVector::zeros(n);
-            let mut jn = DMatrix::zeros(n, p);
-            eval(&xn, &mut rn, &mut jn);
-            let cn = rn.norm_squared();
+            let (cn, jn, gn) = normal_equations(&xn, n, &row);
             if cn.is_finite() && cn <= cost {
                 let small = step.norm() <= 1e-15 * (1.0 + x.norm());
-                let flat = cost - cn <= 1e-30 + 1e-16 * cost;
+                // A fall in cost below the rounding of an n-term sum is no progress.
+                let noise = 1e-16_f64.max(4.0 * f64::EPSILON * (n as f64).sqrt());
+                let flat = cost - cn <= 1e-30 + noise * cost;
                 x = xn;
-                r = rn;
-                j = jn;
+                jtj = jn;
+                g = gn;
                 cost = cn;
                 lambda = (lambda / 10.0).max(1e-15);
                 improved = true;
                 if small || flat {
-                    return Ok((x, r, j));
+                    let r = residuals(&x);
+                    return Ok((x, r, jtj));
                 }
                 break;
             }
@@ -206,21 +297,32 @@ fn levenberg_marquardt(
         }
         if !improved {
             // No step lowers the cost: at the minimum to working precision.
-            return Ok((x, r, j));
+            let r = residuals(&x);
+            return Ok((x, r, jtj));
         }
     }
-    Err(AlignError::NoConvergence(name))
+    Err(AlignError::NoConvergence(
+        name,
+        "200 Levenberg–Marquardt iterations still lowered the cost (the points may not lie on such a shape)",
+    ))
 }
 
-/// Standard uncertainties from the Jacobian at the solution.
-fn uncertainties(j: &DMatrix<f64>, r: &DVector<f64>) -> Option<Vec<f64>> {
-    let (n, p) = j.shape();
+/// Standard uncertainties from JᵀJ and the residuals at the solution.
+fn uncertainties(jtj: &DMatrix<f64>, r: &[f64]) -> Option<Vec<f64>> {
+    let (n, p) = (r.len(), jtj.nrows());
     if n <= p {
         return None;
     }
-    let s2 = r.norm_squared() / (n - p) as f64;
-    let cov = (j.transpose() * j).try_inverse()?;
-    Some((0..p).map(|k| (s2 * cov[(k, k)]).max(0.0).sqrt()).collect())
+    let (_, big) = rms_max(r);
+    let ss: f64 = if big > 0.0 {
+        r.iter().map(|x| (x / big) * (x / big)).sum::<f64>() * big * big
+    } else {
+        0.0
+    };
+    let s2 = ss / (n - p) as f64;
+    let cov = jtj.clone().try_inverse()?;
+    let u: Vec<f64> = (0..p).map(|k| (s2 * cov[(k, k)]).max(0.0).sqrt()).collect();
+    u.iter().all(|x| x.is_finite()).then_some(u)
 }
 
 /// The sphere through exactly four points, by paper 000's determinant method
@@ -300,7 +402,7 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
     // Algebraic start: |q|² = 2c·q + d.
     let a = DMatrix::from_fn(n, 4, |i, k| if k < 3 { 2.0 * q[i][k] } else { 1.0 });
     let b = DVector::from_fn(n, |i, _| q[i].norm_squared());
-    let svd = a.clone().svd(true, true);
+    let svd = svd_capped(a, true, true, "sphere")?;
     let sv = &svd.singular_values;
     let (smax, smin) = (sv.max(), sv.min());
     let start_c;
@@ -330,33 +432,20 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
     let (center, radius, j, r) = match fixed_radius {
         None => {
             let x0 = DVector::from_vec(vec![start_c.x, start_c.y, start_c.z, start_r]);
-            let (x, r, j) = levenberg_marquardt(x0, n, "sphere", |x, res, jac| {
-                let c = P3::new(x[0], x[1], x[2]);
-                for (i, p) in q.iter().enumerate() {
-                    let d = p - c;
-                    let len = d.norm().max(f64::MIN_POSITIVE);
-                    res[i] = len - x[3];
-                    for k in 0..3 {
-                        jac[(i, k)] = -d[k] / len;
-                    }
-                    jac[(i, 3)] = -1.0;
-                }
+            let (x, r, j) = levenberg_marquardt(x0, n, "sphere", |x, i| {
+                let d = q[i] - P3::new(x[0], x[1], x[2]);
+                let len = d.norm().max(f64::MIN_POSITIVE);
+                (len - x[3], [-d.x / len, -d.y / len, -d.z / len, -1.0])
             })?;
             (P3::new(x[0], x[1], x[2]), x[3], j, r)
         }
         Some(rr) => {
             let rq = rr / s;
             let x0 = DVector::from_vec(vec![start_c.x, start_c.y, start_c.z]);
-            let (x, r, j) = levenberg_marquardt(x0, n, "sphere", |x, res, jac| {
-                let c = P3::new(x[0], x[1], x[2]);
-                for (i, p) in q.iter().enumerate() {
-                    let d = p - c;
-                    let len = d.norm().max(f64::MIN_POSITIVE);
-                    res[i] = len - rq;
-                    for k in 0..3 {
-                        jac[(i, k)] = -d[k] / len;
-                    }
-                }
+            let (x, r, j) = levenberg_marquardt(x0, n, "sphere", |x, i| {
+                let d = q[i] - P3::new(x[0], x[1], x[2]);
+                let len = d.norm().max(f64::MIN_POSITIVE);
+                (len - rq, [-d.x / len, -d.y / len, -d.z / len, 0.0])
             })?;
             (P3::new(x[0], x[1], x[2]), rq, j, r)
         }
@@ -369,6 +458,9 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
         .map(|p| (p - center_w).norm() - radius_w)
         .collect();
     let (rms, max_abs_residual) = rms_max(&residuals);
+    let mut all = vec![center_w.x, center_w.y, center_w.z, radius_w, rms];
+    all.extend(u.iter().flatten().map(|v| v * s));
+    finite_result("sphere", &all)?;
     Ok(SphereFit {
         center: arr(&center_w),
         radius: radius_w,
@@ -390,13 +482,15 @@ pub fn plane(pts: &[P3]) -> Result<PlaneFit, AlignError> {
     check_points(pts, "a plane", 3)?;
     let m = centroid(pts);
     let n = pts.len();
-    // The SVD of the N×3 centred matrix, for accuracy with thin point sets.
-    let a = DMatrix::from_fn(n, 3, |i, k| pts[i][k] - m[k]);
-    let svd = a.svd(false, true);
+    // The SVD of the N×3 centred matrix, for accuracy with thin point sets; scaled to
+    // unit size first, so nothing squared can overflow or underflow.
+    let s = scale(pts, &m);
+    let a = DMatrix::from_fn(n, 3, |i, k| (pts[i][k] - m[k]) / s);
+    let svd = svd_capped(a, false, true, "plane")?;
     let vt = svd
         .v_t
         .ok_or_else(|| AlignError::Degenerate("the plane fit failed".into()))?;
-    let sv = svd.singular_values;
+    let sv = svd.singular_values * s;
     let mut order = [0usize, 1, 2];
     order.sort_by(|&x, &y| sv[y].total_cmp(&sv[x]));
     let (i_big, i_mid, i_small) = (order[0], order[1], order[2]);
@@ -412,7 +506,8 @@ pub fn plane(pts: &[P3]) -> Result<PlaneFit, AlignError> {
     let lo = residuals.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = residuals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (u_offset, u_tilt) = if n > 3 {
-        let s = (residuals.iter().map(|r| r * r).sum::<f64>() / (n - 3) as f64).sqrt();
+        // rms·√(n / (n − 3)), without squaring the residuals again.
+        let s = rms * (n as f64 / (n - 3) as f64).sqrt();
         (
             Some(s / (n as f64).sqrt()),
             Some([s / sv[i_big], s / sv[i_mid]]),
@@ -420,6 +515,10 @@ pub fn plane(pts: &[P3]) -> Result<PlaneFit, AlignError> {
     } else {
         (None, None)
     };
+    let mut all = vec![m.x, m.y, m.z, normal.x, normal.y, normal.z, rms, hi - lo];
+    all.extend(u_offset);
+    all.extend(u_tilt.iter().flatten());
+    finite_result("plane", &all)?;
     Ok(PlaneFit {
         point: arr(&m),
         normal: arr(&normal),
@@ -450,37 +549,37 @@ pub fn circle3d(pts: &[P3]) -> Result<CircleFit, AlignError> {
         .map(|p| ((p - m).dot(&e1) / s, (p - m).dot(&e2) / s))
         .collect();
     let n = uv.len();
-    let a = DMatrix::from_fn(n, 3, |i, k| match k {
-        0 => 2.0 * uv[i].0,
-        1 => 2.0 * uv[i].1,
-        _ => 1.0,
-    });
-    let b = DVector::from_fn(n, |i, _| uv[i].0 * uv[i].0 + uv[i].1 * uv[i].1);
-    let svd = a.svd(true, true);
-    if svd.singular_values.min() <= 1e-9 * svd.singular_values.max() {
-        return Err(AlignError::Degenerate(
-            "the points are collinear: no circle passes through them".into(),
-        ));
+    // Algebraic start (Kåsa: |q|² = 2c·q + d) by its 3 × 3 normal equations, one O(n)
+    // pass: the points are centred and scaled to unit size, and the geometric fit below
+    // refines it. (plane() has already refused collinear points.)
+    let mut ata = nalgebra::Matrix3::<f64>::zeros();
+    let mut atb = nalgebra::Vector3::<f64>::zeros();
+    for &(u, v) in &uv {
+        let row = nalgebra::Vector3::new(2.0 * u, 2.0 * v, 1.0);
+        ata += row * row.transpose();
+        atb += row * (u * u + v * v);
     }
-    let x = svd
-        .solve(&b, 1e-14)
-        .map_err(|_| AlignError::Degenerate("the algebraic circle fit failed".into()))?;
+    let x = ata
+        .cholesky()
+        .map(|c| c.solve(&atb))
+        .filter(|x| x.iter().all(|v| v.is_finite()))
+        .ok_or_else(|| {
+            AlignError::Degenerate("the points are collinear: no circle passes through them".into())
+        })?;
     let r0 = (x[2] + x[0] * x[0] + x[1] * x[1]).max(0.0).sqrt();
     let x0 = DVector::from_vec(vec![x[0], x[1], r0]);
-    let (x, r, j) = levenberg_marquardt(x0, n, "circle", |x, res, jac| {
-        for (i, &(u, v)) in uv.iter().enumerate() {
-            let (du, dv) = (u - x[0], v - x[1]);
-            let len = du.hypot(dv).max(f64::MIN_POSITIVE);
-            res[i] = len - x[2];
-            jac[(i, 0)] = -du / len;
-            jac[(i, 1)] = -dv / len;
-            jac[(i, 2)] = -1.0;
-        }
+    let (x, r, j) = levenberg_marquardt(x0, n, "circle", |x, i| {
+        let (du, dv) = (uv[i].0 - x[0], uv[i].1 - x[1]);
+        let len = du.hypot(dv).max(f64::MIN_POSITIVE);
+        (len - x[2], [-du / len, -dv / len, -1.0, 0.0])
     })?;
     let center = m + (e1 * x[0] + e2 * x[1]) * s;
     let residuals: Vec<f64> = r.iter().map(|v| v * s).collect();
     let (rms, max_abs_residual) = rms_max(&residuals);
     let u = uncertainties(&j, &r);
+    let mut all = vec![center.x, center.y, center.z, x[2] * s, rms];
+    all.extend(u.iter().flatten().map(|v| v * s));
+    finite_result("circle", &all)?;
     Ok(CircleFit {
         center: arr(&center),
         normal: pl.normal,

@@ -21,5 +21,7 @@ pub mod setup;
 pub mod study;
 
 pub use error::AlignError;
-pub use fit::{circle3d, plane, sphere, sphere4, CircleFit, PlaneFit, SphereFit, P3};
+pub use fit::{
+    circle3d, plane, sphere, sphere4, CircleFit, PlaneFit, SphereFit, MAX_COORD, MAX_ITERATIONS, P3,
+};
 pub use setup::{level, plane_angle, Level, PlaneAngle, Setup};

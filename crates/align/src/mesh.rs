@@ -65,7 +65,12 @@ fn weld(tris: Vec<[P3; 3]>) -> Result<Mesh, MeshError> {
     for t in tris {
         let mut ids = [0u32; 3];
         for (k, v) in t.iter().enumerate() {
-            let key = [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+            // −0 and +0 are one coordinate.
+            let key = [
+                (v.x + 0.0).to_bits(),
+                (v.y + 0.0).to_bits(),
+                (v.z + 0.0).to_bits(),
+            ];
             let next = u32::try_from(vertices.len()).unwrap_or(u32::MAX);
             ids[k] = *index.entry(key).or_insert_with(|| {
                 vertices.push(*v);

@@ -156,7 +156,7 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
             }
             rhs[i] = -sd;
         }
-        let svd = jac.clone().svd(true, true);
+        let svd = crate::fit::svd_capped(jac.clone(), true, true, "registration")?;
         let sv = &svd.singular_values;
         let (smax, smin) = (sv.max(), sv.min());
         if smin <= 1e-6 * smax {
@@ -208,7 +208,10 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
             break;
         }
         if iterations >= 200 {
-            return Err(AlignError::NoConvergence("registration"));
+            return Err(AlignError::NoConvergence(
+                "registration",
+                "200 ICP steps did not settle (start with the points nearer their place on the mesh)",
+            ));
         }
     }
     // Re-orthonormalise, then invert: part = Rᵀ·(cad − t).

@@ -51,6 +51,11 @@ fn with_lines(name: &str, pts: &[Point], e: AlignError) -> CliError {
             pts[i - 1].line,
             e.hint()
         )),
+        AlignError::TooLarge { index, value } => CliError::failed(format!(
+            "error: {name}:{}: the coordinate {value:e} is beyond ±1e9 of the unit\n  = help: {}\n",
+            pts[index - 1].line,
+            e.hint()
+        )),
         e => align_error(name, e),
     }
 }
@@ -179,7 +184,8 @@ fn outward(n: P3, hint: Option<&str>) -> Result<P3, CliError> {
     match hint {
         None => Ok(n),
         Some(t) => {
-            let h = crate::kin_cmds::vector("--outward", t)?;
+            // Refuses 0,0,0 (no side), and takes 1e300,… as a direction.
+            let h = crate::kin_cmds::direction("--outward", t)?;
             Ok(if n.dot(&h) < 0.0 { -n } else { n })
         }
     }
@@ -268,11 +274,8 @@ pub fn angle(
     let pl = lampost_align::plane(&p3(&pts)).map_err(|e| with_lines(&name, &pts, e))?;
     let cad = match (to_normal, to_plane) {
         (Some(t), None) => {
-            let v = crate::kin_cmds::vector("--to-normal", t)?;
-            if v.norm() < 1e-12 {
-                return Err(CliError::usage("error: --to-normal: the normal has zero length\n  = help: give the CAD plane's normal i,j,k\n".to_string()));
-            }
-            v
+            // A unit normal, its length taken without overflow; zero length refused.
+            crate::kin_cmds::direction("--to-normal", t)?
         }
         (None, Some(f)) => {
             let (n2, p2) = read_points(f)?;
@@ -318,12 +321,24 @@ pub fn angle(
     }
 }
 
+/// The most touches one probing program holds (sphere points, plane grid m·n).
+pub const MAX_TOUCHES: usize = 10_000;
+
 fn pos(flag: &str, v: f64) -> Result<f64, CliError> {
-    if v.is_finite() && v > 0.0 {
+    if v.is_finite() && v > 0.0 && v <= lampost_align::MAX_COORD {
         Ok(v)
     } else {
-        Err(CliError::usage(format!("error: {flag} {v}: must be a positive number\n  = help: give a length in the program's units\n")))
+        Err(CliError::usage(format!("error: {flag} {v}: must be a positive number, at most 1e9\n  = help: give a length in the program's units\n")))
     }
+}
+
+/// A position for a probing program: each coordinate within ±1e9 of the unit.
+fn place(flag: &str, text: &str) -> Result<P3, CliError> {
+    let v = crate::kin_cmds::vector(flag, text)?;
+    if v.amax() > lampost_align::MAX_COORD {
+        return Err(CliError::usage(format!("error: {flag} {text}: a coordinate is beyond ±1e9 of the unit\n  = help: give the position in the program's units\n")));
+    }
+    Ok(v)
 }
 
 fn probe_opts(units: crate::UnitsArg, number: u32) -> lampost_align::probe::ProbeOptions {
@@ -362,11 +377,14 @@ pub fn probe_sphere(
     number: u32,
     output: Option<&str>,
 ) -> Result<(), CliError> {
-    let c = crate::kin_cmds::vector("--center", center)?;
+    let c = place("--center", center)?;
     let radius = pos("--radius", radius)?;
     let stylus = pos("--stylus-radius", stylus)?;
     if points < 4 {
         return Err(CliError::usage(format!("error: --points {points}: a sphere fit needs at least 4 touches\n  = help: 30 spread over the cap is a good default\n")));
+    }
+    if points > MAX_TOUCHES {
+        return Err(CliError::usage(format!("error: --points {points}: at most {MAX_TOUCHES} touches in one program\n  = help: 30 spread over the cap is a good default\n")));
     }
     if !(cap_deg > 0.0 && cap_deg <= 120.0) {
         return Err(CliError::usage(format!("error: --cap-deg {cap_deg}: must be in (0, 120]\n  = help: the polar angle from +Z the touches may reach; keep clear of the stem\n")));
@@ -393,7 +411,7 @@ pub fn probe_plane(
     number: u32,
     output: Option<&str>,
 ) -> Result<(), CliError> {
-    let c = crate::kin_cmds::vector("--corner", corner)?;
+    let c = place("--corner", corner)?;
     let bad_pair = |flag: &str, t: &str| {
         CliError::usage(format!(
             "error: {flag} {t}: expected two values a,b\n  = help: e.g. --size 2,1 --grid 3,3\n"
@@ -417,7 +435,9 @@ pub fn probe_plane(
         .ok_or_else(|| bad_pair("--grid", grid))?;
     let m: usize = gm.trim().parse().map_err(|_| bad_pair("--grid", grid))?;
     let n: usize = gn.trim().parse().map_err(|_| bad_pair("--grid", grid))?;
-    if m == 0 || n == 0 || m * n < 3 || m * n > 10_000 {
+    // Saturating: 9223372036854775813 × 2 must not wrap to something small.
+    let touches = m.saturating_mul(n);
+    if m == 0 || n == 0 || !(3..=MAX_TOUCHES).contains(&touches) {
         return Err(CliError::usage(format!("error: --grid {grid}: needs at least 3 touches (and at most 10000)\n  = help: e.g. --grid 3,3\n")));
     }
     let o = probe_opts(units, number);

@@ -99,7 +99,19 @@ pub fn read_poses(m: &Machine, file: &str) -> Result<(String, Vec<Pose>), CliErr
         let mut v = Vec::with_capacity(fields.len());
         for (k, f) in fields.iter().enumerate() {
             match f.parse::<f64>() {
-                Ok(x) if x.is_finite() => v.push(x),
+                Ok(x) if x.is_finite() && x.abs() > lampost_align::MAX_COORD => {
+                    return Err(located(
+                        &name,
+                        line,
+                        raw,
+                        &format!(
+                            "row {line}, column {}: `{f}` is beyond ±1e9 of the unit",
+                            k + 1
+                        ),
+                        "no machine measures that far: check the units and the numbers",
+                    ))
+                }
+                Ok(x) if x.is_finite() => v.push(x + 0.0),
                 _ => {
                     return Err(located(
                         &name,
@@ -171,10 +183,12 @@ fn report_pivot(m: &Machine, r: &PivotResult) -> String {
         }
         _ => s.push_str("R not fixed: see the note\n"),
     }
-    s.push_str(&format!(
-        "rms {:.3e}\ncondition {:.3e}\n",
-        r.rms, r.condition
-    ));
+    s.push_str(&format!("rms {:.3e}\n", r.rms));
+    if r.condition.is_finite() && r.condition < f64::MAX {
+        s.push_str(&format!("condition {:.3e}\n", r.condition));
+    } else {
+        s.push_str("condition n/a (the design is singular)\n");
+    }
     if let Some(axes) = &r.axes {
         for (i, a) in axes.iter().enumerate() {
             s.push_str(&format!(
@@ -225,6 +239,16 @@ pub fn pivot(
         Method::Fit => calib::method_fit(&m, &poses),
     }
     .map_err(|e| align_error(&name, e))?;
+    let mut numbers: Vec<f64> = res
+        .r
+        .iter()
+        .chain(res.pivot.iter())
+        .flatten()
+        .copied()
+        .collect();
+    numbers.extend(res.u_r.iter().flatten());
+    numbers.push(res.rms);
+    crate::kin_cmds::finite("the calibration (R, its centre, u_R or the rms)", &numbers)?;
     if let Some(path) = write {
         let def = calib::updated_machine(&m, &res).map_err(|e| align_error(&name, e))?;
         let mut o = Output::create(Some(path))?;
@@ -284,7 +308,11 @@ pub fn factorial(
                     "error: --step {d}: must be positive\n"
                 )));
             }
-            let runs = calib::factorial_design(c, d);
+            let runs = calib::factorial_design(c, d).map_err(|e| {
+                CliError::usage(format!(
+                    "error: --start {st} --step {d:e}: {e}\n  = help: give the start centre and the step in the machine's units\n"
+                ))
+            })?;
             if json {
                 let v: Vec<serde_json::Value> = runs.iter().map(|(r, l, c)| serde_json::json!({"run": r, "levels": l, "center": [c.x, c.y, c.z]})).collect();
                 return out_text(format!("{}\n", serde_json::json!({ "runs": v })));
@@ -438,6 +466,21 @@ fn pose_set(m: &Machine, text: Option<&str>) -> Result<Vec<[f64; 2]>, CliError> 
     Ok(out)
 }
 
+/// A point the probing program moves to, in the machine frame: within every linear
+/// axis's travel, or refused naming the axis, its value and the limits.
+fn travel_check(m: &Machine, pose: usize, q: &P3) -> Result<(), CliError> {
+    let x = m.linear_for(q, 0);
+    for (l, &v) in m.linear.iter().zip(&x) {
+        if !(v.is_finite() && v >= l.limits.0 && v <= l.limits.1) {
+            return Err(CliError::failed(format!(
+                "error: at pose {pose} the probing program would move {} to {v:.4}, outside its travel [{}, {}]\n  = help: check --ball (the ball centre at home, in the machine frame) and --radius, or the machine's limits\n",
+                l.name, l.limits.0, l.limits.1
+            )));
+        }
+    }
+    Ok(())
+}
+
 #[allow(clippy::too_many_arguments)]
 pub fn probe_poses(
     machine: &str,
@@ -468,7 +511,13 @@ pub fn probe_poses(
             "error: need --points ≥ 4 and positive --radius and --stylus-radius\n".to_string(),
         ));
     }
-    let (cond, line) = calib::pose_conditioning(&m, &set);
+    // A set that fixes nothing (no poses, every pose at the same angles) is refused,
+    // not written as if it fixed R.
+    let (cond, line) = calib::pose_conditioning(&m, &set).map_err(|e| {
+        CliError::failed(format!(
+            "error: --poses: {e}\n  = help: give poses turning about both rotary axes, e.g. A=0,B=0;A=90,B=0;A=0,B=30;A=90,B=30\n"
+        ))
+    })?;
     let units = match m.units {
         Units::Inch => lampost_gcode::Units::Inch,
         Units::Mm => lampost_gcode::Units::Mm,
@@ -499,6 +548,11 @@ pub fn probe_poses(
                 "error: at pose {k} the stem leaves fewer than 4 reachable touch points\n"
             )));
         }
+        for t in &chosen {
+            for q in [t.start, t.target] {
+                travel_check(&m, k + 1, &P3::from(q))?;
+            }
+        }
         body.push((*r, centre, chosen));
     }
     let safe = body
@@ -508,6 +562,11 @@ pub fn probe_poses(
         + radius
         + stylus
         + 10.0 * opts.clearance;
+    for (k, (_, _, touches)) in body.iter().enumerate() {
+        for t in touches {
+            travel_check(&m, k + 1, &P3::new(t.start[0], t.start[1], safe))?;
+        }
+    }
     text.push_str("%\n");
     text.push_str(&format!(
         "O9502 (LAMPOST ROTARY CALIBRATION {} POSES)\n",

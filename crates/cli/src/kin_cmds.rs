@@ -60,6 +60,34 @@ pub fn vector(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
     ))
 }
 
+/// `i,j,k` as a unit direction: scaled by its largest component before its length is
+/// taken, so `1e300,1e300,1e300` is (1,1,1)/√3, not an overflow; zero length refused.
+pub fn direction(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
+    let v = vector(flag, text)?;
+    let big = v.amax();
+    let u = if big > 0.0 { v / big } else { v };
+    let n = u.norm();
+    if !(n > 0.0 && n.is_finite()) || big < 1e-300 {
+        return Err(usage(
+            flag,
+            format!("`{text}` has zero length: it names no direction"),
+            "give a non-zero direction i,j,k, e.g. 0,0,1",
+        ));
+    }
+    Ok(u / n)
+}
+
+/// Refuse a result with a non-finite number: say so instead of printing it.
+pub fn finite(what: &str, vals: &[f64]) -> Result<(), CliError> {
+    if vals.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(CliError::failed(format!(
+            "error: {what} is not a finite number (the machine's geometry overflows)\n  = help: check the machine file's offsets and their `scale`, and the joint values\n"
+        )))
+    }
+}
+
 /// `NAME=x,y,z` or `NAME=value`, repeatable.
 pub fn overrides(sets: &[String]) -> Result<Vec<(String, ParamValue)>, CliError> {
     let mut out = Vec::new();
@@ -245,6 +273,17 @@ pub fn fk(
     };
     m.check_limits(&j).map_err(kin_error)?;
     let pose = m.forward(&j, h);
+    finite(
+        "the forward kinematics' result",
+        &[
+            pose.tip.x,
+            pose.tip.y,
+            pose.tip.z,
+            pose.axis.x,
+            pose.axis.y,
+            pose.axis.z,
+        ],
+    )?;
     let mut out = Output::create(None)?;
     let text = if json {
         format!(
@@ -278,7 +317,7 @@ pub fn ik(
     let m = load_machine(machine, sets)?;
     let h = head_index(&m, head)?;
     let p = vector("--position", position)?;
-    let a = vector("--axis", axis)?;
+    let a = direction("--axis", axis)?;
     let near = match near {
         Some(t) => {
             let v = joints_arg(&m, "--near", t, &[3, 4], &[])?;
@@ -294,6 +333,9 @@ pub fn ik(
                 what: "no solution within limits".into(),
             },
         }));
+    }
+    for sol in sols.as_slice() {
+        finite("an inverse-kinematics solution", &sol.joints.values())?;
     }
     let names = m.axis_names();
     let mut out = Output::create(None)?;
@@ -373,6 +415,10 @@ pub fn rotate(
     for pt in &pts {
         let q = m.part_to_machine(&rotary, &Vector3::from(pt.p));
         let x = m.linear_for(&q, h);
+        finite(
+            &format!("the machine position of the point on {name}:{}", pt.line),
+            &x,
+        )?;
         for (l, &val) in m.linear.iter().zip(&x) {
             if val < l.limits.0 || val > l.limits.1 {
                 return Err(CliError::failed(format!(

@@ -83,7 +83,19 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<Point>, CliError> {
         for k in 0..3 {
             let (col, f) = fields[k];
             match parsed[k] {
-                Some(v) if v.is_finite() => p[k] = v,
+                Some(v) if v.is_finite() && v.abs() > lampost_align::MAX_COORD => {
+                    let col = raw[..col].chars().count() + 1;
+                    return Err(located(
+                        file,
+                        line,
+                        col,
+                        raw,
+                        &format!("`{f}` is beyond ±1e9 of the unit: no machine measures that far"),
+                        "check the units and the numbers in the file",
+                    ));
+                }
+                // −0 and +0 are the same coordinate (`-0 0 1` is the point `0 0 1`).
+                Some(v) if v.is_finite() => p[k] = v + 0.0,
                 _ => {
                     let col = raw[..col].chars().count() + 1;
                     return Err(located(
@@ -134,6 +146,20 @@ mod tests {
         assert_eq!(pts.len(), 2);
         let e = parse_points("3\n1\t2\t3\n", "f.ds").expect_err("count");
         assert!(e.message.contains("says 3 points"), "{}", e.message);
+    }
+
+    #[test]
+    fn negative_zero_is_zero() {
+        let pts = parse_points("-0 0 1\n0 -0.0 1\n", "f").expect("reads");
+        assert_eq!(pts[0].p[0].to_bits(), 0.0f64.to_bits());
+        assert_eq!(pts[1].p[1].to_bits(), 0.0f64.to_bits());
+    }
+
+    #[test]
+    fn huge_numbers_are_located() {
+        let e = parse_points("1 2 3\n1 1e200 6\n", "pts.txt").expect_err("huge");
+        assert!(e.message.contains("pts.txt:2:3"), "{}", e.message);
+        assert!(e.message.contains("beyond"), "{}", e.message);
     }
 
     #[test]

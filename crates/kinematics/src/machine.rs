@@ -526,6 +526,12 @@ impl Machine {
             if !pivot.iter().all(|x| x.is_finite()) {
                 return Err(KinError::NotFinite(format!("rotary axis {} pivot", r.name)));
             }
+            if let Some(v) = pivot.iter().find(|x| x.abs() > 1e9) {
+                return Err(bad(format!(
+                    "rotary axis {} pivot has the component {v:e}, beyond ±1e9 of the machine's unit (check its `scale`)",
+                    r.name
+                )));
+            }
             let limits = match r.limits {
                 Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Some((lo, hi)),
                 Some(_) => {
@@ -577,6 +583,13 @@ impl Machine {
                 return Err(bad(format!("head `{}` is defined twice", h.name)));
             }
             let offset = resolve(&h.offset, &format!("head {} offset", h.name))?;
+            if let Some(v) = offset.iter().find(|x| !x.is_finite() || x.abs() > 1e9) {
+                return Err(bad(format!(
+                    "head `{}` offset has a component {}, beyond ±1e9 of the machine's unit (check its `scale`)",
+                    h.name,
+                    if v.is_finite() { format!("{v:e}") } else { "that overflows".into() }
+                )));
+            }
             heads.push(Head {
                 name: h.name.clone(),
                 offset,
@@ -1093,6 +1106,13 @@ impl Machine {
         if !v.iter().all(|x| x.is_finite()) {
             return Err(KinError::NotFinite("the direction".into()));
         }
+        // A length that overflows (components near 1e300) is scaled down first: the
+        // direction is what counts.
+        let v = if v.norm().is_finite() {
+            *v
+        } else {
+            v / v.amax()
+        };
         if v.norm() < 1e-12 {
             return Err(KinError::ZeroToolAxis);
         }
@@ -1140,6 +1160,15 @@ impl Machine {
         if !tip.iter().chain(axis.iter()).all(|x| x.is_finite()) {
             return Err(KinError::NotFinite("the position or tool axis".into()));
         }
+        // A length that overflows (components near 1e300) is scaled down first; other
+        // axes are used as given (the batch functions match this path bit for bit).
+        let scaled;
+        let axis = if axis.norm().is_finite() {
+            axis
+        } else {
+            scaled = axis / axis.amax();
+            &scaled
+        };
         let n = axis.norm();
         if n < 1e-12 {
             return Err(KinError::ZeroToolAxis);
