@@ -494,12 +494,14 @@ pub fn parse_line_with<'a>(
                             span: Span::new(offset + start, offset + end),
                         }));
                         i = end;
-                        let code = if letter == b'M' || letter == b'G' && !lenient {
-                            Word::code_of(value)
-                        } else {
-                            None
+                        // Only T, G and M words can make the rest of the block a
+                        // firmware code's own (the common axis words skip all this).
+                        let code = match letter {
+                            b'M' => Word::code_of(value),
+                            b'G' if !lenient => Word::code_of(value),
+                            _ => None,
                         };
-                        if !lenient {
+                        if !lenient && matches!(letter, b'T' | b'G' | b'M') {
                             lenient = match (letter, code) {
                                 (b'T', _) => true,
                                 (b'G', Some(c)) => matches!(c, 280 | 300 | 1610 | 1620),
