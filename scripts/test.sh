@@ -4,6 +4,9 @@
 # every test of the workspace. rs274 is required here, so
 # the comparison can never be skipped silently.
 set -euo pipefail
+# Nothing here reads standard input: close it, so no tool ever reads stray bytes
+# from whatever stdin the runner left open.
+exec </dev/null
 cd "$(dirname "$0")/.."
 ./scripts/install-rs274.sh
 ./scripts/install-python.sh
