@@ -8,18 +8,6 @@ use common::*;
 use std::path::Path;
 use std::process::Command;
 
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn fx(name: &str) -> String {
-    root()
-        .join("fixtures/post")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
 fn temps(dir: &Path) -> Vec<String> {
     std::fs::read_dir(dir)
         .map(|d| {

@@ -4,10 +4,6 @@ mod common;
 
 use common::*;
 
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 /// Each bad input: exit 1, and a message naming the file, line and column.
 #[test]
 fn bad_input_gets_located_errors() {

@@ -4,18 +4,6 @@ mod common;
 
 use common::*;
 
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn fx(name: &str) -> String {
-    root()
-        .join("fixtures/post")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
 fn posted(args: &[&str]) -> String {
     let o = lampost(args);
     assert!(o.status.success(), "{args:?}: {}", stderr(&o));

@@ -3,58 +3,17 @@
 //! kinematics written out from the machine file's comment (paper 000), not the crate's.
 
 mod common;
+#[path = "../../post/tests/papers/mod.rs"]
+mod papers;
 
 use common::*;
+use papers::fadal_tip;
 use std::path::Path;
-
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn fx(name: &str) -> String {
-    root()
-        .join("fixtures/post")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);
     std::fs::write(&p, text).expect("write");
     p.to_string_lossy().into_owned()
-}
-
-/// FADAL (fixtures/machines/fadal-lamp.toml): a part point p sits at M(a, b)·(p + R) − R,
-/// M = Ry(−b)·Rz(a); the laser tip is the joints plus L. The tip and tool axis in the
-/// part frame.
-fn fadal_tip(j: [f64; 3], a: f64, b: f64, laser: bool) -> ([f64; 3], [f64; 3]) {
-    let r = [-4.877, 1.4798, 7.0918];
-    let l = if laser {
-        [-10.10308, 0.03632, -8.72762]
-    } else {
-        [0.0; 3]
-    };
-    let (sa, ca) = a.to_radians().sin_cos();
-    // Ry(−b): rotation about y by −b.
-    let (sb, cb) = (-b).to_radians().sin_cos();
-    let rz = [[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]];
-    let ry = [[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]];
-    let mut m = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for k in 0..3 {
-            m[i][k] = (0..3).map(|x| ry[i][x] * rz[x][k]).sum();
-        }
-    }
-    // p = Mᵀ(q + R) − R; axis = Mᵀ·(0, 0, 1).
-    let q = [j[0] + l[0] + r[0], j[1] + l[1] + r[1], j[2] + l[2] + r[2]];
-    let mut p = [0.0; 3];
-    let mut ax = [0.0; 3];
-    for k in 0..3 {
-        p[k] = (0..3).map(|i| m[i][k] * q[i]).sum::<f64>() - r[k];
-        ax[k] = m[2][k];
-    }
-    (p, ax)
 }
 
 /// The posted rapids and feeds as (g, X, Y, Z, A, B), via `lampost trace`.

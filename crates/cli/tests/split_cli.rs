@@ -8,18 +8,6 @@ use std::path::{Path, PathBuf};
 
 use common::*;
 
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn fx(name: &str) -> String {
-    root()
-        .join("fixtures/post")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf8 path")
 }

@@ -261,3 +261,17 @@ pub fn compare_with_rs274(
     }
     Ok((total, exact))
 }
+
+/// A command's standard error, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A file of `fixtures/post`, as a path argument.
+pub fn fx(name: &str) -> String {
+    root()
+        .join("fixtures/post")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
