@@ -127,9 +127,10 @@ impl<S: LineSource> Iterator for Stream<S> {
                 self.any_content = true;
             }
             let queue = &mut self.queue;
-            // The queue is empty here: the block's first event is handed back directly
-            // (one move per line is the rule), the rest wait in the queue.
-            let mut first: Option<Event> = None;
+            // The queue is empty here; the block's events go to it in order, then any
+            // error, then the source's diagnostics, and the loop hands them out. (Events
+            // go straight into the queue: moving a large `Event` through an `Option` on
+            // the way out costs more than the queue.)
             let mut block = Block::empty(line.number, line.offset);
             let parsed = parse_line_with(
                 line.bytes,
@@ -139,13 +140,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 self.exponents,
             );
             let failed = match parsed {
-                Ok(()) => match self.interp.block(&block, &mut |e| {
-                    if first.is_none() {
-                        first = Some(e);
-                    } else {
-                        queue.push_back(e);
-                    }
-                }) {
+                Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
                     Ok(()) => false,
                     Err(d) => {
                         queue.push_back(Event::Diagnostic(d));
@@ -165,10 +160,6 @@ impl<S: LineSource> Iterator for Stream<S> {
             }
             if failed && self.stop_on_error {
                 self.stopped = true;
-            }
-            if let Some(e) = first {
-                // An error found after the block's first event follows it in the queue.
-                return Some(Ok(e));
             }
         }
     }
