@@ -93,6 +93,24 @@ impl Counter {
             *self = Counter::new(to);
             return;
         }
+        if step < 10 {
+            // The common case (step 1, 2, 5): add to the last digit, then carry through
+            // the nines, no division.
+            let mut i = self.buf.len() - 1;
+            let mut d = self.buf[i] - b'0' + step as u8;
+            while d >= 10 {
+                self.buf[i] = b'0' + d - 10;
+                i -= 1;
+                if i < self.start {
+                    self.start = i;
+                    self.buf[i] = b'0';
+                }
+                d = self.buf[i] - b'0' + 1;
+            }
+            self.buf[i] = b'0' + d;
+            self.value = to;
+            return;
+        }
         let (mut carry, mut s, mut i) = (0u8, step, self.buf.len());
         while s > 0 || carry > 0 {
             i -= 1;
@@ -554,9 +572,7 @@ impl<W: Write> Emitter<W> {
         if n < 9_000_000_000_000_000 && self.n_text.value == n {
             self.separate();
             self.line.push(b'N');
-            for &d in self.n_text.digits() {
-                self.line.push(d);
-            }
+            self.line.extend_from_slice(self.n_text.digits());
         } else {
             self.push_word(b'N', None, n as f64, None);
         }
