@@ -518,6 +518,14 @@ fn fuzz(seconds: u64) -> Result<(), String> {
     }
 }
 
+/// The manual pages, from the command line's definition, into `target/man`.
+fn man() -> Result<(), String> {
+    let mut c = cargo();
+    c.args(["run", "-q", "-p", "lampost-cli", "--", "man", "--out-dir"])
+        .arg(root().join("target/man"));
+    run(c)
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let a: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -528,12 +536,13 @@ fn main() -> ExitCode {
         ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),
         ["calibration"] => calibration(200),
+        ["man"] => man(),
         ["fuzz"] => fuzz(60),
         ["fuzz", "--seconds", n] => match n.parse() {
             Ok(s) => fuzz(s),
             Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
         },
-        _ => Err("usage: cargo xtask bench [gcode|kin|post] | cargo xtask accuracy | cargo xtask calibration | cargo xtask fuzz [--seconds N]".into()),
+        _ => Err("usage: cargo xtask bench [gcode|kin|post] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz [--seconds N]".into()),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

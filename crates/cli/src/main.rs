@@ -5,6 +5,7 @@
 
 mod align_cmds;
 mod calib_cmds;
+mod docs;
 mod gcode_cmds;
 mod io;
 mod kin_cmds;
@@ -23,7 +24,7 @@ use report::CliError;
     version,
     about = "CAM post-processor and setup toolkit for hybrid laser-deposition / machining 5-axis machines"
 )]
-struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     command: Command,
 }
@@ -487,6 +488,32 @@ enum Command {
         #[command(flatten)]
         interp: InterpArgs,
     },
+    /// Print a shell completion script (e.g. `lampost completions bash > /etc/bash_completion.d/lampost`).
+    Completions {
+        /// The shell.
+        shell: ShellArg,
+    },
+    /// Write the manual pages (roff): `lampost.1` and one page per subcommand.
+    Man {
+        /// Directory to write them into (created if missing).
+        #[arg(long, default_value = "man")]
+        out_dir: String,
+    },
+}
+
+/// Shells for `lampost completions`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ShellArg {
+    /// Bash.
+    Bash,
+    /// Zsh.
+    Zsh,
+    /// Fish.
+    Fish,
+    /// PowerShell.
+    Powershell,
+    /// Elvish.
+    Elvish,
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {
@@ -749,6 +776,8 @@ fn run(cli: Cli) -> Result<(), CliError> {
             json,
             interp,
         } => gcode_cmds::trace(&file, output.as_deref(), json, interp),
+        Command::Completions { shell } => docs::completions(shell),
+        Command::Man { out_dir } => docs::man(&out_dir),
     }
 }
 
