@@ -86,17 +86,26 @@ pub fn sphere_touches(
 }
 
 /// A grid of `m` × `n` touches on a face whose outward normal is +Z, over the rectangle
-/// from `corner` spanning `size` (u along X, v along Y), in serpentine order.
+/// from `corner` spanning `size` (u along X, v along Y), in serpentine order. The grid
+/// stays `inset` inside the rectangle's edges (a stylus radius: a stylus centred on an
+/// edge would touch the edge, or miss the face); `None` when the rectangle is not wider
+/// than twice the inset in a direction that has more than one touch.
 pub fn plane_touches(
     corner: P3,
     size: (f64, f64),
     grid: (usize, usize),
+    inset: f64,
     opts: &ProbeOptions,
-) -> Vec<Touch> {
+) -> Option<Vec<Touch>> {
     let (m, n) = grid;
-    let step = |k: usize, count: usize, len: f64| {
+    let span = |len: f64, count: usize| {
+        let inner = len - 2.0 * inset;
+        (inner > 0.0 || count == 1 && len > 0.0).then_some(inner.max(0.0))
+    };
+    let (su, sv) = (span(size.0, m)?, span(size.1, n)?);
+    let step = |k: usize, count: usize, inner: f64, len: f64| {
         if count > 1 {
-            len * k as f64 / (count - 1) as f64
+            inset + inner * k as f64 / (count - 1) as f64
         } else {
             len / 2.0
         }
@@ -105,7 +114,7 @@ pub fn plane_touches(
     for j in 0..n {
         for jj in 0..m {
             let i = if j % 2 == 0 { jj } else { m - 1 - jj };
-            let p = corner + P3::new(step(i, m, size.0), step(j, n, size.1), 0.0);
+            let p = corner + P3::new(step(i, m, su, size.0), step(j, n, sv, size.1), 0.0);
             out.push(Touch {
                 start: [p.x, p.y, p.z + opts.clearance],
                 target: [p.x, p.y, p.z - opts.overtravel],
@@ -113,7 +122,7 @@ pub fn plane_touches(
             });
         }
     }
-    out
+    Some(out)
 }
 
 /// The FADAL program that makes `touches`, each printed as one `X… Y… Z…` line.
@@ -124,6 +133,62 @@ pub fn program(
     title: &str,
     opts: &ProbeOptions,
 ) -> std::io::Result<String> {
+    let mut em = start(title, &[], opts)?;
+    em.words(&[(b'G', 0.0), (b'Z', safe_z)], None)?;
+    touch_moves(&mut em, touches, safe_z, opts)?;
+    finish(em)
+}
+
+/// One pose of a rotary calibration: the rotary words that index to it (letter, angle)
+/// and the touches made there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseTouches {
+    /// The rotary axes' words, e.g. `[(b'A', 0.0), (b'B', 45.0)]`.
+    pub rotary: Vec<(u8, f64)>,
+    /// The touches at this pose.
+    pub touches: Vec<Touch>,
+}
+
+/// The FADAL program of a rotary calibration: the modal setup and the probe switched on
+/// once, then at each pose a retract to `safe_z`, the index, a `#SPRINT "POSE k A… B…"`
+/// record (so the log says which touches belong to which pose) and the touches; the
+/// probe off and `M30` at the end. `comments` go under the program number.
+pub fn poses_program(
+    poses: &[PoseTouches],
+    safe_z: f64,
+    title: &str,
+    comments: &[String],
+    opts: &ProbeOptions,
+) -> std::io::Result<String> {
+    let mut em = start(title, comments, opts)?;
+    for (k, pose) in poses.iter().enumerate() {
+        let label: Vec<String> = pose
+            .rotary
+            .iter()
+            .map(|(l, v)| format!("{}{v:.3}", char::from(*l)))
+            .collect();
+        em.raw_line(&format!(
+            "(POSE {} OF {}: {})",
+            k + 1,
+            poses.len(),
+            label.join(" ")
+        ))?;
+        em.words(&[(b'G', 0.0), (b'Z', safe_z)], None)?;
+        let mut index = vec![(b'G', 0.0)];
+        index.extend(pose.rotary.iter().copied());
+        em.words(&index, None)?;
+        em.raw_line(&format!("#SPRINT \"POSE {} {}\"", k + 1, label.join(" ")))?;
+        touch_moves(&mut em, &pose.touches, safe_z, opts)?;
+    }
+    finish(em)
+}
+
+/// Stage 1: the program number, comments, the modal setup and the probe on.
+fn start(
+    title: &str,
+    comments: &[String],
+    opts: &ProbeOptions,
+) -> std::io::Result<Emitter<Vec<u8>>> {
     let mut em = Emitter::new(
         Vec::new(),
         EmitOptions {
@@ -134,6 +199,9 @@ pub fn program(
     );
     em.program_number(opts.program_number, Some(title))?;
     em.raw_line("(WRITTEN BY LAMPOST - EACH TOUCH IS SENT TO THE RS-232 PORT AS X.. Y.. Z..)")?;
+    for c in comments {
+        em.raw_line(&format!("({})", c.replace(['(', ')'], "")))?;
+    }
     let units = match opts.units {
         Units::Inch => 70.0,
         Units::Mm => 71.0,
@@ -150,7 +218,17 @@ pub fn program(
     )?;
     em.words(&[(b'M', 64.0)], Some("SELECT THE SPINDLE PROBE"))?;
     em.words(&[(b'M', 66.0)], Some("PROBE ON"))?;
-    em.words(&[(b'G', 0.0), (b'Z', safe_z)], None)?;
+    Ok(em)
+}
+
+/// Stage 2: each touch from `safe_z`: over the start, feed down to it, the probing move,
+/// the touch printed, back out and up.
+fn touch_moves(
+    em: &mut Emitter<Vec<u8>>,
+    touches: &[Touch],
+    safe_z: f64,
+    opts: &ProbeOptions,
+) -> std::io::Result<()> {
     for (k, t) in touches.iter().enumerate() {
         em.raw_line(&format!("(TOUCH {} OF {})", k + 1, touches.len()))?;
         em.words(&[(b'G', 0.0), (b'X', t.start[0]), (b'Y', t.start[1])], None)?;
@@ -185,6 +263,11 @@ pub fn program(
         )?;
         em.words(&[(b'G', 0.0), (b'Z', safe_z)], None)?;
     }
+    Ok(())
+}
+
+/// Stage 3: the probe off and the end.
+fn finish(mut em: Emitter<Vec<u8>>) -> std::io::Result<String> {
     em.words(&[(b'M', 67.0)], Some("PROBE OFF"))?;
     em.words(&[(b'M', 30.0)], None)?;
     let bytes = em.finish()?;

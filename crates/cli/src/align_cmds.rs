@@ -406,6 +406,7 @@ pub fn probe_plane(
     corner: &str,
     size: &str,
     grid: &str,
+    stylus_radius: Option<f64>,
     safe_z: Option<f64>,
     units: crate::UnitsArg,
     number: u32,
@@ -441,7 +442,24 @@ pub fn probe_plane(
         return Err(CliError::usage(format!("error: --grid {grid}: needs at least 3 touches (and at most 10000)\n  = help: e.g. --grid 3,3\n")));
     }
     let o = probe_opts(units, number);
-    let t = lampost_align::probe::plane_touches(c, (u, v), (m, n), &o);
+    let inset = match stylus_radius {
+        Some(r) if r.is_finite() && r >= 0.0 => r,
+        Some(r) => {
+            return Err(CliError::usage(format!(
+                "error: --stylus-radius {r}: must be a finite radius, zero or more\n  = help: the stylus ball's radius, in the program's units\n"
+            )))
+        }
+        None => match o.units {
+            lampost_gcode::Units::Inch => 0.0625,
+            lampost_gcode::Units::Mm => 1.5,
+        },
+    };
+    let t = lampost_align::probe::plane_touches(c, (u, v), (m, n), inset, &o).ok_or_else(|| {
+        CliError::usage(format!(
+            "error: --size {size}: the grid must stay a stylus radius ({inset}) inside the edges, so each side with more than one touch must be longer than {}\n  = help: probe a larger rectangle, or give the stylus's real radius with --stylus-radius\n",
+            2.0 * inset
+        ))
+    })?;
     let safe = safe_z.unwrap_or(c.z + 10.0 * o.clearance);
     if safe <= c.z + o.clearance {
         return Err(CliError::usage(format!(

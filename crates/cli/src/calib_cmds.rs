@@ -522,9 +522,11 @@ pub fn probe_poses(
         Units::Inch => lampost_gcode::Units::Inch,
         Units::Mm => lampost_gcode::Units::Mm,
     };
-    let opts = lampost_align::probe::ProbeOptions::defaults(units);
+    let opts = lampost_align::probe::ProbeOptions {
+        program_number: 9502,
+        ..lampost_align::probe::ProbeOptions::defaults(units)
+    };
     // One program: index, then probe the ball where the nominal model puts it.
-    let mut text = String::new();
     let mut body = Vec::new();
     for (k, r) in set.iter().enumerate() {
         // The ball moves with the table; its stem (table −Z) turns with it. Touch the
@@ -567,58 +569,40 @@ pub fn probe_poses(
             travel_check(&m, k + 1, &P3::new(t.start[0], t.start[1], safe))?;
         }
     }
-    text.push_str("%\n");
-    text.push_str(&format!(
-        "O9502 (LAMPOST ROTARY CALIBRATION {} POSES)\n",
-        set.len()
-    ));
-    text.push_str(&format!(
-        "(MACHINE {} - PROBE THE GAGE BALL AT EACH A/B POSE)\n",
-        m.name.to_uppercase()
-    ));
-    text.push_str(&format!(
-        "(POSE SET CONDITION NUMBER {cond:.3e}{})\n",
-        if line.is_some() {
-            " - RANK DEFICIENT"
-        } else {
-            ""
-        }
-    ));
-    for (k, (r, _, touches)) in body.iter().enumerate() {
-        let prog = lampost_align::probe::program(touches, safe, &format!("POSE {}", k + 1), &opts)
-            .map_err(|e| CliError::write(&e))?;
-        // Keep the body of each sub-program (between its O line and the end).
-        text.push_str(&format!(
-            "(POSE {} OF {}: {}={} {}={})\n",
-            k + 1,
-            body.len(),
-            m.rotary[0].name,
-            r[0],
-            m.rotary[1].name,
-            r[1]
-        ));
-        text.push_str(&format!("G0 Z{safe:.4}\n"));
-        text.push_str(&format!(
-            "G0 {}{:.3} {}{:.3}\n",
-            m.rotary[0].name, r[0], m.rotary[1].name, r[1]
-        ));
-        text.push_str(&format!(
-            "#SPRINT \"POSE {} {}{:.3} {}{:.3}\"\n",
-            k + 1,
-            m.rotary[0].name,
-            r[0],
-            m.rotary[1].name,
-            r[1]
-        ));
-        for l in prog.lines().skip(2) {
-            if l == "%" || l.starts_with("M30") || l.starts_with("M67") {
-                continue;
+    let comments = vec![
+        format!(
+            "MACHINE {} - PROBE THE GAGE BALL AT EACH A/B POSE",
+            m.name.to_uppercase()
+        ),
+        format!(
+            "POSE SET CONDITION NUMBER {cond:.3e}{}",
+            if line.is_some() {
+                " - RANK DEFICIENT"
+            } else {
+                ""
             }
-            text.push_str(l);
-            text.push('\n');
-        }
-    }
-    text.push_str("M67 (PROBE OFF)\nM30\n%\n");
+        ),
+    ];
+    let poses: Vec<lampost_align::probe::PoseTouches> = body
+        .iter()
+        .map(|(r, _, touches)| lampost_align::probe::PoseTouches {
+            rotary: m
+                .rotary
+                .iter()
+                .zip(r)
+                .map(|(ax, v)| (ax.name.as_bytes().first().copied().unwrap_or(b'A'), *v))
+                .collect(),
+            touches: touches.clone(),
+        })
+        .collect();
+    let text = lampost_align::probe::poses_program(
+        &poses,
+        safe,
+        &format!("LAMPOST ROTARY CALIBRATION {} POSES", set.len()),
+        &comments,
+        &opts,
+    )
+    .map_err(|e| CliError::write(&e))?;
     let diags = lampost_gcode::check(
         text.as_bytes(),
         lampost_gcode::Options {

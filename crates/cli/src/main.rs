@@ -332,6 +332,10 @@ enum ProbeCmd {
         /// Grid m,n (touches along X and Y).
         #[arg(long)]
         grid: String,
+        /// Stylus ball radius: the grid stays this far inside the rectangle's edges
+        /// (default 0.0625 in or 1.5 mm, a 1/8-in or 3-mm ball).
+        #[arg(long, allow_hyphen_values = true)]
+        stylus_radius: Option<f64>,
         /// Height for moves between touches (default 10 clearances above the face).
         #[arg(long, allow_hyphen_values = true)]
         safe_z: Option<f64>,
@@ -650,6 +654,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     corner,
                     size,
                     grid,
+                    stylus_radius,
                     safe_z,
                     units,
                     program_number,
@@ -659,6 +664,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
             &corner,
             &size,
             &grid,
+            stylus_radius,
             safe_z,
             units,
             program_number,

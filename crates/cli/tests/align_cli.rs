@@ -204,7 +204,7 @@ fn probe_programs_check_and_their_logs_read_back() {
         12
     );
     let o = lampost(&[
-        "probe", "plane", "--corner", "0,0,-1", "--size", "2,1", "--grid", "3,2", "--units", "mm",
+        "probe", "plane", "--corner", "0,0,-1", "--size", "20,10", "--grid", "3,2", "--units", "mm",
     ]);
     let prog = String::from_utf8_lossy(&o.stdout);
     assert!(prog.contains("G71") && prog.matches("G1 G31").count() == 6);
@@ -307,4 +307,150 @@ fn register_to_a_mesh() {
     assert!(stderr(&o).contains("line 4"), "{}", stderr(&o));
     let o = lampost(&["align", "register", ps, "--mesh", ss, "--lock", "q"]);
     assert!(stderr(&o).contains("unknown lock `q`"));
+}
+
+/// The X and Y of every probing move (`G1 G31 X… Y…`) of a probing program.
+fn probing_xy(prog: &str) -> Vec<(f64, f64)> {
+    prog.lines()
+        .filter(|l| l.starts_with("G1 G31"))
+        .map(|l| {
+            let word = |c: char| {
+                l.split_whitespace()
+                    .find_map(|w| w.strip_prefix(c))
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .expect("word")
+            };
+            (word('X'), word('Y'))
+        })
+        .collect()
+}
+
+#[test]
+fn plane_grid_stays_a_stylus_radius_inside_the_edges() {
+    // Default stylus (1.5 mm in millimetres): the corners are never touched.
+    let o = lampost(&[
+        "probe", "plane", "--corner", "10,20,-1", "--size", "40,30", "--grid", "3,2", "--units",
+        "mm",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let xy = probing_xy(&String::from_utf8_lossy(&o.stdout));
+    assert_eq!(xy.len(), 6);
+    let xs: Vec<f64> = xy.iter().map(|p| p.0).collect();
+    let ys: Vec<f64> = xy.iter().map(|p| p.1).collect();
+    let (xmin, xmax) = (
+        xs.iter().copied().fold(f64::MAX, f64::min),
+        xs.iter().copied().fold(f64::MIN, f64::max),
+    );
+    let (ymin, ymax) = (
+        ys.iter().copied().fold(f64::MAX, f64::min),
+        ys.iter().copied().fold(f64::MIN, f64::max),
+    );
+    assert!(
+        (xmin - 11.5).abs() < 1e-9 && (xmax - 48.5).abs() < 1e-9,
+        "{xs:?}"
+    );
+    assert!(
+        (ymin - 21.5).abs() < 1e-9 && (ymax - 48.5).abs() < 1e-9,
+        "{ys:?}"
+    );
+    // The middle column is still the middle.
+    assert!(xs.iter().any(|x| (x - 30.0).abs() < 1e-9));
+    // An explicit stylus radius, in inches.
+    let o = lampost(&[
+        "probe",
+        "plane",
+        "--corner",
+        "0,0,0",
+        "--size",
+        "2,1",
+        "--grid",
+        "2,2",
+        "--stylus-radius",
+        "0.125",
+    ]);
+    let xy = probing_xy(&String::from_utf8_lossy(&o.stdout));
+    assert!(
+        xy.iter()
+            .all(|&(x, y)| (0.125..=1.875).contains(&x) && (0.125..=0.875).contains(&y)),
+        "{xy:?}"
+    );
+    assert!(xy.iter().any(|&(x, _)| (x - 0.125).abs() < 1e-9));
+    // A rectangle no wider than the stylus allows is refused, as is a bad radius.
+    let o = lampost(&[
+        "probe",
+        "plane",
+        "--corner",
+        "0,0,0",
+        "--size",
+        "0.2,1",
+        "--grid",
+        "2,2",
+        "--stylus-radius",
+        "0.1",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("inside the edges"), "{}", stderr(&o));
+    for bad in ["-1", "nan", "inf"] {
+        let o = lampost(&[
+            "probe",
+            "plane",
+            "--corner",
+            "0,0,0",
+            "--size",
+            "2,1",
+            "--grid",
+            "2,2",
+            "--stylus-radius",
+            bad,
+        ]);
+        assert!(!o.status.success(), "{bad}");
+        assert!(
+            stderr(&o).contains("--stylus-radius"),
+            "{bad}: {}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
+fn pose_program_sets_its_modes_once_before_any_move() {
+    let o = lampost(&[
+        "probe",
+        "poses",
+        "--machine",
+        "fadal-lamp",
+        "--ball",
+        "0,0,2",
+        "--radius",
+        "0.5",
+        "--stylus-radius",
+        "0.0625",
+        "--points",
+        "6",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let prog = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = prog.lines().collect();
+    assert_eq!(prog.matches("G70 G90").count(), 1, "{prog}");
+    assert_eq!(prog.matches("M66").count(), 1);
+    assert_eq!(prog.matches("M67").count(), 1);
+    let setup = lines
+        .iter()
+        .position(|l| l.starts_with("G70"))
+        .expect("setup");
+    let first_move = lines
+        .iter()
+        .position(|l| l.starts_with("G0") || l.starts_with("G1"))
+        .expect("a move");
+    assert!(
+        setup < first_move,
+        "setup at {setup}, first move at {first_move}"
+    );
+    assert!(lines[1].starts_with("O9502"));
+    // Each pose: retract, index, record, its touches; 8 poses × 6 touches.
+    assert_eq!(prog.matches("#SPRINT \"POSE ").count(), 8);
+    assert_eq!(prog.matches("G1 G31").count(), 48);
+    // It checks and traces as a whole.
+    let c = lampost_stdin(&["check", "-", "--units", "inch"], prog.as_bytes());
+    assert!(c.status.success(), "{}", stderr(&c));
 }
