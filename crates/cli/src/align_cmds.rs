@@ -402,16 +402,32 @@ pub fn probe_sphere(
     write_program(&text, output)
 }
 
+/// The rectangle and grid of `probe plane`, as given.
+#[derive(Debug, Clone, Copy)]
+pub struct PlaneGrid<'a> {
+    /// `x,y,z` of one corner.
+    pub corner: &'a str,
+    /// `u,v`.
+    pub size: &'a str,
+    /// `m,n`.
+    pub grid: &'a str,
+    /// The stylus ball's radius (the grid's inset from the edges).
+    pub stylus_radius: Option<f64>,
+}
+
 pub fn probe_plane(
-    corner: &str,
-    size: &str,
-    grid: &str,
-    stylus_radius: Option<f64>,
+    plane: &PlaneGrid<'_>,
     safe_z: Option<f64>,
     units: crate::UnitsArg,
     number: u32,
     output: Option<&str>,
 ) -> Result<(), CliError> {
+    let PlaneGrid {
+        corner,
+        size,
+        grid,
+        stylus_radius,
+    } = *plane;
     let c = place("--corner", corner)?;
     let bad_pair = |flag: &str, t: &str| {
         CliError::usage(format!(

@@ -661,10 +661,12 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     output,
                 },
         } => align_cmds::probe_plane(
-            &corner,
-            &size,
-            &grid,
-            stylus_radius,
+            &align_cmds::PlaneGrid {
+                corner: &corner,
+                size: &size,
+                grid: &grid,
+                stylus_radius,
+            },
             safe_z,
             units,
             program_number,
