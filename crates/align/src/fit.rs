@@ -177,6 +177,47 @@ fn scale(pts: &[P3], m: &P3) -> f64 {
         .max(f64::MIN_POSITIVE)
 }
 
+/// The points' spread: their RMS distance from their centroid (0 for fewer than one).
+pub fn spread(pts: &[P3]) -> f64 {
+    if pts.is_empty() {
+        return 0.0;
+    }
+    let m = centroid(pts);
+    let s = scale(pts, &m);
+    // Scaled first, so no square overflows.
+    (pts.iter()
+        .map(|p| ((p - m) / s).norm_squared())
+        .sum::<f64>()
+        / pts.len() as f64)
+        .sqrt()
+        * s
+}
+
+/// A residual above this fraction of the points' spread means the shape does not fit
+/// them: a probed feature's form error and probe noise are far smaller than its size.
+pub const MAX_RESIDUAL_OF_SPREAD: f64 = 0.01;
+
+/// What to say when a fit does not fit: its RMS residual above
+/// [`MAX_RESIDUAL_OF_SPREAD`] of the points' [`spread`], or above three times the
+/// expected probe `noise` (one sigma, when known). `None` when the fit is good.
+pub fn residual_warning(shape: &str, rms: f64, pts: &[P3], noise: Option<f64>) -> Option<String> {
+    let sp = spread(pts);
+    if sp > 0.0 && rms > MAX_RESIDUAL_OF_SPREAD * sp {
+        return Some(format!(
+            "the {shape} does not fit these points: rms residual {rms:.3e} is {:.1} % of their spread {sp:.3e} (a good fit is under {} %); check for outliers, or whether they are a {shape} at all",
+            100.0 * rms / sp,
+            100.0 * MAX_RESIDUAL_OF_SPREAD
+        ));
+    }
+    match noise {
+        Some(sigma) if sigma > 0.0 && rms > 3.0 * sigma => Some(format!(
+            "the {shape}'s rms residual {rms:.3e} is {:.1} times the expected probe noise {sigma:.3e}; check for outliers or form error",
+            rms / sigma
+        )),
+        _ => None,
+    }
+}
+
 fn arr(v: &P3) -> [f64; 3] {
     [v.x, v.y, v.z]
 }
@@ -402,6 +443,19 @@ pub fn sphere(pts: &[P3], fixed_radius: Option<f64>) -> Result<SphereFit, AlignE
     // Algebraic start: |q|² = 2c·q + d.
     let a = DMatrix::from_fn(n, 4, |i, k| if k < 3 { 2.0 * q[i][k] } else { 1.0 });
     let b = DVector::from_fn(n, |i, _| q[i].norm_squared());
+    if fixed_radius.is_none() {
+        // Noisy points of one plane pass the rank test below, then the sphere runs off to
+        // a huge radius or does not settle: say what they are.
+        let pl = plane(pts)?;
+        let sp = spread(pts);
+        if pl.rms < MAX_RESIDUAL_OF_SPREAD * sp {
+            return Err(AlignError::Degenerate(format!(
+                "the points lie on one plane (coplanar: within {:.2e} rms of it, {:.2} % of their spread): a sphere through them is not fixed; probe points off that plane (touch the ball at several heights), or fix the radius with --radius",
+                pl.rms,
+                100.0 * pl.rms / sp
+            )));
+        }
+    }
     let svd = svd_capped(a, true, true, "sphere")?;
     let sv = &svd.singular_values;
     let (smax, smin) = (sv.max(), sv.min());

@@ -22,6 +22,7 @@ pub mod study;
 
 pub use error::AlignError;
 pub use fit::{
-    circle3d, plane, sphere, sphere4, CircleFit, PlaneFit, SphereFit, MAX_COORD, MAX_ITERATIONS, P3,
+    circle3d, plane, residual_warning, sphere, sphere4, spread, CircleFit, PlaneFit, SphereFit,
+    MAX_COORD, MAX_ITERATIONS, MAX_RESIDUAL_OF_SPREAD, P3,
 };
 pub use setup::{level, plane_angle, Level, PlaneAngle, Setup};

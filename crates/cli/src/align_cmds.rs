@@ -104,11 +104,16 @@ pub fn fit(
     file: &str,
     radius: Option<f64>,
     ball_radius: Option<f64>,
+    noise: Option<f64>,
     json: bool,
 ) -> Result<(), CliError> {
     let (name, pts) = read_points(file)?;
     let v = p3(&pts);
-    for (flag, val) in [("--radius", radius), ("--ball-radius", ball_radius)] {
+    for (flag, val) in [
+        ("--radius", radius),
+        ("--ball-radius", ball_radius),
+        ("--noise", noise),
+    ] {
         if let Some(r) = val {
             if !(r.is_finite() && r > 0.0) {
                 return Err(CliError::usage(format!("error: {flag} {r}: must be a positive number\n  = help: give the radius in the points' units\n")));
@@ -123,6 +128,7 @@ pub fn fit(
             }
             .map_err(|e| with_lines(&name, &pts, e))?;
             let probe = ball_radius.map(|b| f.radius - b);
+            let warnings = fit_warnings("sphere", f.rms, &v, noise);
             if json {
                 let mut j = serde_json::json!({
                     "center": f.center, "radius": f.radius, "rms": f.rms, "max_abs_residual": f.max_abs_residual, "n": f.n,
@@ -131,6 +137,7 @@ pub fn fit(
                 if let Some(p) = probe {
                     j["probe_radius"] = serde_json::json!(p);
                 }
+                j["warnings"] = serde_json::json!(warnings);
                 write_json(j)
             } else {
                 let mut s = format!(
@@ -146,10 +153,12 @@ pub fn fit(
         }
         FitKind::Plane => {
             let f = lampost_align::plane(&v).map_err(|e| with_lines(&name, &pts, e))?;
+            let warnings = fit_warnings("plane", f.rms, &v, noise);
             if json {
                 write_json(serde_json::json!({
                     "point": f.point, "normal": f.normal, "rms": f.rms, "flatness": f.flatness,
                     "max_abs_residual": f.max_abs_residual, "n": f.n, "u_offset": f.u_offset, "u_tilt_rad": f.u_tilt,
+                    "warnings": warnings,
                 }))
             } else {
                 write_text(format!(
@@ -163,11 +172,16 @@ pub fn fit(
         }
         FitKind::Circle => {
             let f = lampost_align::circle3d(&v).map_err(|e| with_lines(&name, &pts, e))?;
+            // Off the circle within its plane, or off the plane.
+            let mut warnings = fit_warnings("circle", f.rms, &v, noise);
+            if warnings.is_empty() {
+                warnings = fit_warnings("circle's plane", f.rms_out_of_plane, &v, noise);
+            }
             if json {
                 write_json(serde_json::json!({
                     "center": f.center, "normal": f.normal, "radius": f.radius, "rms": f.rms,
                     "max_abs_residual": f.max_abs_residual, "rms_out_of_plane": f.rms_out_of_plane, "n": f.n,
-                    "u_center": f.u_center, "u_radius": f.u_radius,
+                    "u_center": f.u_center, "u_radius": f.u_radius, "warnings": warnings,
                 }))
             } else {
                 write_text(format!(
@@ -178,6 +192,17 @@ pub fn fit(
             }
         }
     }
+}
+
+/// A fit's warning (see [`lampost_align::residual_warning`]), also written to stderr.
+fn fit_warnings(shape: &str, rms: f64, pts: &[P3], noise: Option<f64>) -> Vec<String> {
+    let w: Vec<String> = lampost_align::residual_warning(shape, rms, pts, noise)
+        .into_iter()
+        .collect();
+    for m in &w {
+        eprintln!("warning: {m}");
+    }
+    w
 }
 
 fn outward(n: P3, hint: Option<&str>) -> Result<P3, CliError> {

@@ -435,6 +435,10 @@ enum Command {
         /// Sphere: the gage ball's radius, to report the effective probe radius.
         #[arg(long, allow_hyphen_values = true)]
         ball_radius: Option<f64>,
+        /// Expected probe noise (one sigma, in the points' units): warn when the rms
+        /// residual exceeds three times it.
+        #[arg(long, allow_hyphen_values = true)]
+        noise: Option<f64>,
         /// Write JSON.
         #[arg(long)]
         json: bool,
@@ -726,8 +730,9 @@ fn run(cli: Cli) -> Result<(), CliError> {
             file,
             radius,
             ball_radius,
+            noise,
             json,
-        } => align_cmds::fit(kind, &file, radius, ball_radius, json),
+        } => align_cmds::fit(kind, &file, radius, ball_radius, noise, json),
         Command::Machines { cmd: None } => kin_cmds::machines(None),
         Command::Machines {
             cmd: Some(MachinesCmd::Show { name }),

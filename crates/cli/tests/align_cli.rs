@@ -454,3 +454,74 @@ fn pose_program_sets_its_modes_once_before_any_move() {
     let c = lampost_stdin(&["check", "-", "--units", "inch"], prog.as_bytes());
     assert!(c.status.success(), "{}", stderr(&c));
 }
+
+#[test]
+fn fits_say_when_they_do_not_fit() {
+    // Points scattered over a plane: a circle "fits" them only in name.
+    let mut plane = String::new();
+    let mut k = 7u64;
+    let mut next = || {
+        k = k
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (k >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..30 {
+        plane.push_str(&format!(
+            "{} {} {}\n",
+            20.0 * next() - 10.0,
+            20.0 * next() - 10.0,
+            0.02 * next() - 0.01
+        ));
+    }
+    let o = lampost_stdin(&["fit", "circle", "-", "--json"], plane.as_bytes());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning: the circle does not fit these points"),
+        "{}",
+        stderr(&o)
+    );
+    let v = json(&o);
+    assert_eq!(v["warnings"].as_array().map(Vec::len), Some(1), "{v}");
+    // A sphere through noisy coplanar points: "coplanar", not "did not converge".
+    let o = lampost_stdin(&["fit", "sphere", "-"], plane.as_bytes());
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("coplanar"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("did not converge"));
+    // A good sphere (a cap, 1e-3 noise on r = 5) has no warning; with the probe's noise
+    // given as 1e-4 its residual is too large for that probe.
+    let mut cap = String::new();
+    for i in 0..40 {
+        let (th, ph) = (1.3 * next(), 6.283 * next());
+        let r = 5.0 + 0.001 * (if i % 2 == 0 { 1.0 } else { -1.0 }) * next();
+        cap.push_str(&format!(
+            "{} {} {}\n",
+            r * th.sin() * ph.cos(),
+            r * th.sin() * ph.sin(),
+            r * th.cos()
+        ));
+    }
+    let o = lampost_stdin(&["fit", "sphere", "-", "--json"], cap.as_bytes());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    assert_eq!(json(&o)["warnings"].as_array().map(Vec::len), Some(0));
+    let o = lampost_stdin(&["fit", "sphere", "-", "--noise", "0.0001"], cap.as_bytes());
+    assert!(
+        stderr(&o).contains("times the expected probe noise"),
+        "{}",
+        stderr(&o)
+    );
+    // A plane through points of a sphere warns too; a bad noise is refused.
+    let o = lampost_stdin(&["fit", "plane", "-"], cap.as_bytes());
+    assert!(
+        stderr(&o).contains("the plane does not fit"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost_stdin(&["fit", "plane", "-", "--noise", "-1"], cap.as_bytes());
+    assert!(
+        !o.status.success() && stderr(&o).contains("--noise"),
+        "{}",
+        stderr(&o)
+    );
+}
