@@ -492,7 +492,7 @@ fn fits_say_when_they_do_not_fit() {
     // given as 1e-4 its residual is too large for that probe.
     let mut cap = String::new();
     for i in 0..40 {
-        let (th, ph) = (1.3 * next(), 6.283 * next());
+        let (th, ph) = (1.3 * next(), std::f64::consts::TAU * next());
         let r = 5.0 + 0.001 * (if i % 2 == 0 { 1.0 } else { -1.0 }) * next();
         cap.push_str(&format!(
             "{} {} {}\n",
