@@ -136,7 +136,11 @@ pub fn fmt(
     {
         let mut em = Emitter::new(out.writer(), opts);
         while let Some(line) = reader.next_line().map_err(|e| io_err(&name, e))? {
-            match parse_line(line.bytes, line.number, line.offset) {
+            let parsed = match line.too_long() {
+                Some(d) => Err(d),
+                None => parse_line(line.bytes, line.number, line.offset),
+            };
+            match parsed {
                 Ok(b) => em.block(&b).map_err(werr)?,
                 Err(d) => {
                     errors += 1;

@@ -131,13 +131,16 @@ impl<S: LineSource> Iterator for Stream<S> {
             // (one move per line is the rule), the rest wait in the queue.
             let mut first: Option<Event> = None;
             let mut block = Block::empty(line.number, line.offset);
-            let parsed = parse_line_with(
-                line.bytes,
-                line.number,
-                line.offset,
-                &mut block,
-                self.exponents,
-            );
+            let parsed = match line.too_long() {
+                Some(d) => Err(d),
+                None => parse_line_with(
+                    line.bytes,
+                    line.number,
+                    line.offset,
+                    &mut block,
+                    self.exponents,
+                ),
+            };
             let failed = match parsed {
                 Ok(()) => match self.interp.block(&block, &mut |e| {
                     if first.is_none() {
