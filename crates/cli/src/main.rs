@@ -7,6 +7,7 @@ mod align_cmds;
 mod calib_cmds;
 mod gcode_cmds;
 mod io;
+mod json;
 mod kin_cmds;
 mod points;
 mod post_cmds;

@@ -1473,7 +1473,8 @@ impl Interpreter {
                         word: w
                             .word(b'Q')
                             .map_or_else(|| format!("G{name} Q{q}"), |q| q.display()),
-                        why: "more than 10000 pecks in one block; make Q larger or split the pattern",
+                        why:
+                            "more than 10000 pecks in one block; make Q larger or split the pattern",
                     },
                     w.word(b'Q').map(|q| q.span),
                 ));

@@ -287,7 +287,12 @@ mod tests {
 
     #[test]
     fn a_line_over_the_limit_is_counted_not_held() {
-        for (cap, eol) in [(7, &b"\r\n"[..]), (4096, b"\n"), (1 << 16, b"\r\n"), (3, b"")] {
+        for (cap, eol) in [
+            (7, &b"\r\n"[..]),
+            (4096, b"\n"),
+            (1 << 16, b"\r\n"),
+            (3, b""),
+        ] {
             let long = MAX_LINE_BYTES * 3 + 5;
             let mut text = b"G0 X1\n".to_vec();
             text.extend(std::iter::repeat_n(b'X', long));
@@ -310,8 +315,13 @@ mod tests {
         }
         // The in-memory splitter gives the same lengths.
         let text = b"ab\r\n\r\nc";
-        let a: Vec<_> = Lines::new(text).map(|l| (l.number, l.offset, l.len)).collect();
-        let b: Vec<_> = streamed(text, 1).into_iter().map(|l| (l.0, l.1, l.2)).collect();
+        let a: Vec<_> = Lines::new(text)
+            .map(|l| (l.number, l.offset, l.len))
+            .collect();
+        let b: Vec<_> = streamed(text, 1)
+            .into_iter()
+            .map(|l| (l.0, l.1, l.2))
+            .collect();
         assert_eq!(a, b);
     }
 
@@ -332,7 +342,10 @@ mod tests {
             let e = r.next_line().expect_err("binary");
             assert_eq!(e.kind(), io::ErrorKind::InvalidData);
             let m = e.to_string();
-            assert!(m.starts_with("line 2: 65536 NUL bytes in a row (byte 9 on)"), "{m}");
+            assert!(
+                m.starts_with("line 2: 65536 NUL bytes in a row (byte 9 on)"),
+                "{m}"
+            );
         }
         // An endless source stops after the run limit.
         let mut r = LineReader::new(BufReader::new(io::repeat(0)));
