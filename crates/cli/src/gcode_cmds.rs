@@ -4,8 +4,8 @@ use std::io::Write;
 
 use lampost_gcode::emit::fixed;
 use lampost_gcode::{
-    parse_line, Dialect, EWord, EmitOptions, Emitter, Event, LineReader, Move, MoveKind, Options,
-    Order, ProgramReader, Severity, Stream, Units, AXES,
+    parse_line, Diagnostic, Dialect, EWord, EmitOptions, Emitter, ErrorKind, Event, LineReader,
+    Move, MoveKind, Options, Order, ProgramReader, Severity, Stream, Units, AXES,
 };
 
 use crate::io::{display_name, open_input, open_seekable, Output};
@@ -164,13 +164,26 @@ pub fn fmt(
                 Some(d) => Err(d),
                 None => parse_line(line.bytes, line.number, line.offset),
             };
-            match parsed {
-                Ok(b) => em.block(&b).map_err(werr)?,
-                Err(d) => {
-                    errors += 1;
-                    if errors <= MAX_PRINTED {
-                        eprint!("{}", report::render(&name, &d));
-                    }
+            let refused = match parsed {
+                Ok(b) => match em.block(&b) {
+                    Ok(()) => None,
+                    // A word the dialect cannot hold, or renumbering past its largest N:
+                    // a located error (the emitter wrote nothing of the block).
+                    Err(e) => match e.get_ref().and_then(|i| i.downcast_ref::<Diagnostic>()) {
+                        Some(d) => Some(d.clone()),
+                        None => return Err(werr(e)),
+                    },
+                },
+                Err(d) => Some(d),
+            };
+            if let Some(d) = refused {
+                errors += 1;
+                if errors <= MAX_PRINTED {
+                    eprint!("{}", report::render(&name, &d));
+                }
+                if matches!(d.kind, ErrorKind::RenumberOverflow { .. }) {
+                    // Every later block would be past it too.
+                    break;
                 }
             }
         }
