@@ -99,7 +99,8 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
     if json {
         writeln!(
             out,
-            "\n],\"not_shown\":{not_shown},\"errors\":{errors},\"warnings\":{warnings},\"ok\":{}}}",
+            "{}],\"not_shown\":{not_shown},\"errors\":{errors},\"warnings\":{warnings},\"ok\":{}}}",
+            if shown > 0 { "\n" } else { "" },
             errors == 0
         )
         .map_err(werr)?;
