@@ -449,7 +449,7 @@ enum Command {
     Check {
         /// Program file, or - for standard input.
         file: String,
-        /// Report as JSON.
+        /// Report as JSON, streamed: the first 10,000 diagnostics, then a count of the rest.
         #[arg(long)]
         json: bool,
         #[command(flatten)]

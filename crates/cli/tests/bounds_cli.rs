@@ -18,7 +18,10 @@ fn a_peck_that_cannot_deepen_is_refused_at_once() {
     );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains("<stdin>:2:40") && e.contains("more than 10000 pecks"), "{e}");
+    assert!(
+        e.contains("<stdin>:2:40") && e.contains("more than 10000 pecks"),
+        "{e}"
+    );
     // The same in a trace: no move of the cycle is written.
     let o = limited(
         "printf 'F10 G73 X1 R0 Z-1000 Q0.001 L10\\n' | timeout $TIMEOUT \"$LAMPOST\" trace -",
@@ -106,7 +109,10 @@ fn check_json_streams_a_capped_list_in_little_memory() {
     // A clean program: an empty list, nothing not shown.
     let o = lampost_stdin(&["check", "--json", "-"], b"G0 X1\n");
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
-    assert_eq!((v["ok"].clone(), v["not_shown"].clone()), (true.into(), 0.into()));
+    assert_eq!(
+        (v["ok"].clone(), v["not_shown"].clone()),
+        (true.into(), 0.into())
+    );
     assert_eq!(v["diagnostics"], serde_json::json!([]));
 }
 
@@ -116,19 +122,41 @@ fn fmt_refuses_values_the_dialect_cannot_hold() {
     let out = dir.join("out.nc");
     let src = b"G0 X1 Y2\nG65536\nM3 S100000\nN100000 X1\nT1 H100\nO10000\nL99999\nX123456.7\nG1 X1 F-5\n";
     let o = lampost_stdin(
-        &["fmt", "-", "--dialect", "fadal", "-o", &out.to_string_lossy()],
+        &[
+            "fmt",
+            "-",
+            "--dialect",
+            "fadal",
+            "-o",
+            &out.to_string_lossy(),
+        ],
         src,
     );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     for (at, what) in [
-        ("<stdin>:2:1", "G65536 is out of range for FADAL: 0 to 999.9"),
-        ("<stdin>:3:4", "S100000 is out of range for FADAL: 0 to 99999"),
-        ("<stdin>:4:1", "N100000 is out of range for FADAL: N0 to N99999"),
+        (
+            "<stdin>:2:1",
+            "G65536 is out of range for FADAL: 0 to 999.9",
+        ),
+        (
+            "<stdin>:3:4",
+            "S100000 is out of range for FADAL: 0 to 99999",
+        ),
+        (
+            "<stdin>:4:1",
+            "N100000 is out of range for FADAL: N0 to N99999",
+        ),
         ("<stdin>:5:4", "H100 is out of range for FADAL: 0 to 99"),
-        ("<stdin>:6:1", "O10000 is out of range for FADAL: O0 to O9999"),
+        (
+            "<stdin>:6:1",
+            "O10000 is out of range for FADAL: O0 to O9999",
+        ),
         ("<stdin>:7:1", "L99999 is out of range for FADAL: 0 to 9999"),
-        ("<stdin>:8:1", "X123456.7 is out of range for FADAL: ±99999.999 in mm"),
+        (
+            "<stdin>:8:1",
+            "X123456.7 is out of range for FADAL: ±99999.999 in mm",
+        ),
         ("<stdin>:9:7", "F-5 is out of range for FADAL: 0 to 99999"),
     ] {
         assert!(e.contains(at) && e.contains(what), "{at} {what}: {e}");
@@ -153,7 +181,10 @@ fn fmt_refuses_values_the_dialect_cannot_hold() {
 #[test]
 fn renumbering_refuses_to_pass_the_largest_n() {
     let src = b"G0 X1\nX2\nX3\n";
-    let o = lampost_stdin(&["fmt", "-", "--dialect", "fadal", "--renumber", "99990,5"], src);
+    let o = lampost_stdin(
+        &["fmt", "-", "--dialect", "fadal", "--renumber", "99990,5"],
+        src,
+    );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(
@@ -173,9 +204,15 @@ fn renumbering_refuses_to_pass_the_largest_n() {
         src,
     );
     let e = stderr(&o);
-    assert!(e.contains("<stdin>:2:1") && e.contains("N18446744073709551615"), "{e}");
+    assert!(
+        e.contains("<stdin>:2:1") && e.contains("N18446744073709551615"),
+        "{e}"
+    );
     // In range: numbered as asked.
-    let o = lampost_stdin(&["fmt", "-", "--dialect", "fadal", "--renumber", "99985,5"], src);
+    let o = lampost_stdin(
+        &["fmt", "-", "--dialect", "fadal", "--renumber", "99985,5"],
+        src,
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("N99995 X3.000"));
 }
