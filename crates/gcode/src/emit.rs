@@ -647,7 +647,7 @@ impl<W: Write> Emitter<W> {
         }
         let step = self.opts.renumber.map_or(1, |r| r.1);
         // Past u64 is past any dialect's largest N: the next block is refused.
-        self.next_n = n.checked_add(step).unwrap_or(u64::MAX);
+        self.next_n = n.saturating_add(step);
         self.n_text.add(step, self.next_n);
         Ok(())
     }
