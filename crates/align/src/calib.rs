@@ -36,6 +36,16 @@ impl Pose {
 }
 
 /// Which method.
+/// A condition number as JSON: `null` for a singular design (infinite, or the
+/// `f64::MAX` a result with nothing fixed carries), the number otherwise.
+fn condition_or_null<S: serde::Serializer>(c: &f64, s: S) -> Result<S::Ok, S::Error> {
+    if c.is_finite() && *c < f64::MAX {
+        s.serialize_some(c)
+    } else {
+        s.serialize_none()
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
@@ -100,7 +110,10 @@ pub struct PivotResult {
     pub ball_home: Option<[f64; 3]>,
     /// RMS of the pose residuals (per coordinate).
     pub rms: f64,
-    /// Condition number of the (scaled) design.
+    /// Condition number of the (scaled) design: infinite (or `f64::MAX`) when the design
+    /// is singular, written `null` in JSON (a number could not be, and the CLI's JSON
+    /// writer refuses a non-finite one).
+    #[serde(serialize_with = "condition_or_null")]
     pub condition: f64,
     /// Residual of each pose.
     pub per_pose: Vec<PoseResidual>,

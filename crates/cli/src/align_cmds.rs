@@ -3,6 +3,7 @@
 use lampost_align::{AlignError, P3};
 
 use crate::io::{display_name, open_input, Output};
+use crate::json::{self, obj, Obj};
 use crate::points::{parse_points, Point};
 use crate::report::CliError;
 
@@ -60,10 +61,11 @@ fn with_lines(name: &str, pts: &[Point], e: AlignError) -> CliError {
     }
 }
 
-fn write_json(v: serde_json::Value) -> Result<(), CliError> {
+fn write_json(v: Obj) -> Result<(), CliError> {
+    let text = json::to_string(&v)?;
     let mut out = Output::create(None)?;
     out.writer()
-        .write_all(format!("{v}\n").as_bytes())
+        .write_all(format!("{text}\n").as_bytes())
         .map_err(|e| CliError::write(&e))?;
     out.commit()
 }
@@ -130,14 +132,14 @@ pub fn fit(
             let probe = ball_radius.map(|b| f.radius - b);
             let warnings = fit_warnings("sphere", f.rms, &v, noise);
             if json {
-                let mut j = serde_json::json!({
+                let mut j = obj! {
                     "center": f.center, "radius": f.radius, "rms": f.rms, "max_abs_residual": f.max_abs_residual, "n": f.n,
                     "u_center": f.u_center, "u_radius": f.u_radius, "radius_fixed": radius.is_some(),
-                });
+                };
                 if let Some(p) = probe {
-                    j["probe_radius"] = serde_json::json!(p);
+                    j.set("probe_radius", &p);
                 }
-                j["warnings"] = serde_json::json!(warnings);
+                j.set("warnings", &warnings);
                 write_json(j)
             } else {
                 let mut s = format!(
@@ -155,11 +157,11 @@ pub fn fit(
             let f = lampost_align::plane(&v).map_err(|e| with_lines(&name, &pts, e))?;
             let warnings = fit_warnings("plane", f.rms, &v, noise);
             if json {
-                write_json(serde_json::json!({
+                write_json(obj! {
                     "point": f.point, "normal": f.normal, "rms": f.rms, "flatness": f.flatness,
                     "max_abs_residual": f.max_abs_residual, "n": f.n, "u_offset": f.u_offset, "u_tilt_rad": f.u_tilt,
                     "warnings": warnings,
-                }))
+                })
             } else {
                 write_text(format!(
                     "point {} {} {}\nnormal {} {} {}\nrms {:.3e}\nflatness {:.3e}\nmax_abs_residual {:.3e}\nn {}\nu_offset {}\nu_tilt_rad {}\n",
@@ -178,11 +180,11 @@ pub fn fit(
                 warnings = fit_warnings("circle's plane", f.rms_out_of_plane, &v, noise);
             }
             if json {
-                write_json(serde_json::json!({
+                write_json(obj! {
                     "center": f.center, "normal": f.normal, "radius": f.radius, "rms": f.rms,
                     "max_abs_residual": f.max_abs_residual, "rms_out_of_plane": f.rms_out_of_plane, "n": f.n,
                     "u_center": f.u_center, "u_radius": f.u_radius, "warnings": warnings,
-                }))
+                })
             } else {
                 write_text(format!(
                     "center {} {} {}\nnormal {} {} {}\nradius {}\nrms {:.3e}\nrms_out_of_plane {:.3e}\nn {}\nu_center {}\nu_radius {}\n",
@@ -248,17 +250,17 @@ pub fn level(
     }
     let names = m.axis_names();
     if json {
-        let list: Vec<serde_json::Value> = sols
+        let list: Vec<Obj> = sols
             .iter()
             .map(|s| {
-                let mut j = serde_json::Map::new();
-                j.insert(names[3].to_string(), serde_json::json!(s.rotary[0]));
-                j.insert(names[4].to_string(), serde_json::json!(s.rotary[1]));
-                serde_json::json!({"joints": j, "within_limits": s.within_limits, "branch": s.branch, "singular": s.singular, "residual_tilt_deg": s.residual_tilt_deg})
+                let j = Obj::new()
+                    .field(names[3], &s.rotary[0])
+                    .field(names[4], &s.rotary[1]);
+                obj!{"joints": j, "within_limits": s.within_limits, "branch": s.branch, "singular": s.singular, "residual_tilt_deg": s.residual_tilt_deg}
             })
             .collect();
         write_json(
-            serde_json::json!({"normal": [n.x, n.y, n.z], "point": pl.point, "flatness": pl.flatness, "rms": pl.rms, "solutions": list}),
+            obj! {"normal": [n.x, n.y, n.z], "point": pl.point, "flatness": pl.flatness, "rms": pl.rms, "solutions": list},
         )
     } else {
         let mut s = format!(
@@ -328,10 +330,10 @@ pub fn angle(
         out.commit()?;
     }
     if json {
-        write_json(serde_json::json!({
+        write_json(obj! {
             "angle_deg": r.angle_deg, "rotation_axis": r.rotation_axis, "rotation_deg": r.rotation_deg,
             "rotation_about_z_deg": r.rotation_about_z_deg, "probed_normal": pl.normal, "setup": setup,
-        }))
+        })
     } else {
         write_text(format!(
             "angle_deg {}\nrotation axis {} {} {} by {} deg\nrotation_about_z_deg {}\n",
@@ -527,11 +529,11 @@ pub fn probe_read(log: &str, output: Option<&str>, json: bool) -> Result<(), Cli
         )),
     })?;
     let s = if json {
-        let list: Vec<serde_json::Value> = pts
+        let list: Vec<Obj> = pts
             .iter()
-            .map(|(l, p)| serde_json::json!({"line": l, "point": p}))
+            .map(|(l, p)| obj! {"line": l, "point": p})
             .collect();
-        format!("{}\n", serde_json::json!({ "points": list }))
+        format!("{}\n", json::to_string(&obj! { "points": list })?)
     } else {
         let mut s = format!("# touch points from {name}\nx y z\n");
         for (_, p) in &pts {
@@ -592,16 +594,16 @@ pub fn register(
         out.commit()?;
     }
     if json {
-        let per_point: Vec<serde_json::Value> = pts
+        let per_point: Vec<Obj> = pts
             .iter()
             .zip(&reg.residuals)
-            .map(|(p, r)| serde_json::json!({"line": p.line, "residual": r}))
+            .map(|(p, r)| obj! {"line": p.line, "residual": r})
             .collect();
-        write_json(serde_json::json!({
+        write_json(obj! {
             "rotation": reg.rotation, "translation": reg.translation, "axis": reg.axis, "angle_deg": reg.angle_deg,
             "rms": reg.rms, "max_abs_residual": reg.max_abs_residual, "iterations": reg.iterations,
             "residuals": per_point, "warnings": warnings,
-        }))
+        })
     } else {
         let mut s = format!(
             "translation {} {} {}\nrotation axis {} {} {} by {} deg\nrms {:.3e}\nmax_abs_residual {:.3e}\n",

@@ -6,6 +6,7 @@ use lampost_kinematics::{Machine, Units};
 
 use crate::align_cmds::align_error;
 use crate::io::{display_name, open_input, Output};
+use crate::json::{self, obj, Obj};
 use crate::kin_cmds::{load_machine, vector};
 use crate::report::CliError;
 
@@ -259,10 +260,7 @@ pub fn pivot(
         o.commit()?;
     }
     if json {
-        out_text(format!(
-            "{}\n",
-            serde_json::to_value(&res).map_err(|e| CliError::usage(format!("error: {e}\n")))?
-        ))
+        out_text(format!("{}\n", json::to_string(&res)?))
     } else {
         out_text(report_pivot(&m, &res))
     }
@@ -273,10 +271,7 @@ pub fn axes(machine: &str, sets: &[String], file: &str, json: bool) -> Result<()
     let (name, poses) = read_poses(&m, file)?;
     let e = calib::axes_from_circles(&m, &poses).map_err(|e| align_error(&name, e))?;
     if json {
-        return out_text(format!(
-            "{}\n",
-            serde_json::to_value(&e).map_err(|x| CliError::usage(format!("error: {x}\n")))?
-        ));
+        return out_text(format!("{}\n", json::to_string(&e)?));
     }
     let mut s = String::new();
     for a in &e.axes {
@@ -314,8 +309,11 @@ pub fn factorial(
                 ))
             })?;
             if json {
-                let v: Vec<serde_json::Value> = runs.iter().map(|(r, l, c)| serde_json::json!({"run": r, "levels": l, "center": [c.x, c.y, c.z]})).collect();
-                return out_text(format!("{}\n", serde_json::json!({ "runs": v })));
+                let v: Vec<Obj> = runs
+                    .iter()
+                    .map(|(r, l, c)| obj! {"run": r, "levels": l, "center": [c.x, c.y, c.z]})
+                    .collect();
+                return out_text(format!("{}\n", json::to_string(&obj! { "runs": v })?));
             }
             let mut s = String::from("run x y z (levels) -> centre\n");
             for (r, l, c) in runs {
@@ -365,11 +363,7 @@ pub fn factorial(
             }
             let r = calib::factorial_fit(&rows).map_err(|e| align_error(&name, e))?;
             if json {
-                return out_text(format!(
-                    "{}\n",
-                    serde_json::to_value(&r)
-                        .map_err(|x| CliError::usage(format!("error: {x}\n")))?
-                ));
+                return out_text(format!("{}\n", json::to_string(&r)?));
             }
             out_text(format!(
                 "variation = {:.6} + {:.6}x + {:.6}y + {:.6}z (coded levels; eq. 18)\nleast variation: run {} at {}\nproposed next centre (zero predicted variation): {}\nregression rms {:.3e}\nnote: Method II ignores z's coupling and needs drilled test holes; Method III and the axis-line fit measure the centre directly\n",
@@ -429,7 +423,7 @@ pub fn laser(
     if json {
         return out_text(format!(
             "{}\n",
-            serde_json::json!({"L": l, "spread": spread, "n": pairs.len()})
+            json::to_string(&obj! {"L": l, "spread": spread, "n": pairs.len()})?
         ));
     }
     out_text(format!(

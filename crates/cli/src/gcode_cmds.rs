@@ -4,16 +4,21 @@ use std::io::Write;
 
 use lampost_gcode::emit::fixed;
 use lampost_gcode::{
-    parse_line, Dialect, EWord, EmitOptions, Emitter, Event, LineReader, Move, MoveKind, Options,
-    Order, ProgramReader, Severity, Stream, Units, AXES,
+    parse_line, Diagnostic, Dialect, EWord, EmitOptions, Emitter, ErrorKind, Event, LineReader,
+    Move, MoveKind, Options, Order, ProgramReader, Severity, Stream, Units, AXES,
 };
 
 use crate::io::{display_name, open_input, open_seekable, Output};
+use crate::json::{self, obj, Obj};
 use crate::report::{self, CliError};
 use crate::{DialectArg, EWordArg, InterpArgs, UnitsArg};
 
-/// At most this many diagnostics are printed for people (JSON carries all).
+/// At most this many diagnostics are printed for people.
 const MAX_PRINTED: usize = 200;
+
+/// At most this many diagnostics are written as JSON by `check --json` and `trace
+/// --json` (each as it is found); the rest are counted (`not_shown`).
+pub const MAX_JSON_DIAGNOSTICS: usize = 10_000;
 
 fn units(u: UnitsArg) -> Units {
     match u {
@@ -47,13 +52,28 @@ fn program(
     Ok(ProgramReader::new(open_seekable(file)?, order))
 }
 
+/// `check`: every diagnostic for people on standard error (the first
+/// [`MAX_PRINTED`]), or with `--json` one JSON document on standard output, streamed:
+/// `{"file": …, "diagnostics": [` then each diagnostic as it is found, one a line (the
+/// first [`MAX_JSON_DIAGNOSTICS`]), then `], "not_shown": …, "errors": …, "warnings": …,
+/// "ok": …}`. Memory does not grow with the number of diagnostics.
 pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError> {
     let name = display_name(file);
     let input = program(file, Order::File)?;
     let mut errors = 0usize;
     let mut warnings = 0usize;
-    let mut printed = 0usize;
-    let mut all = Vec::new();
+    let mut shown = 0usize;
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let werr = |e: std::io::Error| CliError::write(&e);
+    if json {
+        write!(
+            out,
+            "{{\"file\":{},\"diagnostics\":[",
+            json::to_string(&name)?
+        )
+        .map_err(werr)?;
+    }
     let stderr = std::io::stderr();
     for ev in Stream::new(input, options(interp), false) {
         let Event::Diagnostic(d) = ev.map_err(|e| io_err(&name, e))? else {
@@ -64,26 +84,31 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
             Severity::Warning => warnings += 1,
         }
         if json {
-            all.push(report::json(&name, &d));
-        } else if printed < MAX_PRINTED {
-            printed += 1;
+            if shown < MAX_JSON_DIAGNOSTICS {
+                out.write_all(if shown == 0 { b"\n" } else { b",\n" })
+                    .map_err(werr)?;
+                json::to_writer(&mut out, &report::json(&name, &d))?;
+                shown += 1;
+            }
+        } else if shown < MAX_PRINTED {
+            shown += 1;
             let _ = writeln!(stderr.lock(), "{}", report::render(&name, &d));
         }
     }
+    let not_shown = errors + warnings - shown;
     if json {
-        let doc = serde_json::json!({
-            "file": name,
-            "ok": errors == 0,
-            "errors": errors,
-            "warnings": warnings,
-            "diagnostics": all,
-        });
-        println!("{doc}");
+        writeln!(
+            out,
+            "{}],\"not_shown\":{not_shown},\"errors\":{errors},\"warnings\":{warnings},\"ok\":{}}}",
+            if shown > 0 { "\n" } else { "" },
+            errors == 0
+        )
+        .map_err(werr)?;
+        out.flush().map_err(werr)?;
     } else {
-        if errors + warnings > printed {
+        if not_shown > 0 {
             eprintln!(
-                "… and {} more not shown (use --json for all)",
-                errors + warnings - printed
+                "… and {not_shown} more not shown (--json lists up to {MAX_JSON_DIAGNOSTICS})"
             );
         }
         eprintln!("{name}: {errors} error(s), {warnings} warning(s)");
@@ -136,13 +161,30 @@ pub fn fmt(
     {
         let mut em = Emitter::new(out.writer(), opts);
         while let Some(line) = reader.next_line().map_err(|e| io_err(&name, e))? {
-            match parse_line(line.bytes, line.number, line.offset) {
-                Ok(b) => em.block(&b).map_err(werr)?,
-                Err(d) => {
-                    errors += 1;
-                    if errors <= MAX_PRINTED {
-                        eprint!("{}", report::render(&name, &d));
-                    }
+            let parsed = match line.too_long() {
+                Some(d) => Err(d),
+                None => parse_line(line.bytes, line.number, line.offset),
+            };
+            let refused = match parsed {
+                Ok(b) => match em.block(&b) {
+                    Ok(()) => None,
+                    // A word the dialect cannot hold, or renumbering past its largest N:
+                    // a located error (the emitter wrote nothing of the block).
+                    Err(e) => match e.get_ref().and_then(|i| i.downcast_ref::<Diagnostic>()) {
+                        Some(d) => Some(d.clone()),
+                        None => return Err(werr(e)),
+                    },
+                },
+                Err(d) => Some(d),
+            };
+            if let Some(d) = refused {
+                errors += 1;
+                if errors <= MAX_PRINTED {
+                    eprint!("{}", report::render(&name, &d));
+                }
+                if matches!(d.kind, ErrorKind::RenumberOverflow { .. }) {
+                    // Every later block would be past it too.
+                    break;
                 }
             }
         }
@@ -232,17 +274,17 @@ fn move_text(m: &Move) -> String {
     s
 }
 
-fn move_json(m: &Move) -> serde_json::Value {
+fn move_json(m: &Move) -> Obj {
     let pos = |p: &[f64; 9]| {
-        let mut o = serde_json::Map::new();
+        let mut o = Obj::new();
         for (i, &l) in AXES.iter().enumerate() {
             if i < 3 || m.axes_named & (1 << i) != 0 {
-                o.insert(char::from(l).to_string(), serde_json::json!(p[i]));
+                o.set(char::from(l).encode_utf8(&mut [0; 4]), &p[i]);
             }
         }
-        serde_json::Value::Object(o)
+        o
     };
-    let mut v = serde_json::json!({
+    let mut v = obj! {
         "line": m.line,
         "g": match m.kind {
             MoveKind::Rapid => "G0",
@@ -258,12 +300,12 @@ fn move_json(m: &Move) -> serde_json::Value {
         "feed_mode": m.modal.feed_mode,
         "units": m.modal.units,
         "origin": m.origin,
-    });
+    };
     if let Some(e) = m.extrusion {
-        v["extrusion"] = serde_json::json!(e);
+        v.set("extrusion", &e);
     }
     if let Some(e) = m.extruded {
-        v["extruded"] = serde_json::json!(e);
+        v.set("extruded", &e);
     }
     v
 }
@@ -279,6 +321,7 @@ pub fn trace(
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut diags = Vec::new();
+    let mut not_shown = 0usize;
     let mut errors = 0usize;
     let mut moves = 0usize;
     {
@@ -293,8 +336,7 @@ pub fn trace(
                         if moves > 0 {
                             w.write_all(b",").map_err(werr)?;
                         }
-                        serde_json::to_writer(&mut *w, &move_json(&m))
-                            .map_err(|e| werr(e.into()))?;
+                        json::to_writer(&mut *w, &move_json(&m))?;
                     } else {
                         writeln!(w, "{}", move_text(&m)).map_err(werr)?;
                     }
@@ -305,15 +347,19 @@ pub fn trace(
                         errors += 1;
                     }
                     eprint!("{}", report::render(&name, &d));
-                    diags.push(report::json(&name, &d));
+                    if diags.len() < MAX_JSON_DIAGNOSTICS {
+                        diags.push(report::json(&name, &d));
+                    } else {
+                        not_shown += 1;
+                    }
                 }
             }
         }
         if json {
             write!(
                 w,
-                "],\"diagnostics\":{},\"ok\":{}}}",
-                serde_json::Value::Array(diags),
+                "],\"diagnostics\":{},\"diagnostics_not_shown\":{not_shown},\"ok\":{}}}",
+                json::to_string(&diags)?,
                 errors == 0
             )
             .map_err(werr)?;

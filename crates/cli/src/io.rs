@@ -4,6 +4,8 @@ use std::fs::{self, File};
 use std::io::{self, BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use lampost_gcode::lines::MAX_NUL_RUN;
+
 use crate::report::CliError;
 
 /// Open `path` (`-` is stdin) for buffered reading.
@@ -54,13 +56,44 @@ pub fn open_seekable(path: &str) -> Result<Box<dyn ReadSeek>, CliError> {
             .create_new(true)
             .open(&name)?;
         let _ = fs::remove_file(&name);
-        io::copy(&mut source, &mut f)?;
+        copy_text(&mut source, &mut f)?;
         f.seek(SeekFrom::Start(0))?;
         Ok(f)
     };
     spool()
         .map(|f| Box::new(f) as Box<dyn ReadSeek>)
         .map_err(|e| CliError::usage(format!("error: cannot read {}: {e}", display_name(path))))
+}
+
+/// Copy `from` to `to`, stopping with an error at [`MAX_NUL_RUN`] NUL bytes in a row:
+/// binary data is not a program, and a device such as `/dev/zero` never ends.
+fn copy_text(from: &mut dyn Read, to: &mut File) -> io::Result<u64> {
+    let mut buf = vec![0u8; 1 << 16];
+    let (mut total, mut run) = (0u64, 0usize);
+    loop {
+        let n = match from.read(&mut buf) {
+            Ok(0) => return Ok(total),
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        let chunk = &buf[..n];
+        run = match chunk.iter().rposition(|&c| c != 0) {
+            Some(i) => n - 1 - i,
+            None => run.saturating_add(n),
+        };
+        if run >= MAX_NUL_RUN {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "{MAX_NUL_RUN} NUL bytes in a row (byte {} on): binary data, not a program; reading stopped",
+                    (total + n as u64).saturating_sub(run as u64)
+                ),
+            ));
+        }
+        to.write_all(chunk)?;
+        total += n as u64;
+    }
 }
 
 /// Several files read one after another as one input, seekable: DNC pieces given in

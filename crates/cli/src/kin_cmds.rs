@@ -3,6 +3,7 @@
 use lampost_kinematics::{def, Joints, KinError, Machine, MachineDef, ParamValue, Vector3};
 
 use crate::io::{display_name, open_input, Output};
+use crate::json::{self, obj, Obj};
 use crate::points::parse_points;
 use crate::report::CliError;
 
@@ -288,7 +289,9 @@ pub fn fk(
     let text = if json {
         format!(
             "{}\n",
-            serde_json::json!({"position": [pose.tip.x, pose.tip.y, pose.tip.z], "axis": [pose.axis.x, pose.axis.y, pose.axis.z]})
+            json::to_string(
+                &obj! {"position": [pose.tip.x, pose.tip.y, pose.tip.z], "axis": [pose.axis.x, pose.axis.y, pose.axis.z]}
+            )?
         )
     } else {
         format!(
@@ -340,18 +343,18 @@ pub fn ik(
     let names = m.axis_names();
     let mut out = Output::create(None)?;
     let text = if json {
-        let list: Vec<serde_json::Value> = sols
+        let list: Vec<Obj> = sols
             .as_slice()
             .iter()
             .map(|s| {
-                let mut j = serde_json::Map::new();
+                let mut j = Obj::new();
                 for (n, v) in names.iter().zip(s.joints.values()) {
-                    j.insert((*n).to_string(), serde_json::json!(v));
+                    j.set(n, &v);
                 }
-                serde_json::json!({"joints": j, "within_limits": s.within_limits, "branch": s.branch, "singular": s.singular})
+                obj!{"joints": j, "within_limits": s.within_limits, "branch": s.branch, "singular": s.singular}
             })
             .collect();
-        format!("{}\n", serde_json::json!({ "solutions": list }))
+        format!("{}\n", json::to_string(&obj! { "solutions": list })?)
     } else {
         let mut s = String::new();
         for sol in sols.as_slice() {
@@ -431,7 +434,7 @@ pub fn rotate(
     }
     let mut out = Output::create(None)?;
     let s = if json {
-        format!("{}\n", serde_json::json!({ "points": moved }))
+        format!("{}\n", json::to_string(&obj! { "points": moved })?)
     } else {
         moved
             .iter()

@@ -8,6 +8,7 @@ mod calib_cmds;
 mod docs;
 mod gcode_cmds;
 mod io;
+mod json;
 mod kin_cmds;
 mod points;
 mod post_cmds;
@@ -457,7 +458,7 @@ enum Command {
     Check {
         /// Program file, or - for standard input.
         file: String,
-        /// Report as JSON.
+        /// Report as JSON, streamed: the first 10,000 diagnostics, then a count of the rest.
         #[arg(long)]
         json: bool,
         #[command(flatten)]

@@ -12,6 +12,7 @@ use lampost_post::{
 };
 
 use crate::io::display_name;
+use crate::json::{self, obj, Obj};
 use crate::kin_cmds::{load_machine, vector};
 use crate::report::CliError;
 
@@ -700,16 +701,17 @@ pub fn post(
         (_, None) => written.push("<stdout>".into()),
     }
     if let Some(path) = json_report {
-        let limits: Vec<serde_json::Value> = report
+        let limits: Vec<Obj> = report
             .limits_used
             .iter()
-            .map(|(n, lo, hi)| serde_json::json!({"axis": n, "min": lo, "max": hi}))
+            .map(|(n, lo, hi)| obj! {"axis": n, "min": lo, "max": hi})
             .collect();
-        let j = serde_json::json!({
+        let j = obj! {
             "moves": report.moves, "warnings": report.warnings, "limits_used": limits,
             "indexes": report.indexes, "verify": v, "bytes": total, "files": written,
             "time_s": t0.elapsed().as_secs_f64(),
-        });
+        };
+        let j = json::to_string(&j)?;
         if path == "-" {
             println!("{j}");
         } else {
@@ -809,7 +811,9 @@ pub fn verify(
     let s = if json {
         format!(
             "{}\n",
-            serde_json::json!({"max_position_error": v.max_position_error, "max_axis_error_deg": v.max_axis_error_deg, "moves": v.moves, "compared": v.compared, "ok": true})
+            json::to_string(
+                &obj! {"max_position_error": v.max_position_error, "max_axis_error_deg": v.max_axis_error_deg, "moves": v.moves, "compared": v.compared, "ok": true}
+            )?
         )
     } else {
         format!("ok: {} moves, {} feed points compared\nmax_position_error {:.3e}\nmax_axis_error_deg {:.3e}\n", v.moves, v.compared, v.max_position_error, v.max_axis_error_deg)

@@ -4,6 +4,8 @@ use std::fmt::Write as _;
 
 use lampost_gcode::{Diagnostic, Severity};
 
+use crate::json::{obj, Obj};
+
 /// A diagnostic as people read it: message, `file:line:col`, the line, a caret, a hint.
 pub fn render(file: &str, d: &Diagnostic) -> String {
     let mut s = String::new();
@@ -31,9 +33,9 @@ pub fn render(file: &str, d: &Diagnostic) -> String {
     s
 }
 
-/// A diagnostic as JSON.
-pub fn json(file: &str, d: &Diagnostic) -> serde_json::Value {
-    serde_json::json!({
+/// A diagnostic as JSON (written through [`crate::json`]).
+pub fn json(file: &str, d: &Diagnostic) -> Obj {
+    obj! {
         "file": file,
         "severity": d.severity,
         "line": d.line,
@@ -42,7 +44,7 @@ pub fn json(file: &str, d: &Diagnostic) -> serde_json::Value {
         "hint": d.hint(),
         "text": d.snippet.text,
         "span": [d.span.start, d.span.end],
-    })
+    }
 }
 
 /// A CLI-level error: what went wrong, where, and what to do.

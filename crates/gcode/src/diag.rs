@@ -173,6 +173,26 @@ pub enum ErrorKind {
     /// A program with no blocks at all.
     #[error("the program is empty")]
     EmptyProgram,
+    /// A word value the output dialect cannot write (fmt, post): never saturated.
+    #[error("{word} is out of range for {dialect}: {range}")]
+    OutOfRange {
+        /// The word as it would be written (or as read).
+        word: String,
+        /// The dialect (`FADAL`, `ISO`).
+        dialect: &'static str,
+        /// What the dialect takes.
+        range: &'static str,
+    },
+    /// Renumbering would pass the largest N of the dialect.
+    #[error("renumbering reaches N{next} here, past the largest N of {dialect}, N{max}")]
+    RenumberOverflow {
+        /// The number this block would get.
+        next: u64,
+        /// The dialect.
+        dialect: &'static str,
+        /// Its largest N.
+        max: u64,
+    },
     /// A line far longer than any controller accepts.
     #[error("the line is {0} bytes long")]
     LineTooLong(usize),
@@ -216,6 +236,8 @@ impl ErrorKind {
             ErrorKind::TooManyCalls { .. } => "check the L repeats of nested calls; split the program",
             ErrorKind::TooManyPrograms(_) => "split the file",
             ErrorKind::EmptyProgram => "give a file that holds a program",
+            ErrorKind::OutOfRange { .. } => "correct the value; the controller refuses a number it cannot hold, and lampost never writes a cut-off one",
+            ErrorKind::RenumberOverflow { .. } => "renumber with a smaller start or step, or split the program",
             ErrorKind::LineTooLong(_) => "split the line; controllers take lines of a few hundred characters",
         }
     }

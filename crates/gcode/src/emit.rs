@@ -2,7 +2,8 @@
 
 use std::io::{self, Write};
 
-use crate::ast::{Block, BlockKind, CommentStyle, Item, Word};
+use crate::ast::{Block, BlockKind, CommentStyle, Item, Span, Word};
+use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::modal::{code_text, Units};
 
 /// Output dialect.
@@ -139,6 +140,10 @@ impl Counter {
         self.value = to;
     }
 }
+
+/// The linear values [`Emitter::motion`] writes straight from their integer (inch,
+/// mm): inside the eight-digit range of [`out_of_range`]; beyond, the checked path.
+const LINEAR_OK: [f64; 2] = [99_999.999_5, 9_999.999_95];
 
 /// Output is handed to the writer in pieces of about this size.
 const FLUSH_AT: usize = 1 << 16;
@@ -496,6 +501,62 @@ fn format_value_slow(
     s
 }
 
+/// The largest N renumbering writes in `dialect` (FADAL: "ERROR N WORD EXCEEDS 99999";
+/// ISO: nine digits, lampost's own bound).
+pub fn max_n(dialect: Option<Dialect>) -> u64 {
+    match dialect {
+        Some(Dialect::Fadal) => 99_999,
+        _ => 999_999_999,
+    }
+}
+
+fn dialect_name(d: Dialect) -> &'static str {
+    match d {
+        Dialect::Fadal => "FADAL",
+        Dialect::Iso => "ISO",
+    }
+}
+
+/// What `dialect` takes for `letter`, if `value` is outside it (a non-finite value is
+/// always outside). Coordinates have at most eight digits at the dialect's resolution;
+/// FADAL's N, O, H, D and E ranges are its manual's (section 10). The table is in
+/// `docs/gcode.md`.
+pub fn out_of_range(
+    dialect: Dialect,
+    units: Units,
+    letter: u8,
+    register: Option<u8>,
+    value: f64,
+) -> Option<&'static str> {
+    let fadal = dialect == Dialect::Fadal;
+    let inch = units == Units::Inch;
+    // (largest value written, its decimals, may be negative, the range as text)
+    let (max, decimals, signed, text) = match letter {
+        _ if register.is_some() => (99_999.999_99, 5, true, "±99999.99999"),
+        b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' | b'R' if inch => {
+            (9_999.999_9, 4, true, "±9999.9999 in inch (eight digits)")
+        }
+        b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' | b'R' => {
+            (99_999.999, 3, true, "±99999.999 in mm (eight digits)")
+        }
+        b'A' | b'B' | b'C' => (99_999.999, 3, true, "±99999.999 degrees (eight digits)"),
+        b'G' | b'M' => (999.9, 1, false, "0 to 999.9"),
+        b'N' if fadal => (99_999.0, 5, false, "N0 to N99999"),
+        b'N' => (999_999_999.0, 5, false, "N0 to N999999999"),
+        b'O' => (9_999.0, 5, false, "O0 to O9999"),
+        b'H' | b'D' if fadal => (99.0, 5, false, "0 to 99"),
+        b'E' if fadal => (48.0, 5, false, "E0 to E48 (fixture offsets)"),
+        b'T' | b'H' | b'D' | b'L' => (9_999.0, 5, false, "0 to 9999"),
+        b'F' | b'S' | b'P' if fadal => (99_999.0, 5, false, "0 to 99999"),
+        b'F' | b'S' | b'P' => (99_999_999.0, 5, false, "0 to 99999999"),
+        _ => (99_999.999_99, 5, true, "±99999.99999"),
+    };
+    // Compared as written: what rounds to the last value allowed is in range.
+    let half = 0.5 / POW[decimals];
+    let ok = value.is_finite() && value.abs() < max + half && (signed || value > -half);
+    (!ok).then_some(text)
+}
+
 /// The emitter's guard: a non-finite number is an error, never text.
 fn not_finite(letter: u8, v: f64) -> io::Error {
     io::Error::new(
@@ -558,7 +619,26 @@ impl<W: Write> Emitter<W> {
         }
     }
 
-    fn push_word(&mut self, letter: u8, register: Option<u8>, value: f64, text: Option<&str>) {
+    /// Write a word; in a dialect, a value it cannot hold is refused (the range as
+    /// text), nothing written.
+    fn push_word(
+        &mut self,
+        letter: u8,
+        register: Option<u8>,
+        value: f64,
+        text: Option<&str>,
+    ) -> Result<(), &'static str> {
+        // Verbatim text is kept as read; numbers the emitter writes are checked.
+        let dialect = match (self.opts.dialect, text) {
+            (Some(d), _) => Some(d),
+            (None, None) => Some(Dialect::Iso),
+            (None, Some(_)) => None,
+        };
+        if let Some(range) =
+            dialect.and_then(|d| out_of_range(d, self.units, letter, register, value))
+        {
+            return Err(range);
+        }
         self.separate();
         self.line.push(letter);
         if let Some(r) = register {
@@ -576,22 +656,80 @@ impl<W: Write> Emitter<W> {
                 value,
             ),
         }
+        Ok(())
     }
 
-    /// The block's N word (renumbering), then the next number.
-    fn push_number(&mut self) {
+    /// The block's N word (renumbering), then the next number; `Err(n)` when `n` is
+    /// past the dialect's largest N (nothing written).
+    fn push_number(&mut self) -> Result<(), u64> {
         let n = self.next_n;
+        if n > max_n(self.opts.dialect) {
+            return Err(n);
+        }
         // What `push_value` writes for a whole N below 9e15: its decimal digits.
         if n < 9_000_000_000_000_000 && self.n_text.value == n {
             self.separate();
             self.line.push(b'N');
             self.line.extend_from_slice(self.n_text.digits());
         } else {
-            self.push_word(b'N', None, n as f64, None);
+            self.push_word(b'N', None, n as f64, None).map_err(|_| n)?;
         }
         let step = self.opts.renumber.map_or(1, |r| r.1);
+        // Past u64 is past any dialect's largest N: the next block is refused.
         self.next_n = n.saturating_add(step);
         self.n_text.add(step, self.next_n);
+        Ok(())
+    }
+
+    /// The error for a word of `b` the dialect cannot write, located at the word.
+    fn block_error(&self, b: &Block<'_>, kind: ErrorKind, span: Option<Span>) -> io::Error {
+        let (s, e) = span.map_or((0, b.raw.len()), |sp| {
+            (
+                sp.start.saturating_sub(b.span.start),
+                sp.end.saturating_sub(b.span.start),
+            )
+        });
+        let d = Diagnostic::at(
+            Severity::Error,
+            kind,
+            b.line,
+            b.span.start,
+            b.raw.as_bytes(),
+            s,
+            e,
+        );
+        io::Error::new(io::ErrorKind::InvalidData, d)
+    }
+
+    fn dialect_name(&self) -> &'static str {
+        dialect_name(self.opts.dialect.unwrap_or(Dialect::Iso))
+    }
+
+    /// The error for a word [`Emitter::words`] or [`Emitter::motion`] cannot write.
+    fn word_error(&self, letter: u8, value: f64, range: &str) -> io::Error {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "refused to write {}{value}: out of range for {}: {range}",
+                char::from(letter),
+                self.dialect_name()
+            ),
+        )
+    }
+
+    fn numbering_error(&self, next: u64) -> io::Error {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            self.renumber_error(next).to_string(),
+        )
+    }
+
+    fn renumber_error(&self, next: u64) -> ErrorKind {
+        ErrorKind::RenumberOverflow {
+            next,
+            dialect: self.dialect_name(),
+            max: max_n(self.opts.dialect),
+        }
     }
 
     fn track(&mut self, letter: u8, value: f64) {
@@ -694,7 +832,10 @@ impl<W: Write> Emitter<W> {
         }
         let numbered = self.opts.renumber.is_some() && b.has_words() && b.word(b'O').is_none();
         if numbered {
-            self.push_number();
+            if let Err(next) = self.push_number() {
+                let kind = self.renumber_error(next);
+                return Err(self.block_error(b, kind, b.word(b'N').map(|w| w.span)));
+            }
         }
         for item in &b.items {
             match item {
@@ -706,8 +847,17 @@ impl<W: Write> Emitter<W> {
                     if self.suppressed(w.letter, w.value) {
                         continue;
                     }
+                    if let Err(range) = self.push_word(w.letter, w.register, w.value, Some(w.text))
+                    {
+                        let kind = ErrorKind::OutOfRange {
+                            word: w.display(),
+                            dialect: self.dialect_name(),
+                            range,
+                        };
+                        return Err(self.block_error(b, kind, Some(w.span)));
+                    }
+                    // The modal state follows what was written.
                     self.after(w.letter, w.value);
-                    self.push_word(w.letter, w.register, w.value, Some(w.text));
                 }
                 Item::Text(t) => {
                     self.separate();
@@ -742,20 +892,22 @@ impl<W: Write> Emitter<W> {
         self.line.truncate(self.start);
         self.last_percent = false;
         if self.opts.renumber.is_some() && !words.is_empty() {
-            self.push_number();
+            self.push_number().map_err(|n| self.numbering_error(n))?;
         }
         for &(l, v) in words {
             // Axis words (the bulk) need no modal bookkeeping.
             if l != b'G' && l != b'F' {
-                self.push_word(l, None, v, None);
+                self.push_word(l, None, v, None)
+                    .map_err(|r| self.word_error(l, v, r))?;
                 continue;
             }
             self.track(l, v);
             if self.suppressed(l, v) {
                 continue;
             }
+            self.push_word(l, None, v, None)
+                .map_err(|r| self.word_error(l, v, r))?;
             self.after(l, v);
-            self.push_word(l, None, v, None);
         }
         if let Some(c) = comment {
             if self.line.len() > self.start {
@@ -795,13 +947,14 @@ impl<W: Write> Emitter<W> {
         self.line.truncate(self.start);
         self.last_percent = false;
         if self.opts.renumber.is_some() {
-            self.push_number();
+            self.push_number().map_err(|n| self.numbering_error(n))?;
         }
         // `track`, `suppressed` and `after` of the G word, from one rounding.
         let code = round_half_away(g * 10.0) as i64;
         self.track_g(code);
         if !self.g_suppressed_or_after(code) {
-            self.push_word(b'G', None, g, None);
+            self.push_word(b'G', None, g, None)
+                .map_err(|r| self.word_error(b'G', g, r))?;
         }
         let decimals = match self.units {
             Units::Inch => 4,
@@ -813,7 +966,7 @@ impl<W: Write> Emitter<W> {
                 l,
                 b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W' | b'I' | b'J' | b'K' | b'Q' | b'R'
             );
-            if fast_scale && linear && v.abs() < FAST_MAX[decimals] {
+            if fast_scale && linear && v.abs() < LINEAR_OK[decimals - 3] {
                 // `v` is finite here (NaN and ±inf fail the comparison).
                 self.separate();
                 self.line.push(l);
@@ -826,18 +979,21 @@ impl<W: Write> Emitter<W> {
                 // As `words` treats them (not axis letters a post would pass).
                 self.track(l, v);
                 if !self.suppressed(l, v) {
+                    self.push_word(l, None, v, None)
+                        .map_err(|r| self.word_error(l, v, r))?;
                     self.after(l, v);
-                    self.push_word(l, None, v, None);
                 }
             } else {
-                self.push_word(l, None, v, None);
+                self.push_word(l, None, v, None)
+                    .map_err(|r| self.word_error(l, v, r))?;
             }
         }
         if let Some(f) = feed {
             self.track(b'F', f);
             if !self.suppressed(b'F', f) {
+                self.push_word(b'F', None, f, None)
+                    .map_err(|r| self.word_error(b'F', f, r))?;
                 self.after(b'F', f);
-                self.push_word(b'F', None, f, None);
             }
         }
         self.flush_line()
@@ -1039,10 +1195,16 @@ mod tests {
                     .iter()
                     .map(|&(l, v)| (l, v, round_half_away(v * scale) as i64))
                     .collect();
-                // A non-finite number is refused by both, alike (the guard).
+                // A non-finite number, or one past the dialect's range, is refused by
+                // both, alike (the guards); what is written is in range.
                 let (ra, rb) = (a.words(&w, None), b.motion(*g, &scaled, *scale, *feed));
                 prop_assert_eq!(ra.is_err(), rb.is_err());
-                prop_assert_eq!(ra.is_err(), w.iter().any(|(_, v)| !v.is_finite()));
+                if w.iter().any(|(_, v)| !v.is_finite() || v.abs() >= 100_000.0) {
+                    prop_assert!(ra.is_err());
+                }
+                if ra.is_ok() {
+                    prop_assert!(w.iter().all(|(_, v)| v.abs() < 100_000.0));
+                }
             }
             let (a, b) = (a.finish().expect("a Vec takes any write"), b.finish().expect("a Vec takes any write"));
             prop_assert_eq!(String::from_utf8_lossy(&b), String::from_utf8_lossy(&a));

@@ -226,6 +226,10 @@ type Res<T> = Result<T, Diagnostic>;
 /// The most canned-cycle repeats (L) or arc turns (P) one block may ask for.
 const MAX_REPEATS: u32 = 10_000;
 
+/// The most pecks (feeds of Q) of a G73/G83 block, all repeats together: a block's
+/// moves are held until the next line is read, so their number must stay bounded.
+pub const MAX_PECKS: u32 = 10_000;
+
 /// Number of [`GGroup`] variants.
 const GROUPS: usize = 18;
 
@@ -1456,6 +1460,29 @@ impl Interpreter {
                 w.word(b'Z').map(|z| z.span),
             ));
         }
+        // Pecks per hole, counted before any is made: `depth - q` may round back to
+        // `depth` (a tiny Q at a large depth), so the loop below counts its pecks.
+        let pecks = if needs_q && !passthrough {
+            let per_hole = ((r_abs - bottom) / q).ceil().max(1.0);
+            let total = per_hole * f64::from(repeats);
+            if total.is_nan() || total > f64::from(MAX_PECKS) {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: w
+                            .word(b'Q')
+                            .map_or_else(|| format!("G{name} Q{q}"), |q| q.display()),
+                        why:
+                            "more than 10000 pecks in one block; make Q larger or split the pattern",
+                    },
+                    w.word(b'Q').map(|q| q.span),
+                ));
+            }
+            per_hole as u32
+        } else {
+            0
+        };
         let feed = if passthrough {
             0.0
         } else {
@@ -1504,8 +1531,16 @@ impl Interpreter {
             match code {
                 730 | 830 => {
                     let mut depth = r_abs;
-                    while depth > bottom {
-                        let next = (depth - q).max(bottom);
+                    for k in 1..=pecks {
+                        if depth <= bottom {
+                            break;
+                        }
+                        // The last peck reaches the bottom whatever the rounding did.
+                        let next = if k == pecks {
+                            bottom
+                        } else {
+                            (depth - q).max(bottom)
+                        };
                         if code == 830 && depth < r_abs {
                             let t = at(self.pos, depth + delta);
                             self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
@@ -1562,5 +1597,61 @@ impl DisplayCode for Word<'_> {
             Some(c) => format!("{}{}", self.letter_char(), code_text(c)),
             None => self.display(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stream::Stream;
+
+    /// Moves and diagnostics of `text`, every line read.
+    fn run(text: &str) -> (Vec<Move>, Vec<Diagnostic>) {
+        let (mut moves, mut diags) = (Vec::new(), Vec::new());
+        for e in Stream::from_bytes(text.as_bytes(), Options::default(), false) {
+            match e.expect("in memory") {
+                Event::Move(m) => moves.push(m),
+                Event::Diagnostic(d) => diags.push(d),
+            }
+        }
+        (moves, diags)
+    }
+
+    #[test]
+    fn peck_counts_are_bounded_and_end_at_the_bottom() {
+        // `depth - q == depth`: the peck never gets deeper; refused, located at Q.
+        for q in ["Q0.0000001", "Q0.000000000000000000001"] {
+            let text = format!("G0 X0 Y0 Z0\nF10 G83 X1 R10000000000 Z9999999999.99 {q}\nG0 X5\n");
+            let (moves, diags) = run(&text);
+            assert_eq!(diags.len(), 1, "{diags:?}");
+            assert_eq!((diags[0].line, diags[0].column), (2, 40));
+            assert!(diags[0].to_string().contains("more than 10000 pecks"));
+            assert_eq!(moves.len(), 2, "the next line is read");
+        }
+        // Repeats count: 100 holes of 100 pecks is 10,000; one more hole is refused.
+        let (moves, diags) = run("G91 F10 G83 X1 R0 Z-10 Q0.1 L100\n");
+        assert!(diags.is_empty(), "{diags:?}");
+        assert!(moves.len() > 20_000);
+        let (_, diags) = run("G91 F10 G73 X1 R0 Z-10 Q0.1 L101\n");
+        assert!(diags[0].to_string().contains("more than 10000 pecks"));
+        // A peck smaller than the spacing of floats at the depth still reaches the
+        // bottom in its counted pecks.
+        let (moves, diags) = run("F10 G73 X0 R1000000000 Z999999999.9999995 Q0.00000001\n");
+        assert!(diags.is_empty(), "{diags:?}");
+        let feeds: Vec<f64> = moves
+            .iter()
+            .filter(|m| m.kind == MoveKind::Linear)
+            .map(|m| m.end[Z])
+            .collect();
+        assert!(feeds.len() <= 60, "{}", feeds.len());
+        assert_eq!(feeds.last(), Some(&999_999_999.999_999_5));
+        // Ordinary pecks are unchanged: 0.3 deep in 0.1 pecks.
+        let (moves, _) = run("F10 G0 Z1\nG83 X0 R0.5 Z0.2 Q0.1\n");
+        let feeds: Vec<f64> = moves
+            .iter()
+            .filter(|m| m.kind == MoveKind::Linear)
+            .map(|m| m.end[Z])
+            .collect();
+        assert_eq!(feeds, [0.5 - 0.1, 0.5 - 0.1 - 0.1, 0.2]);
     }
 }

@@ -1,6 +1,18 @@
 //! Splitting input into lines: from a byte slice, or streamed from a reader.
+//!
+//! A streamed line longer than [`MAX_LINE_BYTES`] is not held: its first bytes are kept
+//! (for the error's snippet), the rest is read past and only counted, so one line of any
+//! length takes at most 64 KiB of memory. [`MAX_NUL_RUN`] NUL bytes in a row (binary
+//! data, or a device such as `/dev/zero`) stop the reading with an error.
 
 use std::io::{self, BufRead, BufReader, Read, Seek};
+
+use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::parse::MAX_LINE_BYTES;
+
+/// The most NUL bytes in a row a reader reads past: more is binary data, not a program
+/// (and `/dev/zero` would never end), so reading stops with an error.
+pub const MAX_NUL_RUN: usize = 64 * 1024;
 
 /// One line of input: 1-based number, byte offset of its first byte, its bytes
 /// without `\n` or `\r\n`.
@@ -10,8 +22,30 @@ pub struct Line<'a> {
     pub number: u32,
     /// Byte offset of the first byte in the input.
     pub offset: usize,
-    /// The bytes, without the line ending.
+    /// The bytes, without the line ending (only the first bytes of a streamed line over
+    /// [`MAX_LINE_BYTES`]).
     pub bytes: &'a [u8],
+    /// The whole line's length without its ending: more than `bytes.len()` for a
+    /// streamed line over [`MAX_LINE_BYTES`], whose rest was read past unheld.
+    pub len: usize,
+}
+
+impl Line<'_> {
+    /// The error for a line over [`MAX_LINE_BYTES`] (with its whole length), if it is
+    /// one; such a line is refused unscanned.
+    pub fn too_long(&self) -> Option<Diagnostic> {
+        (self.len > MAX_LINE_BYTES).then(|| {
+            Diagnostic::at(
+                Severity::Error,
+                ErrorKind::LineTooLong(self.len),
+                self.number,
+                self.offset,
+                self.bytes,
+                0,
+                1,
+            )
+        })
+    }
 }
 
 fn strip_eol(mut b: &[u8]) -> &[u8] {
@@ -55,23 +89,33 @@ impl<'a> Iterator for Lines<'a> {
         let offset = self.pos;
         self.pos += len;
         self.number = self.number.saturating_add(1);
+        let bytes = strip_eol(&rest[..len]);
         Some(Line {
             number: self.number,
             offset,
-            bytes: strip_eol(&rest[..len]),
+            bytes,
+            len: bytes.len(),
         })
     }
 }
 
 /// Lines read one at a time from a reader into one reused buffer, so memory stays
-/// flat however long the program is.
+/// flat however long the program is: a line over [`MAX_LINE_BYTES`] is read past, only
+/// its first bytes held (see the module documentation).
 #[derive(Debug)]
 pub struct LineReader<R> {
     reader: R,
     buf: Vec<u8>,
+    /// Offset just past the last line read.
     pos: usize,
+    /// Offset and whole length (without ending) of the last line read.
+    start: usize,
+    len: usize,
     number: u32,
 }
+
+/// The most bytes of one line held: a line of [`MAX_LINE_BYTES`] with `\r\n`.
+const KEEP: usize = MAX_LINE_BYTES + 2;
 
 impl<R: BufRead> LineReader<R> {
     /// Read lines from `reader`.
@@ -80,6 +124,8 @@ impl<R: BufRead> LineReader<R> {
             reader,
             buf: Vec::with_capacity(256),
             pos: 0,
+            start: 0,
+            len: 0,
             number: 0,
         }
     }
@@ -92,21 +138,92 @@ impl<R: BufRead> LineReader<R> {
     /// The next line and the offset just past it (its line ending included).
     pub(crate) fn next_line_end(&mut self) -> io::Result<Option<(Line<'_>, usize)>> {
         self.buf.clear();
-        let n = self.reader.read_until(b'\n', &mut self.buf)?;
-        if n == 0 {
+        // Bytes of the line read (ending included), whether it ended in `\n`, the byte
+        // before the last one read, and the NUL bytes in a row at the end.
+        let mut total = 0usize;
+        let mut newline = false;
+        let mut prev = 0u8;
+        let mut last = 0u8;
+        let mut nul_run = 0usize;
+        let mut skipping = false;
+        loop {
+            let avail = match self.reader.fill_buf() {
+                Ok(a) => a,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            if avail.is_empty() {
+                break;
+            }
+            let (take, done) =
+                memchr::memchr(b'\n', avail).map_or((avail.len(), false), |i| (i + 1, true));
+            let chunk = &avail[..take];
+            if total + take <= KEEP {
+                self.buf.extend_from_slice(chunk);
+            } else {
+                // Over the limit: hold the first bytes only, count the rest.
+                if !skipping {
+                    skipping = true;
+                    nul_run = self.buf.iter().rev().take_while(|&&c| c == 0).count();
+                }
+                let room = KEEP.saturating_sub(self.buf.len());
+                self.buf.extend_from_slice(&chunk[..room.min(take)]);
+                nul_run = match chunk.iter().rposition(|&c| c != 0) {
+                    Some(i) => take - 1 - i,
+                    None => nul_run.saturating_add(take),
+                };
+                if nul_run >= MAX_NUL_RUN {
+                    return Err(io::Error::new(
+                        io::ErrorKind::InvalidData,
+                        format!(
+                            "line {}: {MAX_NUL_RUN} NUL bytes in a row (byte {} on): binary data, not a program; reading stopped",
+                            self.number.saturating_add(1),
+                            (self.pos + total + take).saturating_sub(nul_run),
+                        ),
+                    ));
+                }
+            }
+            if take >= 2 {
+                prev = chunk[take - 2];
+            } else {
+                prev = last;
+            }
+            last = chunk[take - 1];
+            self.reader.consume(take);
+            total += take;
+            if done {
+                newline = true;
+                break;
+            }
+        }
+        if total == 0 {
             return Ok(None);
         }
-        let offset = self.pos;
-        self.pos += n;
+        // As `strip_eol`: a final `\n`, then a `\r` before it.
+        let mut len = total;
+        let mut cr = last;
+        if newline {
+            len -= 1;
+            cr = prev;
+        }
+        if len > 0 && cr == b'\r' {
+            len -= 1;
+        }
+        self.start = self.pos;
+        self.len = len;
+        self.pos += total;
         self.number = self.number.saturating_add(1);
-        Ok(Some((
-            Line {
-                number: self.number,
-                offset,
-                bytes: strip_eol(&self.buf),
-            },
-            self.pos,
-        )))
+        Ok(Some((self.line(), self.pos)))
+    }
+
+    fn line(&self) -> Line<'_> {
+        let held = self.len.min(self.buf.len()).min(MAX_LINE_BYTES + 1);
+        Line {
+            number: self.number,
+            offset: self.start,
+            bytes: &self.buf[..held],
+            len: self.len,
+        }
     }
 
     /// Bytes read so far.
@@ -116,11 +233,7 @@ impl<R: BufRead> LineReader<R> {
 
     /// The line the last [`LineReader::next_line`] handed out again (empty after a seek).
     pub(crate) fn last_line(&self) -> Line<'_> {
-        Line {
-            number: self.number,
-            offset: self.pos - self.buf.len(),
-            bytes: strip_eol(&self.buf),
-        }
+        self.line()
     }
 }
 
@@ -134,6 +247,8 @@ impl<R: Read + Seek> LineReader<BufReader<R>> {
         self.reader.seek_relative(delta)?;
         self.buf.clear();
         self.pos = offset;
+        self.start = offset;
+        self.len = 0;
         self.number = number.saturating_sub(1);
         Ok(())
     }
@@ -157,5 +272,83 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(a.len(), 4);
         assert_eq!(a[1], (2, 7, b"G1 Y2".to_vec()));
+    }
+
+    /// Every line of `text` read through a reader of `cap` bytes at a time.
+    fn streamed(text: &[u8], cap: usize) -> Vec<(u32, usize, usize, Vec<u8>)> {
+        let mut r = LineReader::new(BufReader::with_capacity(cap, text));
+        let mut v = Vec::new();
+        while let Some(l) = r.next_line().expect("reads") {
+            v.push((l.number, l.offset, l.len, l.bytes.to_vec()));
+        }
+        assert!(r.buf.capacity() <= 2 * KEEP, "one line held at most");
+        v
+    }
+
+    #[test]
+    fn a_line_over_the_limit_is_counted_not_held() {
+        for (cap, eol) in [
+            (7, &b"\r\n"[..]),
+            (4096, b"\n"),
+            (1 << 16, b"\r\n"),
+            (3, b""),
+        ] {
+            let long = MAX_LINE_BYTES * 3 + 5;
+            let mut text = b"G0 X1\n".to_vec();
+            text.extend(std::iter::repeat_n(b'X', long));
+            text.extend_from_slice(b"\r\nG1 Y2\n");
+            text.extend(std::iter::repeat_n(b'Y', MAX_LINE_BYTES));
+            text.extend_from_slice(eol);
+            let v = streamed(&text, cap);
+            assert_eq!(v.len(), 4);
+            assert_eq!((v[1].0, v[1].1, v[1].2), (2, 6, long));
+            assert_eq!(v[1].3.len(), MAX_LINE_BYTES + 1);
+            assert_eq!((v[2].0, v[2].1, v[2].2), (3, 6 + long + 2, 5));
+            assert_eq!(v[2].3, b"G1 Y2");
+            assert_eq!((v[3].2, v[3].3.len()), (MAX_LINE_BYTES, MAX_LINE_BYTES));
+            let mut r = LineReader::new(BufReader::with_capacity(cap, &text[..]));
+            let _ = r.next_line();
+            let l = r.next_line().expect("reads").expect("a line");
+            let d = l.too_long().expect("refused");
+            assert_eq!(d.kind, ErrorKind::LineTooLong(long));
+            assert_eq!((d.line, d.column), (2, 1));
+        }
+        // The in-memory splitter gives the same lengths.
+        let text = b"ab\r\n\r\nc";
+        let a: Vec<_> = Lines::new(text)
+            .map(|l| (l.number, l.offset, l.len))
+            .collect();
+        let b: Vec<_> = streamed(text, 1)
+            .into_iter()
+            .map(|l| (l.0, l.1, l.2))
+            .collect();
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn a_run_of_nul_bytes_stops_reading() {
+        // Under the run limit: an over-long line like any other.
+        let mut text = b"G0 X1\n".to_vec();
+        text.extend(std::iter::repeat_n(0u8, MAX_NUL_RUN - 1));
+        text.extend_from_slice(b"X\nG1 Y2\n");
+        assert_eq!(streamed(&text, 4096).len(), 3);
+        // A run of the limit, part of it held and part read past: an error, the line
+        // and the byte where the run begins named.
+        for cap in [1, 100, 1 << 16] {
+            let mut text = b"G0 X1\nG1 ".to_vec();
+            text.extend(std::iter::repeat_n(0u8, MAX_NUL_RUN + 10));
+            let mut r = LineReader::new(BufReader::with_capacity(cap, &text[..]));
+            assert!(r.next_line().expect("line 1").is_some());
+            let e = r.next_line().expect_err("binary");
+            assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+            let m = e.to_string();
+            assert!(
+                m.starts_with("line 2: 65536 NUL bytes in a row (byte 9 on)"),
+                "{m}"
+            );
+        }
+        // An endless source stops after the run limit.
+        let mut r = LineReader::new(BufReader::new(io::repeat(0)));
+        assert!(r.next_line().is_err());
     }
 }

@@ -132,13 +132,16 @@ impl<S: LineSource> Iterator for Stream<S> {
             // go straight into the queue: moving a large `Event` through an `Option` on
             // the way out costs more than the queue.)
             let mut block = Block::empty(line.number, line.offset);
-            let parsed = parse_line_with(
-                line.bytes,
-                line.number,
-                line.offset,
-                &mut block,
-                self.exponents,
-            );
+            let parsed = match line.too_long() {
+                Some(d) => Err(d),
+                None => parse_line_with(
+                    line.bytes,
+                    line.number,
+                    line.offset,
+                    &mut block,
+                    self.exponents,
+                ),
+            };
             let failed = match parsed {
                 Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
                     Ok(()) => false,

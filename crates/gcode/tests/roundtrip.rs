@@ -26,12 +26,29 @@ fn blocks_equal(a: &[u8], b: &[u8]) -> Result<(), String> {
 }
 
 fn emit(text: &[u8], opts: EmitOptions) -> Vec<u8> {
+    try_emit(text, opts).expect("writes")
+}
+
+fn try_emit(text: &[u8], opts: EmitOptions) -> std::io::Result<Vec<u8>> {
     let mut em = Emitter::new(Vec::new(), opts);
     for l in Lines::new(text) {
         let b = parse_line(l.bytes, l.number, l.offset).expect("parses");
-        em.block(&b).expect("writes");
+        em.block(&b)?;
     }
-    em.finish().expect("finishes")
+    em.finish()
+}
+
+/// Whether a word of `text` is outside what `opts`' dialect writes.
+fn out_of_range(text: &[u8], opts: EmitOptions) -> bool {
+    let Some(d) = opts.dialect else { return false };
+    Lines::new(text).any(|l| {
+        parse_line(l.bytes, 1, 0).is_ok_and(|b| {
+            b.words().any(|w| {
+                lampost_gcode::emit::out_of_range(d, opts.units, w.letter, w.register, w.value)
+                    .is_some()
+            })
+        })
+    })
 }
 
 fn moves(text: &[u8]) -> Vec<Move> {
@@ -46,12 +63,13 @@ fn moves(text: &[u8]) -> Vec<Move> {
         .collect()
 }
 
-/// A word as a CAM post or a FADAL programmer might write it.
+/// A word as a CAM post or a FADAL programmer might write it, in the range both
+/// dialects write (coordinates of at most four whole digits; feeds, speeds, tools and
+/// offsets not negative and at most 99).
 fn word() -> impl Strategy<Value = String> {
-    let letter = prop::sample::select(b"XYZABCIJKFSTHDPQ".to_vec());
-    let number = prop_oneof![
-        (-99999i64..99999).prop_map(|v| v.to_string()),
-        (-99999i64..99999, 0u32..5).prop_map(|(v, d)| {
+    let coord = prop_oneof![
+        (-9999i64..9999).prop_map(|v| v.to_string()),
+        (-9999i64..9999, 0u32..5).prop_map(|(v, d)| {
             let s = format!("{:.*}", d as usize, v as f64 / 10f64.powi(d as i32));
             s
         }),
@@ -59,7 +77,14 @@ fn word() -> impl Strategy<Value = String> {
         (0u32..10000).prop_map(|v| format!("-.{v}")),
         (0i64..999).prop_map(|v| format!("{v}.")),
     ];
-    (letter, number, any::<bool>()).prop_map(|(l, n, lower)| {
+    let whole = prop_oneof![
+        (0i64..99).prop_map(|v| v.to_string()),
+        (0u32..10000).prop_map(|v| format!(".{v}")),
+        (0i64..99).prop_map(|v| format!("{v}.")),
+    ];
+    let coords = (prop::sample::select(b"XYZABCIJKQ".to_vec()), coord);
+    let others = (prop::sample::select(b"FSTHDP".to_vec()), whole);
+    (prop_oneof![coords, others], any::<bool>()).prop_map(|((l, n), lower)| {
         let c = char::from(l);
         format!("{}{}", if lower { c.to_ascii_lowercase() } else { c }, n)
     })
@@ -110,6 +135,13 @@ proptest! {
             units: if inch { Units::Inch } else { Units::Mm },
             ..EmitOptions::default()
         };
+        // A value the dialect cannot hold is refused, located, never written cut off.
+        if out_of_range(text.as_bytes(), opts) {
+            let e = try_emit(text.as_bytes(), opts).expect_err("refused");
+            let d = e.get_ref().and_then(|i| i.downcast_ref::<lampost_gcode::Diagnostic>());
+            prop_assert!(matches!(d.map(|d| &d.kind), Some(lampost_gcode::ErrorKind::OutOfRange { .. })), "{e}");
+            return Ok(());
+        }
         let once = emit(text.as_bytes(), opts);
         let twice = emit(&once, opts);
         prop_assert_eq!(String::from_utf8_lossy(&once), String::from_utf8_lossy(&twice));
@@ -119,6 +151,43 @@ proptest! {
         for ((la, va), (lb, vb)) in a.iter().zip(&b) {
             prop_assert_eq!(la, lb);
             prop_assert!((va - vb).abs() <= 0.5e-3 + 1e-9, "{} {} -> {}", char::from(*la), va, vb);
+        }
+    }
+
+    /// A value past the dialect's range is refused with its place, in either dialect
+    /// and either unit, never written cut off or saturated.
+    #[test]
+    fn out_of_range_values_are_refused(
+        letter in prop::sample::select(b"XYZABCIJKQRFSTHDPNOLGME".to_vec()),
+        value in prop_oneof![100_000i64..1_000_000_000_000, 100_000i64..1_000_000_000, -1_000_000_000_000i64..-1],
+        fadal in any::<bool>(),
+        inch in any::<bool>(),
+    ) {
+        let opts = EmitOptions {
+            dialect: Some(if fadal { Dialect::Fadal } else { Dialect::Iso }),
+            units: if inch { Units::Inch } else { Units::Mm },
+            ..EmitOptions::default()
+        };
+        let text = format!("G0 X1\n{}{value}\n", char::from(letter));
+        let expect = out_of_range(text.as_bytes(), opts);
+        match try_emit(text.as_bytes(), opts) {
+            Ok(out) => {
+                prop_assert!(!expect);
+                // What is written is the value, not a cut-off one.
+                let mut lines = out.split(|&c| c == b'\n').filter(|l| !l.is_empty() && *l != b"%");
+                let b = parse_line(lines.nth(1).unwrap_or_default(), 1, 0).expect("parses");
+                prop_assert_eq!(b.word(letter).map(|w| w.value), Some(value as f64));
+            }
+            Err(e) => {
+                prop_assert!(expect);
+                let d = e.get_ref().and_then(|i| i.downcast_ref::<lampost_gcode::Diagnostic>()).expect("located");
+                prop_assert_eq!((d.line, d.column), (2, 1));
+            }
+        }
+        // Values of twelve digits and more, and negatives of the unsigned words, are
+        // always out.
+        if value >= 100_000_000_000 || (value < 0 && b"FSTHDPNOLGM".contains(&letter)) {
+            prop_assert!(expect);
         }
     }
 

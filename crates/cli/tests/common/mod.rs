@@ -275,3 +275,16 @@ pub fn fx(name: &str) -> String {
         .to_string_lossy()
         .into_owned()
 }
+
+/// Run `script` in `sh` with at most `kib` KiB of virtual memory and `secs` seconds;
+/// `$LAMPOST` is the binary. Hostile inputs are made by the script's own pipes, so the
+/// test holds none of them in memory.
+pub fn limited(script: &str, kib: u64, secs: u64) -> Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kib}; {script}"))
+        .env("LAMPOST", env!("CARGO_BIN_EXE_lampost"))
+        .env("TIMEOUT", secs.to_string())
+        .output()
+        .expect("sh runs")
+}
