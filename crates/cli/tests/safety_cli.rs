@@ -527,7 +527,9 @@ fn per_point_honours_every_option() {
 
 /// Real CAM programs from `../shared/corpus` (see its SOURCES.md), posted for the FADAL
 /// spindle at two indexes, each with its expected verdict: posted and verified, or
-/// refused at the named line (Cereal.ngc parks in machine X/Y with `G53` at its end).
+/// refused at the named line (Cereal.ngc parks in machine X/Y with `G53` at its end;
+/// LHchips4.ngc feeds at F9991300 mm/min, 393,358 in/min for the FADAL, beyond its
+/// largest F word, 99999).
 #[test]
 fn real_programs_post_and_verify_or_are_refused_where_expected() {
     let Some(shared) = shared() else {
@@ -537,7 +539,10 @@ fn real_programs_post_and_verify_or_are_refused_where_expected() {
     let dir = tempdir("safety-corpus");
     let cases: [(&str, Option<&str>); 3] = [
         ("cam/fusion360-generic-mm-bore-tests.nc", None),
-        ("linuxcnc/LHchips4.ngc", None),
+        (
+            "linuxcnc/LHchips4.ngc",
+            Some("LHchips4.ngc:28: refused to write F393358.2677165354: out of range for FADAL"),
+        ),
         ("linuxcnc/Cereal.ngc", Some("Cereal.ngc:2270: G53")),
     ];
     for (rel, refusal) in cases {

@@ -25,6 +25,17 @@ pub enum PostError {
         /// What.
         what: String,
     },
+    /// A value of the input that no word of the output dialect can hold (a feed beyond
+    /// the control's largest F, say): refused, never saturated.
+    #[error("{file}:{line}: {what}")]
+    OutOfRange {
+        /// Input name.
+        file: String,
+        /// Line.
+        line: u32,
+        /// The emitter's words: which value, and the dialect's range.
+        what: String,
+    },
     /// Program units differ from the machine's.
     #[error("{file}:{line}: the program is in {program} but the machine is in {machine}")]
     Units {
@@ -117,6 +128,7 @@ impl PostError {
         match self {
             PostError::Input { .. } => "fix the input program (`lampost check` lists every problem)",
             PostError::Unsupported { .. } => "resolve macros, canned cycles, cutter compensation and subprograms in the CAM system, then post again",
+            PostError::OutOfRange { .. } => "the input's value does not fit the controller's word: check the program's feeds and units (a feed written for another machine, or millimetres read as inches)",
             PostError::Units { .. } => "post with --convert-units to scale the program, or output the program in the machine's units",
             PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits",
             PostError::SafeHeight { .. } => "place the part lower (--origin or the setup), choose an index that keeps it lower, or check clearance_z, safe_margin and the Z limits in the machine file",

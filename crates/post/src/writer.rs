@@ -376,7 +376,7 @@ impl<'m, W: Write> Writer<'m, W> {
                 w.push((b'F', feed));
             }
         }
-        self.words(&w, None)?;
+        self.move_words(&w, file, line)?;
         self.note_limits(j);
         self.rot = Some(rot);
         self.pos = Some(x);
@@ -420,7 +420,7 @@ impl<'m, W: Write> Writer<'m, W> {
             (b'J', c[1] - start[1]),
             (b'F', step.feed),
         ];
-        self.words(&words, None)?;
+        self.move_words(&words, file, step.line)?;
         // The arc's midpoint (joint space) and its end, as written.
         let mid = crate::post::joints(&self.jmap, &step.at(0.5));
         self.verify_point(&mid, false)?;
@@ -474,6 +474,12 @@ impl<'m, W: Write> Writer<'m, W> {
         comment: Option<&str>,
     ) -> Result<(), PostError> {
         self.em.words(w, comment).map_err(PostError::from)
+    }
+
+    /// [`Writer::words`] of a move made from input line `line`: a value the dialect
+    /// cannot hold is that line's error.
+    fn move_words(&mut self, w: &[(u8, f64)], file: &str, line: u32) -> Result<(), PostError> {
+        self.em.words(w, None).map_err(|e| at_line(e, file, line))
     }
 
     /// Laser and powder off, if the laser is on.
@@ -659,11 +665,11 @@ impl<'m, W: Write> Writer<'m, W> {
             let mut v = vec![(b'G', g)];
             v.extend(feed.map(|f| (b'F', f)));
             v.push((self.letters[0], x[0]));
-            self.words(&v, None)?;
+            self.move_words(&v, file, line)?;
         } else {
             self.em
                 .motion(g, &w[..n], self.scale, feed)
-                .map_err(PostError::from)?;
+                .map_err(|e| at_line(e, file, line))?;
         }
         if g != 0.0 {
             self.verify_point(x, step_end)?;
@@ -684,6 +690,20 @@ impl<'m, W: Write> Writer<'m, W> {
             });
         }
         Ok(())
+    }
+}
+
+/// An emitter error of a move from input line `line`: a value out of the dialect's
+/// range (or not finite) is that line's [`PostError::OutOfRange`]; anything else is I/O.
+fn at_line(e: std::io::Error, file: &str, line: u32) -> PostError {
+    if e.kind() == std::io::ErrorKind::InvalidData {
+        PostError::OutOfRange {
+            file: file.to_string(),
+            line,
+            what: e.to_string(),
+        }
+    } else {
+        PostError::from(e)
     }
 }
 
