@@ -154,6 +154,8 @@ struct CannedParams {
 /// The interpreter. Feed it blocks in order with [`Interpreter::block`].
 #[derive(Debug, Clone)]
 pub struct Interpreter {
+    /// Whether the program has given its units (G20/G21, FADAL G70/G71).
+    units_given: bool,
     opts: Options,
     modal: Modal,
     pos: Position,
@@ -251,6 +253,7 @@ impl Interpreter {
     pub fn new(opts: Options) -> Self {
         Interpreter {
             opts,
+            units_given: false,
             modal: Modal::new(opts.units),
             pos: [0.0; 9],
             g5x: [[0.0; 9]; 10],
@@ -273,6 +276,12 @@ impl Interpreter {
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
+    }
+
+    /// Whether the program has said its units (a G20/G21 or G70/G71 read so far); when
+    /// not, its numbers are in [`Options::units`], an assumption worth a word.
+    pub fn units_given(&self) -> bool {
+        self.units_given
     }
 
     /// The modal state now.
@@ -520,6 +529,7 @@ impl Interpreter {
     }
 
     fn set_units(&mut self, units: Units) {
+        self.units_given = true;
         if units == self.modal.units {
             return;
         }
