@@ -39,6 +39,9 @@ pub struct Placement {
     /// Fixed rotary index, e.g. A=45,B=-45 (the program frame is the part frame moved to --origin).
     #[arg(long, allow_hyphen_values = true)]
     pub index: Option<String>,
+    /// No summary line on stderr at the end (warnings and errors are still written).
+    #[arg(long, short)]
+    pub quiet: bool,
     /// Setup file (from `lampost align`): the program frame on the part; program +Z becomes the tool axis.
     #[arg(long)]
     pub setup: Option<String>,
@@ -731,7 +734,26 @@ pub fn post(
         std::io::copy(&mut f, &mut out).map_err(werr)?;
         out.flush().map_err(werr)?;
     }
+    if !a.place.quiet {
+        eprintln!(
+            "posted {} moves, {total} bytes, to {}; verified: max tip error {:.2e} {}, max axis error {:.2e}°; {:.2} s",
+            report.moves,
+            written.join(", "),
+            v.max_position_error,
+            units_name(&m),
+            v.max_axis_error_deg,
+            t0.elapsed().as_secs_f64()
+        );
+    }
     Ok(())
+}
+
+/// The machine's length unit, as outputs name it.
+fn units_name(m: &Machine) -> &'static str {
+    match m.units {
+        lampost_kinematics::Units::Inch => "in",
+        lampost_kinematics::Units::Mm => "mm",
+    }
 }
 
 /// Pieces of an earlier split of `out` beyond the `count` files this run wrote (`OUT.NNN`
@@ -775,6 +797,7 @@ pub fn verify(
     tolerance: Option<f64>,
     json: bool,
 ) -> Result<(), CliError> {
+    let t0 = std::time::Instant::now();
     let m = load_machine(machine, sets)?;
     let head_name = default_head(&m, process, head);
     let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
@@ -820,5 +843,18 @@ pub fn verify(
     };
     let mut o = crate::io::Output::create(None)?;
     o.writer().write_all(s.as_bytes()).map_err(werr)?;
-    o.commit()
+    o.commit()?;
+    if !place.quiet {
+        eprintln!(
+            "verified {} moves ({} feed points) of {}: max tip error {:.2e} {}, max axis error {:.2e}°; {:.2} s",
+            v.moves,
+            v.compared,
+            posted.join(", "),
+            v.max_position_error,
+            units_name(&m),
+            v.max_axis_error_deg,
+            t0.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
 }

@@ -105,3 +105,64 @@ fn man_into_an_unwritable_place_fails_cleanly() {
         "{err}"
     );
 }
+
+/// After `post` and `verify`: one line on stderr saying what happened (moves, errors
+/// with their units, time, where the output went), none with `--quiet`.
+#[test]
+fn post_and_verify_say_what_happened() {
+    let job = root().join("fixtures/post/bearing-seat/job.toml");
+    let job = job.to_str().expect("utf-8");
+    let dir = tempdir("summary");
+    let out = dir.join("seat.nc");
+    let out_s = out.to_str().expect("utf-8");
+    let o = lampost(&["post", "--machine", "fadal-lamp", "--job", job, "-o", out_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("posted "))
+        .unwrap_or_else(|| panic!("no summary: {err}"));
+    assert!(line.contains(" moves, ") && line.contains(out_s), "{line}");
+    assert!(
+        line.contains("max tip error") && line.contains(" in,"),
+        "{line}"
+    );
+    assert!(
+        line.contains("max axis error") && line.ends_with(" s"),
+        "{line}"
+    );
+    let o = lampost(&["verify", "--machine", "fadal-lamp", "--job", job, out_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o)
+            .lines()
+            .any(|l| l.starts_with("verified ") && l.contains(out_s)),
+        "{}",
+        stderr(&o)
+    );
+    for cmd in [
+        vec![
+            "post",
+            "--quiet",
+            "--machine",
+            "fadal-lamp",
+            "--job",
+            job,
+            "-o",
+            out_s,
+        ],
+        vec![
+            "verify",
+            "-q",
+            "--machine",
+            "fadal-lamp",
+            "--job",
+            job,
+            out_s,
+        ],
+    ] {
+        let o = lampost(&cmd);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).trim().is_empty(), "{cmd:?}: {}", stderr(&o));
+    }
+}
