@@ -75,6 +75,8 @@ pub enum CommentStyle {
     Paren,
     /// `; …` to the end of the line
     Semicolon,
+    /// `' …` to the end of the line (FADAL)
+    Apostrophe,
 }
 
 /// A comment; `text` is what stands between the delimiters.

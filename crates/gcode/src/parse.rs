@@ -334,6 +334,20 @@ pub fn parse_line_with<'a>(
             block.block_delete = true;
             i += 1;
         }
+        b'$' | b'?' => {
+            // A grbl console line (`$H`, `$$`, `$32=1`, `?`), kept verbatim; a `;` or `(`
+            // comment after it stays a comment.
+            let stop = bytes[i..]
+                .iter()
+                .position(|&c| c == b';' || c == b'(')
+                .map_or(bytes.len(), |r| i + r);
+            let cmd = text[i..stop].trim_end();
+            block.items.push(Item::Text(Text {
+                text: cmd,
+                span: Span::new(offset + i, offset + i + cmd.len()),
+            }));
+            i = stop;
+        }
         _ => {}
     }
     if bytes.get(i).is_some_and(|c| matches!(c, b'o' | b'O')) && is_oword(text[i..].trim_start()) {
@@ -361,13 +375,31 @@ pub fn parse_line_with<'a>(
                 }
                 None => return Err(err(ErrorKind::UnterminatedComment, i, bytes.len())),
             },
-            b';' => {
+            b';' | b'\'' => {
+                // `'` starts a comment to the end of the line on the FADAL
+                // (`N20 M98P9724 '*** REN DEFAULT ***`).
                 block.items.push(Item::Comment(Comment {
                     text: &text[i + 1..],
-                    style: CommentStyle::Semicolon,
+                    style: if c == b';' {
+                        CommentStyle::Semicolon
+                    } else {
+                        CommentStyle::Apostrophe
+                    },
                     span: Span::new(offset + i, offset + bytes.len()),
                 }));
                 i = bytes.len();
+            }
+            b'$' if bytes.get(i + 1).is_some_and(|&d| d.is_ascii_digit() || d == b'-') => {
+                // LinuxCNC spindle select (`M3 $0 S1000`): kept verbatim.
+                let mut end = i + 2;
+                while end < bytes.len() && bytes[end].is_ascii_digit() {
+                    end += 1;
+                }
+                block.items.push(Item::Text(Text {
+                    text: &text[i..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
             }
             b'#' | b'[' => {
                 block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
