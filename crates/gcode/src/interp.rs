@@ -393,8 +393,10 @@ impl Interpreter {
         self.collect(b, &mut w)?;
         // A block of an M-code lampost does not act on (a firmware or control setting:
         // `M201 X4000 Y4000`, `M205 X1 Y1 Z1 E1`) and no G-code: its words are its own.
+        let levelling = self.bed_levelling(b, &w, out);
         let settings = w.gs.is_empty() && w.ms.iter().any(|&(_, c)| !m_known(c))
-            || w.gs.iter().any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1));
+            || w.gs.iter().any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
+            || levelling;
         if let Some(t) = w.first_text {
             let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
             // Verbatim text stands only where a code may carry it (the parser reads it
@@ -458,6 +460,24 @@ impl Interpreter {
             ErrorKind::NotSimulated(format!("{name} ({what})")),
             Some(t.span),
         );
+    }
+
+    /// In a firmware (slicer) program `G29` is the printer's bed levelling probe
+    /// (`G29`, `G29 A X92 Y92 I15 J15`): a warning names it, and its words are its own.
+    fn bed_levelling(&self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) -> bool {
+        let Some(&(gw, _, _)) = w.gs.iter().find(|g| g.1 == 290) else {
+            return false;
+        };
+        if self.opts.e_word != EWord::Extrusion {
+            return false;
+        }
+        self.warn(
+            b,
+            out,
+            ErrorKind::NotSimulated(format!("{} (the printer's bed levelling probe)", gw.display_code())),
+            Some(gw.span),
+        );
+        true
     }
 
     /// True when the block's words belong to a code of [`GGroup::Other`] (its arguments,
@@ -600,7 +620,7 @@ impl Interpreter {
                     }
                 }
                 b'M' => {
-                    let code = word.code().ok_or_else(|| {
+                    let code = Word::m_code_of(word.value).ok_or_else(|| {
                         diag(
                             b,
                             Severity::Error,
@@ -1030,14 +1050,7 @@ impl Interpreter {
                     self.warn(
                         b,
                         out,
-                        ErrorKind::NotSimulated(
-                            if self.opts.e_word == EWord::Extrusion {
-                                "G29 (the printer's bed levelling probe)"
-                            } else {
-                                "G29 (return from reference point)"
-                            }
-                            .into(),
-                        ),
+                        ErrorKind::NotSimulated("G29 (return from reference point)".into()),
                         Some(gw.span),
                     );
                 }

@@ -359,6 +359,9 @@ pub fn parse_line_with<'a>(
     let mut seen_reg: u16 = 0;
     // The block's words may be a firmware code's own (see `text_token`).
     let mut lenient = false;
+    // The words after a firmware M-code are its own, repeats included (Bambu
+    // `M970.3 Q0 A7 B30 C90 Q0 H15 K0`).
+    let mut firmware = false;
     while i < bytes.len() {
         let c = bytes[i];
         match c {
@@ -418,7 +421,17 @@ pub fn parse_line_with<'a>(
                 let letter = c.to_ascii_uppercase();
                 let start = i;
                 if lenient {
-                    if let Some(end) = text_token(text, start) {
+                    // A G or M letter among a firmware code's words is one of them
+                    // (Bambu `M900 K0.02 M0.118825`), not a code of its own.
+                    let own = firmware && matches!(letter, b'G' | b'M');
+                    if let Some(end) = text_token(text, start).or_else(|| {
+                        own.then(|| {
+                            bytes[start..]
+                                .iter()
+                                .position(|c| matches!(c, b' ' | b'\t' | b';' | b'('))
+                                .map_or(bytes.len(), |r| start + r)
+                        })
+                    }) {
                         block.items.push(Item::Text(Text {
                             text: &text[start..end],
                             span: Span::new(offset + start, offset + end),
@@ -495,7 +508,7 @@ pub fn parse_line_with<'a>(
                     Ok((end, value)) => {
                         let num = &text[j..end];
                         // Duplicate check (G and M may repeat).
-                        if letter != b'G' && letter != b'M' {
+                        if letter != b'G' && letter != b'M' && !firmware {
                             let dup = match register {
                                 Some(r) => {
                                     let bit = 1u16 << r;
@@ -529,14 +542,17 @@ pub fn parse_line_with<'a>(
                         // Only T, G and M words can make the rest of the block a
                         // firmware code's own (the common axis words skip all this).
                         let code = match letter {
-                            b'M' => Word::code_of(value),
+                            b'M' => Word::m_code_of(value),
                             b'G' if !lenient => Word::code_of(value),
                             _ => None,
                         };
+                        firmware |= letter == b'M' && code.is_some_and(|c| !crate::modal::m_known(c));
                         if !lenient && matches!(letter, b'T' | b'G' | b'M') {
                             lenient = match (letter, code) {
                                 (b'T', _) => true,
-                                (b'G', Some(c)) => matches!(c, 280 | 300 | 1610 | 1620),
+                                // Homing and bed levelling take bare flags (`G28 X`,
+                                // Marlin and Bambu `G29 A`).
+                                (b'G', Some(c)) => matches!(c, 280 | 290 | 300 | 1610 | 1620),
                                 (b'M', Some(c)) => !crate::modal::m_known(c),
                                 _ => false,
                             };
