@@ -30,7 +30,6 @@ pub fn options(a: InterpArgs) -> Options {
             EWordArg::Extrusion => EWord::Extrusion,
         },
         block_delete: a.block_delete,
-        ..Options::default()
     }
 }
 

@@ -42,7 +42,7 @@ fn post(name: &str, args: &[&str], src: &str) -> (bool, String) {
 #[test]
 fn path_changing_codes_warn_and_the_post_refuses_their_line() {
     let cases = [
-        ("G31 Z-1 F10", "G31"),            // Fanuc/Mach3 skip after a G0
+        ("G31 Z-1 F10", "G31"),           // Fanuc/Mach3 skip after a G0
         ("G65 P9001 A.125 C.625", "G65"), // Fanuc macro call
         ("G54.1 P1 G0 X2", "G54.1"),
         ("G154 P3", "G154"),
@@ -112,7 +112,8 @@ fn fadal_apostrophe_comments_are_kept() {
 /// warning in check and a refusal in post.
 #[test]
 fn grbl_console_lines() {
-    let quiet = "$I ; View build info\n$$\n$G\n$32=1\n?\nG21 G90\nG0 X0 Y0 Z5\nG1 Z1 F100\nG1 X10\nM2\n";
+    let quiet =
+        "$I ; View build info\n$$\n$G\n$32=1\n?\nG21 G90\nG0 X0 Y0 Z5\nG1 Z1 F100\nG1 X10\nM2\n";
     let (ok, err) = check(&[], quiet);
     assert!(ok && !err.contains("warning:"), "{err}");
     let out = lampost_stdin(&["fmt", "-"], quiet.as_bytes());
@@ -121,7 +122,10 @@ fn grbl_console_lines() {
     assert!(ok, "{err}");
     let homing = "$H\nG21 G90\nG0 X0 Y0 Z5\nG1 Z1 F100\nG1 X10\nM2\n";
     let (ok, err) = check(&[], homing);
-    assert!(ok && err.contains("$H (grbl homing cycle)") && err.contains("<stdin>:1:1"), "{err}");
+    assert!(
+        ok && err.contains("$H (grbl homing cycle)") && err.contains("<stdin>:1:1"),
+        "{err}"
+    );
     let (ok, err) = post("grbl", &[], homing);
     assert!(!ok && err.contains("grbl.nc:1:"), "{err}");
 }
@@ -148,7 +152,10 @@ fn firmware_codes_in_slicer_programs() {
     // The same G29 in a CNC program is Fanuc's return from the reference point; G380 is
     // no code of a CNC control.
     let (ok, err) = check(&[], "G21\nG29 X1 Y1\n");
-    assert!(ok && err.contains("G29 (return from reference point)"), "{err}");
+    assert!(
+        ok && err.contains("G29 (return from reference point)"),
+        "{err}"
+    );
     let (ok, err) = check(&[], "G21\nG380 S2 Z-25\n");
     assert!(!ok && err.contains("unknown G-code G380"), "{err}");
 }
@@ -201,4 +208,22 @@ fn arc_end_tolerance_is_linuxcncs() {
             assert_eq!(theirs, accepted, "rs274 on {units} {arc}");
         }
     }
+}
+
+/// LinuxCNC NURBS (`G5.2` … `G5.3`): one warning, the control points are not moves, and
+/// the next move starts from the last of them; a motion code ends an unclosed block.
+#[test]
+fn nurbs_control_points_are_not_traced_as_moves() {
+    let src = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X0 F100\nG5.2 X0 Y1 P1 L3\nX2 Y2 P1\nX3 Y0 P1\nG5.3\nG1 X10\n\
+               G5.2 X11 Y1 P1 L3\nX12 Y2 P1\nG1 X20 Y0\nX21\nM2\n";
+    let (ok, err) = check(&[], src);
+    assert!(ok, "{err}");
+    assert_eq!(err.matches("warning:").count(), 2, "{err}");
+    let out = lampost_stdin(&["trace", "--json", "-"], src.as_bytes());
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let moves = doc["moves"].as_array().expect("moves");
+    let lines: Vec<u64> = moves.iter().filter_map(|m| m["line"].as_u64()).collect();
+    assert_eq!(lines, [2, 3, 8, 11, 12], "{doc}");
+    assert_eq!(axis(&moves[2]["start"], "X"), 3.0, "{doc}");
+    assert_eq!(axis(&moves[4]["end"], "X"), 21.0, "{doc}");
 }

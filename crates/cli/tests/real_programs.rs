@@ -40,8 +40,20 @@ fn first_error(path: &Path, e_word: &[&str]) -> String {
         .as_array()
         .and_then(|d| d.iter().find(|d| d["severity"] == "error"))
         .map_or_else(
-            || format!("(no located error) {}", stderr(&out).lines().next().unwrap_or("")),
-            |d| format!("{}:{} {}", d["line"], d["column"], d["message"].as_str().unwrap_or("")),
+            || {
+                format!(
+                    "(no located error) {}",
+                    stderr(&out).lines().next().unwrap_or("")
+                )
+            },
+            |d| {
+                format!(
+                    "{}:{} {}",
+                    d["line"],
+                    d["column"],
+                    d["message"].as_str().unwrap_or("")
+                )
+            },
         )
 }
 
@@ -74,8 +86,14 @@ fn post_verdict(path: &Path, work: &Path) -> String {
         let err = stderr(&out);
         let first = err.lines().next().unwrap_or("");
         let first = first.strip_prefix("error: ").unwrap_or(first);
-        let inp_text = inp.to_string_lossy().into_owned();
-        return format!("post refused {}", first.replace(&format!("{inp_text}:"), "line"));
+        let inp_text = format!("{}:", inp.to_string_lossy());
+        return match first.strip_prefix(&inp_text) {
+            Some(rest) if rest.starts_with(|c: char| c.is_ascii_digit()) => {
+                format!("post refused line {rest}")
+            }
+            Some(rest) => format!("post refused{rest}"),
+            None => format!("post refused {first}"),
+        };
     }
     let nc = std::fs::read_to_string(&out_path).expect("posted");
     let (runs, extruding) = extruding_runs(&input);
@@ -144,8 +162,8 @@ fn real_programs_against_their_verdicts() {
                 let canon = if slicer {
                     None
                 } else {
-                    let text = String::from_utf8_lossy(&std::fs::read(path).expect("read"))
-                        .into_owned();
+                    let text =
+                        String::from_utf8_lossy(&std::fs::read(path).expect("read")).into_owned();
                     let prog = work.join(format!("{gen}-{name}"));
                     std::fs::write(&prog, prepare(&text)).expect("write");
                     rs274_to_end(&prog, &work).ok()

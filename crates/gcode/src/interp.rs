@@ -395,7 +395,9 @@ impl Interpreter {
         // `M201 X4000 Y4000`, `M205 X1 Y1 Z1 E1`) and no G-code: its words are its own.
         let levelling = self.bed_levelling(b, &w, out);
         let settings = w.gs.is_empty() && w.ms.iter().any(|&(_, c)| !m_known(c))
-            || w.gs.iter().any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
+            || w.gs
+                .iter()
+                .any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
             || levelling;
         if let Some(t) = w.first_text {
             let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
@@ -427,6 +429,10 @@ impl Interpreter {
             self.block_axes |= w.bare;
         }
         self.axes_named |= self.block_axes;
+        if w.g_in(GGroup::Motion).is_some() {
+            // A motion code ends a NURBS block left open (LinuxCNC wants G5.3).
+            self.nurbs = false;
+        }
         if self.nurbs && w.gs.is_empty() && w.has_axes() {
             // A NURBS control point: the curve is not traced; its last point is its end.
             self.pos = self.target(&w, false);
@@ -474,7 +480,10 @@ impl Interpreter {
         self.warn(
             b,
             out,
-            ErrorKind::NotSimulated(format!("{} (the printer's bed levelling probe)", gw.display_code())),
+            ErrorKind::NotSimulated(format!(
+                "{} (the printer's bed levelling probe)",
+                gw.display_code()
+            )),
             Some(gw.span),
         );
         true
@@ -498,7 +507,12 @@ impl Interpreter {
 
     /// Warnings for the codes of [`GGroup::Other`]; true when the block is done (a
     /// spline or NURBS code: its end point is taken, no move is traced).
-    fn other_codes(&mut self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) -> bool {
+    fn other_codes(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> bool {
         let mut done = false;
         for &(gw, c, g) in &w.gs {
             if g != GGroup::Other {
@@ -1335,11 +1349,10 @@ impl Interpreter {
             // A probe move stops where the probe touches: traced to its programmed end,
             // with a warning (the post cannot place a contact it does not know).
             let feed = self.feed_for(b, w)?;
-            let code = w
-                .gs
-                .iter()
-                .find(|g| matches!(g.1, 310 | 311 | 382..=385))
-                .map_or_else(|| "a probe move".to_string(), |g| g.0.display_code());
+            let code =
+                w.gs.iter()
+                    .find(|g| matches!(g.1, 310 | 311 | 382..=385))
+                    .map_or_else(|| "a probe move".to_string(), |g| g.0.display_code());
             self.warn(
                 b,
                 out,
@@ -1457,7 +1470,9 @@ impl Interpreter {
                 }
                 let diff = (r1 - r2).abs();
                 let relative = diff / r1.max(r2);
-                if diff > 100.0 * spiral_tol || (relative > ARC_SPIRAL_RELATIVE && diff > spiral_tol) {
+                if diff > 100.0 * spiral_tol
+                    || (relative > ARC_SPIRAL_RELATIVE && diff > spiral_tol)
+                {
                     return Err(diag(
                         b,
                         Severity::Error,

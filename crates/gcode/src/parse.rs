@@ -392,7 +392,10 @@ pub fn parse_line_with<'a>(
                 }));
                 i = bytes.len();
             }
-            b'$' if bytes.get(i + 1).is_some_and(|&d| d.is_ascii_digit() || d == b'-') => {
+            b'$' if bytes
+                .get(i + 1)
+                .is_some_and(|&d| d.is_ascii_digit() || d == b'-') =>
+            {
                 // LinuxCNC spindle select (`M3 $0 S1000`): kept verbatim.
                 let mut end = i + 2;
                 while end < bytes.len() && bytes[end].is_ascii_digit() {
@@ -546,7 +549,8 @@ pub fn parse_line_with<'a>(
                             b'G' if !lenient => Word::code_of(value),
                             _ => None,
                         };
-                        firmware |= letter == b'M' && code.is_some_and(|c| !crate::modal::m_known(c));
+                        firmware |=
+                            letter == b'M' && code.is_some_and(|c| !crate::modal::m_known(c));
                         if !lenient && matches!(letter, b'T' | b'G' | b'M') {
                             lenient = match (letter, code) {
                                 (b'T', _) => true,
