@@ -408,7 +408,22 @@ pub fn parse_line_with<'a>(
                 i = end;
             }
             b'#' | b'[' => {
-                block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
+                // After an N number alone, `#` followed by a letter or `:` is a FADAL
+                // statement (`N80 #:S1`, `N60 #WAIT`), as at the start of a line.
+                let numbered_only = block
+                    .items
+                    .iter()
+                    .all(|it| matches!(it, Item::Word(w) if w.letter == b'N'));
+                let next = bytes.get(i + 1).copied().unwrap_or(b' ');
+                let fadal = c == b'#'
+                    && numbered_only
+                    && !block.items.is_empty()
+                    && (next.is_ascii_alphabetic() || next == b':');
+                block.kind = BlockKind::Macro(if fadal {
+                    MacroKind::FadalStatement
+                } else {
+                    MacroKind::LinuxCncExpression
+                });
                 block.items.clear();
                 return Ok(());
             }
@@ -694,6 +709,10 @@ mod tests {
         for (s, k) in [
             ("#V10 = 1 'comment", MacroKind::FadalStatement),
             ("#IF (R1 = 3) THEN GOTO:FAULT", MacroKind::FadalStatement),
+            ("N80 #:S1", MacroKind::FadalStatement),
+            ("N60 #WAIT", MacroKind::FadalStatement),
+            ("N60 #<depth> = 1", MacroKind::LinuxCncExpression),
+            ("N60 G1 X#1", MacroKind::LinuxCncExpression),
             ("G1 G31 X+R6. Y+R7. F+R4. P1", MacroKind::FadalRegisterWords),
             ("#<depth> = 5", MacroKind::LinuxCncExpression),
             ("#1 = 5", MacroKind::LinuxCncExpression),
