@@ -35,7 +35,6 @@ pub fn options(a: InterpArgs) -> Options {
             EWordArg::Extrusion => EWord::Extrusion,
         },
         block_delete: a.block_delete,
-        ..Options::default()
     }
 }
 

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::PathBuf;
 
-use common::{lampost, shared, tempdir};
+use common::{extruding_runs, lampost, posted_deposition, shared, tempdir};
 
 /// The corpus programs, or `None` (with a note) where `../shared` is absent.
 fn corpus() -> Option<Vec<PathBuf>> {
@@ -22,129 +22,6 @@ fn corpus() -> Option<Vec<PathBuf>> {
     files.sort();
     assert!(files.len() >= 2, "PrusaSlicer and Cura programs expected");
     Some(files)
-}
-
-/// The words of a slicer line (comment stripped), as (letter, number text).
-fn words(line: &str) -> Vec<(char, &str)> {
-    let code = line.split(';').next().unwrap_or("");
-    code.split_whitespace()
-        .filter_map(|t| {
-            let mut c = t.chars();
-            let l = c.next()?.to_ascii_uppercase();
-            Some((l, c.as_str()))
-        })
-        .collect()
-}
-
-fn num(s: &str) -> f64 {
-    s.parse::<f64>().unwrap_or_else(|_| panic!("number {s}"))
-}
-
-/// Extruding runs and extruding length of a slicer program, read here on its own (not
-/// through lampost): G0/G1 lines with X, Y or Z are moves; a G1 move extrudes when its
-/// E grows (M82 absolute, M83 relative; G92 E resets). A run is a longest sequence of
-/// extruding moves with no other move between them; lines that are not moves (E-only,
-/// F-only, settings) do not end a run.
-fn extruding_runs(src: &str) -> (usize, f64) {
-    let (mut pos, mut e) = ([0.0f64; 3], 0.0f64);
-    let mut relative = false;
-    let (mut runs, mut length, mut in_run) = (0usize, 0.0f64, false);
-    let mut motion = "";
-    for line in src.lines() {
-        let w = words(line);
-        let Some(&(l, code)) = w.first() else {
-            continue;
-        };
-        match (l, code) {
-            ('M', "82") => relative = false,
-            ('M', "83") => relative = true,
-            ('G', "91") => panic!("G91 is not read by this test"),
-            ('G', "92") => {
-                for &(l, v) in &w[1..] {
-                    assert_eq!(l, 'E', "G92 of axes is not read by this test");
-                    e = num(v);
-                }
-            }
-            ('G', "0" | "1") => motion = if code == "0" { "G0" } else { "G1" },
-            _ => {}
-        }
-        if !(l == 'G' && (code == "0" || code == "1")) {
-            continue;
-        }
-        let mut end = pos;
-        let mut grown = 0.0;
-        let mut is_move = false;
-        for &(l, v) in &w[1..] {
-            match l {
-                'X' | 'Y' | 'Z' => {
-                    end[(l as u8 - b'X') as usize] = num(v);
-                    is_move = true;
-                }
-                'E' if relative => {
-                    grown = num(v);
-                    e += grown;
-                }
-                'E' => {
-                    grown = num(v) - e;
-                    e = num(v);
-                }
-                _ => {}
-            }
-        }
-        if !is_move {
-            continue;
-        }
-        let extrudes = motion == "G1" && grown > 0.0;
-        if extrudes {
-            let d =
-                ((end[0] - pos[0]).powi(2) + (end[1] - pos[1]).powi(2) + (end[2] - pos[2]).powi(2))
-                    .sqrt();
-            length += d;
-            if !in_run {
-                runs += 1;
-            }
-        }
-        in_run = extrudes;
-        pos = end;
-    }
-    (runs, length)
-}
-
-/// Laser-on events (`M71`) and the length fed with the laser on, read from a posted
-/// NRC program (B and C stay at one index, so X Y Z lengths are tip lengths).
-fn posted_deposition(nc: &str) -> (usize, f64) {
-    let (mut pos, mut on, mut ons, mut length) = ([0.0f64; 3], false, 0usize, 0.0f64);
-    let mut rapid = true;
-    for line in nc.lines() {
-        let code = line.split('(').next().unwrap_or("");
-        let mut end = pos;
-        for t in code.split_whitespace() {
-            let (l, v) = t.split_at(1);
-            match l {
-                "M" if v == "71" => {
-                    on = true;
-                    ons += 1;
-                }
-                "M" if v == "72" => on = false,
-                "G" if v == "0" => rapid = true,
-                "G" if v == "1" => rapid = false,
-                "X" | "Y" | "Z" => end[(l.as_bytes()[0] - b'X') as usize] = num(v),
-                "B" | "C" => assert_eq!(num(v), 0.0, "one index"),
-                _ => {}
-            }
-        }
-        if end != pos {
-            assert!(!(on && rapid), "a rapid with the laser on: {line}");
-            if on {
-                length += ((end[0] - pos[0]).powi(2)
-                    + (end[1] - pos[1]).powi(2)
-                    + (end[2] - pos[2]).powi(2))
-                .sqrt();
-            }
-        }
-        pos = end;
-    }
-    (ons, length)
 }
 
 #[test]

@@ -56,6 +56,16 @@ impl Word<'_> {
         Self::code_of(self.value)
     }
 
+    /// [`Word::code`] of an M word, where an M-code beyond `M6553.5` (a firmware's own,
+    /// such as Bambu's `M9833.2`) is `u16::MAX`: a code lampost does not act on.
+    pub fn m_code_of(value: f64) -> Option<u16> {
+        Self::code_of(value).or_else(|| {
+            let tenths = value * 10.0;
+            let whole = (tenths - crate::emit::round_half_away(tenths)).abs() < 1e-6;
+            (whole && tenths > 65535.0 && tenths.is_finite()).then_some(u16::MAX)
+        })
+    }
+
     /// [`Word::code`] of a value.
     pub fn code_of(value: f64) -> Option<u16> {
         let tenths = value * 10.0;
@@ -75,6 +85,8 @@ pub enum CommentStyle {
     Paren,
     /// `; …` to the end of the line
     Semicolon,
+    /// `' …` to the end of the line (FADAL)
+    Apostrophe,
 }
 
 /// A comment; `text` is what stands between the delimiters.

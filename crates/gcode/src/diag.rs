@@ -54,7 +54,7 @@ pub enum ErrorKind {
     #[error("{0} is not a valid code number")]
     BadCodeNumber(String),
     /// An arc whose start and end radii differ beyond tolerance.
-    #[error("arc radius at the start ({start:.6}) and at the end ({end:.6}) differ by {diff:.6}, more than the tolerance {tolerance}")]
+    #[error("arc radius at the start ({start:.6}) and at the end ({end:.6}) differ by {diff:.6}: more than {tolerance:.6} and 0.1 % of the radius, or more than {:.6} (LinuxCNC's limits)", .tolerance * 100.0)]
     ArcRadiusMismatch {
         /// Radius from the centre to the start.
         start: f64,
@@ -62,7 +62,8 @@ pub enum ErrorKind {
         end: f64,
         /// The difference.
         diff: f64,
-        /// The tolerance in program units.
+        /// The absolute tolerance in program units (LinuxCNC's, see
+        /// [`crate::interp::ARC_SPIRAL_TOLERANCE`]).
         tolerance: f64,
     },
     /// G2/G3 with neither centre offsets nor a radius.

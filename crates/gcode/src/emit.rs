@@ -875,6 +875,10 @@ impl<W: Write> Emitter<W> {
                             self.line.push(b';');
                             self.line.extend_from_slice(c.text.as_bytes());
                         }
+                        CommentStyle::Apostrophe => {
+                            self.line.push(b'\'');
+                            self.line.extend_from_slice(c.text.as_bytes());
+                        }
                     }
                 }
             }

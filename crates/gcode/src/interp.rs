@@ -25,6 +25,21 @@ pub enum EWord {
     Extrusion,
 }
 
+/// LinuxCNC's arc tolerances (rs274ngc, `interp_internal.hh` and `interp_arc.cc`), as
+/// (inch, millimetre) values. The start and end radii of an I/J/K arc may differ by
+/// [`ARC_SPIRAL_TOLERANCE`], or by up to 100 times that when the difference is at most
+/// [`ARC_SPIRAL_RELATIVE`] of the larger radius (LinuxCNC then moves along a spiral to the
+/// programmed end). A radius below [`ARC_RADIUS_TOLERANCE`] is zero, and an R arc may be
+/// short of half its chord by as much.
+pub const ARC_SPIRAL_TOLERANCE: (f64, f64) = (
+    2.0 * 0.001 * std::f64::consts::SQRT_2,
+    2.0 * 0.01 * std::f64::consts::SQRT_2,
+);
+/// See [`ARC_SPIRAL_TOLERANCE`]: 0.1 %.
+pub const ARC_SPIRAL_RELATIVE: f64 = 0.001;
+/// See [`ARC_SPIRAL_TOLERANCE`]: 0.00005 in, 0.00127 mm.
+pub const ARC_RADIUS_TOLERANCE: (f64, f64) = (0.00005, 0.00005 * 25.4);
+
 /// Interpreter settings.
 #[derive(Debug, Clone, Copy)]
 pub struct Options {
@@ -32,8 +47,6 @@ pub struct Options {
     pub units: Units,
     /// What E means.
     pub e_word: EWord,
-    /// Arc radius tolerance in inches (scaled for millimetre programs).
-    pub arc_tolerance_inch: f64,
     /// Skip blocks starting with `/`.
     pub block_delete: bool,
 }
@@ -43,7 +56,6 @@ impl Default for Options {
         Options {
             units: Units::Mm,
             e_word: EWord::FixtureOffset,
-            arc_tolerance_inch: 0.0005,
             block_delete: false,
         }
     }
@@ -181,6 +193,8 @@ pub struct Interpreter {
     /// Axes named in the block being run.
     block_axes: u16,
     warned_macro: bool,
+    /// Inside a LinuxCNC `G5.2` … `G5.3` NURBS block (control points, not moves).
+    nurbs: bool,
     offset_cache: Position,
     /// Every offset is zero (the common case): positions need no shifting.
     offset_zero: bool,
@@ -233,7 +247,7 @@ const MAX_REPEATS: u32 = 10_000;
 pub const MAX_PECKS: u32 = 10_000;
 
 /// Number of [`GGroup`] variants.
-const GROUPS: usize = 18;
+const GROUPS: usize = 19;
 
 fn diag(
     b: &Block<'_>,
@@ -273,6 +287,7 @@ impl Interpreter {
             axes_named: 0,
             block_axes: 0,
             warned_macro: false,
+            nurbs: false,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -355,6 +370,9 @@ impl Interpreter {
             BlockKind::Words => {}
         }
         if !b.has_words() {
+            if !self.ended {
+                self.console_line(b, out);
+            }
             return Ok(());
         }
         if self.ended && self.calls == Calls::Checked && crate::program::program_number(b).is_some()
@@ -388,7 +406,12 @@ impl Interpreter {
         self.collect(b, &mut w)?;
         // A block of an M-code lampost does not act on (a firmware or control setting:
         // `M201 X4000 Y4000`, `M205 X1 Y1 Z1 E1`) and no G-code: its words are its own.
-        let settings = w.gs.is_empty() && w.ms.iter().any(|&(_, c)| !m_known(c));
+        let levelling = self.bed_levelling(b, &w, out);
+        let settings = w.gs.is_empty() && w.ms.iter().any(|&(_, c)| !m_known(c))
+            || w.gs
+                .iter()
+                .any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
+            || levelling;
         if let Some(t) = w.first_text {
             let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
             // Verbatim text stands only where a code may carry it (the parser reads it
@@ -419,7 +442,139 @@ impl Interpreter {
             self.block_axes |= w.bare;
         }
         self.axes_named |= self.block_axes;
+        if w.g_in(GGroup::Motion).is_some() {
+            // A motion code ends a NURBS block left open (LinuxCNC wants G5.3).
+            self.nurbs = false;
+        }
+        if self.nurbs && w.gs.is_empty() && w.has_axes() {
+            // A NURBS control point: the curve is not traced; its last point is its end.
+            self.pos = self.target(&w, false);
+            return Ok(());
+        }
+        if self.other_codes(b, &w, out) {
+            return Ok(());
+        }
         self.execute(b, &w, settings, out)
+    }
+
+    /// A line that is no G-code block: a grbl console command (`$H`, `$$`, `$32=1`, `?`).
+    /// Homing (`$H`) and jogging (`$J=…`) move the machine: a warning says so, and the
+    /// post refuses them; settings and queries change no path.
+    fn console_line(&self, b: &Block<'_>, out: &mut impl FnMut(Event)) {
+        let Some(Item::Text(t)) = b.items.first() else {
+            return;
+        };
+        let upper = t.text.to_ascii_uppercase();
+        let what = if upper.starts_with("$H") {
+            "grbl homing cycle"
+        } else if upper.starts_with("$J") {
+            "grbl jog"
+        } else {
+            return;
+        };
+        let name = t.text.split(['=', ' ']).next().unwrap_or(t.text);
+        self.warn(
+            b,
+            out,
+            ErrorKind::NotSimulated(format!("{name} ({what})")),
+            Some(t.span),
+        );
+    }
+
+    /// In a firmware (slicer) program `G29` is the printer's bed levelling probe
+    /// (`G29`, `G29 A X92 Y92 I15 J15`): a warning names it, and its words are its own.
+    fn bed_levelling(&self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) -> bool {
+        let Some(&(gw, _, _)) = w.gs.iter().find(|g| g.1 == 290) else {
+            return false;
+        };
+        if self.opts.e_word != EWord::Extrusion {
+            return false;
+        }
+        self.warn(
+            b,
+            out,
+            ErrorKind::NotSimulated(format!(
+                "{} (the printer's bed levelling probe)",
+                gw.display_code()
+            )),
+            Some(gw.span),
+        );
+        true
+    }
+
+    /// True when the block's words belong to a code of [`GGroup::Other`] (its arguments,
+    /// never positions): settings, macro calls, pocket cycles, firmware codes.
+    fn own_words(&self, w: &Words<'_, '_>, code: u16) -> bool {
+        match other_code(code) {
+            None | Some(OtherCode::Setting | OtherCode::Unsimulated(_)) => true,
+            // Fanuc `G05 P10000` and `G05.1 Q1` are settings; LinuxCNC's splines have
+            // axis or I/J words.
+            Some(OtherCode::Spline) => !Self::is_spline(w),
+            Some(_) => false,
+        }
+    }
+
+    fn is_spline(w: &Words<'_, '_>) -> bool {
+        w.has_axes() || w.word(b'I').is_some() || w.word(b'J').is_some()
+    }
+
+    /// Warnings for the codes of [`GGroup::Other`]; true when the block is done (a
+    /// spline or NURBS code: its end point is taken, no move is traced).
+    fn other_codes(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> bool {
+        let mut done = false;
+        for &(gw, c, g) in &w.gs {
+            if g != GGroup::Other {
+                continue;
+            }
+            let name = gw.display_code();
+            let with_p = || match w.word(b'P') {
+                Some(p) => format!("{name} {}", p.display()),
+                None => name.clone(),
+            };
+            let kind = match other_code(c) {
+                None => ErrorKind::NotSimulated(format!(
+                    "{name} (a firmware code lampost does not know)"
+                )),
+                Some(OtherCode::Setting) => continue,
+                Some(OtherCode::Unsimulated(_)) if c == 650 => {
+                    ErrorKind::SubprogramNotFollowed(format!("{} (macro call)", with_p()))
+                }
+                Some(OtherCode::Unsimulated(what)) => {
+                    ErrorKind::NotSimulated(format!("{name} ({what})"))
+                }
+                Some(OtherCode::ExtendedOffset) => ErrorKind::NotSimulated(format!(
+                    "{} (an extended work offset set on the machine; the trace stays in the active work system)",
+                    with_p()
+                )),
+                Some(OtherCode::DiameterMode) => ErrorKind::NotSimulated(format!(
+                    "{name} (lathe diameter mode; X is traced as a radius)"
+                )),
+                Some(OtherCode::Spline) if !Self::is_spline(w) => continue,
+                Some(OtherCode::Spline) | Some(OtherCode::Nurbs(true)) => {
+                    self.nurbs = c == 52;
+                    if let Some(f) = w.word(b'F').filter(|f| f.value >= 0.0) {
+                        self.modal.feed = f.value;
+                    }
+                    self.pos = self.target(w, false);
+                    done = true;
+                    ErrorKind::NotSimulated(format!(
+                        "{name} (spline; the trace takes its end point and draws no move)"
+                    ))
+                }
+                Some(OtherCode::Nurbs(false)) => {
+                    self.nurbs = false;
+                    done = true;
+                    continue;
+                }
+            };
+            self.warn(b, out, kind, Some(gw.span));
+        }
+        done
     }
 
     fn collect<'b, 'a>(&self, b: &'b Block<'a>, w: &mut Words<'b, 'a>) -> Res<()> {
@@ -427,6 +582,8 @@ impl Interpreter {
             let word = match item {
                 Item::Word(word) => word,
                 Item::Comment(_) => continue,
+                // LinuxCNC spindle select (`M3 $0 S1000`): one spindle is traced.
+                Item::Text(t) if t.text.starts_with('$') => continue,
                 Item::Text(t) => {
                     let axes = t.bare_axes();
                     w.bare |= axes;
@@ -447,20 +604,27 @@ impl Interpreter {
                             Some(word.span),
                         )
                     })?;
-                    let group = g_group(code).ok_or_else(|| {
-                        diag(
-                            b,
-                            Severity::Error,
-                            ErrorKind::UnknownGCode(code_text(code)),
-                            Some(word.span),
-                        )
-                    })?;
+                    let group = match g_group(code) {
+                        Some(g) => g,
+                        // In a firmware (slicer) program an unknown G-code is the
+                        // firmware's own (Bambu `G380`, `G392`): named in a warning.
+                        None if self.opts.e_word == EWord::Extrusion => GGroup::Other,
+                        None => {
+                            return Err(diag(
+                                b,
+                                Severity::Error,
+                                ErrorKind::UnknownGCode(code_text(code)),
+                                Some(word.span),
+                            ))
+                        }
+                    };
                     for &(other, oc, og) in &w.gs {
                         let conflict = og == group
                             && match group {
                                 // G80 may share a block with the motion that follows it.
                                 GGroup::Motion => oc != 800 && code != 800,
                                 GGroup::Modifier => oc == code,
+                                GGroup::Other => false,
                                 _ => true,
                             };
                         if conflict {
@@ -483,7 +647,7 @@ impl Interpreter {
                     }
                 }
                 b'M' => {
-                    let code = word.code().ok_or_else(|| {
+                    let code = Word::m_code_of(word.value).ok_or_else(|| {
                         diag(
                             b,
                             Severity::Error,
@@ -924,11 +1088,9 @@ impl Interpreter {
                     ErrorKind::NotSimulated(format!("{} (tool offset adjust)", gw.display_code())),
                     Some(gw.span),
                 ),
-                310 | 311
-                    if w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 10)
-                        || (w.g_in(GGroup::Motion).is_none()
-                            && self.modal.motion != Motion::Linear) =>
-                {
+                // G31 (skip) is a feed move of its own whatever motion mode is in force
+                // (Fanuc, Mach3, FADAL); only another motion code in its block is wrong.
+                310 | 311 if w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 10) => {
                     return Err(diag(
                         b,
                         Severity::Error,
@@ -1060,7 +1222,10 @@ impl Interpreter {
                 block_axes: this.block_axes,
             }));
         };
-        if numbered && via {
+        // G28/G30 go through their intermediate point even when the block names no axis
+        // (a zero-length move, as LinuxCNC's rs274 reports it); a slicer's bare `G28`
+        // (the firmware's homing) has none.
+        if via && (numbered || (!any && self.opts.e_word != EWord::Extrusion)) {
             mv(start, inter, self);
         }
         mv(inter, target, self);
@@ -1194,6 +1359,25 @@ impl Interpreter {
         } else {
             Origin::Block
         };
+        if probe || self.modal.motion == Motion::Probe {
+            // A probe move stops where the probe touches: traced to its programmed end,
+            // with a warning (the post cannot place a contact it does not know).
+            let feed = self.feed_for(b, w)?;
+            let code =
+                w.gs.iter()
+                    .find(|g| matches!(g.1, 310 | 311 | 382..=385))
+                    .map_or_else(|| "a probe move".to_string(), |g| g.0.display_code());
+            self.warn(
+                b,
+                out,
+                ErrorKind::NotSimulated(format!(
+                    "{code} (a probe move stops where the probe touches; the trace goes to its programmed end)"
+                )),
+                None,
+            );
+            self.emit(b, MoveKind::Probe, target, feed, origin, out);
+            return Ok(());
+        }
         match self.modal.motion {
             Motion::None => Err(diag(
                 b,
@@ -1203,18 +1387,13 @@ impl Interpreter {
                     .map(|g| g.0.span)
                     .or(b.words().next().map(|x| x.span)),
             )),
-            Motion::Rapid if !probe => {
+            Motion::Rapid => {
                 self.emit(b, MoveKind::Rapid, target, 0.0, origin, out);
                 Ok(())
             }
-            Motion::Rapid | Motion::Linear | Motion::Thread | Motion::Probe => {
+            Motion::Linear | Motion::Thread | Motion::Probe => {
                 let feed = self.feed_for(b, w)?;
-                let kind = if probe || self.modal.motion == Motion::Probe {
-                    MoveKind::Probe
-                } else {
-                    MoveKind::Linear
-                };
-                self.emit(b, kind, target, feed, origin, out);
+                self.emit(b, MoveKind::Linear, target, feed, origin, out);
                 Ok(())
             }
             Motion::ArcCw | Motion::ArcCcw => self.arc(b, w, target, out),
@@ -1270,7 +1449,10 @@ impl Interpreter {
             }
             None => 1,
         };
-        let tol = self.opts.arc_tolerance_inch * 25.4 / self.modal.units.mm();
+        let (spiral_tol, radius_tol) = match self.modal.units {
+            Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
+            Units::Mm => (ARC_SPIRAL_TOLERANCE.1, ARC_RADIUS_TOLERANCE.1),
+        };
         let (su, sv) = (self.pos[u], self.pos[v]);
         let (eu, ev) = (target[u], target[v]);
         let (cu, cv) = match (has_ijk, radius_word) {
@@ -1297,11 +1479,14 @@ impl Interpreter {
                 };
                 let r1 = (su - cu).hypot(sv - cv);
                 let r2 = (eu - cu).hypot(ev - cv);
-                if r1 <= 0.0 || r2 <= 0.0 {
+                if r1 < radius_tol || r2 < radius_tol {
                     return Err(diag(b, Severity::Error, ErrorKind::ArcZeroRadius, None));
                 }
                 let diff = (r1 - r2).abs();
-                if diff > tol {
+                let relative = diff / r1.max(r2);
+                if diff > 100.0 * spiral_tol
+                    || (relative > ARC_SPIRAL_RELATIVE && diff > spiral_tol)
+                {
                     return Err(diag(
                         b,
                         Severity::Error,
@@ -1309,7 +1494,7 @@ impl Interpreter {
                             start: r1,
                             end: r2,
                             diff,
-                            tolerance: tol,
+                            tolerance: spiral_tol,
                         },
                         None,
                     ));
@@ -1340,7 +1525,7 @@ impl Interpreter {
                 let h2 = r * r - half * half;
                 let h = if h2 >= 0.0 {
                     h2.sqrt()
-                } else if half - r.abs() <= tol {
+                } else if half - r.abs() <= radius_tol {
                     0.0
                 } else {
                     return Err(diag(

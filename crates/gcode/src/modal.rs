@@ -256,6 +256,9 @@ pub enum GGroup {
     Mirror,
     /// G68/G69 rotation.
     Rotation,
+    /// Codes of real controls that lampost reads but does not model as state (settings,
+    /// splines, macro calls, pocket cycles, tilted planes; see [`other_code`]).
+    Other,
 }
 
 impl GGroup {
@@ -280,6 +283,7 @@ impl GGroup {
             GGroup::Scaling => "scaling",
             GGroup::Mirror => "mirroring",
             GGroup::Rotation => "coordinate rotation",
+            GGroup::Other => "other",
         }
     }
 }
@@ -320,6 +324,66 @@ pub fn g_group(code: u16) -> Option<GGroup> {
         930 | 940 | 950 => FeedMode,
         960 | 970 => SpindleMode,
         980 | 990 => Retract,
+        50..=53
+        | 70
+        | 80
+        | 120
+        | 130
+        | 434
+        | 435
+        | 531
+        | 541
+        | 650
+        | 660
+        | 670
+        | 682..=684
+        | 1030
+        | 1500
+        | 1540
+        | 1870 => Other,
+        _ => return None,
+    })
+}
+
+/// How lampost reads a code of [`GGroup::Other`] (given as ten times its number).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OtherCode {
+    /// A setting of the control that leaves the path alone: look-ahead and smoothing
+    /// (Fanuc `G05 P10000`, `G05.1 Q1`, `G08 P1`, Haas `G103 P1`, `G187 P1 E.01`), radius
+    /// mode (LinuxCNC `G8`), modal macro cancel (`G67`). The block's words are its own.
+    Setting,
+    /// A code whose words are its own and that changes the path in a way lampost does not
+    /// simulate (macro calls, pocket cycles, tilted planes, tool centre point): a
+    /// warning names it, and the post refuses it.
+    Unsimulated(&'static str),
+    /// LinuxCNC splines `G5` (cubic) and `G5.1` (quadratic), when the block has axis or
+    /// I/J words (without them, `G5`/`G5.1` are the Fanuc settings above).
+    Spline,
+    /// LinuxCNC `G5.2` (NURBS start) and `G5.3` (end).
+    Nurbs(bool),
+    /// An extended work offset (Fanuc `G54.1 P…`, Haas `G154 P…`): set on the machine.
+    ExtendedOffset,
+    /// LinuxCNC lathe diameter mode `G7`: X words are diameters.
+    DiameterMode,
+}
+
+/// What a code of [`GGroup::Other`] is (`None` for any other code).
+pub fn other_code(code: u16) -> Option<OtherCode> {
+    use OtherCode::*;
+    Some(match code {
+        50 | 51 => Spline,
+        52 => Nurbs(true),
+        53 => Nurbs(false),
+        70 => DiameterMode,
+        80 | 670 | 1030 | 1870 => Setting,
+        120 | 130 => Unsimulated("circular pocket milling"),
+        434 | 435 => Unsimulated("tool centre point control"),
+        531 => Unsimulated("tool axis to the tilted work plane (moves the rotaries)"),
+        541 | 1540 => ExtendedOffset,
+        650 => Unsimulated("macro call"),
+        660 => Unsimulated("modal macro call after every move"),
+        682..=684 => Unsimulated("tilted work plane"),
+        1500 => Unsimulated("pocket milling cycle"),
         _ => return None,
     })
 }

@@ -334,6 +334,20 @@ pub fn parse_line_with<'a>(
             block.block_delete = true;
             i += 1;
         }
+        b'$' | b'?' => {
+            // A grbl console line (`$H`, `$$`, `$32=1`, `?`), kept verbatim; a `;` or `(`
+            // comment after it stays a comment.
+            let stop = bytes[i..]
+                .iter()
+                .position(|&c| c == b';' || c == b'(')
+                .map_or(bytes.len(), |r| i + r);
+            let cmd = text[i..stop].trim_end();
+            block.items.push(Item::Text(Text {
+                text: cmd,
+                span: Span::new(offset + i, offset + i + cmd.len()),
+            }));
+            i = stop;
+        }
         _ => {}
     }
     if bytes.get(i).is_some_and(|c| matches!(c, b'o' | b'O')) && is_oword(text[i..].trim_start()) {
@@ -345,6 +359,9 @@ pub fn parse_line_with<'a>(
     let mut seen_reg: u16 = 0;
     // The block's words may be a firmware code's own (see `text_token`).
     let mut lenient = false;
+    // The words after a firmware M-code are its own, repeats included (Bambu
+    // `M970.3 Q0 A7 B30 C90 Q0 H15 K0`).
+    let mut firmware = false;
     while i < bytes.len() {
         let c = bytes[i];
         match c {
@@ -361,16 +378,52 @@ pub fn parse_line_with<'a>(
                 }
                 None => return Err(err(ErrorKind::UnterminatedComment, i, bytes.len())),
             },
-            b';' => {
+            b';' | b'\'' => {
+                // `'` starts a comment to the end of the line on the FADAL
+                // (`N20 M98P9724 '*** REN DEFAULT ***`).
                 block.items.push(Item::Comment(Comment {
                     text: &text[i + 1..],
-                    style: CommentStyle::Semicolon,
+                    style: if c == b';' {
+                        CommentStyle::Semicolon
+                    } else {
+                        CommentStyle::Apostrophe
+                    },
                     span: Span::new(offset + i, offset + bytes.len()),
                 }));
                 i = bytes.len();
             }
+            b'$' if bytes
+                .get(i + 1)
+                .is_some_and(|&d| d.is_ascii_digit() || d == b'-') =>
+            {
+                // LinuxCNC spindle select (`M3 $0 S1000`): kept verbatim.
+                let mut end = i + 2;
+                while end < bytes.len() && bytes[end].is_ascii_digit() {
+                    end += 1;
+                }
+                block.items.push(Item::Text(Text {
+                    text: &text[i..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
+            }
             b'#' | b'[' => {
-                block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
+                // After an N number alone, `#` followed by a letter or `:` is a FADAL
+                // statement (`N80 #:S1`, `N60 #WAIT`), as at the start of a line.
+                let numbered_only = block
+                    .items
+                    .iter()
+                    .all(|it| matches!(it, Item::Word(w) if w.letter == b'N'));
+                let next = bytes.get(i + 1).copied().unwrap_or(b' ');
+                let fadal = c == b'#'
+                    && numbered_only
+                    && !block.items.is_empty()
+                    && (next.is_ascii_alphabetic() || next == b':');
+                block.kind = BlockKind::Macro(if fadal {
+                    MacroKind::FadalStatement
+                } else {
+                    MacroKind::LinuxCncExpression
+                });
                 block.items.clear();
                 return Ok(());
             }
@@ -386,7 +439,17 @@ pub fn parse_line_with<'a>(
                 let letter = c.to_ascii_uppercase();
                 let start = i;
                 if lenient {
-                    if let Some(end) = text_token(text, start) {
+                    // A G or M letter among a firmware code's words is one of them
+                    // (Bambu `M900 K0.02 M0.118825`), not a code of its own.
+                    let own = firmware && matches!(letter, b'G' | b'M');
+                    if let Some(end) = text_token(text, start).or_else(|| {
+                        own.then(|| {
+                            bytes[start..]
+                                .iter()
+                                .position(|c| matches!(c, b' ' | b'\t' | b';' | b'('))
+                                .map_or(bytes.len(), |r| start + r)
+                        })
+                    }) {
                         block.items.push(Item::Text(Text {
                             text: &text[start..end],
                             span: Span::new(offset + start, offset + end),
@@ -463,7 +526,7 @@ pub fn parse_line_with<'a>(
                     Ok((end, value)) => {
                         let num = &text[j..end];
                         // Duplicate check (G and M may repeat).
-                        if letter != b'G' && letter != b'M' {
+                        if letter != b'G' && letter != b'M' && !firmware {
                             let dup = match register {
                                 Some(r) => {
                                     let bit = 1u16 << r;
@@ -497,14 +560,18 @@ pub fn parse_line_with<'a>(
                         // Only T, G and M words can make the rest of the block a
                         // firmware code's own (the common axis words skip all this).
                         let code = match letter {
-                            b'M' => Word::code_of(value),
+                            b'M' => Word::m_code_of(value),
                             b'G' if !lenient => Word::code_of(value),
                             _ => None,
                         };
+                        firmware |=
+                            letter == b'M' && code.is_some_and(|c| !crate::modal::m_known(c));
                         if !lenient && matches!(letter, b'T' | b'G' | b'M') {
                             lenient = match (letter, code) {
                                 (b'T', _) => true,
-                                (b'G', Some(c)) => matches!(c, 280 | 300 | 1610 | 1620),
+                                // Homing and bed levelling take bare flags (`G28 X`,
+                                // Marlin and Bambu `G29 A`).
+                                (b'G', Some(c)) => matches!(c, 280 | 290 | 300 | 1610 | 1620),
                                 (b'M', Some(c)) => !crate::modal::m_known(c),
                                 _ => false,
                             };
@@ -642,6 +709,10 @@ mod tests {
         for (s, k) in [
             ("#V10 = 1 'comment", MacroKind::FadalStatement),
             ("#IF (R1 = 3) THEN GOTO:FAULT", MacroKind::FadalStatement),
+            ("N80 #:S1", MacroKind::FadalStatement),
+            ("N60 #WAIT", MacroKind::FadalStatement),
+            ("N60 #<depth> = 1", MacroKind::LinuxCncExpression),
+            ("N60 G1 X#1", MacroKind::LinuxCncExpression),
             ("G1 G31 X+R6. Y+R7. F+R4. P1", MacroKind::FadalRegisterWords),
             ("#<depth> = 5", MacroKind::LinuxCncExpression),
             ("#1 = 5", MacroKind::LinuxCncExpression),

@@ -100,8 +100,8 @@ pub fn rs274_motions(program: &Path, work: &Path) -> Vec<Canon> {
     }
 }
 
-/// Run rs274 on `program`: its motion calls, or why it did not run to the end.
-pub fn rs274_try(program: &Path, work: &Path) -> Result<Vec<Canon>, String> {
+/// Run rs274 on `program`: its output and the canonical calls it wrote.
+fn rs274_exec(program: &Path, work: &Path) -> (Output, String) {
     let _one_at_a_time = RS274
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -125,6 +125,12 @@ pub fn rs274_try(program: &Path, work: &Path) -> Result<Vec<Canon>, String> {
         .output()
         .expect("rs274 runs");
     let text = std::fs::read_to_string(&out_path).unwrap_or_default();
+    (out, text)
+}
+
+/// Run rs274 on `program`: its motion calls, or why it did not run to the end.
+pub fn rs274_try(program: &Path, work: &Path) -> Result<Vec<Canon>, String> {
+    let (out, text) = rs274_exec(program, work);
     if !(text.contains("PROGRAM_END") || text.lines().count() > 5) {
         return Err(format!(
             "rs274 failed on {} ({}): {}\n{}",
@@ -134,6 +140,28 @@ pub fn rs274_try(program: &Path, work: &Path) -> Result<Vec<Canon>, String> {
             String::from_utf8_lossy(&out.stderr)
         ));
     }
+    canon_calls(&text)
+}
+
+/// Like [`rs274_try`], but an error rs274 reports on the way (after its menu's
+/// `executing`) is a failure too, even when it wrote some motion first.
+pub fn rs274_to_end(program: &Path, work: &Path) -> Result<Vec<Canon>, String> {
+    let (out, text) = rs274_exec(program, work);
+    // rs274 prints its menu, then `executing`, then any error, to standard error.
+    let printed = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let after = printed.rsplit("executing").next().unwrap_or("").trim();
+    if !after.is_empty() {
+        return Err(format!("rs274: {}", after.lines().next().unwrap_or("")));
+    }
+    canon_calls(&text)
+}
+
+/// The motion calls of rs274's canonical output.
+fn canon_calls(text: &str) -> Result<Vec<Canon>, String> {
     let mut v = Vec::new();
     for (i, l) in text.lines().enumerate() {
         for kind in [
@@ -274,6 +302,172 @@ pub fn fx(name: &str) -> String {
         .join(name)
         .to_string_lossy()
         .into_owned()
+}
+
+/// The words of a slicer line (comment stripped), as (letter, number text).
+pub fn slicer_words(line: &str) -> Vec<(char, &str)> {
+    let code = line.split(';').next().unwrap_or("");
+    code.split_whitespace()
+        .filter_map(|t| {
+            let mut c = t.chars();
+            let l = c.next()?.to_ascii_uppercase();
+            Some((l, c.as_str()))
+        })
+        .collect()
+}
+
+fn num(s: &str) -> f64 {
+    s.parse::<f64>().unwrap_or_else(|_| panic!("number {s}"))
+}
+
+/// Length of an XY arc from `s` to `e` about the centre `c` (`cw`: clockwise), with the Z
+/// change `dz` along it (a helix); start = end is a full circle.
+fn arc_length(s: [f64; 2], e: [f64; 2], c: [f64; 2], cw: bool, dz: f64) -> f64 {
+    let r = (s[0] - c[0]).hypot(s[1] - c[1]);
+    let a0 = (s[1] - c[1]).atan2(s[0] - c[0]);
+    let a1 = (e[1] - c[1]).atan2(e[0] - c[0]);
+    let tau = std::f64::consts::TAU;
+    let mut sweep = if cw { a0 - a1 } else { a1 - a0 };
+    sweep = sweep.rem_euclid(tau);
+    if sweep <= 1e-12 {
+        sweep = tau;
+    }
+    (r * sweep).hypot(dz)
+}
+
+/// Extruding runs and extruding length of a slicer program, read here on its own (not
+/// through lampost): G0/G1/G2/G3 lines with X, Y or Z are moves (arcs in XY with I/J,
+/// helical in Z); a G1/G2/G3 move extrudes when its E grows. E is relative under M83,
+/// absolute under M82, and G90/G91 set it with the axes (Marlin's rule); G92 E resets it.
+/// A run is a longest sequence of extruding moves with no other move between them;
+/// lines that are not moves (E-only, F-only, settings) do not end a run.
+pub fn extruding_runs(src: &str) -> (usize, f64) {
+    let (mut pos, mut e) = ([0.0f64; 3], 0.0f64);
+    let (mut e_relative, mut incremental) = (false, false);
+    let (mut runs, mut length, mut in_run) = (0usize, 0.0f64, false);
+    let mut motion = 0u8;
+    for line in src.lines() {
+        let w = slicer_words(line);
+        let Some(&(l, code)) = w.first() else {
+            continue;
+        };
+        let code = code.trim_start_matches('0');
+        let code = if code.is_empty() { "0" } else { code };
+        match (l, code) {
+            ('M', "82") => e_relative = false,
+            ('M', "83") => e_relative = true,
+            ('G', "90") => (incremental, e_relative) = (false, false),
+            ('G', "91") => (incremental, e_relative) = (true, true),
+            ('G', "92") => {
+                for &(l, v) in &w[1..] {
+                    assert_eq!(l, 'E', "G92 of axes is not read by this test: {line}");
+                    e = num(v);
+                }
+            }
+            ('G', "0" | "1" | "2" | "3") => motion = code.as_bytes()[0] - b'0',
+            _ => {}
+        }
+        if !(l == 'G' && matches!(code, "0" | "1" | "2" | "3")) {
+            continue;
+        }
+        let mut end = pos;
+        let (mut grown, mut is_move) = (0.0, false);
+        let mut centre = [pos[0], pos[1]];
+        for &(l, v) in &w[1..] {
+            match l {
+                'X' | 'Y' | 'Z' => {
+                    let a = (l as u8 - b'X') as usize;
+                    end[a] = if incremental { pos[a] + num(v) } else { num(v) };
+                    is_move = true;
+                }
+                'I' => centre[0] = pos[0] + num(v),
+                'J' => centre[1] = pos[1] + num(v),
+                'E' if e_relative => {
+                    grown = num(v);
+                    e += grown;
+                }
+                'E' => {
+                    grown = num(v) - e;
+                    e = num(v);
+                }
+                _ => {}
+            }
+        }
+        if !is_move {
+            continue;
+        }
+        let extrudes = motion != 0 && grown > 0.0;
+        if extrudes {
+            length += if motion >= 2 {
+                arc_length(
+                    [pos[0], pos[1]],
+                    [end[0], end[1]],
+                    centre,
+                    motion == 2,
+                    end[2] - pos[2],
+                )
+            } else {
+                ((end[0] - pos[0]).powi(2) + (end[1] - pos[1]).powi(2) + (end[2] - pos[2]).powi(2))
+                    .sqrt()
+            };
+            if !in_run {
+                runs += 1;
+            }
+        }
+        in_run = extrudes;
+        pos = end;
+    }
+    (runs, length)
+}
+
+/// Laser-on events (`M71`) and the length fed with the laser on, read from a posted
+/// NRC program (B and C stay at one index, so X Y Z lengths are tip lengths; arcs are
+/// G2/G3 in XY with incremental I/J).
+pub fn posted_deposition(nc: &str) -> (usize, f64) {
+    let (mut pos, mut on, mut ons, mut length) = ([0.0f64; 3], false, 0usize, 0.0f64);
+    let mut motion = 0u8;
+    for line in nc.lines() {
+        let code = line.split('(').next().unwrap_or("");
+        let mut end = pos;
+        let mut centre = [pos[0], pos[1]];
+        for t in code.split_whitespace() {
+            let (l, v) = t.split_at(1);
+            match l {
+                "M" if v == "71" => {
+                    on = true;
+                    ons += 1;
+                }
+                "M" if v == "72" => on = false,
+                "G" if matches!(v, "0" | "1" | "2" | "3") => motion = v.as_bytes()[0] - b'0',
+                "X" | "Y" | "Z" => end[(l.as_bytes()[0] - b'X') as usize] = num(v),
+                "I" => centre[0] = pos[0] + num(v),
+                "J" => centre[1] = pos[1] + num(v),
+                "B" | "C" => assert_eq!(num(v), 0.0, "one index"),
+                _ => {}
+            }
+        }
+        if end != pos {
+            assert!(!(on && motion == 0), "a rapid with the laser on: {line}");
+            if on {
+                length += if motion >= 2 {
+                    arc_length(
+                        [pos[0], pos[1]],
+                        [end[0], end[1]],
+                        centre,
+                        motion == 2,
+                        end[2] - pos[2],
+                    )
+                } else {
+                    ((end[0] - pos[0]).powi(2)
+                        + (end[1] - pos[1]).powi(2)
+                        + (end[2] - pos[2]).powi(2))
+                    .sqrt()
+                };
+            }
+        }
+        pos = end;
+    }
+    (ons, length)
 }
 
 /// Run `script` in `sh` with at most `kib` KiB of virtual memory and `secs` seconds;
