@@ -527,7 +527,9 @@ fn per_point_honours_every_option() {
 
 /// Real CAM programs from `../shared/corpus` (see its SOURCES.md), posted for the FADAL
 /// spindle at two indexes, each with its expected verdict: posted and verified, or
-/// refused at the named line (Cereal.ngc parks in machine X/Y with `G53` at its end).
+/// refused at the named line (Cereal.ngc parks in machine X/Y with `G53` at its end), or
+/// refused for a value FADAL cannot hold (LHchips4.ngc feeds at F9991300 mm/min, which is
+/// F393358 in/min: past FADAL's five-digit F).
 #[test]
 fn real_programs_post_and_verify_or_are_refused_where_expected() {
     let Some(shared) = shared() else {
@@ -537,7 +539,10 @@ fn real_programs_post_and_verify_or_are_refused_where_expected() {
     let dir = tempdir("safety-corpus");
     let cases: [(&str, Option<&str>); 3] = [
         ("cam/fusion360-generic-mm-bore-tests.nc", None),
-        ("linuxcnc/LHchips4.ngc", None),
+        (
+            "linuxcnc/LHchips4.ngc",
+            Some("refused to write F393358.2677165354: out of range for FADAL: 0 to 99999"),
+        ),
         ("linuxcnc/Cereal.ngc", Some("Cereal.ngc:2270: G53")),
     ];
     for (rel, refusal) in cases {

@@ -109,6 +109,10 @@ pub enum PostError {
     /// Options that do not fit together.
     #[error("{0}")]
     Options(String),
+    /// A value the output dialect cannot hold (or a renumbering past its largest N),
+    /// refused by the emitter rather than written cut off.
+    #[error("{0}")]
+    Unwritable(String),
 }
 
 impl PostError {
@@ -127,12 +131,20 @@ impl PostError {
             PostError::Io(_) => "check the paths and free space",
             PostError::Verify(_) => "this is a lampost fault or a mismatched INPUT/POSTED pair; nothing was written",
             PostError::Options(_) => "see `lampost post --help`",
+            PostError::Unwritable(_) => "the dialect cannot hold this value (its ranges are in docs/gcode.md): check the program's feeds, speeds and units; nothing was written",
         }
     }
 }
 
 impl From<std::io::Error> for PostError {
     fn from(e: std::io::Error) -> Self {
+        // The emitter refuses a value it cannot write as invalid data.
+        if e.kind() == std::io::ErrorKind::InvalidData {
+            let m = e.to_string();
+            if m.starts_with("refused to write") || m.starts_with("renumbering reaches") {
+                return PostError::Unwritable(m);
+            }
+        }
         PostError::Io(e.to_string())
     }
 }
