@@ -541,7 +541,7 @@ fn real_programs_post_and_verify_or_are_refused_where_expected() {
         ("cam/fusion360-generic-mm-bore-tests.nc", None),
         (
             "linuxcnc/LHchips4.ngc",
-            Some("refused to write F393358.2677165354: out of range for FADAL: 0 to 99999"),
+            Some("LHchips4.ngc:28: refused to write F393358.2677165354: out of range for FADAL: 0 to 99999"),
         ),
         ("linuxcnc/Cereal.ngc", Some("Cereal.ngc:2270: G53")),
     ];

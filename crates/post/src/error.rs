@@ -116,6 +116,15 @@ pub enum PostError {
 }
 
 impl PostError {
+    /// A value refused by the emitter, located at the input line being written (other
+    /// errors carry their own place).
+    pub fn at(self, file: &str, line: u32) -> PostError {
+        match self {
+            PostError::Unwritable(m) => PostError::Unwritable(format!("{file}:{line}: {m}")),
+            e => e,
+        }
+    }
+
     /// What the user can do about it.
     pub fn hint(&self) -> &'static str {
         match self {

@@ -397,7 +397,8 @@ pub(crate) fn post_steps<W: Write>(
                     .rot
                     .is_none_or(|r| (r[0] - rot[0]).abs() > 1e-9 || (r[1] - rot[1]).abs() > 1e-9);
                 if changed {
-                    w.index(rot, cfg.near, file, step.line)?;
+                    w.index(rot, cfg.near, file, step.line)
+                        .map_err(|e| e.at(file, step.line))?;
                     need_approach = true;
                 }
             }
@@ -430,7 +431,8 @@ pub(crate) fn post_steps<W: Write>(
                         step.line
                     ));
                 }
-                w.travel(file, step.line)?;
+                w.travel(file, step.line)
+                    .map_err(|e| e.at(file, step.line))?;
                 need_approach = true;
                 continue;
             }
@@ -439,10 +441,12 @@ pub(crate) fn post_steps<W: Write>(
                 .pos
                 .is_some_and(|p| (0..3).all(|k| (p[k] - on_grid[k]).abs() <= 1e-6));
             if need_approach || !at_start {
-                w.approach(&start, step.feed, file, step.line)?;
+                w.approach(&start, step.feed, file, step.line)
+                    .map_err(|e| e.at(file, step.line))?;
                 need_approach = false;
             }
-            w.process_for(cfg, step.deposit)?;
+            w.process_for(cfg, step.deposit)
+                .map_err(|e| e.at(file, step.line))?;
             match step.kind {
                 StepKind::Arc {
                     center,
@@ -460,7 +464,8 @@ pub(crate) fn post_steps<W: Write>(
                         cfg.tolerance,
                     );
                     if let ArcWay::Kept { ccw } = way {
-                        w.arc(&step, &start, &end, &joints(&jm, &center), ccw, sweep, file)?;
+                        w.arc(&step, &start, &end, &joints(&jm, &center), ccw, sweep, file)
+                            .map_err(|e| e.at(file, step.line))?;
                     } else {
                         if arc_warned != Some(step.section) {
                             arc_warned = Some(step.section);
@@ -484,11 +489,14 @@ pub(crate) fn post_steps<W: Write>(
                                 None => (joints(&jm, &step.at(k as f64 / n as f64)), None),
                             };
                             w.feed_check.planned_check = check.map(|c| (q, k == n, c));
-                            w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
+                            w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)
+                                .map_err(|e| e.at(file, step.line))?;
                         }
                     }
                 }
-                _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
+                _ => w
+                    .linear(1.0, &end, Some(step.feed), file, step.line, true)
+                    .map_err(|e| e.at(file, step.line))?,
             }
         }
         points.clear();
