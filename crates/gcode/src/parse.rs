@@ -29,7 +29,7 @@ fn number(i: &str) -> IResult<&str, &str> {
     )))(i)
 }
 
-/// Parse a decimal number text (as accepted by [`number`]) to `f64`, correctly rounded.
+/// Parse a decimal number text (as accepted by `number`) to `f64`, correctly rounded.
 pub fn parse_number(text: &str) -> Option<f64> {
     let bytes = text.as_bytes();
     let mut i = 0;
@@ -88,7 +88,7 @@ pub fn parse_number(text: &str) -> Option<f64> {
 
 /// The common spelling of a number (`[+-]digits[.digits]` or `[+-].digits`, at most 15
 /// significant digits, no inner spaces) scanned and valued in one pass. `None` when the
-/// text is anything else, which then goes to the nom grammar [`number`]; the two agree
+/// text is anything else, which then goes to the nom grammar `number`; the two agree
 /// wherever this one answers (property-tested).
 pub fn fast_number(b: &[u8]) -> Option<(usize, f64)> {
     const POW10: [f64; 16] = [

@@ -160,7 +160,7 @@ pub(crate) fn atan2_deg_core(y: f64, x: f64) -> f64 {
     d.copysign(y)
 }
 
-/// [`sin_cos_deg_core`] on four lanes at once (the same operations on each lane, so the
+/// `sin_cos_deg_core` on four lanes at once (the same operations on each lane, so the
 /// same bits; see [`crate::lanes`]).
 #[inline(always)]
 pub fn sin_cos_deg4(x: F4) -> (F4, F4) {
@@ -187,7 +187,7 @@ pub fn sin_cos_deg4(x: F4) -> (F4, F4) {
     (sin_sign * ps, cos_sign * pc)
 }
 
-/// [`atan2_deg_core`] on four lanes at once (see [`sin_cos_deg4`]).
+/// `atan2_deg_core` on four lanes at once (see [`sin_cos_deg4`]).
 #[inline(always)]
 pub fn atan2_deg4(y: F4, x: F4) -> F4 {
     let (ax, ay) = (x.abs(), y.abs());
