@@ -3,14 +3,15 @@
 use std::io::Write;
 
 use lampost_gcode::emit::fixed;
+use lampost_gcode::flavor::DETECT_BYTES;
 use lampost_gcode::{
-    parse_line, Dialect, EWord, EmitOptions, Emitter, Event, LineReader, Move, MoveKind, Options,
-    Order, ProgramReader, Severity, Stream, Units, AXES,
+    parse_line_with, Block, Dialect, EWord, EmitOptions, Emitter, Event, Flavor, LineReader, Move,
+    MoveKind, Options, Order, ProgramReader, Resolved, Severity, Stream, Units, AXES,
 };
 
-use crate::io::{display_name, open_input, open_seekable, Output};
+use crate::io::{display_name, open_seekable, Output};
 use crate::report::{self, CliError};
-use crate::{DialectArg, EWordArg, InterpArgs, UnitsArg};
+use crate::{DialectArg, EWordArg, FlavorArg, InterpArgs, UnitsArg};
 
 /// At most this many diagnostics are printed for people (JSON carries all).
 const MAX_PRINTED: usize = 200;
@@ -22,16 +23,38 @@ fn units(u: UnitsArg) -> Units {
     }
 }
 
-pub fn options(a: InterpArgs) -> Options {
-    Options {
-        units: units(a.units),
-        e_word: match a.e_word {
-            EWordArg::Fixture => EWord::FixtureOffset,
-            EWordArg::Extrusion => EWord::Extrusion,
+/// The interpreter's options for a program of flavour `flavor` (resolved).
+pub fn options(a: InterpArgs, flavor: Flavor) -> Options {
+    let e_word = a.e_word.map(|e| match e {
+        EWordArg::Fixture => EWord::FixtureOffset,
+        EWordArg::Extrusion => EWord::Extrusion,
+    });
+    flavor.options(
+        Options {
+            units: units(a.units),
+            block_delete: a.block_delete,
+            ..Options::default()
         },
-        block_delete: a.block_delete,
-        ..Options::default()
+        e_word,
+    )
+}
+
+/// The flavour of the program `r` holds (its first bytes are looked at for `auto`;
+/// `r` is left where it was).
+pub fn resolve<R: std::io::Read + std::io::Seek + ?Sized>(
+    given: FlavorArg,
+    r: &mut R,
+) -> std::io::Result<Resolved> {
+    use std::io::{Read, SeekFrom};
+    let given = given.flavor();
+    if given != Flavor::Auto {
+        return Ok(Resolved::new(given, b""));
     }
+    let at = r.stream_position()?;
+    let mut head = Vec::with_capacity(DETECT_BYTES);
+    r.take(DETECT_BYTES as u64).read_to_end(&mut head)?;
+    r.seek(SeekFrom::Start(at))?;
+    Ok(Resolved::new(given, &head))
 }
 
 fn io_err(name: &str, e: std::io::Error) -> CliError {
@@ -39,23 +62,32 @@ fn io_err(name: &str, e: std::io::Error) -> CliError {
 }
 
 /// `file`'s lines in `order` (every program in turn, or the main program with its calls
-/// followed).
+/// followed; a flavour that evaluates macros is always read in execution order), and
+/// its flavour.
 fn program(
     file: &str,
     order: Order,
-) -> Result<ProgramReader<Box<dyn crate::io::ReadSeek>>, CliError> {
-    Ok(ProgramReader::new(open_seekable(file)?, order))
+    flavor: FlavorArg,
+) -> Result<(ProgramReader<Box<dyn crate::io::ReadSeek>>, Resolved), CliError> {
+    let mut src = open_seekable(file)?;
+    let resolved = resolve(flavor, &mut src).map_err(|e| io_err(&display_name(file), e))?;
+    let order = if resolved.flavor.evaluates() {
+        Order::Execution
+    } else {
+        order
+    };
+    Ok((ProgramReader::new(src, order), resolved))
 }
 
 pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError> {
     let name = display_name(file);
-    let input = program(file, Order::File)?;
+    let (input, flavor) = program(file, Order::File, interp.flavor)?;
     let mut errors = 0usize;
     let mut warnings = 0usize;
     let mut printed = 0usize;
     let mut all = Vec::new();
     let stderr = std::io::stderr();
-    for ev in Stream::new(input, options(interp), false) {
+    for ev in Stream::new(input, options(interp, flavor.flavor), false) {
         let Event::Diagnostic(d) = ev.map_err(|e| io_err(&name, e))? else {
             continue;
         };
@@ -77,6 +109,7 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
             "errors": errors,
             "warnings": warnings,
             "diagnostics": all,
+            "flavor": flavor,
         });
         println!("{doc}");
     } else {
@@ -86,7 +119,10 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
                 errors + warnings - printed
             );
         }
-        eprintln!("{name}: {errors} error(s), {warnings} warning(s)");
+        eprintln!(
+            "{name}: {errors} error(s), {warnings} warning(s); {}",
+            flavor.describe()
+        );
     }
     if errors > 0 {
         Err(CliError::failed(""))
@@ -116,7 +152,7 @@ pub fn fmt(
     dialect: Option<DialectArg>,
     renumber: Option<&str>,
     suppress_modal: bool,
-    start_units: UnitsArg,
+    (start_units, flavor): (UnitsArg, FlavorArg),
 ) -> Result<(), CliError> {
     let name = display_name(file);
     let renumber = renumber.map(parse_renumber).transpose()?;
@@ -129,15 +165,19 @@ pub fn fmt(
         suppress_modal,
         units: units(start_units),
     };
-    let mut reader = LineReader::new(open_input(file)?);
+    let mut src = open_seekable(file)?;
+    let flavor = resolve(flavor, &mut src).map_err(|e| io_err(&name, e))?;
+    let exponents = flavor.flavor.is_slicer();
+    let mut reader = LineReader::new(std::io::BufReader::with_capacity(1 << 16, src));
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut errors = 0usize;
     {
         let mut em = Emitter::new(out.writer(), opts);
         while let Some(line) = reader.next_line().map_err(|e| io_err(&name, e))? {
-            match parse_line(line.bytes, line.number, line.offset) {
-                Ok(b) => em.block(&b).map_err(werr)?,
+            let mut b = Block::empty(line.number, line.offset);
+            match parse_line_with(line.bytes, line.number, line.offset, &mut b, exponents) {
+                Ok(()) => em.block(&b).map_err(werr)?,
                 Err(d) => {
                     errors += 1;
                     if errors <= MAX_PRINTED {
@@ -275,7 +315,10 @@ pub fn trace(
     interp: InterpArgs,
 ) -> Result<(), CliError> {
     let name = display_name(file);
-    let input = program(file, Order::Execution)?;
+    let (input, flavor) = program(file, Order::Execution, interp.flavor)?;
+    if !json {
+        eprintln!("{name}: {}", flavor.describe());
+    }
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut diags = Vec::new();
@@ -286,7 +329,7 @@ pub fn trace(
         if json {
             w.write_all(b"{\"moves\":[").map_err(werr)?;
         }
-        for ev in Stream::new(input, options(interp), true) {
+        for ev in Stream::new(input, options(interp, flavor.flavor), true) {
             match ev.map_err(|e| io_err(&name, e))? {
                 Event::Move(m) => {
                     if json {
@@ -312,8 +355,9 @@ pub fn trace(
         if json {
             write!(
                 w,
-                "],\"diagnostics\":{},\"ok\":{}}}",
+                "],\"diagnostics\":{},\"flavor\":{},\"ok\":{}}}",
                 serde_json::Value::Array(diags),
+                serde_json::json!(flavor),
                 errors == 0
             )
             .map_err(werr)?;

@@ -36,6 +36,8 @@ pub struct Options {
     pub arc_tolerance_inch: f64,
     /// Skip blocks starting with `/`.
     pub block_delete: bool,
+    /// The control the program was written for (resolved: see [`crate::flavor`]).
+    pub flavor: crate::flavor::Flavor,
 }
 
 impl Default for Options {
@@ -45,6 +47,7 @@ impl Default for Options {
             e_word: EWord::FixtureOffset,
             arc_tolerance_inch: 0.0005,
             block_delete: false,
+            flavor: crate::flavor::Flavor::Fadal,
         }
     }
 }

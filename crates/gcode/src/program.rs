@@ -134,6 +134,10 @@ pub struct ProgramReader<R> {
     /// The current line as bytes, for `BufRead`.
     out: Vec<u8>,
     out_pos: usize,
+    /// LinuxCNC O-word lines and their control flow (indexed at the first one followed).
+    ngc: Option<Box<crate::ngc::Control>>,
+    /// [`crate::ngc::MAX_BLOCKS`] (smaller in tests).
+    max_blocks: u64,
 }
 
 fn may_matter(bytes: &[u8]) -> bool {
@@ -189,7 +193,89 @@ impl<R: Read + Seek> ProgramReader<R> {
             halted: false,
             out: Vec::new(),
             out_pos: 0,
+            ngc: None,
+            max_blocks: crate::ngc::MAX_BLOCKS,
         }
+    }
+
+    /// At most `n` blocks are run again by loops and subroutine calls (default
+    /// [`crate::ngc::MAX_BLOCKS`]).
+    pub fn set_max_blocks(&mut self, n: u64) {
+        self.max_blocks = n;
+    }
+
+    /// Read the whole file once and note its LinuxCNC O-word lines.
+    fn index_owords(&mut self) -> io::Result<crate::ngc::Control> {
+        let mut c = crate::ngc::Control::new();
+        c.max_blocks = self.max_blocks;
+        self.lines.seek_line(0, 1)?;
+        while let Some((line, end)) = self.lines.next_line_end()? {
+            let b = line.bytes;
+            let first = b.iter().position(|c| !matches!(c, b' ' | b'\t' | b'/'));
+            let maybe = first.is_some_and(|i| matches!(b[i] | 0x20, b'o' | b'n'));
+            if !maybe || b.len() > MAX_LINE_BYTES {
+                continue;
+            }
+            let Ok(text) = std::str::from_utf8(b) else {
+                continue;
+            };
+            let next = (end, line.number.saturating_add(1));
+            if !c.add(text, (line.offset, line.number), next) {
+                break;
+            }
+        }
+        Ok(c)
+    }
+
+    /// Follow the LinuxCNC O-word control line `text` (line `number` at `offset`, just
+    /// handed out) with `params`; `None` when this reader does not follow control lines
+    /// (file order).
+    pub fn control(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        if self.order != Order::Execution {
+            return None;
+        }
+        if self.ngc.is_none() {
+            let at = (self.pos, self.line);
+            match self.index_owords() {
+                Ok(c) => self.ngc = Some(Box::new(c)),
+                Err(e) => {
+                    return Some(Err(Diagnostic::at(
+                        Severity::Error,
+                        ErrorKind::Control(format!("cannot index the O-word lines: {e}")),
+                        number,
+                        offset,
+                        text.as_bytes(),
+                        0,
+                        text.len(),
+                    )))
+                }
+            }
+            (self.pos, self.line) = at;
+        }
+        let ctl = self.ngc.as_mut()?;
+        Some(match ctl.step(text, offset, params) {
+            Ok(None) => Ok(()),
+            Ok(Some((pos, line))) => {
+                self.pos = pos;
+                self.line = line;
+                Ok(())
+            }
+            Err((msg, s, e)) => Err(Diagnostic::at(
+                Severity::Error,
+                ErrorKind::Control(msg),
+                number,
+                offset,
+                text.as_bytes(),
+                s,
+                e,
+            )),
+        })
     }
 
     /// Read the whole file once and note its programs.
@@ -526,6 +612,16 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
 
     fn take_diagnostic(&mut self) -> Option<Diagnostic> {
         ProgramReader::take_diagnostic(self)
+    }
+
+    fn control(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        ProgramReader::control(self, text, number, offset, params)
     }
 }
 

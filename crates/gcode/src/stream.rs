@@ -3,8 +3,9 @@
 use std::collections::VecDeque;
 use std::io::{self, BufRead};
 
-use crate::ast::Block;
+use crate::ast::{Block, BlockKind, MacroKind};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
 use crate::parse::parse_line_with;
@@ -23,6 +24,18 @@ pub trait LineSource {
     /// A problem the source found (a call to a missing program, say), reported after the
     /// line it concerns.
     fn take_diagnostic(&mut self) -> Option<Diagnostic> {
+        None
+    }
+
+    /// Follow a LinuxCNC O-word control line (see [`crate::ngc`]) that was just handed
+    /// out; `None` when this source does not follow them (then the line is warned about).
+    fn control(
+        &mut self,
+        _text: &str,
+        _number: u32,
+        _offset: usize,
+        _params: &mut Params,
+    ) -> Option<Result<(), Diagnostic>> {
         None
     }
 }
@@ -51,6 +64,8 @@ pub struct Stream<S> {
     any_content: bool,
     /// Numbers may have exponents (E is extrusion: see [`parse_line_with`]).
     exponents: bool,
+    /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
+    params: Option<Box<Params>>,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -69,6 +84,7 @@ impl<S: LineSource> Stream<S> {
             finished: false,
             any_content: false,
             exponents: opts.e_word == EWord::Extrusion,
+            params: opts.flavor.evaluates().then(Box::default),
         }
     }
 
@@ -138,6 +154,26 @@ impl<S: LineSource> Iterator for Stream<S> {
                 &mut block,
                 self.exponents,
             );
+            // Macro lines only: the flavour's evaluation (plain lines never come here).
+            let mut control = None;
+            let parsed = match (parsed, self.params.as_deref_mut()) {
+                (Ok(()), Some(params)) if block.kind != BlockKind::Words => match block.kind {
+                    BlockKind::Macro(MacroKind::LinuxCncExpression) => crate::expr::eval_line(
+                        line.bytes,
+                        line.number,
+                        line.offset,
+                        &mut block,
+                        params,
+                    ),
+                    BlockKind::Macro(MacroKind::LinuxCncOWord) => {
+                        control = Some((block.raw.to_owned(), line.number, line.offset));
+                        block.kind = BlockKind::Words;
+                        Ok(())
+                    }
+                    _ => Ok(()),
+                },
+                (p, _) => p,
+            };
             let failed = match parsed {
                 Ok(()) => match self.interp.block(&block, &mut |e| {
                     if first.is_none() {
@@ -159,6 +195,29 @@ impl<S: LineSource> Iterator for Stream<S> {
             };
             drop(block);
             let mut failed = failed;
+            if let (Some((text, number, offset)), Some(params)) =
+                (control, self.params.as_deref_mut())
+            {
+                match self.src.control(&text, number, offset, params) {
+                    Some(Ok(())) => {}
+                    Some(Err(d)) => {
+                        failed = true;
+                        self.queue.push_back(Event::Diagnostic(d));
+                    }
+                    None => {
+                        let len = text.len();
+                        self.queue.push_back(Event::Diagnostic(Diagnostic::at(
+                            Severity::Warning,
+                            ErrorKind::MacroNotEvaluated(MacroKind::LinuxCncOWord.describe()),
+                            number,
+                            offset,
+                            text.as_bytes(),
+                            0,
+                            len,
+                        )));
+                    }
+                }
+            }
             while let Some(d) = self.src.take_diagnostic() {
                 failed |= d.is_error();
                 self.queue.push_back(Event::Diagnostic(d));
