@@ -6,7 +6,9 @@
 //! - Parameters: numbered `#1` … `#5601` (0 until set; `#1`–`#30` are a subroutine's
 //!   arguments, local to each call), named `#<name>` (local to the subroutine or main
 //!   program that sets them; reading one never set is an error), global `#<_name>`;
-//!   `#[expr]` and `##1` name a parameter by number.
+//!   `#[expr]` and `##1` name a parameter by number. HAL pins `#<_hal[…]>` read 0; after each
+//!   block `#5420`–`#5428` hold the position, and after a probing move `#5061`–`#5069` its
+//!   end and `#5070` 0, as LinuxCNC's standalone `rs274` sets them.
 //! - Expressions `[…]`: numbers, parameters, `**`, `*` `/` `MOD`, `+` `-`, `EQ NE GT GE LT
 //!   LE`, `AND OR XOR` (that order of precedence, each left to right), unary `-`/`+`,
 //!   functions `ABS ACOS ASIN ATAN[a]/[b] COS EXP FIX FUP ROUND LN SIN SQRT TAN` (degrees)
@@ -65,9 +67,13 @@ impl Params {
         self.numbered.get(n).copied()
     }
 
-    /// A named parameter (name without `#<>`, any case).
+    /// A named parameter (name without `#<>`, any case). A HAL pin (`#<_hal[…]>`) is
+    /// unknown to lampost and reads 0, as in LinuxCNC's standalone interpreter.
     pub fn named(&self, name: &str) -> Option<f64> {
         let name = name.to_ascii_lowercase();
+        if name.starts_with("_hal[") {
+            return Some(0.0);
+        }
         if name.starts_with('_') {
             self.globals.get(&name).copied()
         } else {
@@ -93,6 +99,20 @@ impl Params {
                 }
             }
             Param::Named(name) => self.set_named(name, v),
+        }
+    }
+
+    /// Note what the machine would have set after a block's moves (LinuxCNC's system
+    /// parameters as its standalone interpreter sets them): `#5420`–`#5428` the position
+    /// (program coordinates), and after a probing move `#5061`–`#5069` its end and
+    /// `#5070` 0 (lampost has no probe that trips).
+    pub fn after_moves<'m>(&mut self, moves: impl Iterator<Item = &'m crate::interp::Move>) {
+        for m in moves {
+            self.numbered[5420..5429].copy_from_slice(&m.end);
+            if m.kind == crate::interp::MoveKind::Probe {
+                self.numbered[5061..5070].copy_from_slice(&m.end);
+                self.numbered[5070] = 0.0;
+            }
         }
     }
 
@@ -521,6 +541,37 @@ fn apply(op: Op, l: f64, r: f64, s: usize, e: usize) -> Result<f64, EvalError> {
     finite(v, "the expression", s, e)
 }
 
+/// Whether a macro line that is not evaluated sets the feed rate from a macro value
+/// (`F#1`, `F[#2*3]`, FADAL `F+R4.`, `#F = …` is not one): the block is skipped with its
+/// warning, and later feed moves are not blamed for a missing F.
+pub fn sets_feed(raw: &str) -> bool {
+    let b = raw.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'(' => {
+                i += memchr::memchr(b')', &b[i..]).unwrap_or(b.len() - i);
+            }
+            b';' | b'\'' => return false,
+            b'[' => depth += 1,
+            b']' => depth = depth.saturating_sub(1),
+            b'F' | b'f' if depth == 0 && (i == 0 || !b[i - 1].is_ascii_alphabetic()) => {
+                let mut k = i + 1;
+                while k < b.len() && matches!(b[k], b' ' | b'\t' | b'+' | b'-') {
+                    k += 1;
+                }
+                if b.get(k).is_some_and(|c| matches!(c, b'#' | b'[' | b'R' | b'r' | b'V' | b'v')) {
+                    return true;
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    false
+}
+
 /// Evaluate a whole macro line of the `linuxcnc` flavour into `block`: words whose
 /// values are expressions or parameters get their values (each word's `text` is the
 /// value as written, `[#1+2]`), comments are kept, and parameter assignments
@@ -757,7 +808,7 @@ mod tests {
         // Errors are located in the line.
         let mut b = Block::empty(3, 0);
         let d = eval_line(b"G1 X[1/0]", 3, 0, &mut b, &mut p).expect_err("fails");
-        assert_eq!(d.column, 5);
+        assert_eq!(d.column, 6);
         let d = eval_line(b"G1 X#<nope>", 3, 0, &mut b, &mut p).expect_err("fails");
         assert_eq!((d.column, d.kind.to_string().contains("not set")), (5, true));
     }

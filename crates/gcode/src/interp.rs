@@ -182,6 +182,9 @@ pub struct Interpreter {
     /// Axes named in the block being run.
     block_axes: u16,
     warned_macro: bool,
+    /// A skipped macro block set the feed rate from a value lampost does not know: later
+    /// feed moves are not blamed for a missing F.
+    feed_from_macro: bool,
     offset_cache: Position,
     /// Every offset is zero (the common case): positions need no shifting.
     offset_zero: bool,
@@ -250,7 +253,15 @@ impl Interpreter {
     pub fn new(opts: Options) -> Self {
         Interpreter {
             opts,
-            modal: Modal::new(opts.units),
+            modal: Modal {
+                // LinuxCNC starts in G99 (canned cycles retract to R), others in G98.
+                retract: if opts.flavor == crate::flavor::Flavor::LinuxCnc {
+                    crate::modal::Retract::RPlane
+                } else {
+                    crate::modal::Retract::InitialZ
+                },
+                ..Modal::new(opts.units)
+            },
             pos: [0.0; 9],
             g5x: [[0.0; 9]; 10],
             fixture: [[0.0; 9]; 49],
@@ -269,6 +280,7 @@ impl Interpreter {
             axes_named: 0,
             block_axes: 0,
             warned_macro: false,
+            feed_from_macro: false,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -331,6 +343,7 @@ impl Interpreter {
                 // Statement lines (`#…`) are reported once; lines whose motion or flow
                 // depends on macro values each time.
                 let statement = b.raw.trim_start().starts_with('#');
+                self.feed_from_macro |= crate::expr::sets_feed(b.raw);
                 if !(self.ended || statement && self.warned_macro) {
                     self.warned_macro |= statement;
                     out(Event::Diagnostic(diag(
@@ -627,7 +640,12 @@ impl Interpreter {
                 20 | 300 => stop_after = true,
                 820 => self.e_relative = false,
                 830 => self.e_relative = true,
-                980 if self.calls == Calls::NotFollowed => {
+                // Haas M97: the reader runs the labelled block to its M99, which then
+                // returns like a subprogram's.
+                970 if self.calls == Calls::Followed => {
+                    self.open_programs = self.open_programs.saturating_add(1);
+                }
+                970 | 980 if self.calls == Calls::NotFollowed => {
                     let mut what = mw.display_code();
                     for word in [w.word(b'P'), w.word(b'L')].into_iter().flatten() {
                         what.push(' ');
@@ -669,7 +687,7 @@ impl Interpreter {
         // call's repeat count).
         if let Some(l) = w
             .word(b'L')
-            .filter(|_| !w.ms.iter().any(|&(_, c)| c == 980))
+            .filter(|_| !w.ms.iter().any(|&(_, c)| c == 980 || c == 970))
         {
             let canned_block = w
                 .g_in(GGroup::Motion)
@@ -1107,7 +1125,7 @@ impl Interpreter {
                 Some(f) if f > 0.0 => Ok(f),
                 _ => Err(diag(b, Severity::Error, ErrorKind::InverseTimeNeedsF, None)),
             },
-            _ if self.modal.feed <= 0.0 => {
+            _ if self.modal.feed <= 0.0 && !self.feed_from_macro => {
                 Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None))
             }
             _ => Ok(self.modal.feed),

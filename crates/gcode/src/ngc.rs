@@ -387,7 +387,7 @@ impl Control {
                 if n > self.max_blocks as f64 {
                     return Err((
                         format!("repeat count {n} is over the limit of {} blocks", self.max_blocks),
-                        rest,
+                        rest + (text[rest..].len() - text[rest..].trim_start().len()),
                         ev.pos,
                     ));
                 }

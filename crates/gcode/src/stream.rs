@@ -182,7 +182,16 @@ impl<S: LineSource> Iterator for Stream<S> {
                         queue.push_back(e);
                     }
                 }) {
-                    Ok(()) => false,
+                    Ok(()) => {
+                        if let Some(params) = self.params.as_deref_mut() {
+                            let moves = first.iter().chain(queue.iter());
+                            params.after_moves(moves.filter_map(|e| match e {
+                                Event::Move(m) => Some(m),
+                                Event::Diagnostic(_) => None,
+                            }));
+                        }
+                        false
+                    }
                     Err(d) => {
                         queue.push_back(Event::Diagnostic(d));
                         true
