@@ -159,7 +159,7 @@ fn post_reports_the_flavour() {
         "--machine",
         "nrc-lc",
         "--index",
-        "A=0,B=0",
+        "B=0,C=0",
         "--process",
         "machine",
         "-o",
