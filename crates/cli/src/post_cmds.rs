@@ -537,14 +537,6 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         format!("lampost {} post for {}", env!("CARGO_PKG_VERSION"), m.name),
         format!("head {head_name}, process {}", a.process),
     ];
-    if !sections.is_empty() {
-        let r = section_flavor(&a.place, sections)?;
-        header.push(format!(
-            "input flavour {}{}",
-            r.flavor.name(),
-            if r.auto { ", decided from the program" } else { "" }
-        ));
-    }
     for s in sections {
         let f = &s.frame;
         let place = match s.orient {
