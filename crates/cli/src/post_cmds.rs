@@ -253,7 +253,10 @@ fn source(input: &str) -> Result<Source, CliError> {
 
 /// The flavour of the sections' programs: given, or for `auto` decided from the first
 /// section's first bytes.
-pub fn section_flavor(pl: &Placement, secs: &[Section]) -> Result<lampost_gcode::Resolved, CliError> {
+pub fn section_flavor(
+    pl: &Placement,
+    secs: &[Section],
+) -> Result<lampost_gcode::Resolved, CliError> {
     use lampost_gcode::flavor::DETECT_BYTES;
     use std::io::Read;
     let mut head = Vec::new();

@@ -53,7 +53,10 @@ fn auto_says_what_it_chose() {
     let o = lampost_stdin(&["check", "--json", "-"], SUBS.as_bytes());
     assert!(o.status.success(), "{}", stderr(&o));
     let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
-    assert_eq!((doc["flavor"]["flavor"].as_str(), doc["errors"].as_u64()), (Some("linuxcnc"), Some(0)));
+    assert_eq!(
+        (doc["flavor"]["flavor"].as_str(), doc["errors"].as_u64()),
+        (Some("linuxcnc"), Some(0))
+    );
     // Given, it is not decided.
     let doc = trace_json(&["--flavor", "linuxcnc"], SUBS);
     assert_eq!(doc["flavor"]["auto"], false);
@@ -101,18 +104,33 @@ fn mmount_feed_from_a_parameter_cascades_no_more() {
 #[test]
 fn bad_input_is_a_located_error() {
     for (text, at, what) in [
-        ("o1 sub\no1 call\no1 endsub\no1 call\n", ":2:1", "nest more than 10 deep"),
-        ("G0 X0\no<nowhere> call [1]\n", ":2:1", "no subroutine o<nowhere> sub"),
+        (
+            "o1 sub\no1 call\no1 endsub\no1 call\n",
+            ":2:1",
+            "nest more than 10 deep",
+        ),
+        (
+            "G0 X0\no<nowhere> call [1]\n",
+            ":2:1",
+            "no subroutine o<nowhere> sub",
+        ),
         ("G0 X#<nope>\n", ":1:5", "#<nope> is not set"),
         ("G0 X[1 / 0]\n", ":1:6", "division by zero"),
-        ("o1 repeat [1000000000]\nG0 X1\no1 endrepeat\n", ":1:11", "over the limit"),
+        (
+            "o1 repeat [1000000000]\nG0 X1\no1 endrepeat\n",
+            ":1:11",
+            "over the limit",
+        ),
         ("o1 endsub\n", ":1:1", "outside a subroutine"),
     ] {
         for cmd in ["trace", "check"] {
             let o = lampost_stdin(&[cmd, "--flavor", "linuxcnc", "-"], text.as_bytes());
             let e = stderr(&o);
             assert!(!o.status.success(), "{cmd} {text}: {e}");
-            assert!(e.contains(&format!("<stdin>{at}")) && e.contains(what), "{cmd} {text}: {e}");
+            assert!(
+                e.contains(&format!("<stdin>{at}")) && e.contains(what),
+                "{cmd} {text}: {e}"
+            );
             assert!(e.contains("help:"), "{e}");
         }
     }

@@ -137,8 +137,7 @@ impl Params {
         if self.locals.len() > 1 {
             self.locals.pop();
         }
-        self.globals
-            .insert("_value".into(), value.unwrap_or(0.0));
+        self.globals.insert("_value".into(), value.unwrap_or(0.0));
         self.globals.insert(
             "_value_returned".into(),
             if value.is_some() { 1.0 } else { 0.0 },
@@ -237,7 +236,8 @@ impl<'t, 'p> Eval<'t, 'p> {
             Some(b'<') => {
                 let close = memchr::memchr(b'>', &self.b[self.pos..])
                     .ok_or_else(|| ("`#<` has no closing `>`".to_string(), start, self.b.len()))?;
-                let name: String = self.text(self.pos + 1, self.pos + close)
+                let name: String = self
+                    .text(self.pos + 1, self.pos + close)
                     .chars()
                     .filter(|c| !c.is_whitespace())
                     .collect::<String>()
@@ -253,7 +253,10 @@ impl<'t, 'p> Eval<'t, 'p> {
                 let n = crate::emit::round_half_away(v);
                 if (v - n).abs() > 1e-6 || !(0.0..=MAX_PARAM as f64).contains(&n) {
                     return Err((
-                        format!("#{}: parameter numbers are whole numbers 0 to {MAX_PARAM}", self.text(start, self.pos)),
+                        format!(
+                            "#{}: parameter numbers are whole numbers 0 to {MAX_PARAM}",
+                            self.text(start, self.pos)
+                        ),
                         start,
                         self.pos,
                     ));
@@ -266,9 +269,10 @@ impl<'t, 'p> Eval<'t, 'p> {
     fn read_param(&self, p: &Param, s: usize, e: usize) -> Result<f64, EvalError> {
         match p {
             Param::Numbered(n) => Ok(self.params.get(*n).unwrap_or(0.0)),
-            Param::Named(name) => self.params.named(name).ok_or_else(|| {
-                (format!("parameter #<{name}> is not set"), s, e)
-            }),
+            Param::Named(name) => self
+                .params
+                .named(name)
+                .ok_or_else(|| (format!("parameter #<{name}> is not set"), s, e)),
         }
     }
 
@@ -328,7 +332,11 @@ impl<'t, 'p> Eval<'t, 'p> {
                 start,
                 start + 1,
             )),
-            None => Err(("expected a value at the end of the line".into(), start, start)),
+            None => Err((
+                "expected a value at the end of the line".into(),
+                start,
+                start,
+            )),
         }
     }
 
@@ -338,7 +346,11 @@ impl<'t, 'p> Eval<'t, 'p> {
         self.pos += 1;
         let v = self.expression()?;
         if self.peek() != Some(b']') {
-            return Err(("`[` is not closed by `]`".into(), open, self.pos.max(open + 1)));
+            return Err((
+                "`[` is not closed by `]`".into(),
+                open,
+                self.pos.max(open + 1),
+            ));
         }
         self.pos += 1;
         Ok(v)
@@ -360,7 +372,7 @@ impl<'t, 'p> Eval<'t, 'p> {
                     .take_while(|c| c.is_ascii_alphabetic())
                     .map(u8::to_ascii_uppercase)
                     .collect();
-                let op = match &word[..] {
+                match &word[..] {
                     [b'M', b'O', b'D'] => (Op::Mod, 3),
                     [b'A', b'N', b'D'] => (Op::And, 3),
                     [b'X', b'O', b'R'] => (Op::Xor, 3),
@@ -372,8 +384,7 @@ impl<'t, 'p> Eval<'t, 'p> {
                     [b'L', b'T', ..] => (Op::Lt, 2),
                     [b'L', b'E', ..] => (Op::Le, 2),
                     _ => return None,
-                };
-                op
+                }
             }
         };
         self.pos += len;
@@ -433,14 +444,22 @@ impl<'t, 'p> Eval<'t, 'p> {
         let name = self.text(self.pos, self.pos + len).to_ascii_uppercase();
         self.pos += len;
         if self.peek() != Some(b'[') {
-            return Err((format!("expected a value, found `{name}`"), start, start + len));
+            return Err((
+                format!("expected a value, found `{name}`"),
+                start,
+                start + len,
+            ));
         }
         if name == "EXISTS" {
             let open = self.pos;
             self.pos += 1;
             self.skip();
             if self.b.get(self.pos) != Some(&b'#') {
-                return Err(("EXISTS takes a named parameter: EXISTS[#<name>]".into(), open, self.pos + 1));
+                return Err((
+                    "EXISTS takes a named parameter: EXISTS[#<name>]".into(),
+                    open,
+                    self.pos + 1,
+                ));
             }
             self.pos += 1;
             let p = self.param_ref()?;
@@ -459,7 +478,11 @@ impl<'t, 'p> Eval<'t, 'p> {
             if ok {
                 Ok(())
             } else {
-                Err((format!("{name}[{a}] is outside the function's domain"), start, end))
+                Err((
+                    format!("{name}[{a}] is outside the function's domain"),
+                    start,
+                    end,
+                ))
             }
         };
         let v = match name.as_str() {
@@ -561,7 +584,9 @@ pub fn sets_feed(raw: &str) -> bool {
                 while k < b.len() && matches!(b[k], b' ' | b'\t' | b'+' | b'-') {
                     k += 1;
                 }
-                if b.get(k).is_some_and(|c| matches!(c, b'#' | b'[' | b'R' | b'r' | b'V' | b'v')) {
+                if b.get(k)
+                    .is_some_and(|c| matches!(c, b'#' | b'[' | b'R' | b'r' | b'V' | b'v'))
+                {
                     return true;
                 }
             }
@@ -791,25 +816,43 @@ mod tests {
         let line = b"G1 X[#1 * 2] Y#2 Z-#<loc> F#<_g> (c) #1 = 0";
         let mut b = Block::empty(2, 10);
         eval_line(line, 2, 10, &mut b, &mut p).expect("evaluates");
-        let w: Vec<(char, f64, &str)> = b.words().map(|w| (w.letter_char(), w.value, w.text)).collect();
+        let w: Vec<(char, f64, &str)> = b
+            .words()
+            .map(|w| (w.letter_char(), w.value, w.text))
+            .collect();
         assert_eq!(
             w,
-            [('G', 1.0, "1"), ('X', 10.0, "[#1 * 2]"), ('Y', 1.0, "#2"), ('Z', -3.0, "-#<loc>"), ('F', 2.0, "#<_g>")]
+            [
+                ('G', 1.0, "1"),
+                ('X', 10.0, "[#1 * 2]"),
+                ('Y', 1.0, "#2"),
+                ('Z', -3.0, "-#<loc>"),
+                ('F', 2.0, "#<_g>")
+            ]
         );
         assert_eq!(p.get(1), Some(0.0));
         assert_eq!(b.comments().count(), 1);
         // Subroutine scopes.
         p.enter(&[7.0]);
-        assert_eq!((p.get(1), p.get(2), p.named("loc")), (Some(7.0), Some(0.0), None));
+        assert_eq!(
+            (p.get(1), p.get(2), p.named("loc")),
+            (Some(7.0), Some(0.0), None)
+        );
         assert_eq!(p.named("_g"), Some(2.0));
         p.leave(Some(4.0));
-        assert_eq!((p.get(1), p.get(2), p.named("loc")), (Some(0.0), Some(1.0), Some(3.0)));
+        assert_eq!(
+            (p.get(1), p.get(2), p.named("loc")),
+            (Some(0.0), Some(1.0), Some(3.0))
+        );
         assert_eq!(p.named("_value"), Some(4.0));
         // Errors are located in the line.
         let mut b = Block::empty(3, 0);
         let d = eval_line(b"G1 X[1/0]", 3, 0, &mut b, &mut p).expect_err("fails");
         assert_eq!(d.column, 6);
         let d = eval_line(b"G1 X#<nope>", 3, 0, &mut b, &mut p).expect_err("fails");
-        assert_eq!((d.column, d.kind.to_string().contains("not set")), (5, true));
+        assert_eq!(
+            (d.column, d.kind.to_string().contains("not set")),
+            (5, true)
+        );
     }
 }

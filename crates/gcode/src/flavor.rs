@@ -253,7 +253,9 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             || code.contains("GOTO")
             || has_code(code, b'G', "65")
             || (code.starts_with("END")
-                && code[3..].trim_start().starts_with(|c: char| c.is_ascii_digit()))
+                && code[3..]
+                    .trim_start()
+                    .starts_with(|c: char| c.is_ascii_digit()))
         {
             return (Flavor::Fanuc, at("a Fanuc Macro B word"));
         }
@@ -319,7 +321,10 @@ mod tests {
         text.push_str("o100 sub\n");
         assert_eq!(detect(text.as_bytes()).0, Flavor::Fadal);
         let r = Resolved::new(Flavor::Auto, b"M83\n");
-        assert_eq!(r.describe(), "flavour marlin (auto: an extruder mode code on line 1: M83)");
+        assert_eq!(
+            r.describe(),
+            "flavour marlin (auto: an extruder mode code on line 1: M83)"
+        );
         assert_eq!(Resolved::new(Flavor::Haas, b"M83\n").flavor, Flavor::Haas);
     }
 

@@ -275,7 +275,10 @@ impl Control {
                 };
                 let Some(f) = self.frames.pop() else {
                     return Err((
-                        format!("{} outside a subroutine call", name(if kw == Kw::Return { "return" } else { "endsub" })),
+                        format!(
+                            "{} outside a subroutine call",
+                            name(if kw == Kw::Return { "return" } else { "endsub" })
+                        ),
                         0,
                         len,
                     ));
@@ -341,14 +344,14 @@ impl Control {
                         self.next_branch(&list, k, &label, len)
                     }
                 } else {
-                    self.to_endif(&list, k, &label, len)
+                    self.past_endif(&list, k, &label, len)
                 }
             }
             Kw::Else => {
                 if branch == Some(i) {
                     Ok(None)
                 } else {
-                    self.to_endif(&list, k, &label, len)
+                    self.past_endif(&list, k, &label, len)
                 }
             }
             Kw::EndIf | Kw::Do => Ok(None),
@@ -386,7 +389,10 @@ impl Control {
                 let n = crate::emit::round_half_away(n);
                 if n > self.max_blocks as f64 {
                     return Err((
-                        format!("repeat count {n} is over the limit of {} blocks", self.max_blocks),
+                        format!(
+                            "repeat count {n} is over the limit of {} blocks",
+                            self.max_blocks
+                        ),
                         rest + (text[rest..].len() - text[rest..].trim_start().len()),
                         ev.pos,
                     ));
@@ -459,7 +465,9 @@ impl Control {
         len: usize,
     ) -> Result<Option<(usize, u32)>, CtlError> {
         let j = self
-            .after(list, k, |x| matches!(x.kw, Kw::ElseIf | Kw::Else | Kw::EndIf))
+            .after(list, k, |x| {
+                matches!(x.kw, Kw::ElseIf | Kw::Else | Kw::EndIf)
+            })
             .ok_or_else(|| (format!("o{} if has no endif", fmt_label(label)), 0, len))?;
         if self.entries[j].kw == Kw::EndIf {
             Ok(Some(self.entries[j].next))
@@ -469,7 +477,7 @@ impl Control {
         }
     }
 
-    fn to_endif(
+    fn past_endif(
         &mut self,
         list: &[usize],
         k: usize,

@@ -619,7 +619,11 @@ fn action(
             Action::Error(err_at(line, ErrorKind::BadValue { word, why }, Some(span)))
         };
         let Some(p) = b.word(b'P') else {
-            return bad("M97".into(), "the call needs the block number in P", m97.span);
+            return bad(
+                "M97".into(),
+                "the call needs the block number in P",
+                m97.span,
+            );
         };
         if !(p.value >= 0.0 && p.value <= 999_999_999.0 && p.value.fract() == 0.0) {
             return bad(p.display(), "the block number P is a whole number", p.span);

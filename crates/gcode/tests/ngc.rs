@@ -112,7 +112,10 @@ fn feed_from_a_parameter_is_not_lost() {
 /// The first error of `text`: (line, column, message).
 fn first_error(text: &str, max_blocks: Option<u64>) -> (u32, u32, String) {
     let (_, d) = run_with(text, max_blocks);
-    let e = d.iter().find(|d| d.is_error()).unwrap_or_else(|| panic!("no error in {text}: {d:?}"));
+    let e = d
+        .iter()
+        .find(|d| d.is_error())
+        .unwrap_or_else(|| panic!("no error in {text}: {d:?}"));
     (e.line, e.column, e.kind.to_string())
 }
 
@@ -120,18 +123,38 @@ fn first_error(text: &str, max_blocks: Option<u64>) -> (u32, u32, String) {
 fn bad_input_is_a_located_error() {
     for (text, line, col, what) in [
         // A while that never ends.
-        ("G0 X0\no1 while [1]\nG0 X1\no1 endwhile\n", 4, 1, "more than 1000 blocks"),
+        (
+            "G0 X0\no1 while [1]\nG0 X1\no1 endwhile\n",
+            4,
+            1,
+            "more than 1000 blocks",
+        ),
         // Recursion without end.
-        ("o1 sub\no1 call\no1 endsub\no1 call\n", 2, 1, "nest more than 10 deep"),
+        (
+            "o1 sub\no1 call\no1 endsub\no1 call\n",
+            2,
+            1,
+            "nest more than 10 deep",
+        ),
         // A call to a missing sub.
-        ("G0 X0\no<nowhere> call [1]\n", 2, 1, "no subroutine o<nowhere> sub"),
+        (
+            "G0 X0\no<nowhere> call [1]\n",
+            2,
+            1,
+            "no subroutine o<nowhere> sub",
+        ),
         // An undefined parameter.
         ("G0 X#<nope>\n", 1, 5, "#<nope> is not set"),
         // Division by zero.
         ("G0 X[1 / [2 - 2]]\n", 1, 6, "division by zero"),
         // A 1e9 repeat count.
         ("o1 repeat [1e9]\n", 1, 13, "expected an operator"),
-        ("o1 repeat [1000000000]\nG0 X1\no1 endrepeat\n", 1, 11, "over the limit"),
+        (
+            "o1 repeat [1000000000]\nG0 X1\no1 endrepeat\n",
+            1,
+            11,
+            "over the limit",
+        ),
         // Control lines out of place.
         ("o1 endsub\n", 1, 1, "outside a subroutine"),
         ("o1 return\n", 1, 1, "outside a subroutine"),
@@ -181,7 +204,9 @@ fn an_unevaluated_feed_blames_no_later_block() {
     ] {
         let r = ProgramReader::new(Cursor::new(text.as_bytes()), Order::Execution);
         let opts = Flavor::Fadal.options(Options::default(), None);
-        let events: Vec<Event> = Stream::new(r, opts, false).map(|e| e.expect("reads")).collect();
+        let events: Vec<Event> = Stream::new(r, opts, false)
+            .map(|e| e.expect("reads"))
+            .collect();
         let diags: Vec<&Diagnostic> = events
             .iter()
             .filter_map(|e| match e {
@@ -191,7 +216,10 @@ fn an_unevaluated_feed_blames_no_later_block() {
             .collect();
         assert_eq!(diags.len(), 1, "{text}: {diags:?}");
         assert!(!diags[0].is_error() && diags[0].line == 2, "{diags:?}");
-        let moves = events.iter().filter(|e| matches!(e, Event::Move(_))).count();
+        let moves = events
+            .iter()
+            .filter(|e| matches!(e, Event::Move(_)))
+            .count();
         assert_eq!(moves, 3, "{text}");
     }
     assert!(!lampost_gcode::expr::sets_feed("#F = 2"));
@@ -235,8 +263,18 @@ fn haas_m97_calls_a_local_subprogram_by_its_n_label() {
     );
     // A missing label, and recursion, are located errors; check reads in file order.
     for (text, line, col, what) in [
-        ("G20 G0 X0\nM97 P300\nM30\nN100 X1\nM99\n", 2, 5, "no block N300"),
-        ("G20 G0 X0\nM97 P100\nM30\nN100 M97 P100\nM99\n", 4, 10, "N100 → N100"),
+        (
+            "G20 G0 X0\nM97 P300\nM30\nN100 X1\nM99\n",
+            2,
+            5,
+            "no block N300",
+        ),
+        (
+            "G20 G0 X0\nM97 P100\nM30\nN100 M97 P100\nM99\n",
+            4,
+            10,
+            "N100 → N100",
+        ),
     ] {
         let (_, d) = haas(text, Order::Execution);
         let e = d.iter().find(|d| d.is_error()).expect("an error");
@@ -250,5 +288,9 @@ fn haas_m97_calls_a_local_subprogram_by_its_n_label() {
     let d: Vec<Event> = Stream::from_bytes(b"G20 G0 X0\nM97 P100\nM30\n", opts, false)
         .map(|e| e.expect("reads"))
         .collect();
-    assert!(d.iter().any(|e| matches!(e, Event::Diagnostic(d) if d.line == 2)), "{d:?}");
+    assert!(
+        d.iter()
+            .any(|e| matches!(e, Event::Diagnostic(d) if d.line == 2)),
+        "{d:?}"
+    );
 }
