@@ -147,30 +147,50 @@ fn first_word(line: &str) -> &str {
     s
 }
 
-/// Whether `code` (a G/M word like "M83") stands in `line` as a whole word.
-fn has_code(line: &str, letter: u8, number: &str) -> bool {
-    let b = line.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'(' || b[i] == b';' {
-            return false;
-        }
-        if b[i].to_ascii_uppercase() == letter && (i == 0 || !b[i - 1].is_ascii_alphanumeric()) {
+/// The words of one upper-cased line (before its comments) that tell flavours apart, in
+/// one pass: each letter that does not follow a letter, with the whole number
+/// after it (leading zeros dropped).
+#[derive(Default)]
+struct Codes {
+    g65: bool,
+    g92: bool,
+    e0: bool,
+    m82_83: bool,
+    m97: bool,
+}
+
+impl Codes {
+    fn of(code: &str) -> Self {
+        let b = code.as_bytes();
+        let mut c = Codes::default();
+        let mut i = 0;
+        while i < b.len() {
+            let letter = b[i];
+            if !letter.is_ascii_alphabetic() || i > 0 && b[i - 1].is_ascii_alphabetic() {
+                i += 1;
+                continue;
+            }
             let mut j = i + 1;
-            while j < b.len() && b[j] == b'0' && b.get(j + 1).is_some_and(u8::is_ascii_digit) {
+            let mut n: u32 = 0;
+            while j < b.len() && b[j].is_ascii_digit() && n < 100_000 {
+                n = n * 10 + u32::from(b[j] - b'0');
                 j += 1;
             }
-            if line[j..].starts_with(number)
-                && !b
-                    .get(j + number.len())
-                    .is_some_and(|c| c.is_ascii_digit() || *c == b'.')
-            {
-                return true;
+            let whole = j > i + 1 && !b.get(j).is_some_and(|d| d.is_ascii_digit() || *d == b'.');
+            if whole {
+                match (letter, n) {
+                    (b'G', 65) => c.g65 = true,
+                    (b'G', 92) => c.g92 = true,
+                    (b'E', 0) => c.e0 = true,
+                    (b'M', 82 | 83) => c.m82_83 = true,
+                    (b'M', 97) => c.m97 = true,
+                    _ => {}
+                }
             }
+            i = j.max(i + 1);
         }
-        i += 1;
+        c
     }
-    false
 }
 
 /// Decide the flavour of a program from its first bytes (at most [`DETECT_BYTES`] are
@@ -248,10 +268,11 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
         }
         let upper = w.to_ascii_uppercase();
         let code = upper.split(['(', ';']).next().unwrap_or("");
+        let c = Codes::of(code);
         if code.starts_with("IF") && code[2..].trim_start().starts_with('[')
             || code.starts_with("WHILE") && code[5..].trim_start().starts_with('[')
             || code.contains("GOTO")
-            || has_code(code, b'G', "65")
+            || c.g65
             || (code.starts_with("END")
                 && code[3..]
                     .trim_start()
@@ -259,13 +280,13 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
         {
             return (Flavor::Fanuc, at("a Fanuc Macro B word"));
         }
-        if has_code(code, b'M', "82") || has_code(code, b'M', "83") {
+        if c.m82_83 {
             return (Flavor::Marlin, at("an extruder mode code"));
         }
-        if has_code(code, b'G', "92") && has_code(code, b'E', "0") {
+        if c.g92 && c.e0 {
             return (Flavor::Marlin, at("G92 E (extruder position)"));
         }
-        if has_code(code, b'M', "97") {
+        if c.m97 {
             return (Flavor::Haas, at("an M97 local subprogram call"));
         }
         if weak.is_none() && (code.contains('#') || code.contains('[')) {
@@ -295,6 +316,8 @@ mod tests {
             (";FLAVOR:RepRap\nG1 X1\n", Flavor::RepRap),
             ("G21\nM83\nG1 X1 E.2\n", Flavor::Marlin),
             ("G92 E0\n", Flavor::Marlin),
+            ("G1X1\nG92E0\n", Flavor::Marlin),
+            ("G0 X1\nM830\nM8.3 G650\n", Flavor::Fadal),
             ("G20\no100 sub\nG0 X1\no100 endsub\n", Flavor::LinuxCnc),
             ("O<probe> call\n", Flavor::LinuxCnc),
             ("#<depth> = 2\nG1 Z-#<depth>\n", Flavor::LinuxCnc),

@@ -147,7 +147,7 @@ impl<S: LineSource> Iterator for Stream<S> {
             // (one move per line is the rule), the rest wait in the queue.
             let mut first: Option<Event> = None;
             let mut block = Block::empty(line.number, line.offset);
-            let parsed = parse_line_with(
+            let mut parsed = parse_line_with(
                 line.bytes,
                 line.number,
                 line.offset,
@@ -156,24 +156,11 @@ impl<S: LineSource> Iterator for Stream<S> {
             );
             // Macro lines only: the flavour's evaluation (plain lines never come here).
             let mut control = None;
-            let parsed = match (parsed, self.params.as_deref_mut()) {
-                (Ok(()), Some(params)) if block.kind != BlockKind::Words => match block.kind {
-                    BlockKind::Macro(MacroKind::LinuxCncExpression) => crate::expr::eval_line(
-                        line.bytes,
-                        line.number,
-                        line.offset,
-                        &mut block,
-                        params,
-                    ),
-                    BlockKind::Macro(MacroKind::LinuxCncOWord) => {
-                        control = Some((block.raw.to_owned(), line.number, line.offset));
-                        block.kind = BlockKind::Words;
-                        Ok(())
-                    }
-                    _ => Ok(()),
-                },
-                (p, _) => p,
-            };
+            if block.kind != BlockKind::Words && parsed.is_ok() {
+                if let Some(params) = self.params.as_deref_mut() {
+                    parsed = evaluate(&line, &mut block, params, &mut control);
+                }
+            }
             let failed = match parsed {
                 Ok(()) => match self.interp.block(&block, &mut |e| {
                     if first.is_none() {
@@ -184,11 +171,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 }) {
                     Ok(()) => {
                         if let Some(params) = self.params.as_deref_mut() {
-                            let moves = first.iter().chain(queue.iter());
-                            params.after_moves(moves.filter_map(|e| match e {
-                                Event::Move(m) => Some(m),
-                                Event::Diagnostic(_) => None,
-                            }));
+                            after_moves(params, first.as_ref(), queue);
                         }
                         false
                     }
@@ -240,6 +223,42 @@ impl<S: LineSource> Iterator for Stream<S> {
             }
         }
     }
+}
+
+/// A macro line of a flavour that evaluates them: an expression line becomes a word
+/// block, an O-word line is noted in `control` for the source to follow.
+#[inline(never)]
+fn evaluate<'a>(
+    line: &Line<'a>,
+    block: &mut Block<'a>,
+    params: &mut Params,
+    control: &mut Option<(String, u32, usize)>,
+) -> Result<(), Diagnostic> {
+    match block.kind {
+        BlockKind::Macro(MacroKind::LinuxCncExpression) => {
+            crate::expr::eval_line(line.bytes, line.number, line.offset, block, params)
+        }
+        BlockKind::Macro(MacroKind::LinuxCncOWord) => {
+            *control = Some((block.raw.to_owned(), line.number, line.offset));
+            block.kind = BlockKind::Words;
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The system parameters after a block's moves (see [`Params::after_moves`]).
+#[inline(never)]
+fn after_moves(params: &mut Params, first: Option<&Event>, rest: &VecDeque<Event>) {
+    params.after_moves(
+        first
+            .into_iter()
+            .chain(rest.iter())
+            .filter_map(|e| match e {
+                Event::Move(m) => Some(m),
+                Event::Diagnostic(_) => None,
+            }),
+    );
 }
 
 /// Every diagnostic of a program (parse and interpretation), in order: every line of
