@@ -340,6 +340,24 @@ impl Rng {
 }
 
 const TOKENS: &[&str] = &[
+    "\no1 sub\n",
+    "\no1 endsub\n",
+    "\no1 call [2]\n",
+    "\no2 while [#1 LT 3]\n",
+    "\no2 endwhile\n",
+    "\no3 if [#2 EQ 1]\n",
+    "\no3 else\n",
+    "\no3 endif\n",
+    "\no4 repeat [3]\n",
+    "\no4 endrepeat\n",
+    "\no2 break\n",
+    "\no2 continue\n",
+    "\n#1 = [#1 + 1]\n",
+    "#<a>",
+    "[1/#1]",
+    "SQRT[",
+    "**",
+    "M97 P",
     "G0",
     "G1",
     "G2",
@@ -443,6 +461,7 @@ fn fuzz(seconds: u64) -> Result<(), String> {
         root().join("../shared/corpus/linuxcnc"),
         root().join("../shared/corpus/fadal-probekit"),
         root().join("fixtures/programs"),
+        root().join("fixtures/linuxcnc-nc_files"),
     ] {
         if let Ok(rd) = std::fs::read_dir(&dir) {
             for e in rd.flatten() {
@@ -487,9 +506,23 @@ fn fuzz(seconds: u64) -> Result<(), String> {
         }
         let t = Instant::now();
         let data = input.clone();
+        // Every other input is read as LinuxCNC's, its O-words followed and its
+        // expressions evaluated (with a smaller block limit, so each run stays short).
+        let linuxcnc = inputs % 2 == 1;
         let r = panic::catch_unwind(move || {
-            let opts = lampost_gcode::Options::default();
-            lampost_gcode::Stream::from_bytes(&data, opts, false).count()
+            if linuxcnc {
+                let mut src = lampost_gcode::ProgramReader::new(
+                    std::io::Cursor::new(&data[..]),
+                    lampost_gcode::Order::Execution,
+                );
+                src.set_max_blocks(100_000);
+                let opts = lampost_gcode::Flavor::LinuxCnc
+                    .options(lampost_gcode::Options::default(), None);
+                lampost_gcode::Stream::new(src, opts, false).count()
+            } else {
+                let opts = lampost_gcode::Options::default();
+                lampost_gcode::Stream::from_bytes(&data, opts, false).count()
+            }
         });
         slowest = slowest.max(t.elapsed());
         inputs += 1;

@@ -3,15 +3,17 @@
 use std::io::Write;
 
 use lampost_gcode::emit::fixed;
+use lampost_gcode::flavor::DETECT_BYTES;
 use lampost_gcode::{
-    parse_line, Diagnostic, Dialect, EWord, EmitOptions, Emitter, ErrorKind, Event, LineReader,
-    Move, MoveKind, Options, Order, ProgramReader, Severity, Stream, Units, AXES,
+    parse_line_with, Block, Diagnostic, Dialect, EWord, EmitOptions, Emitter, ErrorKind, Event,
+    Flavor, LineReader, Move, MoveKind, Options, Order, ProgramReader, Resolved, Severity, Stream,
+    Units, AXES,
 };
 
-use crate::io::{display_name, open_input, open_seekable, Output};
+use crate::io::{display_name, open_seekable, Output};
 use crate::json::{self, obj, Obj};
 use crate::report::{self, CliError};
-use crate::{DialectArg, EWordArg, InterpArgs, UnitsArg};
+use crate::{DialectArg, EWordArg, FlavorArg, InterpArgs, UnitsArg};
 
 /// At most this many diagnostics are printed for people.
 const MAX_PRINTED: usize = 200;
@@ -27,15 +29,38 @@ fn units(u: UnitsArg) -> Units {
     }
 }
 
-pub fn options(a: InterpArgs) -> Options {
-    Options {
-        units: units(a.units),
-        e_word: match a.e_word {
-            EWordArg::Fixture => EWord::FixtureOffset,
-            EWordArg::Extrusion => EWord::Extrusion,
+/// The interpreter's options for a program of flavour `flavor` (resolved).
+pub fn options(a: InterpArgs, flavor: Flavor) -> Options {
+    let e_word = a.e_word.map(|e| match e {
+        EWordArg::Fixture => EWord::FixtureOffset,
+        EWordArg::Extrusion => EWord::Extrusion,
+    });
+    flavor.options(
+        Options {
+            units: units(a.units),
+            block_delete: a.block_delete,
+            ..Options::default()
         },
-        block_delete: a.block_delete,
+        e_word,
+    )
+}
+
+/// The flavour of the program `r` holds (its first bytes are looked at for `auto`;
+/// `r` is left where it was).
+pub fn resolve<R: std::io::Read + std::io::Seek + ?Sized>(
+    given: FlavorArg,
+    r: &mut R,
+) -> std::io::Result<Resolved> {
+    use std::io::{Read, SeekFrom};
+    let given = given.flavor();
+    if given != Flavor::Auto {
+        return Ok(Resolved::new(given, b""));
     }
+    let at = r.stream_position()?;
+    let mut head = Vec::with_capacity(DETECT_BYTES);
+    r.take(DETECT_BYTES as u64).read_to_end(&mut head)?;
+    r.seek(SeekFrom::Start(at))?;
+    Ok(Resolved::new(given, &head))
 }
 
 fn io_err(name: &str, e: std::io::Error) -> CliError {
@@ -43,12 +68,21 @@ fn io_err(name: &str, e: std::io::Error) -> CliError {
 }
 
 /// `file`'s lines in `order` (every program in turn, or the main program with its calls
-/// followed).
+/// followed; a flavour that evaluates macros is always read in execution order), and
+/// its flavour.
 fn program(
     file: &str,
     order: Order,
-) -> Result<ProgramReader<Box<dyn crate::io::ReadSeek>>, CliError> {
-    Ok(ProgramReader::new(open_seekable(file)?, order))
+    flavor: FlavorArg,
+) -> Result<(ProgramReader<Box<dyn crate::io::ReadSeek>>, Resolved), CliError> {
+    let mut src = open_seekable(file)?;
+    let resolved = resolve(flavor, &mut src).map_err(|e| io_err(&display_name(file), e))?;
+    let order = if resolved.flavor.evaluates() {
+        Order::Execution
+    } else {
+        order
+    };
+    Ok((ProgramReader::new(src, order), resolved))
 }
 
 /// `check`: every diagnostic for people on standard error (the first
@@ -58,7 +92,7 @@ fn program(
 /// "ok": …}`. Memory does not grow with the number of diagnostics.
 pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError> {
     let name = display_name(file);
-    let input = program(file, Order::File)?;
+    let (input, flavor) = program(file, Order::File, interp.flavor)?;
     let mut errors = 0usize;
     let mut warnings = 0usize;
     let mut shown = 0usize;
@@ -74,7 +108,7 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
         .map_err(werr)?;
     }
     let stderr = std::io::stderr();
-    for ev in Stream::new(input, options(interp), false) {
+    for ev in Stream::new(input, options(interp, flavor.flavor), false) {
         let Event::Diagnostic(d) = ev.map_err(|e| io_err(&name, e))? else {
             continue;
         };
@@ -98,8 +132,9 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
     if json {
         writeln!(
             out,
-            "{}],\"not_shown\":{not_shown},\"errors\":{errors},\"warnings\":{warnings},\"ok\":{}}}",
+            "{}],\"not_shown\":{not_shown},\"errors\":{errors},\"warnings\":{warnings},\"flavor\":{},\"ok\":{}}}",
             if shown > 0 { "\n" } else { "" },
+            json::to_string(&flavor)?,
             errors == 0
         )
         .map_err(werr)?;
@@ -110,7 +145,10 @@ pub fn check(file: &str, json: bool, interp: InterpArgs) -> Result<(), CliError>
                 "… and {not_shown} more not shown (--json lists up to {MAX_JSON_DIAGNOSTICS})"
             );
         }
-        eprintln!("{name}: {errors} error(s), {warnings} warning(s)");
+        eprintln!(
+            "{name}: {errors} error(s), {warnings} warning(s); {}",
+            flavor.describe()
+        );
     }
     if errors > 0 {
         Err(CliError::failed(""))
@@ -140,7 +178,7 @@ pub fn fmt(
     dialect: Option<DialectArg>,
     renumber: Option<&str>,
     suppress_modal: bool,
-    start_units: UnitsArg,
+    (start_units, flavor): (UnitsArg, FlavorArg),
 ) -> Result<(), CliError> {
     let name = display_name(file);
     let renumber = renumber.map(parse_renumber).transpose()?;
@@ -153,19 +191,23 @@ pub fn fmt(
         suppress_modal,
         units: units(start_units),
     };
-    let mut reader = LineReader::new(open_input(file)?);
+    let mut src = open_seekable(file)?;
+    let flavor = resolve(flavor, &mut src).map_err(|e| io_err(&name, e))?;
+    let exponents = flavor.flavor.is_slicer();
+    let mut reader = LineReader::new(std::io::BufReader::with_capacity(1 << 16, src));
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut errors = 0usize;
     {
         let mut em = Emitter::new(out.writer(), opts);
         while let Some(line) = reader.next_line().map_err(|e| io_err(&name, e))? {
+            let mut b = Block::empty(line.number, line.offset);
             let parsed = match line.too_long() {
                 Some(d) => Err(d),
-                None => parse_line(line.bytes, line.number, line.offset),
+                None => parse_line_with(line.bytes, line.number, line.offset, &mut b, exponents),
             };
             let refused = match parsed {
-                Ok(b) => match em.block(&b) {
+                Ok(()) => match em.block(&b) {
                     Ok(()) => None,
                     // A word the dialect cannot hold, or renumbering past its largest N:
                     // a located error (the emitter wrote nothing of the block).
@@ -316,7 +358,10 @@ pub fn trace(
     interp: InterpArgs,
 ) -> Result<(), CliError> {
     let name = display_name(file);
-    let input = program(file, Order::Execution)?;
+    let (input, flavor) = program(file, Order::Execution, interp.flavor)?;
+    if !json {
+        eprintln!("{name}: {}", flavor.describe());
+    }
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut diags = Vec::new();
@@ -328,7 +373,7 @@ pub fn trace(
         if json {
             w.write_all(b"{\"moves\":[").map_err(werr)?;
         }
-        for ev in Stream::new(input, options(interp), true) {
+        for ev in Stream::new(input, options(interp, flavor.flavor), true) {
             match ev.map_err(|e| io_err(&name, e))? {
                 Event::Move(m) => {
                     if json {
@@ -357,8 +402,9 @@ pub fn trace(
         if json {
             write!(
                 w,
-                "],\"diagnostics\":{},\"diagnostics_not_shown\":{not_shown},\"ok\":{}}}",
+                "],\"diagnostics\":{},\"diagnostics_not_shown\":{not_shown},\"flavor\":{},\"ok\":{}}}",
                 json::to_string(&diags)?,
+                json::to_string(&flavor)?,
                 errors == 0
             )
             .map_err(werr)?;

@@ -48,6 +48,45 @@ pub enum EWordArg {
     Extrusion,
 }
 
+/// The control a program was written for (`auto`: decided from the program's content).
+#[derive(Debug, Clone, Copy, ValueEnum, Default, PartialEq, Eq)]
+pub enum FlavorArg {
+    /// Decide from the program's first 64 KiB (slicer comments, M82/M83, O-words, macros).
+    #[default]
+    Auto,
+    /// LinuxCNC: parameters, expressions and O-words evaluated.
+    Linuxcnc,
+    /// Fanuc.
+    Fanuc,
+    /// Haas.
+    Haas,
+    /// FADAL.
+    Fadal,
+    /// Mach3.
+    Mach3,
+    /// Marlin (slicer programs: E is extrusion).
+    Marlin,
+    /// RepRapFirmware (slicer programs: E is extrusion).
+    Reprap,
+}
+
+impl FlavorArg {
+    /// The library's flavour.
+    pub fn flavor(self) -> lampost_gcode::Flavor {
+        use lampost_gcode::Flavor as F;
+        match self {
+            FlavorArg::Auto => F::Auto,
+            FlavorArg::Linuxcnc => F::LinuxCnc,
+            FlavorArg::Fanuc => F::Fanuc,
+            FlavorArg::Haas => F::Haas,
+            FlavorArg::Fadal => F::Fadal,
+            FlavorArg::Mach3 => F::Mach3,
+            FlavorArg::Marlin => F::Marlin,
+            FlavorArg::Reprap => F::RepRap,
+        }
+    }
+}
+
 /// Output dialect.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum DialectArg {
@@ -63,9 +102,12 @@ pub struct InterpArgs {
     /// Units before the program's first G20/G21.
     #[arg(long, value_enum, default_value = "mm")]
     units: UnitsArg,
-    /// Meaning of E words.
-    #[arg(long = "e-word", value_enum, default_value = "fixture")]
-    e_word: EWordArg,
+    /// Meaning of E words (default: the flavour's: extrusion for marlin and reprap).
+    #[arg(long = "e-word", value_enum)]
+    e_word: Option<EWordArg>,
+    /// The control the program was written for.
+    #[arg(long, value_enum, default_value = "auto")]
+    flavor: FlavorArg,
     /// Skip blocks that start with `/` (the block-delete switch on).
     #[arg(long)]
     block_delete: bool,
@@ -483,6 +525,9 @@ enum Command {
         /// Units before the program's first G20/G21 (decides decimals).
         #[arg(long, value_enum, default_value = "mm")]
         units: UnitsArg,
+        /// The control the program was written for (marlin and reprap read number exponents).
+        #[arg(long, value_enum, default_value = "auto")]
+        flavor: FlavorArg,
     },
     /// Show the interpreted motion: one line per move, absolute, in program units.
     Trace {
@@ -776,13 +821,14 @@ fn run(cli: Cli) -> Result<(), CliError> {
             renumber,
             suppress_modal,
             units,
+            flavor,
         } => gcode_cmds::fmt(
             &file,
             output.as_deref(),
             dialect,
             renumber.as_deref(),
             suppress_modal,
-            units,
+            (units, flavor),
         ),
         Command::Trace {
             file,

@@ -66,9 +66,12 @@ pub struct Placement {
     /// Scale a program in other units to the machine's (otherwise an error).
     #[arg(long)]
     pub convert_units: bool,
-    /// E words are slicer extrusion: deposit only while E grows.
+    /// E words are slicer extrusion: deposit only while E grows (implied by --flavor marlin or reprap).
     #[arg(long)]
     pub e_extrusion: bool,
+    /// The control the input was written for (auto: decided from the first section's program).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub flavor: crate::FlavorArg,
     /// INPUT is a path with its own tool axis: rows `x y z i j k [feed] [laser]` (implied by a .csv name).
     #[arg(long)]
     pub per_point: bool,
@@ -250,6 +253,41 @@ fn source(input: &str) -> Result<Source, CliError> {
         }
         Ok(Source::Path(PathBuf::from(input)))
     }
+}
+
+/// The flavour of the sections' programs: given, or for `auto` decided from the first
+/// section's first bytes.
+pub fn section_flavor(
+    pl: &Placement,
+    secs: &[Section],
+) -> Result<lampost_gcode::Resolved, CliError> {
+    use lampost_gcode::flavor::DETECT_BYTES;
+    use std::io::Read;
+    let mut head = Vec::new();
+    if pl.flavor == crate::FlavorArg::Auto {
+        match secs.first().map(|s| &s.source) {
+            Some(Source::Bytes(b)) => head.extend_from_slice(&b[..b.len().min(DETECT_BYTES)]),
+            Some(Source::Path(p)) => {
+                std::fs::File::open(p)
+                    .and_then(|f| f.take(DETECT_BYTES as u64).read_to_end(&mut head))
+                    .map_err(|e| {
+                        CliError::usage(format!("error: cannot read {}: {e}\n", p.display()))
+                    })?;
+            }
+            None => {}
+        }
+    }
+    Ok(lampost_gcode::Resolved::new(pl.flavor.flavor(), &head))
+}
+
+/// How the sections' programs are read.
+fn intended_options(pl: &Placement, secs: &[Section]) -> Result<IntendedOptions, CliError> {
+    let flavor = section_flavor(pl, secs)?.flavor;
+    Ok(IntendedOptions {
+        convert_units: pl.convert_units,
+        e_extrusion: pl.e_extrusion || flavor.is_slicer(),
+        flavor,
+    })
 }
 
 /// Build the sections from the placement options and INPUT.
@@ -540,10 +578,7 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         dialect,
         renumber,
         tolerance,
-        intended: IntendedOptions {
-            convert_units: a.place.convert_units,
-            e_extrusion: a.place.e_extrusion,
-        },
+        intended: intended_options(&a.place, sections)?,
         near,
         program_number: a.program_number,
         header,
@@ -712,6 +747,7 @@ pub fn post(
         let j = obj! {
             "moves": report.moves, "warnings": report.warnings, "limits_used": limits,
             "indexes": report.indexes, "verify": v, "bytes": total, "files": written,
+            "flavor": cfg.intended.flavor,
             "time_s": t0.elapsed().as_secs_f64(),
         };
         let j = json::to_string(&j)?;
@@ -823,10 +859,7 @@ pub fn verify(
         .map_err(located)?
     } else {
         let secs = sections(&m, place, input)?;
-        let opts = IntendedOptions {
-            convert_units: place.convert_units,
-            e_extrusion: place.e_extrusion,
-        };
+        let opts = intended_options(place, &secs)?;
         let work = extra_work(place, part.as_deref())?;
         lampost_post::verify(&m, &secs, h, opts, f, tol, work.as_ref(), part.as_deref())
             .map_err(located)?

@@ -42,9 +42,13 @@ fn linuxcnc_sample_programs_against_rs274() {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
         let text = String::from_utf8_lossy(&std::fs::read(path).expect("read")).into_owned();
-        let prog = work.join(&name);
+        // rs274 keeps state (its parameter file) in its working folder: each program
+        // gets a folder of its own, so no verdict depends on the programs run before.
+        let own = work.join(name.replace('.', "_"));
+        std::fs::create_dir_all(&own).expect("folder");
+        let prog = own.join(&name);
         std::fs::write(&prog, prepare(&text)).expect("write");
-        let verdict = match rs274_try(&prog, &work) {
+        let verdict = match rs274_try(&prog, &own) {
             Err(_) => "rs274-fails".to_string(),
             Ok(canon) => {
                 let out = lampost(&["trace", "--json", prog.to_str().expect("utf8")]);

@@ -5,7 +5,7 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use lampost_gcode::{Event, Options, Stream};
+use lampost_gcode::{Event, Flavor, Options, Resolved, Stream};
 
 fn best_of(runs: usize, mut f: impl FnMut() -> usize) -> (Duration, usize) {
     let mut best = Duration::MAX;
@@ -21,7 +21,10 @@ fn best_of(runs: usize, mut f: impl FnMut() -> usize) -> (Duration, usize) {
 fn ours(text: &[u8]) -> usize {
     let mut moves = 0usize;
     let mut endsum = 0.0f64;
-    for e in Stream::from_bytes(text, Options::default(), false) {
+    // As `--flavor auto` reads it: the flavour decided from the head, once per program.
+    let flavor = Resolved::new(Flavor::Auto, text).flavor;
+    let opts = flavor.options(Options::default(), None);
+    for e in Stream::from_bytes(text, opts, false) {
         if let Ok(Event::Move(m)) = e {
             moves += 1;
             endsum += m.end[0];

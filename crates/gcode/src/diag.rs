@@ -168,6 +168,13 @@ pub enum ErrorKind {
         /// What was counted.
         what: &'static str,
     },
+    /// A parameter or expression that cannot be evaluated (LinuxCNC flavour).
+    #[error("{0}")]
+    Expression(String),
+    /// An O-word control line that cannot be followed (LinuxCNC flavour), or the block
+    /// limit of loops and subroutines reached.
+    #[error("{0}")]
+    Control(String),
     /// More `O` programs in one file than lampost indexes.
     #[error("more than {0} programs (O numbers) in one file")]
     TooManyPrograms(usize),
@@ -236,6 +243,8 @@ impl ErrorKind {
             ErrorKind::CallsTooDeep(_) => "flatten the calls: lampost follows calls 8 deep",
             ErrorKind::TooManyCalls { .. } => "check the L repeats of nested calls; split the program",
             ErrorKind::TooManyPrograms(_) => "split the file",
+            ErrorKind::Expression(_) => "check the expression and that every parameter it reads is set before (RS274NGC: parameters are set after the line's words are read)",
+            ErrorKind::Control(_) => "check the O-word structure: each sub, if, while, do and repeat is closed with the same O number, and loops end",
             ErrorKind::EmptyProgram => "give a file that holds a program",
             ErrorKind::OutOfRange { .. } => "correct the value; the controller refuses a number it cannot hold, and lampost never writes a cut-off one",
             ErrorKind::RenumberOverflow { .. } => "renumber with a smaller start or step, or split the program",

@@ -49,6 +49,8 @@ pub struct Options {
     pub e_word: EWord,
     /// Skip blocks starting with `/`.
     pub block_delete: bool,
+    /// The control the program was written for (resolved: see [`crate::flavor`]).
+    pub flavor: crate::flavor::Flavor,
 }
 
 impl Default for Options {
@@ -57,6 +59,7 @@ impl Default for Options {
             units: Units::Mm,
             e_word: EWord::FixtureOffset,
             block_delete: false,
+            flavor: crate::flavor::Flavor::Fadal,
         }
     }
 }
@@ -195,6 +198,9 @@ pub struct Interpreter {
     warned_macro: bool,
     /// Inside a LinuxCNC `G5.2` … `G5.3` NURBS block (control points, not moves).
     nurbs: bool,
+    /// A skipped macro block set the feed rate from a value lampost does not know: later
+    /// feed moves are not blamed for a missing F.
+    feed_from_macro: bool,
     offset_cache: Position,
     /// Every offset is zero (the common case): positions need no shifting.
     offset_zero: bool,
@@ -268,7 +274,15 @@ impl Interpreter {
         Interpreter {
             opts,
             units_given: false,
-            modal: Modal::new(opts.units),
+            modal: Modal {
+                // LinuxCNC starts in G99 (canned cycles retract to R), others in G98.
+                retract: if opts.flavor == crate::flavor::Flavor::LinuxCnc {
+                    crate::modal::Retract::RPlane
+                } else {
+                    crate::modal::Retract::InitialZ
+                },
+                ..Modal::new(opts.units)
+            },
             pos: [0.0; 9],
             g5x: [[0.0; 9]; 10],
             fixture: [[0.0; 9]; 49],
@@ -288,6 +302,7 @@ impl Interpreter {
             block_axes: 0,
             warned_macro: false,
             nurbs: false,
+            feed_from_macro: false,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -356,6 +371,7 @@ impl Interpreter {
                 // Statement lines (`#…`) are reported once; lines whose motion or flow
                 // depends on macro values each time.
                 let statement = b.raw.trim_start().starts_with('#');
+                self.feed_from_macro |= crate::expr::sets_feed(b.raw);
                 if !(self.ended || statement && self.warned_macro) {
                     self.warned_macro |= statement;
                     out(Event::Diagnostic(diag(
@@ -802,7 +818,12 @@ impl Interpreter {
                 20 | 300 => stop_after = true,
                 820 => self.e_relative = false,
                 830 => self.e_relative = true,
-                980 if self.calls == Calls::NotFollowed => {
+                // Haas M97: the reader runs the labelled block to its M99, which then
+                // returns like a subprogram's.
+                970 if self.calls == Calls::Followed => {
+                    self.open_programs = self.open_programs.saturating_add(1);
+                }
+                970 | 980 if self.calls == Calls::NotFollowed => {
                     let mut what = mw.display_code();
                     for word in [w.word(b'P'), w.word(b'L')].into_iter().flatten() {
                         what.push(' ');
@@ -844,7 +865,7 @@ impl Interpreter {
         // call's repeat count).
         if let Some(l) = w
             .word(b'L')
-            .filter(|_| !w.ms.iter().any(|&(_, c)| c == 980))
+            .filter(|_| !w.ms.iter().any(|&(_, c)| c == 980 || c == 970))
         {
             let canned_block = w
                 .g_in(GGroup::Motion)
@@ -1283,7 +1304,7 @@ impl Interpreter {
                 Some(f) if f > 0.0 => Ok(f),
                 _ => Err(diag(b, Severity::Error, ErrorKind::InverseTimeNeedsF, None)),
             },
-            _ if self.modal.feed <= 0.0 => {
+            _ if self.modal.feed <= 0.0 && !self.feed_from_macro => {
                 Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None))
             }
             _ => Ok(self.modal.feed),

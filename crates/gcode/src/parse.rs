@@ -156,7 +156,7 @@ const OWORD_KEYWORDS: [&str; 15] = [
     "continue",
 ];
 
-fn is_oword(rest: &str) -> bool {
+pub(crate) fn is_oword(rest: &str) -> bool {
     let b = rest.as_bytes();
     if b.len() < 2 || !(b[0] == b'o' || b[0] == b'O') {
         return false;

@@ -86,6 +86,8 @@ struct Frame {
     back: (usize, u32),
     /// Runs still to come after this one.
     repeats_left: u32,
+    /// A Haas `M97` call: `prog` indexes `locals`, the body runs to the first M99.
+    local: bool,
 }
 
 /// What a line asks of the reader.
@@ -97,6 +99,12 @@ enum Action {
     Call {
         prog: usize,
         repeats: u32,
+    },
+    /// Haas `M97 P…`: the block labelled `N…` of this file, to its first M99.
+    Local {
+        label: u32,
+        repeats: u32,
+        span: crate::ast::Span,
     },
     Return,
     Error(Diagnostic),
@@ -134,6 +142,14 @@ pub struct ProgramReader<R> {
     /// The current line as bytes, for `BufRead`.
     out: Vec<u8>,
     out_pos: usize,
+    /// LinuxCNC O-word lines and their control flow (indexed at the first one followed).
+    ngc: Option<Box<crate::ngc::Control>>,
+    /// The `N` labels of the file (number, offset, line), sorted, for `M97`.
+    labels: Option<Vec<(u32, usize, u32)>>,
+    /// Where each followed `M97` body starts (offset, line).
+    locals: Vec<(usize, u32)>,
+    /// [`crate::ngc::MAX_BLOCKS`] (smaller in tests).
+    max_blocks: u64,
 }
 
 fn may_matter(bytes: &[u8]) -> bool {
@@ -189,7 +205,119 @@ impl<R: Read + Seek> ProgramReader<R> {
             halted: false,
             out: Vec::new(),
             out_pos: 0,
+            ngc: None,
+            labels: None,
+            locals: Vec::new(),
+            max_blocks: crate::ngc::MAX_BLOCKS,
         }
+    }
+
+    /// At most `n` blocks are run again by loops and subroutine calls (default
+    /// [`crate::ngc::MAX_BLOCKS`]).
+    pub fn set_max_blocks(&mut self, n: u64) {
+        self.max_blocks = n;
+    }
+
+    /// Read the whole file once and note its `N` labels (for Haas `M97`).
+    fn index_labels(&mut self) -> io::Result<Vec<(u32, usize, u32)>> {
+        let mut v = Vec::new();
+        self.lines.seek_line(0, 1)?;
+        while let Some((line, _)) = self.lines.next_line_end()? {
+            let b = line.bytes;
+            let mut i = 0;
+            while i < b.len() && matches!(b[i], b' ' | b'\t' | b'/') {
+                i += 1;
+            }
+            if !b.get(i).is_some_and(|c| matches!(c, b'n' | b'N')) {
+                continue;
+            }
+            let digits = b[i + 1..].iter().take_while(|c| c.is_ascii_digit()).count();
+            if digits == 0 || digits > 9 || v.len() >= MAX_PROGRAMS {
+                continue;
+            }
+            let n = b[i + 1..i + 1 + digits]
+                .iter()
+                .fold(0u32, |a, c| a * 10 + u32::from(c - b'0'));
+            v.push((n, line.offset, line.number));
+        }
+        // The first block with a label wins.
+        v.sort_by_key(|x| (x.0, x.1));
+        v.dedup_by_key(|x| x.0);
+        Ok(v)
+    }
+
+    /// Read the whole file once and note its LinuxCNC O-word lines.
+    fn index_owords(&mut self) -> io::Result<crate::ngc::Control> {
+        let mut c = crate::ngc::Control::new();
+        c.max_blocks = self.max_blocks;
+        self.lines.seek_line(0, 1)?;
+        while let Some((line, end)) = self.lines.next_line_end()? {
+            let b = line.bytes;
+            let first = b.iter().position(|c| !matches!(c, b' ' | b'\t' | b'/'));
+            let maybe = first.is_some_and(|i| matches!(b[i] | 0x20, b'o' | b'n'));
+            if !maybe || b.len() > MAX_LINE_BYTES {
+                continue;
+            }
+            let Ok(text) = std::str::from_utf8(b) else {
+                continue;
+            };
+            let next = (end, line.number.saturating_add(1));
+            if !c.add(text, (line.offset, line.number), next) {
+                break;
+            }
+        }
+        Ok(c)
+    }
+
+    /// Follow the LinuxCNC O-word control line `text` (line `number` at `offset`, just
+    /// handed out) with `params`; `None` when this reader does not follow control lines
+    /// (file order).
+    pub fn control(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        if self.order != Order::Execution {
+            return None;
+        }
+        if self.ngc.is_none() {
+            let at = (self.pos, self.line);
+            match self.index_owords() {
+                Ok(c) => self.ngc = Some(Box::new(c)),
+                Err(e) => {
+                    return Some(Err(Diagnostic::at(
+                        Severity::Error,
+                        ErrorKind::Control(format!("cannot index the O-word lines: {e}")),
+                        number,
+                        offset,
+                        text.as_bytes(),
+                        0,
+                        text.len(),
+                    )))
+                }
+            }
+            (self.pos, self.line) = at;
+        }
+        let ctl = self.ngc.as_mut()?;
+        Some(match ctl.step(text, offset, params) {
+            Ok(None) => Ok(()),
+            Ok(Some((pos, line))) => {
+                self.pos = pos;
+                self.line = line;
+                Ok(())
+            }
+            Err((msg, s, e)) => Err(Diagnostic::at(
+                Severity::Error,
+                ErrorKind::Control(msg),
+                number,
+                offset,
+                text.as_bytes(),
+                s,
+                e,
+            )),
+        })
     }
 
     /// Read the whole file once and note its programs.
@@ -272,6 +400,9 @@ impl<R: Read + Seek> ProgramReader<R> {
         }
         // A body ends at its last M99, which returns; this is only a guard.
         while let Some(f) = self.stack.last() {
+            if f.local {
+                break;
+            }
             match self.programs[f.prog].end {
                 Some((end, _)) if self.pos < end => break,
                 _ => self.ret(),
@@ -330,6 +461,7 @@ impl<R: Read + Seek> ProgramReader<R> {
                 None => Action::Nothing,
                 Some(b) if !self.indexed => {
                     let needs_index = has_m(&b, 980)
+                        || has_m(&b, 970)
                         || (self.order == Order::Execution && program_number(&b).is_some());
                     if needs_index {
                         Action::Index
@@ -364,12 +496,76 @@ impl<R: Read + Seek> ProgramReader<R> {
                     prog,
                     back: (self.pos, self.line),
                     repeats_left: repeats - 1,
+                    local: false,
                 });
                 let p = self.programs[prog];
                 self.pos = p.start;
                 self.line = p.line;
             }
             Action::Return => self.ret(),
+            Action::Local {
+                label,
+                repeats,
+                span,
+            } => {
+                if self.labels.is_none() {
+                    self.labels = Some(self.index_labels()?);
+                }
+                let found = self.labels.as_ref().and_then(|l| {
+                    let i = l.partition_point(|x| x.0 < label);
+                    l.get(i).filter(|x| x.0 == label).map(|x| (x.1, x.2))
+                });
+                // Read the line again for the diagnostics: the index moved the reader.
+                self.lines.seek_line(offset, number)?;
+                self.lines.next_line_end()?;
+                let line = self.lines.last_line();
+                let Some(start) = found else {
+                    let d = err_at(
+                        &line,
+                        ErrorKind::Control(format!(
+                            "M97 P{label}: this file holds no block N{label}"
+                        )),
+                        Some(span),
+                    );
+                    self.pending.push_back(d);
+                    return Ok(Some(self.lines.last_line()));
+                };
+                let error = if self.order == Order::File || repeats == 0 {
+                    None
+                } else if self
+                    .stack
+                    .iter()
+                    .any(|f| f.local && self.locals[f.prog] == start)
+                {
+                    Some(ErrorKind::RecursiveCall {
+                        number: label,
+                        chain: format!("N{label} → N{label}"),
+                    })
+                } else if self.stack.len() >= MAX_NESTING {
+                    Some(ErrorKind::CallsTooDeep(MAX_NESTING))
+                } else if self.runs + u64::from(repeats) > self.max_runs {
+                    Some(ErrorKind::TooManyCalls {
+                        limit: self.max_runs,
+                        what: "subprogram runs",
+                    })
+                } else {
+                    self.runs += u64::from(repeats);
+                    self.locals.push(start);
+                    self.stack.push(Frame {
+                        prog: self.locals.len() - 1,
+                        back: (self.pos, self.line),
+                        repeats_left: repeats - 1,
+                        local: true,
+                    });
+                    (self.pos, self.line) = start;
+                    None
+                };
+                if let Some(kind) = error {
+                    let d = err_at(&line, kind, Some(span));
+                    self.pending.push_back(d);
+                }
+                return Ok(Some(self.lines.last_line()));
+            }
         }
         Ok(Some(self.lines.last_line()))
     }
@@ -380,11 +576,17 @@ impl<R: Read + Seek> ProgramReader<R> {
         if let Some(f) = self.stack.last_mut() {
             if f.repeats_left > 0 {
                 f.repeats_left -= 1;
-                let p = self.programs[f.prog];
-                self.pos = p.start;
-                self.line = p.line;
+                (self.pos, self.line) = if f.local {
+                    self.locals[f.prog]
+                } else {
+                    let p = self.programs[f.prog];
+                    (p.start, p.line)
+                };
             } else {
                 (self.pos, self.line) = f.back;
+                if f.local {
+                    self.locals.pop();
+                }
                 self.stack.pop();
             }
         }
@@ -408,6 +610,37 @@ fn action(
 ) -> Action {
     if has_m(b, 990) && !stack.is_empty() && order == Order::Execution {
         return Action::Return;
+    }
+    if let Some(m97) = b
+        .words()
+        .find(|w| w.letter == b'M' && w.register.is_none() && w.code() == Some(970))
+    {
+        let bad = |word: String, why: &'static str, span| {
+            Action::Error(err_at(line, ErrorKind::BadValue { word, why }, Some(span)))
+        };
+        let Some(p) = b.word(b'P') else {
+            return bad(
+                "M97".into(),
+                "the call needs the block number in P",
+                m97.span,
+            );
+        };
+        if !(p.value >= 0.0 && p.value <= 999_999_999.0 && p.value.fract() == 0.0) {
+            return bad(p.display(), "the block number P is a whole number", p.span);
+        }
+        let repeats = match b.word(b'L') {
+            None => 1,
+            Some(l) if l.value > f64::from(MAX_REPEATS) => {
+                return bad(l.display(), "more than 10000 repeats", l.span)
+            }
+            Some(l) if l.value >= 0.0 && l.value.fract() == 0.0 => l.value as u32,
+            Some(l) => return bad(l.display(), "the repeat count L is a whole number", l.span),
+        };
+        return Action::Local {
+            label: p.value as u32,
+            repeats,
+            span: p.span,
+        };
     }
     let Some(m98) = b
         .words()
@@ -526,6 +759,16 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
 
     fn take_diagnostic(&mut self) -> Option<Diagnostic> {
         ProgramReader::take_diagnostic(self)
+    }
+
+    fn control(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        ProgramReader::control(self, text, number, offset, params)
     }
 }
 

@@ -3,8 +3,9 @@
 use std::collections::VecDeque;
 use std::io::{self, BufRead};
 
-use crate::ast::Block;
+use crate::ast::{Block, BlockKind, MacroKind};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
 use crate::parse::parse_line_with;
@@ -23,6 +24,18 @@ pub trait LineSource {
     /// A problem the source found (a call to a missing program, say), reported after the
     /// line it concerns.
     fn take_diagnostic(&mut self) -> Option<Diagnostic> {
+        None
+    }
+
+    /// Follow a LinuxCNC O-word control line (see [`crate::ngc`]) that was just handed
+    /// out; `None` when this source does not follow them (then the line is warned about).
+    fn control(
+        &mut self,
+        _text: &str,
+        _number: u32,
+        _offset: usize,
+        _params: &mut Params,
+    ) -> Option<Result<(), Diagnostic>> {
         None
     }
 }
@@ -51,6 +64,8 @@ pub struct Stream<S> {
     any_content: bool,
     /// Numbers may have exponents (E is extrusion: see [`parse_line_with`]).
     exponents: bool,
+    /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
+    params: Option<Box<Params>>,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -69,6 +84,7 @@ impl<S: LineSource> Stream<S> {
             finished: false,
             any_content: false,
             exponents: opts.e_word == EWord::Extrusion,
+            params: opts.flavor.evaluates().then(Box::default),
         }
     }
 
@@ -132,7 +148,7 @@ impl<S: LineSource> Iterator for Stream<S> {
             // go straight into the queue: moving a large `Event` through an `Option` on
             // the way out costs more than the queue.)
             let mut block = Block::empty(line.number, line.offset);
-            let parsed = match line.too_long() {
+            let mut parsed = match line.too_long() {
                 Some(d) => Err(d),
                 None => parse_line_with(
                     line.bytes,
@@ -142,9 +158,23 @@ impl<S: LineSource> Iterator for Stream<S> {
                     self.exponents,
                 ),
             };
+            // Macro lines only: the flavour's evaluation (plain lines never come here).
+            let mut control = None;
+            if block.kind != BlockKind::Words && parsed.is_ok() {
+                if let Some(params) = self.params.as_deref_mut() {
+                    parsed = evaluate(&line, &mut block, params, &mut control);
+                }
+            }
             let failed = match parsed {
                 Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
-                    Ok(()) => false,
+                    Ok(()) => {
+                        if let Some(params) = self.params.as_deref_mut() {
+                            // The queue held nothing before this block: its events are
+                            // exactly the block's.
+                            after_moves(params, queue);
+                        }
+                        false
+                    }
                     Err(d) => {
                         queue.push_back(Event::Diagnostic(d));
                         true
@@ -157,6 +187,29 @@ impl<S: LineSource> Iterator for Stream<S> {
             };
             drop(block);
             let mut failed = failed;
+            if let (Some((text, number, offset)), Some(params)) =
+                (control, self.params.as_deref_mut())
+            {
+                match self.src.control(&text, number, offset, params) {
+                    Some(Ok(())) => {}
+                    Some(Err(d)) => {
+                        failed = true;
+                        self.queue.push_back(Event::Diagnostic(d));
+                    }
+                    None => {
+                        let len = text.len();
+                        self.queue.push_back(Event::Diagnostic(Diagnostic::at(
+                            Severity::Warning,
+                            ErrorKind::MacroNotEvaluated(MacroKind::LinuxCncOWord.describe()),
+                            number,
+                            offset,
+                            text.as_bytes(),
+                            0,
+                            len,
+                        )));
+                    }
+                }
+            }
             while let Some(d) = self.src.take_diagnostic() {
                 failed |= d.is_error();
                 self.queue.push_back(Event::Diagnostic(d));
@@ -166,6 +219,37 @@ impl<S: LineSource> Iterator for Stream<S> {
             }
         }
     }
+}
+
+/// A macro line of a flavour that evaluates them: an expression line becomes a word
+/// block, an O-word line is noted in `control` for the source to follow.
+#[inline(never)]
+fn evaluate<'a>(
+    line: &Line<'a>,
+    block: &mut Block<'a>,
+    params: &mut Params,
+    control: &mut Option<(String, u32, usize)>,
+) -> Result<(), Diagnostic> {
+    match block.kind {
+        BlockKind::Macro(MacroKind::LinuxCncExpression) => {
+            crate::expr::eval_line(line.bytes, line.number, line.offset, block, params)
+        }
+        BlockKind::Macro(MacroKind::LinuxCncOWord) => {
+            *control = Some((block.raw.to_owned(), line.number, line.offset));
+            block.kind = BlockKind::Words;
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The system parameters after a block's moves (see [`Params::after_moves`]).
+#[inline(never)]
+fn after_moves(params: &mut Params, events: &VecDeque<Event>) {
+    params.after_moves(events.iter().filter_map(|e| match e {
+        Event::Move(m) => Some(m),
+        Event::Diagnostic(_) => None,
+    }));
 }
 
 /// Every diagnostic of a program (parse and interpretation), in order: every line of

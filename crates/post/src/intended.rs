@@ -168,6 +168,9 @@ pub struct IntendedOptions {
     pub convert_units: bool,
     /// E words are slicer extrusion (deposit only while E grows).
     pub e_extrusion: bool,
+    /// The control the programs were written for (resolved; LinuxCNC expressions are
+    /// evaluated, O-word control lines refused as macros).
+    pub flavor: lampost_gcode::Flavor,
 }
 
 /// The intended path over every section, as an iterator.
@@ -262,6 +265,7 @@ impl<'a> Intended<'a> {
                     } else {
                         EWord::FixtureOffset
                     },
+                    flavor: self.opts.flavor,
                     ..Options::default()
                 };
                 self.stream = Some(Stream::from_reader(sec.source.open()?, opts, true));

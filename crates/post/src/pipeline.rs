@@ -315,6 +315,7 @@ mod tests {
                 intended: IntendedOptions {
                     convert_units: false,
                     e_extrusion: false,
+                    flavor: lampost_gcode::Flavor::Fadal,
                 },
                 near: [0.0, 0.0],
                 program_number: 1000,

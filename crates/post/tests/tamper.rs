@@ -129,6 +129,7 @@ fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
         intended: IntendedOptions {
             convert_units: false,
             e_extrusion: false,
+            flavor: lampost_gcode::Flavor::Fadal,
         },
         near: [0.0, 0.0],
         program_number: 1000,

@@ -113,6 +113,8 @@ fn rs274_exec(program: &Path, work: &Path) -> (Output, String) {
     }
     std::fs::write(&tbl, t).expect("tool table");
     let out_path = work.join("canon.txt");
+    // Never read an earlier program's output when rs274 writes none.
+    let _ = std::fs::remove_file(&out_path);
     // rs274 keeps files in its working folder: give each run its own.
     let out = Command::new(bin)
         .current_dir(work)

@@ -1,0 +1,858 @@
+//! LinuxCNC (RS274NGC) parameters and expressions, evaluated for the `linuxcnc` flavour.
+//!
+//! Only lines the parser marked as macro lines come here (a word whose value starts
+//! with `[` or `#`, a line starting with `#`), so plain numeric programs never pay for it.
+//!
+//! - Parameters: numbered `#1` … `#5601` (0 until set; `#1`–`#30` are a subroutine's
+//!   arguments, local to each call), named `#<name>` (local to the subroutine or main
+//!   program that sets them; reading one never set is an error), global `#<_name>`;
+//!   `#[expr]` and `##1` name a parameter by number. HAL pins `#<_hal[…]>` read 0; after each
+//!   block `#5420`–`#5428` hold the position, and after a probing move `#5061`–`#5069` its
+//!   end and `#5070` 0, as LinuxCNC's standalone `rs274` sets them.
+//! - Expressions `[…]`: numbers, parameters, `**`, `*` `/` `MOD`, `+` `-`, `EQ NE GT GE LT
+//!   LE`, `AND OR XOR` (that order of precedence, each left to right), unary `-`/`+`,
+//!   functions `ABS ACOS ASIN ATAN[a]/[b] COS EXP FIX FUP ROUND LN SIN SQRT TAN` (degrees)
+//!   and `EXISTS[#<name>]`. Division by zero, a root or logarithm out of its domain and
+//!   any result that is not finite are located errors.
+//! - Assignments `#… = value` take effect after the whole line is read (RS274NGC's rule),
+//!   in the order written.
+
+use std::collections::HashMap;
+
+use crate::ast::{Block, BlockKind, Comment, CommentStyle, Item, Span, Word};
+use crate::diag::{Diagnostic, ErrorKind, Severity};
+use crate::parse::{fast_number, MAX_LINE_BYTES};
+
+/// The highest numbered parameter (LinuxCNC's `RS274NGC_MAX_PARAMETERS` − 1).
+pub const MAX_PARAM: usize = 5601;
+/// A subroutine's argument parameters `#1` … `#30`.
+pub const SUB_PARAMS: usize = 30;
+/// Expressions nest at most this deep.
+const MAX_DEPTH: usize = 64;
+/// `EQ` and `NE` compare within this (LinuxCNC's `TOLERANCE_EQUAL`).
+const TOLERANCE_EQUAL: f64 = 0.0001;
+
+/// The parameters of one program run.
+#[derive(Debug, Clone)]
+pub struct Params {
+    numbered: Vec<f64>,
+    globals: HashMap<String, f64>,
+    /// Named locals: the main program's, then one scope per subroutine call.
+    locals: Vec<HashMap<String, f64>>,
+    /// `#1`–`#30` of each caller, saved at a call.
+    saved: Vec<[f64; SUB_PARAMS]>,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            numbered: vec![0.0; MAX_PARAM + 1],
+            globals: HashMap::new(),
+            locals: vec![HashMap::new()],
+            saved: Vec::new(),
+        }
+    }
+}
+
+/// Where a parameter lives.
+#[derive(Debug, Clone, PartialEq)]
+enum Param {
+    Numbered(usize),
+    Named(String),
+}
+
+impl Params {
+    /// A numbered parameter.
+    pub fn get(&self, n: usize) -> Option<f64> {
+        self.numbered.get(n).copied()
+    }
+
+    /// A named parameter (name without `#<>`, any case). A HAL pin (`#<_hal[…]>`) is
+    /// unknown to lampost and reads 0, as in LinuxCNC's standalone interpreter.
+    pub fn named(&self, name: &str) -> Option<f64> {
+        let name = name.to_ascii_lowercase();
+        if name.starts_with("_hal[") {
+            return Some(0.0);
+        }
+        if name.starts_with('_') {
+            self.globals.get(&name).copied()
+        } else {
+            self.locals.last().and_then(|m| m.get(&name)).copied()
+        }
+    }
+
+    /// Set a named parameter.
+    pub fn set_named(&mut self, name: &str, v: f64) {
+        let name = name.to_ascii_lowercase();
+        if name.starts_with('_') {
+            self.globals.insert(name, v);
+        } else if let Some(m) = self.locals.last_mut() {
+            m.insert(name, v);
+        }
+    }
+
+    fn set(&mut self, p: &Param, v: f64) {
+        match p {
+            Param::Numbered(n) => {
+                if let Some(slot) = self.numbered.get_mut(*n) {
+                    *slot = v;
+                }
+            }
+            Param::Named(name) => self.set_named(name, v),
+        }
+    }
+
+    /// Note what the machine would have set after a block's moves (LinuxCNC's system
+    /// parameters as its standalone interpreter sets them): `#5420`–`#5428` the position
+    /// (program coordinates), and after a probing move `#5061`–`#5069` its end and
+    /// `#5070` 0 (lampost has no probe that trips).
+    pub fn after_moves<'m>(&mut self, moves: impl Iterator<Item = &'m crate::interp::Move>) {
+        for m in moves {
+            self.numbered[5420..5429].copy_from_slice(&m.end);
+            if m.kind == crate::interp::MoveKind::Probe {
+                self.numbered[5061..5070].copy_from_slice(&m.end);
+                self.numbered[5070] = 0.0;
+            }
+        }
+    }
+
+    /// Enter a subroutine: the caller's `#1`–`#30` are saved, the arguments take their
+    /// place (0 for those not given), and a new scope of named locals opens.
+    pub fn enter(&mut self, args: &[f64]) {
+        let mut keep = [0.0; SUB_PARAMS];
+        keep.copy_from_slice(&self.numbered[1..=SUB_PARAMS]);
+        self.saved.push(keep);
+        for i in 0..SUB_PARAMS {
+            self.numbered[1 + i] = args.get(i).copied().unwrap_or(0.0);
+        }
+        self.locals.push(HashMap::new());
+    }
+
+    /// Leave a subroutine: the caller's `#1`–`#30` and named locals come back, and
+    /// `#<_value>` holds the returned value (`#<_value_returned>` says whether there is one).
+    pub fn leave(&mut self, value: Option<f64>) {
+        if let Some(keep) = self.saved.pop() {
+            self.numbered[1..=SUB_PARAMS].copy_from_slice(&keep);
+        }
+        if self.locals.len() > 1 {
+            self.locals.pop();
+        }
+        self.globals.insert("_value".into(), value.unwrap_or(0.0));
+        self.globals.insert(
+            "_value_returned".into(),
+            if value.is_some() { 1.0 } else { 0.0 },
+        );
+    }
+}
+
+/// An evaluation error: message and byte range in the text evaluated.
+pub type EvalError = (String, usize, usize);
+
+/// A reader of values and expressions over one line.
+#[derive(Debug)]
+pub struct Eval<'t, 'p> {
+    b: &'t [u8],
+    /// Where reading stands.
+    pub pos: usize,
+    params: &'p Params,
+    depth: usize,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Op {
+    Pow,
+    Mul,
+    Div,
+    Mod,
+    Add,
+    Sub,
+    Eq,
+    Ne,
+    Gt,
+    Ge,
+    Lt,
+    Le,
+    And,
+    Or,
+    Xor,
+}
+
+impl Op {
+    fn precedence(self) -> u8 {
+        match self {
+            Op::Pow => 6,
+            Op::Mul | Op::Div | Op::Mod => 5,
+            Op::Add | Op::Sub => 4,
+            Op::Eq | Op::Ne | Op::Gt | Op::Ge | Op::Lt | Op::Le => 3,
+            Op::And | Op::Or | Op::Xor => 2,
+        }
+    }
+}
+
+fn finite(v: f64, what: &str, s: usize, e: usize) -> Result<f64, EvalError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err((format!("{what} has no finite value"), s, e))
+    }
+}
+
+impl<'t, 'p> Eval<'t, 'p> {
+    /// A reader of `text` from byte `pos`, reading `params`.
+    pub fn new(text: &'t str, pos: usize, params: &'p Params) -> Self {
+        Eval {
+            b: text.as_bytes(),
+            pos,
+            params,
+            depth: 0,
+        }
+    }
+
+    fn skip(&mut self) {
+        while self.pos < self.b.len() && matches!(self.b[self.pos], b' ' | b'\t') {
+            self.pos += 1;
+        }
+    }
+
+    fn peek(&mut self) -> Option<u8> {
+        self.skip();
+        self.b.get(self.pos).copied()
+    }
+
+    /// Whether a value follows (anything but the end of the line or a comment).
+    pub fn peek_value(&mut self) -> bool {
+        !matches!(self.peek(), None | Some(b'(' | b';'))
+    }
+
+    fn text(&self, s: usize, e: usize) -> String {
+        String::from_utf8_lossy(&self.b[s..e.min(self.b.len())]).into_owned()
+    }
+
+    /// A parameter reference after its `#` (at `self.pos`).
+    fn param_ref(&mut self) -> Result<Param, EvalError> {
+        let start = self.pos;
+        self.skip();
+        match self.b.get(self.pos) {
+            Some(b'<') => {
+                let close = memchr::memchr(b'>', &self.b[self.pos..])
+                    .ok_or_else(|| ("`#<` has no closing `>`".to_string(), start, self.b.len()))?;
+                let name: String = self
+                    .text(self.pos + 1, self.pos + close)
+                    .chars()
+                    .filter(|c| !c.is_whitespace())
+                    .collect::<String>()
+                    .to_ascii_lowercase();
+                self.pos += close + 1;
+                if name.is_empty() {
+                    return Err(("a parameter name is empty".into(), start, self.pos));
+                }
+                Ok(Param::Named(name))
+            }
+            _ => {
+                let v = self.value()?;
+                let n = crate::emit::round_half_away(v);
+                if (v - n).abs() > 1e-6 || !(0.0..=MAX_PARAM as f64).contains(&n) {
+                    return Err((
+                        format!(
+                            "#{}: parameter numbers are whole numbers 0 to {MAX_PARAM}",
+                            self.text(start, self.pos)
+                        ),
+                        start,
+                        self.pos,
+                    ));
+                }
+                Ok(Param::Numbered(n as usize))
+            }
+        }
+    }
+
+    fn read_param(&self, p: &Param, s: usize, e: usize) -> Result<f64, EvalError> {
+        match p {
+            Param::Numbered(n) => Ok(self.params.get(*n).unwrap_or(0.0)),
+            Param::Named(name) => self
+                .params
+                .named(name)
+                .ok_or_else(|| (format!("parameter #<{name}> is not set"), s, e)),
+        }
+    }
+
+    /// A real value: a number, a parameter, an expression `[…]`, a function, with an
+    /// optional sign.
+    pub fn value(&mut self) -> Result<f64, EvalError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(("expressions nest too deep".into(), self.pos, self.b.len()));
+        }
+        let r = self.value_inner();
+        self.depth -= 1;
+        r
+    }
+
+    fn value_inner(&mut self) -> Result<f64, EvalError> {
+        let start = {
+            self.skip();
+            self.pos
+        };
+        match self.b.get(self.pos).copied() {
+            Some(b'-') => {
+                self.pos += 1;
+                Ok(-self.value()?)
+            }
+            Some(b'+') => {
+                self.pos += 1;
+                self.value()
+            }
+            Some(b'[') => self.bracket(),
+            Some(b'#') => {
+                self.pos += 1;
+                let p = self.param_ref()?;
+                self.read_param(&p, start, self.pos)
+            }
+            Some(c) if c.is_ascii_digit() || c == b'.' => match fast_number(&self.b[self.pos..]) {
+                Some((len, v)) => {
+                    self.pos += len;
+                    Ok(v)
+                }
+                None => {
+                    let len = self.b[self.pos..]
+                        .iter()
+                        .take_while(|c| c.is_ascii_digit() || **c == b'.')
+                        .count();
+                    let t = self.text(self.pos, self.pos + len);
+                    self.pos += len;
+                    t.parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| (format!("cannot read the number `{t}`"), start, self.pos))
+                }
+            },
+            Some(c) if c.is_ascii_alphabetic() => self.function(),
+            Some(c) => Err((
+                format!("expected a value, found `{}`", char::from(c)),
+                start,
+                start + 1,
+            )),
+            None => Err((
+                "expected a value at the end of the line".into(),
+                start,
+                start,
+            )),
+        }
+    }
+
+    /// `[ expression ]` at `self.pos`.
+    fn bracket(&mut self) -> Result<f64, EvalError> {
+        let open = self.pos;
+        self.pos += 1;
+        let v = self.expression()?;
+        if self.peek() != Some(b']') {
+            return Err((
+                "`[` is not closed by `]`".into(),
+                open,
+                self.pos.max(open + 1),
+            ));
+        }
+        self.pos += 1;
+        Ok(v)
+    }
+
+    fn op(&mut self) -> Option<Op> {
+        let c = self.peek()?;
+        let two = self.b.get(self.pos + 1).copied().unwrap_or(0);
+        let (op, len) = match c {
+            b'*' if two == b'*' => (Op::Pow, 2),
+            b'*' => (Op::Mul, 1),
+            b'/' => (Op::Div, 1),
+            b'+' => (Op::Add, 1),
+            b'-' => (Op::Sub, 1),
+            _ => {
+                let word: Vec<u8> = self.b[self.pos..]
+                    .iter()
+                    .take(3)
+                    .take_while(|c| c.is_ascii_alphabetic())
+                    .map(u8::to_ascii_uppercase)
+                    .collect();
+                match &word[..] {
+                    [b'M', b'O', b'D'] => (Op::Mod, 3),
+                    [b'A', b'N', b'D'] => (Op::And, 3),
+                    [b'X', b'O', b'R'] => (Op::Xor, 3),
+                    [b'O', b'R', ..] => (Op::Or, 2),
+                    [b'E', b'Q', ..] => (Op::Eq, 2),
+                    [b'N', b'E', ..] => (Op::Ne, 2),
+                    [b'G', b'T', ..] => (Op::Gt, 2),
+                    [b'G', b'E', ..] => (Op::Ge, 2),
+                    [b'L', b'T', ..] => (Op::Lt, 2),
+                    [b'L', b'E', ..] => (Op::Le, 2),
+                    _ => return None,
+                }
+            }
+        };
+        self.pos += len;
+        Some(op)
+    }
+
+    /// An expression inside brackets (without them): operators by precedence, each
+    /// left to right (RS274NGC).
+    fn expression(&mut self) -> Result<f64, EvalError> {
+        let start = self.pos;
+        let mut values: Vec<f64> = vec![self.value()?];
+        let mut ops: Vec<Op> = Vec::new();
+        loop {
+            let at = self.pos;
+            if self.peek() == Some(b']') {
+                break;
+            }
+            let Some(op) = self.op() else {
+                let c = self.peek();
+                return Err(match c {
+                    None => ("`[` is not closed by `]`".into(), start, self.b.len()),
+                    Some(c) => (
+                        format!("expected an operator or `]`, found `{}`", char::from(c)),
+                        self.pos,
+                        self.pos + 1,
+                    ),
+                });
+            };
+            while let Some(&top) = ops.last() {
+                if top.precedence() >= op.precedence() {
+                    ops.pop();
+                    let r = values.pop().unwrap_or(0.0);
+                    let l = values.pop().unwrap_or(0.0);
+                    values.push(apply(top, l, r, start, at)?);
+                } else {
+                    break;
+                }
+            }
+            ops.push(op);
+            values.push(self.value()?);
+        }
+        let end = self.pos;
+        while let Some(top) = ops.pop() {
+            let r = values.pop().unwrap_or(0.0);
+            let l = values.pop().unwrap_or(0.0);
+            values.push(apply(top, l, r, start, end)?);
+        }
+        Ok(values.pop().unwrap_or(0.0))
+    }
+
+    fn function(&mut self) -> Result<f64, EvalError> {
+        let start = self.pos;
+        let len = self.b[self.pos..]
+            .iter()
+            .take_while(|c| c.is_ascii_alphabetic())
+            .count();
+        let name = self.text(self.pos, self.pos + len).to_ascii_uppercase();
+        self.pos += len;
+        if self.peek() != Some(b'[') {
+            return Err((
+                format!("expected a value, found `{name}`"),
+                start,
+                start + len,
+            ));
+        }
+        if name == "EXISTS" {
+            let open = self.pos;
+            self.pos += 1;
+            self.skip();
+            if self.b.get(self.pos) != Some(&b'#') {
+                return Err((
+                    "EXISTS takes a named parameter: EXISTS[#<name>]".into(),
+                    open,
+                    self.pos + 1,
+                ));
+            }
+            self.pos += 1;
+            let p = self.param_ref()?;
+            if self.peek() != Some(b']') {
+                return Err(("`[` is not closed by `]`".into(), open, self.pos));
+            }
+            self.pos += 1;
+            return Ok(match p {
+                Param::Named(n) => f64::from(u8::from(self.params.named(&n).is_some())),
+                Param::Numbered(_) => 1.0,
+            });
+        }
+        let a = self.bracket()?;
+        let end = self.pos;
+        let domain = |ok: bool| {
+            if ok {
+                Ok(())
+            } else {
+                Err((
+                    format!("{name}[{a}] is outside the function's domain"),
+                    start,
+                    end,
+                ))
+            }
+        };
+        let v = match name.as_str() {
+            "ABS" => a.abs(),
+            "ACOS" => {
+                domain((-1.0..=1.0).contains(&a))?;
+                a.acos().to_degrees()
+            }
+            "ASIN" => {
+                domain((-1.0..=1.0).contains(&a))?;
+                a.asin().to_degrees()
+            }
+            "ATAN" => {
+                if self.peek() != Some(b'/') {
+                    return Err(("ATAN takes two values: ATAN[y]/[x]".into(), start, self.pos));
+                }
+                self.pos += 1;
+                if self.peek() != Some(b'[') {
+                    return Err(("ATAN takes two values: ATAN[y]/[x]".into(), start, self.pos));
+                }
+                let x = self.bracket()?;
+                a.atan2(x).to_degrees()
+            }
+            "COS" => a.to_radians().cos(),
+            "SIN" => a.to_radians().sin(),
+            "TAN" => a.to_radians().tan(),
+            "EXP" => a.exp(),
+            "FIX" => a.floor(),
+            "FUP" => a.ceil(),
+            "ROUND" => crate::emit::round_half_away(a),
+            "LN" => {
+                domain(a > 0.0)?;
+                a.ln()
+            }
+            "SQRT" => {
+                domain(a >= 0.0)?;
+                a.sqrt()
+            }
+            _ => return Err((format!("unknown function {name}"), start, start + len)),
+        };
+        finite(v, &name, start, self.pos)
+    }
+}
+
+fn apply(op: Op, l: f64, r: f64, s: usize, e: usize) -> Result<f64, EvalError> {
+    let b = |x: bool| if x { 1.0 } else { 0.0 };
+    let v = match op {
+        Op::Pow => l.powf(r),
+        Op::Mul => l * r,
+        Op::Div => {
+            if r == 0.0 {
+                return Err(("division by zero".into(), s, e));
+            }
+            l / r
+        }
+        Op::Mod => {
+            if r == 0.0 {
+                return Err(("MOD by zero".into(), s, e));
+            }
+            let m = l % r;
+            if m < 0.0 {
+                m + r.abs()
+            } else {
+                m
+            }
+        }
+        Op::Add => l + r,
+        Op::Sub => l - r,
+        Op::Eq => b((l - r).abs() < TOLERANCE_EQUAL),
+        Op::Ne => b((l - r).abs() >= TOLERANCE_EQUAL),
+        Op::Gt => b(l > r),
+        Op::Ge => b(l >= r),
+        Op::Lt => b(l < r),
+        Op::Le => b(l <= r),
+        Op::And => b(l != 0.0 && r != 0.0),
+        Op::Or => b(l != 0.0 || r != 0.0),
+        Op::Xor => b((l != 0.0) != (r != 0.0)),
+    };
+    finite(v, "the expression", s, e)
+}
+
+/// Whether a macro line that is not evaluated sets the feed rate from a macro value
+/// (`F#1`, `F[#2*3]`, FADAL `F+R4.`, `#F = …` is not one): the block is skipped with its
+/// warning, and later feed moves are not blamed for a missing F.
+pub fn sets_feed(raw: &str) -> bool {
+    let b = raw.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'(' => {
+                i += memchr::memchr(b')', &b[i..]).unwrap_or(b.len() - i);
+            }
+            b';' | b'\'' => return false,
+            b'[' => depth += 1,
+            b']' => depth = depth.saturating_sub(1),
+            b'F' | b'f' if depth == 0 && (i == 0 || !b[i - 1].is_ascii_alphabetic()) => {
+                let mut k = i + 1;
+                while k < b.len() && matches!(b[k], b' ' | b'\t' | b'+' | b'-') {
+                    k += 1;
+                }
+                if b.get(k)
+                    .is_some_and(|c| matches!(c, b'#' | b'[' | b'R' | b'r' | b'V' | b'v'))
+                {
+                    return true;
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    false
+}
+
+/// Evaluate a whole macro line of the `linuxcnc` flavour into `block`: words whose
+/// values are expressions or parameters get their values (each word's `text` is the
+/// value as written, `[#1+2]`), comments are kept, and parameter assignments
+/// (`#1 = …`, `#<name> = …`) are made after the whole line is read. The block becomes a
+/// plain word block for the interpreter.
+pub fn eval_line<'a>(
+    line: &'a [u8],
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    params: &mut Params,
+) -> Result<(), Diagnostic> {
+    let err = |(msg, s, e): EvalError| {
+        Diagnostic::at(
+            Severity::Error,
+            ErrorKind::Expression(msg),
+            line_no,
+            offset,
+            line,
+            s,
+            e,
+        )
+    };
+    block.kind = BlockKind::Words;
+    block.items.clear();
+    if line.len() > MAX_LINE_BYTES {
+        return Err(err(("line too long".into(), 0, 1)));
+    }
+    let text = std::str::from_utf8(line).map_err(|_| err(("not UTF-8".into(), 0, 1)))?;
+    let bytes = line;
+    let mut sets: Vec<(Param, f64)> = Vec::new();
+    let mut seen: u32 = 0;
+    let mut i = 0;
+    while i < bytes.len() && matches!(bytes[i], b' ' | b'\t') {
+        i += 1;
+    }
+    if bytes.get(i) == Some(&b'/') {
+        block.block_delete = true;
+        i += 1;
+    }
+    while i < bytes.len() {
+        let c = bytes[i];
+        match c {
+            b' ' | b'\t' => i += 1,
+            b'(' => match memchr::memchr(b')', &bytes[i + 1..]) {
+                Some(rel) => {
+                    let end = i + 1 + rel;
+                    block.items.push(Item::Comment(Comment {
+                        text: &text[i + 1..end],
+                        style: CommentStyle::Paren,
+                        span: Span::new(offset + i, offset + end + 1),
+                    }));
+                    i = end + 1;
+                }
+                None => {
+                    return Err(Diagnostic::at(
+                        Severity::Error,
+                        ErrorKind::UnterminatedComment,
+                        line_no,
+                        offset,
+                        line,
+                        i,
+                        bytes.len(),
+                    ))
+                }
+            },
+            b';' => {
+                block.items.push(Item::Comment(Comment {
+                    text: &text[i + 1..],
+                    style: CommentStyle::Semicolon,
+                    span: Span::new(offset + i, offset + bytes.len()),
+                }));
+                i = bytes.len();
+            }
+            b'#' => {
+                let start = i;
+                let mut ev = Eval::new(text, i + 1, params);
+                let p = ev.param_ref().map_err(err)?;
+                if ev.peek() != Some(b'=') {
+                    return Err(err((
+                        "a parameter at the start of a word needs `= value`".into(),
+                        start,
+                        ev.pos.max(start + 1),
+                    )));
+                }
+                ev.pos += 1;
+                let v = ev.value().map_err(err)?;
+                i = ev.pos;
+                sets.push((p, v));
+            }
+            b'a'..=b'z' | b'A'..=b'Z' => {
+                let letter = c.to_ascii_uppercase();
+                let mut ev = Eval::new(text, i + 1, params);
+                ev.skip();
+                let vstart = ev.pos;
+                let v = ev.value().map_err(err)?;
+                let end = ev.pos;
+                if letter != b'G' && letter != b'M' {
+                    let bit = 1u32 << (letter - b'A');
+                    if seen & bit != 0 {
+                        return Err(Diagnostic::at(
+                            Severity::Error,
+                            ErrorKind::DuplicateWord(char::from(letter).to_string()),
+                            line_no,
+                            offset,
+                            line,
+                            i,
+                            end,
+                        ));
+                    }
+                    seen |= bit;
+                }
+                block.items.push(Item::Word(Word {
+                    letter,
+                    register: None,
+                    value: v,
+                    text: &text[vstart..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
+            }
+            _ => {
+                let ch = text[i..].chars().next().unwrap_or('?');
+                return Err(Diagnostic::at(
+                    Severity::Error,
+                    ErrorKind::UnexpectedCharacter(ch),
+                    line_no,
+                    offset,
+                    line,
+                    i,
+                    i + ch.len_utf8(),
+                ));
+            }
+        }
+    }
+    for (p, v) in sets {
+        params.set(&p, v);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ev(s: &str, p: &Params) -> Result<f64, EvalError> {
+        let mut e = Eval::new(s, 0, p);
+        let v = e.value()?;
+        Ok(v)
+    }
+
+    #[test]
+    fn operators_and_precedence() {
+        let p = Params::default();
+        for (s, want) in [
+            ("[1 + 2 * 3]", 7.0),
+            ("[2 ** 3 ** 2]", 64.0),
+            ("[10 - 4 - 3]", 3.0),
+            ("[7 MOD 3]", 1.0),
+            ("[-7 MOD 3]", 2.0),
+            ("[1 + 2 EQ 3]", 1.0),
+            ("[1 LT 2 AND 3 GT 4]", 0.0),
+            ("[1 OR 0]", 1.0),
+            ("[1 XOR 1]", 0.0),
+            ("[2 NE 2.00001]", 0.0),
+            ("[2 GE 2]", 1.0),
+            ("[2 LE 1]", 0.0),
+            ("-[2]", -2.0),
+            ("[ABS[-2.5]]", 2.5),
+            ("[ATAN[1]/[1]]", 45.0),
+            ("[SIN[30]]", 0.49999999999999994),
+            ("[FIX[-1.5] + FUP[1.2]]", 0.0),
+            ("[ROUND[2.5]]", 3.0),
+            ("[SQRT[16]]", 4.0),
+            ("[EXISTS[#<nope>]]", 0.0),
+            ("[1.5e]", 1.5),
+        ] {
+            match ev(s, &p) {
+                Ok(v) => assert_eq!(v, want, "{s}"),
+                Err(e) if s == "[1.5e]" => assert!(e.0.contains("operator"), "{e:?}"),
+                Err(e) => panic!("{s}: {e:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn bad_expressions_are_located() {
+        let p = Params::default();
+        for (s, what) in [
+            ("[1/0]", "division by zero"),
+            ("[1 MOD 0]", "MOD by zero"),
+            ("[SQRT[-1]]", "domain"),
+            ("[LN[0]]", "domain"),
+            ("[#<undefined> + 1]", "not set"),
+            ("[1 + ]", "expected a value"),
+            ("[1 + 2", "not closed"),
+            ("[FOO[1]]", "unknown function"),
+            ("[10 ** 400]", "finite"),
+            ("[#6000]", "whole numbers"),
+        ] {
+            let e = ev(s, &p).expect_err(s);
+            assert!(e.0.contains(what), "{s}: {e:?}");
+            assert!(e.1 <= e.2 && e.2 <= s.len(), "{s}: {e:?}");
+        }
+        let deep = format!("{}1{}", "[".repeat(1000), "]".repeat(1000));
+        assert!(ev(&deep, &p).is_err());
+    }
+
+    #[test]
+    fn assignments_take_effect_after_the_line() {
+        let mut p = Params::default();
+        let mut b = Block::empty(1, 0);
+        let line = b"#1 = 5 #2 = [#1 + 1] #<_g> = 2 #<loc> = 3";
+        eval_line(line, 1, 0, &mut b, &mut p).expect("evaluates");
+        assert_eq!((p.get(1), p.get(2)), (Some(5.0), Some(1.0)));
+        assert_eq!((p.named("_G"), p.named("loc")), (Some(2.0), Some(3.0)));
+        let line = b"G1 X[#1 * 2] Y#2 Z-#<loc> F#<_g> (c) #1 = 0";
+        let mut b = Block::empty(2, 10);
+        eval_line(line, 2, 10, &mut b, &mut p).expect("evaluates");
+        let w: Vec<(char, f64, &str)> = b
+            .words()
+            .map(|w| (w.letter_char(), w.value, w.text))
+            .collect();
+        assert_eq!(
+            w,
+            [
+                ('G', 1.0, "1"),
+                ('X', 10.0, "[#1 * 2]"),
+                ('Y', 1.0, "#2"),
+                ('Z', -3.0, "-#<loc>"),
+                ('F', 2.0, "#<_g>")
+            ]
+        );
+        assert_eq!(p.get(1), Some(0.0));
+        assert_eq!(b.comments().count(), 1);
+        // Subroutine scopes.
+        p.enter(&[7.0]);
+        assert_eq!(
+            (p.get(1), p.get(2), p.named("loc")),
+            (Some(7.0), Some(0.0), None)
+        );
+        assert_eq!(p.named("_g"), Some(2.0));
+        p.leave(Some(4.0));
+        assert_eq!(
+            (p.get(1), p.get(2), p.named("loc")),
+            (Some(0.0), Some(1.0), Some(3.0))
+        );
+        assert_eq!(p.named("_value"), Some(4.0));
+        // Errors are located in the line.
+        let mut b = Block::empty(3, 0);
+        let d = eval_line(b"G1 X[1/0]", 3, 0, &mut b, &mut p).expect_err("fails");
+        assert_eq!(d.column, 6);
+        let d = eval_line(b"G1 X#<nope>", 3, 0, &mut b, &mut p).expect_err("fails");
+        assert_eq!(
+            (d.column, d.kind.to_string().contains("not set")),
+            (5, true)
+        );
+    }
+}

@@ -1,0 +1,364 @@
+//! Flavours: which control a program was written for, and how that changes its reading.
+//!
+//! A [`Flavor`] is resolved once per program (for `auto`, from the program's first
+//! [`DETECT_BYTES`] bytes: see [`detect`]) and feeds [`crate::Options`]:
+//!
+//! - `marlin`, `reprap`: E is the extruder (slicer reading, number exponents);
+//! - `linuxcnc`: parameters, `[…]` expressions and O-word control lines are evaluated
+//!   (see [`crate::expr`]);
+//! - `fanuc`, `haas`, `mach3`, `fadal`: macros stay verbatim; Haas `M97 P…` calls a local
+//!   subprogram by its N label (followed by [`crate::ProgramReader`] in every flavour).
+
+use serde::Serialize;
+
+use crate::interp::{EWord, Options};
+
+/// How much of a program `auto` looks at.
+pub const DETECT_BYTES: usize = 64 * 1024;
+
+/// The control a program was written for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Flavor {
+    /// Decide from the program's content ([`detect`]).
+    Auto,
+    /// LinuxCNC (RS274NGC): parameters, expressions and O-words evaluated.
+    #[serde(rename = "linuxcnc")]
+    LinuxCnc,
+    /// Fanuc (Macro B left verbatim).
+    Fanuc,
+    /// Haas (Fanuc-like; `M97` local subprograms).
+    Haas,
+    /// FADAL (macros and register words left verbatim). What lampost reads without a flavour.
+    #[default]
+    Fadal,
+    /// Mach3.
+    Mach3,
+    /// Marlin firmware: a slicer's program, E is extrusion.
+    Marlin,
+    /// RepRapFirmware: a slicer's program, E is extrusion.
+    #[serde(rename = "reprap")]
+    RepRap,
+}
+
+impl Flavor {
+    /// Every flavour's name, as the CLI spells it.
+    pub const NAMES: [&'static str; 8] = [
+        "auto", "linuxcnc", "fanuc", "haas", "fadal", "mach3", "marlin", "reprap",
+    ];
+
+    /// The name as the CLI spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Flavor::Auto => "auto",
+            Flavor::LinuxCnc => "linuxcnc",
+            Flavor::Fanuc => "fanuc",
+            Flavor::Haas => "haas",
+            Flavor::Fadal => "fadal",
+            Flavor::Mach3 => "mach3",
+            Flavor::Marlin => "marlin",
+            Flavor::RepRap => "reprap",
+        }
+    }
+
+    /// A printer firmware: E is the extruder.
+    pub fn is_slicer(self) -> bool {
+        matches!(self, Flavor::Marlin | Flavor::RepRap)
+    }
+
+    /// LinuxCNC parameters, expressions and O-words are evaluated.
+    pub fn evaluates(self) -> bool {
+        self == Flavor::LinuxCnc
+    }
+
+    /// `opts` with this (resolved) flavour's reading: the flavour recorded, and E as
+    /// extrusion for printer firmwares unless `e_word` says otherwise.
+    pub fn options(self, opts: Options, e_word: Option<EWord>) -> Options {
+        Options {
+            flavor: self,
+            e_word: e_word.unwrap_or(if self.is_slicer() {
+                EWord::Extrusion
+            } else {
+                EWord::FixtureOffset
+            }),
+            ..opts
+        }
+    }
+}
+
+/// A flavour resolved for one program, with why it was chosen.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Resolved {
+    /// The flavour in force.
+    pub flavor: Flavor,
+    /// It was decided from the content (`--flavor auto`).
+    pub auto: bool,
+    /// What decided it: the evidence `auto` found, or "given".
+    pub reason: String,
+}
+
+impl Resolved {
+    /// `given` itself, or for [`Flavor::Auto`] what [`detect`] finds in `head` (the
+    /// program's first bytes).
+    pub fn new(given: Flavor, head: &[u8]) -> Self {
+        if given == Flavor::Auto {
+            let (flavor, reason) = detect(head);
+            Resolved {
+                flavor,
+                auto: true,
+                reason,
+            }
+        } else {
+            Resolved {
+                flavor: given,
+                auto: false,
+                reason: "given".into(),
+            }
+        }
+    }
+
+    /// One line for people: `flavour linuxcnc (auto: O-word line 3: o100 sub)`.
+    pub fn describe(&self) -> String {
+        if self.auto {
+            format!("flavour {} (auto: {})", self.flavor.name(), self.reason)
+        } else {
+            format!("flavour {}", self.flavor.name())
+        }
+    }
+}
+
+fn contains_ci(hay: &str, needle: &str) -> bool {
+    hay.as_bytes()
+        .windows(needle.len())
+        .any(|w| w.eq_ignore_ascii_case(needle.as_bytes()))
+}
+
+/// The first word of a line (after an optional block delete and `N` number): its
+/// upper-cased letter and the rest of the line from there.
+fn first_word(line: &str) -> &str {
+    let mut s = line.trim_start().trim_start_matches('/').trim_start();
+    let b = s.as_bytes();
+    if b.first().is_some_and(|c| matches!(c, b'N' | b'n'))
+        && b.get(1).is_some_and(u8::is_ascii_digit)
+    {
+        let digits = s[1..].bytes().take_while(u8::is_ascii_digit).count();
+        s = s[1 + digits..].trim_start();
+    }
+    s
+}
+
+/// The words of one upper-cased line (before its comments) that tell flavours apart, in
+/// one pass: each letter that does not follow a letter, with the whole number
+/// after it (leading zeros dropped).
+#[derive(Default)]
+struct Codes {
+    g65: bool,
+    g92: bool,
+    e0: bool,
+    m82_83: bool,
+    m97: bool,
+}
+
+impl Codes {
+    fn of(code: &str) -> Self {
+        let b = code.as_bytes();
+        let mut c = Codes::default();
+        let mut i = 0;
+        while i < b.len() {
+            let letter = b[i];
+            if !letter.is_ascii_alphabetic() || i > 0 && b[i - 1].is_ascii_alphabetic() {
+                i += 1;
+                continue;
+            }
+            let mut j = i + 1;
+            let mut n: u32 = 0;
+            while j < b.len() && b[j].is_ascii_digit() && n < 100_000 {
+                n = n * 10 + u32::from(b[j] - b'0');
+                j += 1;
+            }
+            let whole = j > i + 1 && !b.get(j).is_some_and(|d| d.is_ascii_digit() || *d == b'.');
+            if whole {
+                match (letter, n) {
+                    (b'G', 65) => c.g65 = true,
+                    (b'G', 92) => c.g92 = true,
+                    (b'E', 0) => c.e0 = true,
+                    (b'M', 82 | 83) => c.m82_83 = true,
+                    (b'M', 97) => c.m97 = true,
+                    _ => {}
+                }
+            }
+            i = j.max(i + 1);
+        }
+        c
+    }
+}
+
+/// Decide the flavour of a program from its first bytes (at most [`DETECT_BYTES`] are
+/// looked at, whole lines only): the first decisive evidence wins, line by line, and a
+/// program with none is [`Flavor::Fadal`] (lampost's reading without a flavour). The
+/// evidence, strongest first within a line:
+///
+/// - comments naming a slicer or firmware (`;FLAVOR:Marlin`, `; generated by PrusaSlicer`,
+///   Cura, Bambu/Orca, SuperSlicer, Simplify3D, RepRapFirmware), `M82`/`M83`, `G92 E…`:
+///   Marlin (RepRap when the comment says so);
+/// - LinuxCNC O-word lines (`o100 sub`, `o<name> call`) and named parameters `#<…>`;
+/// - Fanuc Macro B words: `IF [`, `WHILE [`, `GOTO`, `DOn`, `ENDn`, `G65`;
+/// - Haas: a comment naming Haas, or `M97`; Mach3: a comment naming Mach3;
+/// - FADAL: macro statements (`#V10 = …`, `#IF`, `#PRINT`, `#:LABEL`), a comment naming
+///   FADAL;
+/// - numbered parameters (`#1 = …`) or `[…]` expressions alone: LinuxCNC.
+pub fn detect(head: &[u8]) -> (Flavor, String) {
+    let mut head = &head[..head.len().min(DETECT_BYTES)];
+    if head.len() == DETECT_BYTES {
+        // Whole lines only.
+        if let Some(nl) = memchr::memrchr(b'\n', head) {
+            head = &head[..nl];
+        }
+    }
+    let text = String::from_utf8_lossy(head);
+    let mut weak: Option<(Flavor, String)> = None;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let at = |what: &str| format!("{what} on line {}: {}", n + 1, clip(line));
+        // Comments that name their source.
+        if let Some(p) = line.find([';', '(']) {
+            let c = &line[p..];
+            for (needle, f) in [
+                ("FLAVOR:RepRap", Flavor::RepRap),
+                ("RepRapFirmware", Flavor::RepRap),
+                ("FLAVOR:Marlin", Flavor::Marlin),
+                ("PrusaSlicer", Flavor::Marlin),
+                ("SuperSlicer", Flavor::Marlin),
+                ("Slic3r", Flavor::Marlin),
+                ("BambuStudio", Flavor::Marlin),
+                ("Bambu Studio", Flavor::Marlin),
+                ("OrcaSlicer", Flavor::Marlin),
+                ("Cura_SteamEngine", Flavor::Marlin),
+                ("Simplify3D", Flavor::Marlin),
+                ("FLAVOR:", Flavor::Marlin),
+                ("Mach3", Flavor::Mach3),
+                ("Haas", Flavor::Haas),
+                ("LinuxCNC", Flavor::LinuxCnc),
+                ("FADAL", Flavor::Fadal),
+            ] {
+                if contains_ci(c, needle) {
+                    return (f, at(&format!("a comment naming {needle}")));
+                }
+            }
+        }
+        let w = first_word(line);
+        let wb = w.as_bytes();
+        if wb.first().is_some_and(|c| matches!(c, b'o' | b'O'))
+            && (wb.get(1) == Some(&b'<') || crate::parse::is_oword(w))
+        {
+            return (Flavor::LinuxCnc, at("an O-word line"));
+        }
+        if w.contains("#<") {
+            return (Flavor::LinuxCnc, at("a named parameter"));
+        }
+        if wb.first() == Some(&b'#')
+            && wb
+                .get(1)
+                .is_some_and(|c| c.is_ascii_alphabetic() || *c == b':')
+        {
+            return (Flavor::Fadal, at("a FADAL macro statement"));
+        }
+        let upper = w.to_ascii_uppercase();
+        let code = upper.split(['(', ';']).next().unwrap_or("");
+        let c = Codes::of(code);
+        if code.starts_with("IF") && code[2..].trim_start().starts_with('[')
+            || code.starts_with("WHILE") && code[5..].trim_start().starts_with('[')
+            || code.contains("GOTO")
+            || c.g65
+            || (code.starts_with("END")
+                && code[3..]
+                    .trim_start()
+                    .starts_with(|c: char| c.is_ascii_digit()))
+        {
+            return (Flavor::Fanuc, at("a Fanuc Macro B word"));
+        }
+        if c.m82_83 {
+            return (Flavor::Marlin, at("an extruder mode code"));
+        }
+        if c.g92 && c.e0 {
+            return (Flavor::Marlin, at("G92 E (extruder position)"));
+        }
+        if c.m97 {
+            return (Flavor::Haas, at("an M97 local subprogram call"));
+        }
+        if weak.is_none() && (code.contains('#') || code.contains('[')) {
+            weak = Some((Flavor::LinuxCnc, at("a parameter or expression")));
+        }
+    }
+    weak.unwrap_or((Flavor::Fadal, "no evidence of another control".into()))
+}
+
+fn clip(line: &str) -> String {
+    let mut s: String = line.chars().take(40).collect();
+    if s.len() < line.len() {
+        s.push('…');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_finds_each_flavour() {
+        for (text, want) in [
+            (";FLAVOR:Marlin\nG1 X1\n", Flavor::Marlin),
+            ("; generated by PrusaSlicer 2.6\nG1 X1 E1\n", Flavor::Marlin),
+            (";FLAVOR:RepRap\nG1 X1\n", Flavor::RepRap),
+            ("G21\nM83\nG1 X1 E.2\n", Flavor::Marlin),
+            ("G92 E0\n", Flavor::Marlin),
+            ("G1X1\nG92E0\n", Flavor::Marlin),
+            ("G0 X1\nM830\nM8.3 G650\n", Flavor::Fadal),
+            ("G20\no100 sub\nG0 X1\no100 endsub\n", Flavor::LinuxCnc),
+            ("O<probe> call\n", Flavor::LinuxCnc),
+            ("#<depth> = 2\nG1 Z-#<depth>\n", Flavor::LinuxCnc),
+            ("G0 X0\n#1 = 2\nG1 X#1\n", Flavor::LinuxCnc),
+            ("#100=1\nWHILE [#100 LE 3] DO1\nEND1\n", Flavor::Fanuc),
+            ("N10 G65 P9001 A.125\n", Flavor::Fanuc),
+            ("IF [#1 GT 2] GOTO 20\n", Flavor::Fanuc),
+            ("(HAAS VF2)\nG0 X1\n", Flavor::Haas),
+            ("G0 X0\nM97 P100\nM30\nN100 G1 X1\nM99\n", Flavor::Haas),
+            ("(Mach3 post)\nG0 X1\n", Flavor::Mach3),
+            ("#V1 = 2 'A\n", Flavor::Fadal),
+            ("N80 #:S1\n", Flavor::Fadal),
+            ("G0 X1\nG1 Y2 F10\n", Flavor::Fadal),
+            ("O1000\nG0 X1\nM30\n", Flavor::Fadal),
+            ("", Flavor::Fadal),
+        ] {
+            assert_eq!(detect(text.as_bytes()).0, want, "{text}");
+        }
+    }
+
+    #[test]
+    fn auto_looks_at_the_head_only() {
+        let mut text = "G0 X1\n".repeat(DETECT_BYTES / 6 + 10);
+        text.push_str("o100 sub\n");
+        assert_eq!(detect(text.as_bytes()).0, Flavor::Fadal);
+        let r = Resolved::new(Flavor::Auto, b"M83\n");
+        assert_eq!(
+            r.describe(),
+            "flavour marlin (auto: an extruder mode code on line 1: M83)"
+        );
+        assert_eq!(Resolved::new(Flavor::Haas, b"M83\n").flavor, Flavor::Haas);
+    }
+
+    #[test]
+    fn options_follow_the_flavour() {
+        let o = Flavor::Marlin.options(Options::default(), None);
+        assert_eq!(o.e_word, EWord::Extrusion);
+        let o = Flavor::Marlin.options(Options::default(), Some(EWord::FixtureOffset));
+        assert_eq!(o.e_word, EWord::FixtureOffset);
+        let o = Flavor::LinuxCnc.options(Options::default(), None);
+        assert!(o.flavor.evaluates());
+        assert_eq!(o.e_word, EWord::FixtureOffset);
+    }
+}

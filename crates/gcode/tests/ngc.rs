@@ -1,0 +1,296 @@
+//! LinuxCNC parameters, expressions and O-word control flow (issue 12 items 3 and 4),
+//! followed through `ProgramReader` in execution order with the `linuxcnc` flavour.
+
+use std::io::Cursor;
+
+use lampost_gcode::{Diagnostic, Event, Flavor, Options, Order, ProgramReader, Stream};
+
+fn run_with(text: &str, max_blocks: Option<u64>) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
+    let mut r = ProgramReader::new(Cursor::new(text.as_bytes()), Order::Execution);
+    if let Some(n) = max_blocks {
+        r.set_max_blocks(n);
+    }
+    let opts = Flavor::LinuxCnc.options(Options::default(), None);
+    let mut moves = Vec::new();
+    let mut diags = Vec::new();
+    for e in Stream::new(r, opts, true) {
+        match e.expect("reads") {
+            Event::Move(m) => moves.push([m.end[0], m.end[1], m.end[2]]),
+            Event::Diagnostic(d) => diags.push(d),
+        }
+    }
+    (moves, diags)
+}
+
+fn run(text: &str) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
+    run_with(text, None)
+}
+
+fn xs(m: &[[f64; 3]]) -> Vec<f64> {
+    m.iter().map(|p| p[0]).collect()
+}
+
+#[test]
+fn subroutines_are_called_never_traced_in_place() {
+    let text = "G21 G90\n\
+        o100 sub\n\
+        G0 X[#1 * 10] Y#2\n\
+        o100 endsub\n\
+        o<twice> sub\n\
+        o100 call [#1] [#1 + 1]\n\
+        o100 call [#1 + 1]\n\
+        o<twice> return [#1 * 2]\n\
+        o<twice> endsub\n\
+        o<twice> call [1]\n\
+        G0 X#<_value>\n\
+        M2\n";
+    let (m, d) = run(text);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(m, [[10.0, 2.0, 0.0], [20.0, 0.0, 0.0], [2.0, 0.0, 0.0]]);
+}
+
+#[test]
+fn loops_and_branches() {
+    let text = "G21 G90 G0 X0\n\
+        #1 = 0\n\
+        o1 while [#1 LT 5]\n\
+        #1 = [#1 + 1]\n\
+        o2 if [#1 EQ 2]\n\
+        o1 continue\n\
+        o2 elseif [#1 EQ 4]\n\
+        G0 Y4\n\
+        o2 else\n\
+        G0 X#1\n\
+        o2 endif\n\
+        o3 if [#1 GE 5]\n\
+        o1 break\n\
+        o3 endif\n\
+        o1 endwhile\n\
+        o4 repeat [3]\n\
+        G91 G0 Z1\n\
+        o4 endrepeat\n\
+        G90\n\
+        o5 do\n\
+        #1 = [#1 - 2]\n\
+        o5 while [#1 GT 0]\n\
+        G0 X#1\n\
+        M2\n";
+    let (m, d) = run(text);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(
+        m,
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0],
+            [3.0, 4.0, 0.0],
+            [5.0, 4.0, 0.0],
+            [5.0, 4.0, 1.0],
+            [5.0, 4.0, 2.0],
+            [5.0, 4.0, 3.0],
+            [-1.0, 4.0, 3.0],
+        ]
+    );
+}
+
+#[test]
+fn parameters_are_set_after_the_line_is_read() {
+    // RS274NGC: `#1 = 2 G0 X#1` moves to the old #1.
+    let (m, d) = run("G21 G0 X0\n#1 = 5\n#1 = 2 G0 X#1\nG0 X#1\n");
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(xs(&m), [0.0, 5.0, 2.0]);
+}
+
+#[test]
+fn feed_from_a_parameter_is_not_lost() {
+    // LinuxCNC's mmount.ngc pattern: a feed from a parameter, then plain G1 lines.
+    let (m, d) = run("G21 G0 X0\n#1 = 100\nG1 X10 F#1\nG1 X20\nG1 X30\n");
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(xs(&m), [0.0, 10.0, 20.0, 30.0]);
+}
+
+/// The first error of `text`: (line, column, message).
+fn first_error(text: &str, max_blocks: Option<u64>) -> (u32, u32, String) {
+    let (_, d) = run_with(text, max_blocks);
+    let e = d
+        .iter()
+        .find(|d| d.is_error())
+        .unwrap_or_else(|| panic!("no error in {text}: {d:?}"));
+    (e.line, e.column, e.kind.to_string())
+}
+
+#[test]
+fn bad_input_is_a_located_error() {
+    for (text, line, col, what) in [
+        // A while that never ends.
+        (
+            "G0 X0\no1 while [1]\nG0 X1\no1 endwhile\n",
+            4,
+            1,
+            "more than 1000 blocks",
+        ),
+        // Recursion without end.
+        (
+            "o1 sub\no1 call\no1 endsub\no1 call\n",
+            2,
+            1,
+            "nest more than 10 deep",
+        ),
+        // A call to a missing sub.
+        (
+            "G0 X0\no<nowhere> call [1]\n",
+            2,
+            1,
+            "no subroutine o<nowhere> sub",
+        ),
+        // An undefined parameter.
+        ("G0 X#<nope>\n", 1, 5, "#<nope> is not set"),
+        // Division by zero.
+        ("G0 X[1 / [2 - 2]]\n", 1, 6, "division by zero"),
+        // A 1e9 repeat count.
+        ("o1 repeat [1e9]\n", 1, 13, "expected an operator"),
+        (
+            "o1 repeat [1000000000]\nG0 X1\no1 endrepeat\n",
+            1,
+            11,
+            "over the limit",
+        ),
+        // Control lines out of place.
+        ("o1 endsub\n", 1, 1, "outside a subroutine"),
+        ("o1 return\n", 1, 1, "outside a subroutine"),
+        ("o1 break\n", 1, 1, "outside a loop"),
+        ("o1 while [0]\nG0 X1\n", 1, 1, "no endwhile"),
+        ("o1 if [0]\nG0 X1\n", 1, 1, "no endif"),
+        ("o1 sub\nG0 X1\n", 1, 1, "no endsub"),
+    ] {
+        let (l, c, m) = first_error(text, Some(1000));
+        assert_eq!((l, c), (line, col), "{text}: {m}");
+        assert!(m.contains(what), "{text}: {m}");
+    }
+}
+
+#[test]
+fn other_flavours_leave_macros_verbatim() {
+    let text = "G21 G0 X0\n#1 = 5\nG0 X#1\no1 if [1]\nG0 X2\no1 endif\n";
+    let r = ProgramReader::new(Cursor::new(text.as_bytes()), Order::Execution);
+    let opts = Flavor::Fadal.options(Options::default(), None);
+    let moves = Stream::new(r, opts, true)
+        .filter(|e| matches!(e, Ok(Event::Move(_))))
+        .count();
+    // X0 and X2: the macro lines are warned about, not evaluated.
+    assert_eq!(moves, 2);
+}
+
+#[test]
+fn system_parameters_after_moves_and_probes() {
+    // As LinuxCNC's standalone rs274: #5420… the position, #5061… a probe's end and
+    // #5070 0 (no probe trips), so a `while [#5070 NE 0]` retry loop ends.
+    let text = "G20 F10\nG0 X1 Y1 Z1\nG38.3 Z-1\nG0 X#5070 Y#5063 Z#5061\n\
+        #5070 = 1\no4 while [#5070 NE 0]\nG38.3 Z-2\no4 endwhile\nG0 X#5420 Y#5421\n";
+    let (m, d) = run(text);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(m[2], [0.0, -1.0, 1.0]);
+    assert_eq!(m.len(), 5);
+    assert_eq!(m[4], [0.0, -1.0, -2.0]);
+}
+
+#[test]
+fn an_unevaluated_feed_blames_no_later_block() {
+    // FADAL flavour: `F#1` is not evaluated; the block is skipped with one warning and
+    // the later G1 lines are not "feed move with no feed rate".
+    for text in [
+        "G21 G0 X0\nG1 X10 F#1\nG1 X20\nG1 X30\n",
+        "G21 G0 X0\nG1 X10 F+R4.\nG1 X20\nG1 X30\n",
+    ] {
+        let r = ProgramReader::new(Cursor::new(text.as_bytes()), Order::Execution);
+        let opts = Flavor::Fadal.options(Options::default(), None);
+        let events: Vec<Event> = Stream::new(r, opts, false)
+            .map(|e| e.expect("reads"))
+            .collect();
+        let diags: Vec<&Diagnostic> = events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Diagnostic(d) => Some(d),
+                Event::Move(_) => None,
+            })
+            .collect();
+        assert_eq!(diags.len(), 1, "{text}: {diags:?}");
+        assert!(!diags[0].is_error() && diags[0].line == 2, "{diags:?}");
+        let moves = events
+            .iter()
+            .filter(|e| matches!(e, Event::Move(_)))
+            .count();
+        assert_eq!(moves, 3, "{text}");
+    }
+    assert!(!lampost_gcode::expr::sets_feed("#F = 2"));
+    assert!(!lampost_gcode::expr::sets_feed("G1 X#1 (F#2)"));
+    assert!(lampost_gcode::expr::sets_feed("G1 X1 f [#2 * 2]"));
+}
+
+/// Moves and diagnostics of a Haas program read in `order`.
+fn haas(text: &str, order: Order) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
+    let r = ProgramReader::new(Cursor::new(text.as_bytes()), order);
+    let opts = Flavor::Haas.options(Options::default(), None);
+    let mut moves = Vec::new();
+    let mut diags = Vec::new();
+    for e in Stream::new(r, opts, order == Order::Execution) {
+        match e.expect("reads") {
+            Event::Move(m) => moves.push([m.end[0], m.end[1], m.end[2]]),
+            Event::Diagnostic(d) => diags.push(d),
+        }
+    }
+    (moves, diags)
+}
+
+#[test]
+fn haas_m97_calls_a_local_subprogram_by_its_n_label() {
+    let text = "O1000\nG20 G90 G0 X0 Y0\nM97 P100 L2\nG0 X5\nM97 P200\nM30\n\
+        N100 G91 G0 Y1\nG90\nM99\nN200 G0 Z-1\nM97 P100\nM99\n";
+    let (m, d) = haas(text, Order::Execution);
+    // Only the bodies after M30, read on after the main program, are warned about.
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert!(!d[0].is_error() && d[0].line == 7, "{d:?}");
+    assert_eq!(
+        m,
+        [
+            [0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [5.0, 2.0, 0.0],
+            [5.0, 2.0, -1.0],
+            [5.0, 3.0, -1.0],
+        ]
+    );
+    // A missing label, and recursion, are located errors; check reads in file order.
+    for (text, line, col, what) in [
+        (
+            "G20 G0 X0\nM97 P300\nM30\nN100 X1\nM99\n",
+            2,
+            5,
+            "no block N300",
+        ),
+        (
+            "G20 G0 X0\nM97 P100\nM30\nN100 M97 P100\nM99\n",
+            4,
+            10,
+            "N100 → N100",
+        ),
+    ] {
+        let (_, d) = haas(text, Order::Execution);
+        let e = d.iter().find(|d| d.is_error()).expect("an error");
+        assert_eq!((e.line, e.column), (line, col), "{text}: {e:?}");
+        assert!(e.kind.to_string().contains(what), "{text}: {}", e.kind);
+    }
+    let (_, d) = haas("G20 G0 X0\nM97 P300\nM30\n", Order::File);
+    assert_eq!(d.iter().filter(|d| d.is_error()).count(), 1, "{d:?}");
+    // Without a reader that follows calls, M97 is warned about, not ignored.
+    let opts = Flavor::Haas.options(Options::default(), None);
+    let d: Vec<Event> = Stream::from_bytes(b"G20 G0 X0\nM97 P100\nM30\n", opts, false)
+        .map(|e| e.expect("reads"))
+        .collect();
+    assert!(
+        d.iter()
+            .any(|e| matches!(e, Event::Diagnostic(d) if d.line == 2)),
+        "{d:?}"
+    );
+}
