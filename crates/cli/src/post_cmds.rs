@@ -69,6 +69,11 @@ pub struct Placement {
     /// E words are slicer extrusion: deposit only while E grows (implied by --flavor marlin or reprap).
     #[arg(long)]
     pub e_extrusion: bool,
+    /// Units of the input where it does not say (a program before any G20/G21, a
+    /// per-point file); default: the machine's. Other units than the machine's need
+    /// --convert-units.
+    #[arg(long, value_enum)]
+    pub units: Option<crate::UnitsArg>,
     /// The control the input was written for (auto: decided from the first section's program).
     #[arg(long, value_enum, default_value = "auto")]
     pub flavor: crate::FlavorArg,
@@ -171,6 +176,49 @@ fn is_per_point(pl: &Placement, input: Option<&str>) -> bool {
 }
 
 /// The frame and points of a per-point input.
+/// `--units` as the G-code layer's units.
+fn gcode_units(u: crate::UnitsArg) -> lampost_gcode::Units {
+    match u {
+        crate::UnitsArg::Inch => lampost_gcode::Units::Inch,
+        crate::UnitsArg::Mm => lampost_gcode::Units::Mm,
+    }
+}
+
+/// A per-point path in `--units` other than the machine's: scaled to the machine's with
+/// `--convert-units` (positions and feeds), else refused, naming both.
+fn per_point_units(
+    m: &Machine,
+    pl: &Placement,
+    name: &str,
+    pts: &mut [lampost_post::pointwise::PathPoint],
+) -> Result<(), CliError> {
+    let machine_mm = m.units == lampost_kinematics::Units::Mm;
+    let Some(given) = pl.units else {
+        return Ok(());
+    };
+    let given_mm = matches!(given, crate::UnitsArg::Mm);
+    if given_mm == machine_mm {
+        return Ok(());
+    }
+    let (from, to) = if given_mm {
+        ("millimetres", "inches")
+    } else {
+        ("inches", "millimetres")
+    };
+    if !pl.convert_units {
+        return Err(CliError::usage(format!(
+            "error: {name}: the points are in {from} (--units), the machine {} works in {to}\n  = help: add --convert-units to scale the points and feeds to {to}\n",
+            m.name
+        )));
+    }
+    let k = if given_mm { 1.0 / 25.4 } else { 25.4 };
+    for p in pts.iter_mut() {
+        p.tip *= k;
+        p.feed *= k;
+    }
+    Ok(())
+}
+
 fn per_point_input(
     pl: &Placement,
     input: &str,
@@ -287,6 +335,7 @@ fn intended_options(pl: &Placement, secs: &[Section]) -> Result<IntendedOptions,
         convert_units: pl.convert_units,
         e_extrusion: pl.e_extrusion || flavor.is_slicer(),
         flavor,
+        units: pl.units.map(gcode_units),
     })
 }
 
@@ -640,7 +689,8 @@ pub fn post(
     let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
     let (report, cfg) = if is_per_point(&a.place, input) {
         // The per-point post, then its verification of what was written.
-        let (frame, pts, name) = per_point_input(&a.place, input.unwrap_or("-"))?;
+        let (frame, mut pts, name) = per_point_input(&a.place, input.unwrap_or("-"))?;
+        per_point_units(&m, &a.place, &name, &mut pts)?;
         let mut cfg = config(&m, a, &[])?;
         let csv_bytes = input
             .filter(|i| *i != "-")
@@ -846,7 +896,8 @@ pub fn verify(
     let located = |e| post_error(crate::posted::locate(posted, e));
     let part = part_mesh(place, &m)?;
     let v = if is_per_point(place, input) {
-        let (frame, pts, _) = per_point_input(place, input.unwrap_or("-"))?;
+        let (frame, mut pts, name) = per_point_input(place, input.unwrap_or("-"))?;
+        per_point_units(&m, place, &name, &mut pts)?;
         lampost_post::pointwise::verify_points(
             &m,
             &pts,

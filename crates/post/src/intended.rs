@@ -171,6 +171,9 @@ pub struct IntendedOptions {
     /// The control the programs were written for (resolved; LinuxCNC expressions are
     /// evaluated, O-word control lines refused as macros).
     pub flavor: lampost_gcode::Flavor,
+    /// Units of a program that does not say (no G20/G21 before its numbers); `None`: the
+    /// machine's.
+    pub units: Option<Units>,
 }
 
 /// The intended path over every section, as an iterator.
@@ -192,6 +195,8 @@ pub struct Intended<'a> {
     /// The program Z a machine-coordinate retract left the head at: a feed may not start
     /// from there (its height on the part is not known).
     retract_z: Option<f64>,
+    /// What the user should hear of (a program read in units it did not name).
+    notes: Vec<String>,
 }
 
 impl std::fmt::Debug for Intended<'_> {
@@ -225,7 +230,19 @@ impl<'a> Intended<'a> {
             last_end: None,
             frame_cache: None,
             retract_z: None,
+            notes: Vec::new(),
         }
+    }
+
+    /// Notes for the report, so far: each section whose program gave no G20/G21, with the
+    /// units it was read in.
+    pub fn take_notes(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.notes)
+    }
+
+    /// The units a program is read in until it says (`--units`, else the machine's).
+    fn assumed_units(&self) -> Units {
+        self.opts.units.unwrap_or_else(|| self.machine_units())
     }
 
     fn machine_units(&self) -> Units {
@@ -259,7 +276,7 @@ impl<'a> Intended<'a> {
             let sec = &self.sections[self.idx];
             if self.stream.is_none() {
                 let opts = Options {
-                    units: self.machine_units(),
+                    units: self.assumed_units(),
                     e_word: if self.opts.e_extrusion {
                         EWord::Extrusion
                     } else {
@@ -278,6 +295,23 @@ impl<'a> Intended<'a> {
                 None => {
                     if self.moves_in_section == 0 {
                         return Err(PostError::Empty(sec.name.clone()));
+                    }
+                    if self
+                        .stream
+                        .as_ref()
+                        .is_some_and(|s| !s.interpreter().units_given())
+                    {
+                        let u = self.assumed_units();
+                        self.notes.push(format!(
+                            "{}: the program gives no G20/G21: its numbers were read as {} ({})",
+                            sec.name,
+                            units_name(u),
+                            if self.opts.units.is_some() {
+                                "--units"
+                            } else {
+                                "the machine's units; say otherwise with --units"
+                            }
+                        ));
                     }
                     self.stream = None;
                     self.idx += 1;

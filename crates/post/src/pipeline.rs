@@ -217,7 +217,8 @@ fn post_pass<W: Write>(
                     })
                 };
                 let mut batch = fresh();
-                for step in Intended::new(machine, sections, opts) {
+                let mut intended = Intended::new(machine, sections, opts);
+                for step in intended.by_ref() {
                     let failed = step.is_err();
                     let planned = step.map(|s| {
                         seen.add_step(&s);
@@ -229,14 +230,14 @@ fn post_pass<W: Write>(
                         let full = std::mem::replace(&mut batch, fresh());
                         // A closed channel: the writer stopped (an error); so do we.
                         if tx.send(full).is_err() || failed {
-                            return seen;
+                            return (seen, intended.take_notes());
                         }
                     }
                 }
                 if !batch.steps.is_empty() {
                     let _ = tx.send(batch);
                 }
-                seen
+                (seen, intended.take_notes())
             })
             .map_err(|e| PostError::Io(format!("cannot start the reading thread: {e}")))?;
         let result = post_steps(
@@ -253,11 +254,14 @@ fn post_pass<W: Write>(
             },
         );
         // `post_steps` has dropped the receiver, so the reader cannot block on a send.
-        let seen = match reader.join() {
-            Ok(seen) => seen,
+        let (seen, notes) = match reader.join() {
+            Ok(r) => r,
             Err(panic) => std::panic::resume_unwind(panic),
         };
-        result.map(|(report, used)| (report, seen, used))
+        result.map(|(mut report, used)| {
+            report.warnings.extend(notes);
+            (report, seen, used)
+        })
     })
 }
 
@@ -316,6 +320,7 @@ mod tests {
                     convert_units: false,
                     e_extrusion: false,
                     flavor: lampost_gcode::Flavor::Fadal,
+                    units: None,
                 },
                 near: [0.0, 0.0],
                 program_number: 1000,

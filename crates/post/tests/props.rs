@@ -31,6 +31,7 @@ fn config(m: &Machine, process: Process) -> PostConfig {
             convert_units: false,
             e_extrusion: false,
             flavor: lampost_gcode::Flavor::Fadal,
+            units: None,
         },
         near: [0.0, 0.0],
         program_number: 1000,

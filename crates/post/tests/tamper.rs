@@ -130,6 +130,7 @@ fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
             convert_units: false,
             e_extrusion: false,
             flavor: lampost_gcode::Flavor::Fadal,
+            units: None,
         },
         near: [0.0, 0.0],
         program_number: 1000,
