@@ -103,6 +103,20 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
             "every degree of freedom is locked: nothing to fit".into(),
         ));
     }
+    // The mesh's coordinates are held to the points' range: a vertex at 1e154 (an STL
+    // holds up to 3e38) made residuals whose squares overflow (found by `cargo xtask
+    // fuzz`).
+    for (i, v) in mesh.vertices.iter().enumerate() {
+        if let Some(x) = v
+            .iter()
+            .find(|x| !(x.is_finite() && x.abs() <= crate::fit::MAX_COORD))
+        {
+            return Err(AlignError::Degenerate(format!(
+                "mesh vertex {} has a coordinate {x:e}, beyond ±1e9 of the unit",
+                i + 1
+            )));
+        }
+    }
     let verts: Vec<PV> = mesh
         .vertices
         .iter()
@@ -247,6 +261,26 @@ mod tests {
     fn moved(points: &[P3], axis: P3, deg: f64, t: P3) -> Vec<P3> {
         let r = Rotation3::from_axis_angle(&Unit::new_normalize(axis), deg.to_radians());
         points.iter().map(|p| r * p + t).collect()
+    }
+
+    /// Found by `cargo xtask fuzz` (numeric target, seed 3, input 48525): a mesh at
+    /// z = 1e154 registered with `rms inf`; it is refused.
+    #[test]
+    fn a_mesh_beyond_the_coordinate_range_is_refused() {
+        let m = box_mesh(P3::new(-1.0, -4.3, 1e154), P3::new(0.0, 0.1, 1e154));
+        let pts = [
+            P3::new(0.0, 0.0, 0.0),
+            P3::new(1.0, 0.0, 0.0),
+            P3::new(0.0, 1.0, 0.0),
+            P3::new(1.0, 1.0, 0.5),
+            P3::new(2.0, 0.0, 0.25),
+            P3::new(0.0, 2.0, 0.75),
+        ];
+        let r = register(&m, &pts, Locks::default());
+        assert!(
+            matches!(&r, Err(AlignError::Degenerate(w)) if w.contains("beyond ±1e9")),
+            "{r:?}"
+        );
     }
 
     /// Points on three faces of a box, seen after a small known rigid move.

@@ -378,6 +378,11 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         self.words(&w, None)?;
         self.note_limits(j);
+        if self.rot != Some(rot) {
+            // The table turned under the head: the safe height to lift to (at the end, or
+            // before a re-index) is the one at this table position.
+            self.safe = self.heights.at(&rot);
+        }
         self.rot = Some(rot);
         self.pos = Some(x);
         for (slot, v) in self.written.iter_mut().zip(x) {
