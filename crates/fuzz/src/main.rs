@@ -7,8 +7,9 @@
 //! - `p NEXT INPUTS BYTES SLOWEST_US SLOWEST_INDEX`: progress (at least every 10 ms of
 //!   work, and at the end); NEXT is the first index not yet run.
 //! - `f KIND INDEX PATH`: a finding saved at PATH (KIND `panic` or `invalid`).
-//! - with `--trace FILE`, `s INDEX` before each input, whose bytes are in FILE first (the
-//!   parent's way to name the input in flight when the process hangs or dies).
+//! - with `--announce 1`, `s INDEX` before each input (the parent's way to name the input
+//!   in flight when the process hangs or dies); with `--trace FILE` too, and each input's
+//!   bytes are written to FILE before it runs (and what was chosen to FILE.txt).
 //!
 //! Built with `--profile fuzz` (integer overflow checks on); memory is limited by the
 //! parent (`ulimit -v`).
@@ -42,6 +43,7 @@ struct Args {
     ms: u64,
     findings: PathBuf,
     trace: Option<PathBuf>,
+    announce: bool,
 }
 
 fn args() -> Result<Args, String> {
@@ -54,6 +56,7 @@ fn args() -> Result<Args, String> {
         ms: 1000,
         findings: PathBuf::from("fuzz-findings"),
         trace: None,
+        announce: false,
     };
     let v: Vec<String> = std::env::args().skip(1).collect();
     let mut it = v.iter();
@@ -72,10 +75,11 @@ fn args() -> Result<Args, String> {
             "--ms" => a.ms = num()?,
             "--findings" => a.findings = PathBuf::from(val),
             "--trace" => a.trace = Some(PathBuf::from(val)),
+            "--announce" => a.announce = val == "1",
             _ => return Err(format!("unknown option {k}")),
         }
     }
-    if !targets::TARGETS.contains(&a.target.as_str()) {
+    if !(targets::TARGETS.contains(&a.target.as_str()) || a.target == "selftest") {
         return Err(format!(
             "--target {}: one of {}",
             a.target,
@@ -120,9 +124,11 @@ fn run() -> Result<(), String> {
     let end = a.start.saturating_add(a.count);
     let mut input = Vec::with_capacity(1 << 16);
     let mut note = String::new();
+    // Ready: the parent's per-input clock starts here.
+    say(format!("p {i} 0 0 0 {i}\n"))?;
     while i < end && t0.elapsed() < budget {
         let mut r = gen::Rng::for_input(a.seed, &a.target, i);
-        if a.trace.is_some() {
+        if a.trace.is_some() || a.announce {
             say(format!("s {i}\n"))?;
         }
         input.clear();

@@ -301,6 +301,7 @@ impl Ctx {
             "stl" => self.stl(r, input, note),
             "probe" => probe_log(self, r, input, note),
             "numeric" => numeric(self, r, input, note),
+            "selftest" => selftest(self, r, input, note),
             other => Err(format!("no target {other}")),
         }
     }
@@ -1286,4 +1287,30 @@ fn numeric(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Re
         }
     }
     Ok(())
+}
+
+/// Not a reader: the fuzzer's own check (`--target selftest`, never in `all`). About one
+/// input in 5,000 each hangs, asks for 1 TiB, overflows an integer or panics, so a run
+/// shows the parent catching each (`cargo xtask fuzz --target selftest`).
+fn selftest(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    input.clear();
+    let pick = r.below(5_000);
+    input.extend_from_slice(format!("{pick}\n").as_bytes());
+    *note = format!("selftest {pick}");
+    ctx.made(input, note);
+    match pick {
+        0 => loop {
+            std::hint::black_box(&input);
+        },
+        1 => {
+            let v = vec![1u8; std::hint::black_box(1usize << 40)];
+            Err(format!("1 TiB allocated: {}", v.len()))
+        }
+        2 => {
+            let x = std::hint::black_box(u32::MAX);
+            Err(format!("no overflow check: {}", x + 1))
+        }
+        3 => panic!("selftest panic"),
+        _ => Ok(()),
+    }
 }
