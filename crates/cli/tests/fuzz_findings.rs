@@ -29,8 +29,21 @@ fn per_point_final_lift_is_safe_where_the_table_stopped() {
         .to_string_lossy()
         .into_owned();
     let out = dir.join("turning.nc");
-    let o = lampost(&["post", "--machine", &machine, &csv, "-o", &out.to_string_lossy()]);
+    let o = lampost(&[
+        "post",
+        "--machine",
+        &machine,
+        &csv,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let v = lampost(&["verify", "--machine", &machine, &csv, &out.to_string_lossy()]);
+    let v = lampost(&[
+        "verify",
+        "--machine",
+        &machine,
+        &csv,
+        &out.to_string_lossy(),
+    ]);
     assert!(v.status.success(), "{}", stderr(&v));
 }

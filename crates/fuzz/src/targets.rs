@@ -430,8 +430,7 @@ impl Ctx {
             return Ok(());
         };
         // What fmt wrote must read back, every number finite.
-        let mut lines = lampost_gcode::Lines::new(&out);
-        while let Some(l) = lines.next() {
+        for l in lampost_gcode::Lines::new(&out) {
             match parse_line(l.bytes, l.number, l.offset) {
                 Ok(b) => {
                     if let Some(w) = b.words().find(|w| !w.value.is_finite()) {
@@ -847,7 +846,7 @@ impl Ctx {
                 input.extend_from_slice(generated_csv(r, 25.4).as_bytes());
             }
         } else {
-            input.extend_from_slice(r.pick_bytes(&seeds));
+            input.extend_from_slice(r.pick_bytes(seeds));
         }
         mutate(r, input, POINT_TOKENS);
         self.made(input, note);
@@ -963,8 +962,7 @@ fn shown(out: &[u8]) -> String {
 
 /// Check the posted text: every line reads, every word is finite.
 fn check_posted(out: &[u8]) -> Result<(), String> {
-    let mut lines = lampost_gcode::Lines::new(out);
-    while let Some(l) = lines.next() {
+    for l in lampost_gcode::Lines::new(out) {
         match parse_line(l.bytes, l.number, l.offset) {
             Ok(b) => {
                 if let Some(w) = b.words().find(|w| !w.value.is_finite()) {
