@@ -680,8 +680,13 @@ impl Ctx {
         let origin = Vector3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(0.0, 1.0));
         let frame = Frame::translation(origin);
         *note = format!(
-            "per-point on machine {mi} ({}), {:?}, origin {origin:?}",
-            m.name, cfg.process
+            "per-point on machine {mi} ({}), head {}, {:?}, {:?}, tolerance {}, work {}, origin {origin:?}",
+            m.name,
+            cfg.head,
+            cfg.process,
+            cfg.dialect,
+            cfg.tolerance,
+            cfg.work.is_some()
         );
         self.made(input, note);
         let text = String::from_utf8_lossy(input);
