@@ -9,11 +9,10 @@
 //!   against `lampost fmt` and a numpy script (`xtask/post_baseline.py`), same run.
 //! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
 //!   the calibration table (`cargo xtask calibration` alone).
-//! - `cargo xtask fuzz [--seconds N]`: a mutation fuzzer over parse + interpret, seeded
-//!   with the corpus and fixtures; reports inputs run and any panic.
+//! - `cargo xtask fuzz [--target T] [--seconds N] …`: every reader fuzzed in a child
+//!   process (`crates/fuzz`) under a time and memory limit per input; see `fuzz.rs`.
 
 use std::io::Write;
-use std::panic;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::time::{Duration, Instant};
@@ -326,230 +325,7 @@ fn accuracy() -> Result<(), String> {
     Ok(())
 }
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
-const TOKENS: &[&str] = &[
-    "\no1 sub\n",
-    "\no1 endsub\n",
-    "\no1 call [2]\n",
-    "\no2 while [#1 LT 3]\n",
-    "\no2 endwhile\n",
-    "\no3 if [#2 EQ 1]\n",
-    "\no3 else\n",
-    "\no3 endif\n",
-    "\no4 repeat [3]\n",
-    "\no4 endrepeat\n",
-    "\no2 break\n",
-    "\no2 continue\n",
-    "\n#1 = [#1 + 1]\n",
-    "#<a>",
-    "[1/#1]",
-    "SQRT[",
-    "**",
-    "M97 P",
-    "G0",
-    "G1",
-    "G2",
-    "G3",
-    "G4",
-    "G10",
-    "G17",
-    "G18",
-    "G19",
-    "G20",
-    "G21",
-    "G28",
-    "G30",
-    "G31",
-    "G31.1",
-    "G38.2",
-    "G40",
-    "G41",
-    "G43",
-    "G49",
-    "G52",
-    "G53",
-    "G54",
-    "G59.3",
-    "G73",
-    "G80",
-    "G81",
-    "G83",
-    "G84",
-    "G85",
-    "G86",
-    "G89",
-    "G90",
-    "G90.1",
-    "G91",
-    "G91.1",
-    "G92",
-    "G92.1",
-    "G93",
-    "G94",
-    "G98",
-    "G99",
-    "M2",
-    "M3",
-    "M6",
-    "M30",
-    "M98",
-    "M99",
-    "L2",
-    "L20",
-    "L9101",
-    "R1+1.",
-    "R0-.5",
-    "R-5",
-    "P0",
-    "P2",
-    "Q-1",
-    "Q.5",
-    "E0",
-    "E49",
-    "E1.5",
-    "H1",
-    "T1",
-    "F0",
-    "F-1",
-    "X",
-    "Y-",
-    ".",
-    "-.",
-    "1e999",
-    "99999999999999999999",
-    "(",
-    ")",
-    ";",
-    "#V1=2",
-    "X+R6.",
-    "[",
-    "#<a>",
-    "o100 sub",
-    "%",
-    "/",
-    "\n",
-    "\r\n",
-    " ",
-    "\t",
-    "\u{ff}",
-    "\0",
-    "I0",
-    "J0",
-    "K0",
-    "A360",
-    "B-90",
-    "C1e3",
-    "Z-0",
-    "X1e-300",
-];
-
-fn fuzz(seconds: u64) -> Result<(), String> {
-    let mut seeds: Vec<Vec<u8>> = Vec::new();
-    for dir in [
-        root().join("../shared/corpus/linuxcnc"),
-        root().join("../shared/corpus/fadal-probekit"),
-        root().join("fixtures/programs"),
-        root().join("fixtures/linuxcnc-nc_files"),
-    ] {
-        if let Ok(rd) = std::fs::read_dir(&dir) {
-            for e in rd.flatten() {
-                if let Ok(b) = std::fs::read(e.path()) {
-                    // Seeds of a few hundred lines keep each run short.
-                    for chunk in b.split(|&c| c == b'\n').collect::<Vec<_>>().chunks(40) {
-                        seeds.push(chunk.join(&b'\n'));
-                    }
-                }
-            }
-        }
-    }
-    if seeds.is_empty() {
-        seeds.push(b"G0 X1 Y2\nG1 Z-1 F10\nG2 X3 Y4 R2\n".to_vec());
-    }
-    panic::set_hook(Box::new(|_| {}));
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    let mut inputs = 0u64;
-    let mut bytes = 0u64;
-    let mut slowest = Duration::ZERO;
-    let mut failures = Vec::new();
-    while Instant::now() < deadline {
-        let mut input = seeds[rng.below(seeds.len())].clone();
-        for _ in 0..=rng.below(8) {
-            let at = rng.below(input.len() + 1);
-            match rng.below(5) {
-                0 => input.insert(at, rng.next() as u8),
-                1 if !input.is_empty() => {
-                    let end = (at + rng.below(8)).min(input.len());
-                    input.drain(at.min(end)..end);
-                }
-                2 if !input.is_empty() => {
-                    let i = rng.below(input.len());
-                    input[i] ^= 1 << rng.below(8);
-                }
-                _ => {
-                    let t = TOKENS[rng.below(TOKENS.len())].as_bytes();
-                    input.splice(at..at, t.iter().copied());
-                }
-            }
-        }
-        let t = Instant::now();
-        let data = input.clone();
-        // Every other input is read as LinuxCNC's, its O-words followed and its
-        // expressions evaluated (with a smaller block limit, so each run stays short).
-        let linuxcnc = inputs % 2 == 1;
-        let r = panic::catch_unwind(move || {
-            if linuxcnc {
-                let mut src = lampost_gcode::ProgramReader::new(
-                    std::io::Cursor::new(&data[..]),
-                    lampost_gcode::Order::Execution,
-                );
-                src.set_max_blocks(100_000);
-                let opts = lampost_gcode::Flavor::LinuxCnc
-                    .options(lampost_gcode::Options::default(), None);
-                lampost_gcode::Stream::new(src, opts, false).count()
-            } else {
-                let opts = lampost_gcode::Options::default();
-                lampost_gcode::Stream::from_bytes(&data, opts, false).count()
-            }
-        });
-        slowest = slowest.max(t.elapsed());
-        inputs += 1;
-        bytes += input.len() as u64;
-        if r.is_err() && failures.len() < 5 {
-            failures.push(input);
-        }
-    }
-    let _ = panic::take_hook();
-    println!(
-        "fuzz: {inputs} inputs ({:.1} MB) in {seconds} s, slowest input {:.2} ms, {} panics",
-        bytes as f64 / 1e6,
-        slowest.as_secs_f64() * 1e3,
-        failures.len()
-    );
-    for (i, f) in failures.iter().enumerate() {
-        let p = root().join(format!("target/xtask/fuzz-crash-{i}.nc"));
-        let _ = std::fs::create_dir_all(root().join("target/xtask"));
-        let _ = std::fs::write(&p, f);
-        println!("  crash input written to {}", p.display());
-    }
-    if failures.is_empty() {
-        Ok(())
-    } else {
-        Err("the fuzzer found panics".into())
-    }
-}
+mod fuzz;
 
 /// The manual pages, from the command line's definition, into `target/man`.
 fn man() -> Result<(), String> {
@@ -570,12 +346,8 @@ fn main() -> ExitCode {
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),
         ["calibration"] => calibration(200),
         ["man"] => man(),
-        ["fuzz"] => fuzz(60),
-        ["fuzz", "--seconds", n] => match n.parse() {
-            Ok(s) => fuzz(s),
-            Err(_) => Err(format!("--seconds takes a whole number, not {n}")),
-        },
-        _ => Err("usage: cargo xtask bench [gcode|kin|post] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz [--seconds N]".into()),
+        ["fuzz", rest @ ..] => fuzz::Config::parse(rest).and_then(|c| fuzz::run(&root(), &c)),
+        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -132,7 +132,12 @@ fn rot(m: &Machine, rotary: &[f64; 2]) -> nalgebra::Matrix3<f64> {
     (b * a).into_inner()
 }
 
-/// Check poses against the machine: limits, and enough of them.
+/// The smallest standard uncertainty of a pose's centre that [`check_poses`] accepts, in
+/// the machine's unit.
+pub const MIN_SIGMA: f64 = 1e-9;
+
+/// Check poses against the machine: limits, coordinates and uncertainties in range, and
+/// enough of them.
 pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), AlignError> {
     for p in poses {
         for (i, r) in m.rotary.iter().enumerate() {
@@ -163,6 +168,20 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
                 value,
             });
         }
+        // Weights are 1/σ: beyond these bounds their squares overflow or vanish beside
+        // the coordinates' (and no machine measures to 1e-9 of its unit).
+        if let Some(&s) = p
+            .sigma
+            .iter()
+            .flatten()
+            .find(|s| !(s.is_finite() && (MIN_SIGMA..=crate::fit::MAX_COORD).contains(*s)))
+        {
+            return Err(AlignError::Degenerate(format!(
+                "row {}: the uncertainty {s:e} is outside [{MIN_SIGMA:e}, {:e}] of the unit",
+                p.row,
+                crate::fit::MAX_COORD
+            )));
+        }
     }
     if poses.len() < need {
         return Err(AlignError::TooFewPoints {
@@ -172,6 +191,15 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
         });
     }
     Ok(())
+}
+
+/// Standard uncertainties from variances; `None` when one is negative or not finite (an
+/// inverse too ill-conditioned to mean anything: found by `cargo xtask fuzz`, where it
+/// gave NaN).
+fn variances_to_u(v: [f64; 3]) -> Option<[f64; 3]> {
+    v.iter()
+        .all(|x| x.is_finite() && *x >= 0.0)
+        .then(|| v.map(f64::sqrt))
 }
 
 /// Each pose's measured minus modelled ball centre under the intersecting-axes model.
@@ -329,13 +357,9 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     let dof = (3 * k).saturating_sub(6);
     let u_r = if dof > 0 {
         let s2 = wss / dof as f64;
-        (a.transpose() * &a).try_inverse().map(|cov| {
-            [
-                (s2 * cov[(0, 0)]).sqrt(),
-                (s2 * cov[(1, 1)]).sqrt(),
-                (s2 * cov[(2, 2)]).sqrt(),
-            ]
-        })
+        (a.transpose() * &a)
+            .try_inverse()
+            .and_then(|cov| variances_to_u([s2 * cov[(0, 0)], s2 * cov[(1, 1)], s2 * cov[(2, 2)]]))
     } else {
         None
     };
@@ -543,7 +567,7 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     let ss = r.norm_squared();
     let dof = (3 * k).saturating_sub(np);
     let u_r = if dof > 0 {
-        (j.transpose() * &j).try_inverse().map(|cov| {
+        (j.transpose() * &j).try_inverse().and_then(|cov| {
             let s2 = ss / dof as f64;
             // Propagate to R numerically.
             let mut jr = DMatrix::zeros(3, np);
@@ -559,7 +583,7 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
                 }
             }
             let cr = &jr * (cov * s2) * jr.transpose();
-            [cr[(0, 0)].sqrt(), cr[(1, 1)].sqrt(), cr[(2, 2)].sqrt()]
+            variances_to_u([cr[(0, 0)], cr[(1, 1)], cr[(2, 2)]])
         })
     } else {
         None
@@ -847,6 +871,25 @@ pub fn laser_offset(pairs: &[(P3, P3)]) -> Result<([f64; 3], Option<[f64; 3]>), 
             got: 0,
         });
     }
+    for (k, (burned, probed)) in pairs.iter().enumerate() {
+        let both = [*burned, *probed];
+        crate::fit::check_points(&both, "the laser offset (burn marks)", 0)
+            .map_err(|e| {
+                match e {
+                    AlignError::TooLarge { value, .. } => AlignError::TooLarge {
+                        index: k + 1,
+                        value,
+                    },
+                    AlignError::NotFinite(_) => AlignError::NotFinite(k + 1),
+                    // The same point burned and probed: an offset of zero.
+                    _ => e,
+                }
+            })
+            .or_else(|e| match e {
+                AlignError::DuplicatePoints { .. } => Ok(()),
+                e => Err(e),
+            })?;
+    }
     let ls: Vec<P3> = pairs
         .iter()
         .map(|(burned, probed)| probed - burned)
@@ -976,6 +1019,87 @@ mod tests {
 
     fn fadal() -> Machine {
         Machine::builtin("fadal-lamp", &[]).expect("machine")
+    }
+
+    /// Found by `cargo xtask fuzz` (numeric target): burn marks beyond ±1e9 gave an
+    /// infinite spread, and uncertainties of 1e-300 or 1e308 NaN residuals and `u_R`.
+    #[test]
+    fn laser_offset_and_uncertainties_out_of_range_are_refused() {
+        let far = P3::new(1e308, 0.0, 0.0);
+        let r = laser_offset(&[(P3::zeros(), P3::zeros()), (-far, far)]);
+        assert!(
+            matches!(r, Err(AlignError::TooLarge { index: 2, .. })),
+            "{r:?}"
+        );
+        let (l, spread) = laser_offset(&[
+            (P3::zeros(), P3::new(1.0, 0.0, 0.0)),
+            (P3::zeros(), P3::zeros()),
+        ])
+        .expect("in range");
+        assert_eq!(l, [0.5, 0.0, 0.0]);
+        assert!(spread.is_some_and(|s| s.iter().all(|v| v.is_finite())));
+        let m = fadal();
+        let c = P3::new(7.877, -3.4798, -6.0918);
+        let truth = [(m.rotary[0].axis, c), (m.rotary[1].axis, c)];
+        let mut poses = exact(&m, &truth, P3::new(3.0, -2.0, 1.0), &poses8());
+        for p in &mut poses {
+            p.sigma = Some([1e-4; 3]);
+        }
+        assert!(method_iii(&m, &poses)
+            .is_ok_and(|r| r.u_r.is_some_and(|u| u.iter().all(|v| v.is_finite()))));
+        for bad in [1e-300, 1e308, 0.0, f64::NAN] {
+            poses[1].sigma = Some([1e-4, bad, 1e-4]);
+            let r = method_iii(&m, &poses);
+            assert!(
+                matches!(&r, Err(AlignError::Degenerate(w)) if w.starts_with("row 2: the uncertainty")),
+                "{bad}: {r:?}"
+            );
+        }
+    }
+
+    /// Found by `cargo xtask fuzz` (numeric target, seed 3, input 126194): an
+    /// ill-conditioned Method III design (uncertainties 1e3 and 1e9 beside unweighted
+    /// poses) gave `u_R` = NaN from a negative variance; it is now left out.
+    #[test]
+    fn ill_conditioned_uncertainty_is_left_out_not_nan() {
+        assert_eq!(variances_to_u([4.0, 0.0, 1.0]), Some([2.0, 0.0, 1.0]));
+        assert_eq!(variances_to_u([4.0, -1e-20, 1.0]), None);
+        assert_eq!(variances_to_u([f64::INFINITY, 1.0, 1.0]), None);
+        let m = Machine::builtin("nrc-lc", &[]).expect("machine");
+        let pose = |rotary: [f64; 2], x: f64, sigma: Option<[f64; 3]>, row: usize| Pose {
+            rotary,
+            center: P3::new(x, 3.633826562083369, -3.159122641960284),
+            row,
+            sigma,
+        };
+        let s = 0.8589743093803003;
+        let poses = [
+            pose(
+                [-90.0, -157.14359908444328],
+                -2.2250738585072014e-308,
+                Some([1e3; 3]),
+                1,
+            ),
+            pose([105.85023488894646, -180.0], s, Some([1e9; 3]), 2),
+            pose(
+                [67.23553195635353, 653.9704184458857],
+                1.7179486187606006,
+                None,
+                3,
+            ),
+            pose(
+                [113.12982999500124, 140.1807612784674],
+                2.5769229281409007,
+                Some([539070896.204483; 3]),
+                4,
+            ),
+        ];
+        let r = method_iii(&m, &poses).expect("R fixed");
+        assert!(r.r.is_some(), "{r:?}");
+        assert!(
+            r.u_r.is_none_or(|u| u.iter().all(|v| v.is_finite())),
+            "{r:?}"
+        );
     }
 
     fn poses8() -> Vec<[f64; 2]> {

@@ -103,6 +103,20 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
             "every degree of freedom is locked: nothing to fit".into(),
         ));
     }
+    // The mesh's coordinates are held to the points' range: a vertex at 1e154 (an STL
+    // holds up to 3e38) made residuals whose squares overflow (found by `cargo xtask
+    // fuzz`).
+    for (i, v) in mesh.vertices.iter().enumerate() {
+        if let Some(x) = v
+            .iter()
+            .find(|x| !(x.is_finite() && x.abs() <= crate::fit::MAX_COORD))
+        {
+            return Err(AlignError::Degenerate(format!(
+                "mesh vertex {} has a coordinate {x:e}, beyond ±1e9 of the unit",
+                i + 1
+            )));
+        }
+    }
     let verts: Vec<PV> = mesh
         .vertices
         .iter()
@@ -219,9 +233,15 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
     let rp = r.transpose();
     let tp = -(rp * t);
     let rot = Rotation3::from_matrix(&rp);
-    let (axis, angle) = rot
-        .axis_angle()
-        .map_or((P3::z(), 0.0), |(a, ang)| (a.into_inner(), ang));
+    let axis = rot.axis_angle().map_or(P3::z(), |(a, _)| a.into_inner());
+    // The angle from both the trace and the skew part, the cosine clamped: nalgebra's
+    // `acos` of the trace alone gave NaN for a turn of 180° (found by `cargo xtask fuzz`).
+    let skew = P3::new(
+        rp[(2, 1)] - rp[(1, 2)],
+        rp[(0, 2)] - rp[(2, 0)],
+        rp[(1, 0)] - rp[(0, 1)],
+    );
+    let angle = (0.5 * skew.norm()).atan2(((rp.trace() - 1.0) / 2.0).clamp(-1.0, 1.0));
     let ss: f64 = residuals.iter().map(|x| x * x).sum();
     Ok(Registration {
         rotation: [
@@ -247,6 +267,54 @@ mod tests {
     fn moved(points: &[P3], axis: P3, deg: f64, t: P3) -> Vec<P3> {
         let r = Rotation3::from_axis_angle(&Unit::new_normalize(axis), deg.to_radians());
         points.iter().map(|p| r * p + t).collect()
+    }
+
+    /// Found by `cargo xtask fuzz` (numeric target, seed 3, input 48525): a mesh at
+    /// z = 1e154 registered with `rms inf`; it is refused.
+    #[test]
+    fn a_mesh_beyond_the_coordinate_range_is_refused() {
+        let m = box_mesh(P3::new(-1.0, -4.3, 1e154), P3::new(0.0, 0.1, 1e154));
+        let pts = [
+            P3::new(0.0, 0.0, 0.0),
+            P3::new(1.0, 0.0, 0.0),
+            P3::new(0.0, 1.0, 0.0),
+            P3::new(1.0, 1.0, 0.5),
+            P3::new(2.0, 0.0, 0.25),
+            P3::new(0.0, 2.0, 0.75),
+        ];
+        let r = register(&m, &pts, Locks::default());
+        assert!(
+            matches!(&r, Err(AlignError::Degenerate(w)) if w.contains("beyond ±1e9")),
+            "{r:?}"
+        );
+    }
+
+    /// Found by `cargo xtask fuzz` (numeric target, seed 2026, input 3698652): a
+    /// registration turned 180° reported `angle_deg` NaN.
+    #[test]
+    fn a_half_turn_has_an_angle() {
+        let m = box_mesh(
+            P3::new(-1.8955522650204086, -2.1289049374634694, -4.28192972113275),
+            P3::new(3.061910000895928, 1.0738304418740534, -2.7747951842139416),
+        );
+        let pts = [
+            P3::new(6.827847196350195, -1.9038795730743077, -8.884508728773934),
+            P3::new(5.57756728050065, 1.521277466478758, -8.884508724275307),
+            P3::new(2.414753699938728, 3.3355296366975424, -8.88450873300313),
+            P3::new(-1.1730728905985084, 2.685605779832, -8.88450872738302),
+            P3::new(
+                -3.4985015916532722,
+                -0.12282474958168063,
+                -8.884508732660995,
+            ),
+        ];
+        let locks = Locks {
+            translate: [true; 3],
+            rotate: [false, false, true],
+        };
+        let r = register(&m, &pts, locks).expect("registers");
+        assert!(r.angle_deg.is_finite(), "{r:?}");
+        assert!((r.angle_deg - 180.0).abs() < 1e-3, "{r:?}");
     }
 
     /// Points on three faces of a box, seen after a small known rigid move.

@@ -1,6 +1,5 @@
 //! `lampost post` and `lampost verify`.
 
-use std::collections::BTreeMap;
 use std::io::{BufReader, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
@@ -247,23 +246,6 @@ fn per_point_input(
     Ok((frame, pts, name))
 }
 
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct JobFile {
-    section: Vec<JobSection>,
-}
-
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct JobSection {
-    program: String,
-    index: Option<BTreeMap<String, f64>>,
-    setup: Option<String>,
-    origin: Option<[f64; 3]>,
-    x_axis: Option<[f64; 3]>,
-    z_axis: Option<[f64; 3]>,
-}
-
 fn index_arg(m: &Machine, text: &str) -> Result<[f64; 2], CliError> {
     let v = crate::kin_cmds::joints_arg(m, "--index", text, &[3, 4], &[3, 4])?;
     Ok([v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)])
@@ -393,7 +375,7 @@ pub fn sections(
     if let Some(job) = &pl.job {
         let text = std::fs::read_to_string(job)
             .map_err(|e| CliError::usage(format!("error: cannot read {job}: {e}\n")))?;
-        let jf: JobFile = toml::from_str(&text).map_err(|e| file_error(job, &text, &e))?;
+        let jf = lampost_post::job::parse(&text).map_err(|e| file_error(job, &text, &e))?;
         let dir = Path::new(job).parent().unwrap_or(Path::new("."));
         let mut out = Vec::new();
         for (k, s) in jf.section.iter().enumerate() {

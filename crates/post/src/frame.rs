@@ -36,6 +36,17 @@ impl Frame {
         {
             return Err("the setup holds a number that is not finite".into());
         }
+        // Directions are scaled to a largest component of 1 first: the length of one
+        // near 1e308 overflows (found by `cargo xtask fuzz`: a NaN frame).
+        let unit = |v: Vector3<f64>| {
+            let m = v.amax();
+            if m > 0.0 {
+                v / m
+            } else {
+                v
+            }
+        };
+        let (x, z) = (unit(x), unit(z));
         if z.norm() < 1e-12 {
             return Err("z_axis has zero length".into());
         }
@@ -111,4 +122,20 @@ pub fn read_setup(text: &str, file: &str) -> Result<Frame, PostError> {
             message,
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Found by `cargo xtask fuzz` (toml target, seed 2026, input 4006557): a setup file
+    /// whose x_axis has components of ±1.8e308 gave a frame of NaN.
+    #[test]
+    fn axes_near_the_largest_double_give_a_finite_frame() {
+        let text = "origin = [-25.4, 0.5, 0.6]\nx_axis = [-1.7976931348623157e308, 1.7976931348623157e308, -0.75]\nz_axis = [0.9377506658644394, -0.6517597444561505, 0.30606564945222914]\n";
+        let f = read_setup(text, "setup.toml").expect("a frame");
+        assert!(f.rot.iter().all(|v| v.is_finite()), "{f:?}");
+        let i = f.rot.transpose() * f.rot;
+        assert!((i - Matrix3::identity()).amax() < 1e-12, "{f:?}");
+    }
 }

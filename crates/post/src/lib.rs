@@ -28,6 +28,7 @@ pub mod collide;
 pub mod error;
 pub mod frame;
 pub mod intended;
+pub mod job;
 mod orient;
 pub mod pipeline;
 pub mod pointwise;

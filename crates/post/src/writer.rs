@@ -378,6 +378,11 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         self.move_words(&w, file, line)?;
         self.note_limits(j);
+        if self.rot != Some(rot) {
+            // The table turned under the head: the safe height to lift to (at the end, or
+            // before a re-index) is the one at this table position.
+            self.safe = self.heights.at(&rot);
+        }
         self.rot = Some(rot);
         self.pos = Some(x);
         for (slot, v) in self.written.iter_mut().zip(x) {
@@ -473,6 +478,11 @@ impl<'m, W: Write> Writer<'m, W> {
         w: &[(u8, f64)],
         comment: Option<&str>,
     ) -> Result<(), PostError> {
+        for &(l, v) in w {
+            if l == b'F' {
+                feed_writable(v)?;
+            }
+        }
         self.em.words(w, comment).map_err(PostError::from)
     }
 
@@ -667,6 +677,9 @@ impl<'m, W: Write> Writer<'m, W> {
             v.push((self.letters[0], x[0]));
             self.move_words(&v, file, line)?;
         } else {
+            if let Some(f) = feed {
+                feed_writable(f)?;
+            }
             self.em
                 .motion(g, &w[..n], self.scale, feed)
                 .map_err(|e| at_line(e, file, line))?;
@@ -727,4 +740,17 @@ fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
     } else {
         Err(bad())
     }
+}
+
+/// A feed is written with 5 decimals: one that rounds to `F0` (a feed of 1e-300 in the
+/// input, or an inverse-time feed of a move lasting years) would be a program the
+/// controller refuses or runs at no feed, and `verify` refuses it (found by `cargo xtask
+/// fuzz`). Refused before it is written.
+fn feed_writable(f: f64) -> Result<(), PostError> {
+    if f.is_finite() && round_half_away(f.abs() * 1e5) == 0.0 {
+        return Err(PostError::Options(format!(
+            "a feed of {f:e} would be written as F0 (feeds have 5 decimals): give a feed of at least 0.00001 units per minute"
+        )));
+    }
+    Ok(())
 }

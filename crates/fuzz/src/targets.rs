@@ -1,0 +1,1333 @@
+//! The targets: each makes one input from its generator (a mutated seed or a generated
+//! structure), runs it through the library, and checks what came back. `Err` is a
+//! finding ("invalid": a broken promise such as a non-finite number in an output or a
+//! posted program that fails `verify`); a refusal of bad input is `Ok`.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use lampost_align::{calib, fit, mesh, probe, register, setup, P3};
+use lampost_gcode::{
+    parse_line, Dialect, EWord, EmitOptions, Emitter, Event, Flavor, LineReader, Options, Order,
+    ProgramReader, Stream, Units,
+};
+
+/// Every resolved flavour (`auto` is resolved before a program is read).
+const FLAVORS: [Flavor; 7] = [
+    Flavor::Fadal,
+    Flavor::LinuxCnc,
+    Flavor::Fanuc,
+    Flavor::Haas,
+    Flavor::Mach3,
+    Flavor::Marlin,
+    Flavor::RepRap,
+];
+use lampost_kinematics::{Joints, Machine, MachineDef, Vector3};
+use lampost_post::safety::WorkBounds;
+use lampost_post::{
+    Frame, IntendedOptions, LayerSchedule, Orient, PostConfig, PostDialect, Process, Section,
+    Source,
+};
+
+use crate::gen::{chunks, mutate, read_dir, shows_nonfinite, Rng};
+
+/// Every target, in round-robin order.
+pub const TARGETS: &[&str] = &[
+    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric",
+];
+
+/// G-code tokens spliced into programs.
+const GCODE_TOKENS: &[&str] = &[
+    "G0",
+    "G1",
+    "G2",
+    "G3",
+    "G4",
+    "G10 L2 P1",
+    "G10 L20",
+    "G17",
+    "G18",
+    "G19",
+    "G20",
+    "G21",
+    "G28",
+    "G30",
+    "G31",
+    "G38.2",
+    "G40",
+    "G41 D1",
+    "G43 H1",
+    "G49",
+    "G52",
+    "G53",
+    "G54",
+    "G59.3",
+    "G73",
+    "G80",
+    "G81",
+    "G83",
+    "G84",
+    "G85",
+    "G89",
+    "G90",
+    "G90.1",
+    "G91",
+    "G91.1",
+    "G92",
+    "G92.1",
+    "G93",
+    "G94",
+    "G98",
+    "G99",
+    "M2",
+    "M3",
+    "M6",
+    "M30",
+    "M98 P100",
+    "M99",
+    "O100",
+    "L2",
+    "L9101",
+    "R1+1.",
+    "R-5",
+    "P0",
+    "P2",
+    "Q-1",
+    "Q.0000001",
+    "E0",
+    "E49",
+    "E1.5",
+    "H1",
+    "T1",
+    "F0",
+    "F-1",
+    "X",
+    "Y-",
+    "(",
+    ")",
+    ";",
+    "#V1=2",
+    "X+R6.",
+    "[",
+    "#<a>",
+    "o100 sub",
+    "%",
+    "/",
+    "\n",
+    "\r\n",
+    " ",
+    "\t",
+    "\u{ff}",
+    "\0",
+    "I0",
+    "J0",
+    "K0",
+    "A360",
+    "B-90",
+    "C1e3",
+    "Z-0",
+    "X1e-300",
+    "R10000000000",
+    "Z9999999999.99",
+    "P300",
+    "N",
+    "N99999999999",
+    "S",
+    "S1e308",
+    "M71",
+    "G65536",
+];
+
+const TOML_TOKENS: &[&str] = &[
+    "=",
+    "[",
+    "]",
+    "[[",
+    "]]",
+    "{",
+    "}",
+    ",",
+    "\"",
+    "'",
+    "\n",
+    "#",
+    " = 1e308",
+    " = nan",
+    " = inf",
+    " = -inf",
+    " = \"\"",
+    " = []",
+    "x = 1",
+    "scale = 1e308",
+    "limits = [1, -1]",
+    "axis = [0, 0, 0]",
+    "[[head]]",
+    "[[rotary]]",
+    "[[section]]",
+    "program = \"a.nc\"",
+    "index = { A = 1e300 }",
+    "\u{e9}",
+    "\u{1F600}",
+    "\0",
+    "\"\"\"",
+    "true",
+    "1979-05-27",
+];
+
+const POINT_TOKENS: &[&str] = &[
+    " ",
+    "\t",
+    ",",
+    ";",
+    "#",
+    "\n",
+    "\r\n",
+    "x y z",
+    "x y z i j k feed laser",
+    "1 2 3",
+    "0 0 1",
+    "1e308 1e308 1e308",
+    "nan",
+    "inf",
+    "\u{e9}",
+    "\u{ff}",
+    "\0",
+    "3\n",
+];
+
+const LOG_TOKENS: &[&str] = &[
+    "X",
+    "Y",
+    "Z",
+    "X1.5",
+    "Y-2",
+    "Z0.1",
+    ":",
+    "P1:",
+    "TOUCH:",
+    " ",
+    "\n",
+    "\r",
+    "\t",
+    "X1e308 Y1e308 Z1e308",
+    "Xnan",
+    "Yinf",
+    "\u{e9}",
+    "\0",
+];
+
+const STL_TOKENS: &[&str] = &[
+    "solid",
+    "endsolid",
+    "facet normal 0 0 1",
+    "outer loop",
+    "vertex 0 0 0",
+    "vertex 1e308 0 0",
+    "vertex nan 0 0",
+    "endloop",
+    "endfacet",
+    "\n",
+    " ",
+];
+
+/// What every input of a run shares: the machines and the seeds, read once.
+#[derive(Debug)]
+pub struct Ctx {
+    machines: Vec<Machine>,
+    machine_texts: Vec<Vec<u8>>,
+    programs: Vec<Vec<u8>>,
+    post_programs: Vec<Vec<u8>>,
+    csv: Vec<Vec<u8>>,
+    points: Vec<Vec<u8>>,
+    stl: Vec<Vec<u8>>,
+    jobs: Vec<Vec<u8>>,
+    /// Where each input is written before it runs (`--trace`).
+    trace: Option<std::path::PathBuf>,
+}
+
+impl Ctx {
+    /// Seeds from `root`'s fixtures and, when it is there, the shared corpus beside it.
+    pub fn new(root: &Path, trace: Option<std::path::PathBuf>) -> Result<Self, String> {
+        let fx = root.join("fixtures");
+        let corpus = root.join("../shared/corpus");
+        let mut machine_texts: Vec<Vec<u8>> = lampost_kinematics::BUILTINS
+            .iter()
+            .map(|(_, t)| t.as_bytes().to_vec())
+            .collect();
+        machine_texts.extend(read_dir(&fx.join("machines"), &["toml"]));
+        let mut machines = Vec::new();
+        for t in &machine_texts {
+            let text = String::from_utf8_lossy(t);
+            let def = MachineDef::from_toml(&text, "seed.toml").map_err(|e| e.to_string())?;
+            machines.push(Machine::new(def, &[]).map_err(|e| e.to_string())?);
+        }
+        let mut gfiles = Vec::new();
+        for d in [
+            fx.join("programs"),
+            fx.join("linuxcnc-nc_files"),
+            fx.join("post"),
+            fx.join("post/bearing-seat"),
+            corpus.join("linuxcnc"),
+            corpus.join("fadal-probekit"),
+            corpus.join("cam"),
+            corpus.join("slicers"),
+        ] {
+            gfiles.extend(read_dir(
+                &d,
+                &["nc", "ngc", "gcode", "tap", "txt", "cnc", "fnc"],
+            ));
+        }
+        let programs = chunks(&gfiles, 40);
+        let mut pfiles = read_dir(&fx.join("post"), &["nc"]);
+        pfiles.extend(read_dir(&fx.join("post/bearing-seat"), &["nc"]));
+        let post_programs = chunks(&pfiles, 60);
+        Ok(Ctx {
+            machines,
+            machine_texts,
+            programs,
+            post_programs,
+            csv: read_dir(&fx.join("post"), &["csv"]),
+            points: read_dir(&fx.join("points"), &[]),
+            stl: read_dir(&fx.join("meshes"), &["stl"]),
+            jobs: read_dir(&fx.join("post/bearing-seat"), &["toml"]),
+            trace,
+        })
+    }
+
+    /// Run input `index` of `target`; `input` receives the input's bytes (what a finding
+    /// saves) before it runs, and `note` what else was chosen.
+    pub fn run(
+        &self,
+        target: &str,
+        r: &mut Rng,
+        input: &mut Vec<u8>,
+        note: &mut String,
+    ) -> Result<(), String> {
+        match target {
+            "gcode" => self.gcode(r, input, note),
+            "fmt" => self.fmt(r, input, note),
+            "post" => self.post(r, input, note),
+            "toml" => self.toml(r, input, note),
+            "points" => self.points(r, input, note),
+            "stl" => self.stl(r, input, note),
+            "probe" => probe_log(self, r, input, note),
+            "numeric" => numeric(self, r, input, note),
+            "selftest" => selftest(self, r, input, note),
+            other => Err(format!("no target {other}")),
+        }
+    }
+
+    /// The input is made: with `--trace`, saved (with what was chosen) before it runs.
+    fn made(&self, input: &[u8], note: &str) {
+        if let Some(t) = &self.trace {
+            let _ = std::fs::write(t, input);
+            let _ = std::fs::write(t.with_extension("txt"), note);
+        }
+    }
+
+    fn program(&self, r: &mut Rng, input: &mut Vec<u8>) {
+        input.clear();
+        if self.programs.is_empty() || r.one_in(8) {
+            input.extend_from_slice(generated_program(r, 25.4).as_bytes());
+        } else {
+            input.extend_from_slice(r.pick_bytes(&self.programs));
+        }
+        mutate(r, input, GCODE_TOKENS);
+    }
+
+    fn gcode(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        self.program(r, input);
+        let opts = Options {
+            units: if r.coin() { Units::Mm } else { Units::Inch },
+            e_word: if r.coin() {
+                EWord::FixtureOffset
+            } else {
+                EWord::Extrusion
+            },
+            block_delete: r.coin(),
+            flavor: *r.pick(&FLAVORS),
+        };
+        let stop = r.coin();
+        let mode = r.below(4);
+        *note = format!("{opts:?}, stop_on_error {stop}, mode {mode} (0 bytes, 1 file order, 2 execution order, 3 check)");
+        self.made(input, note);
+        let mut events = 0u64;
+        let mut check = |ev: Event| -> Result<(), String> {
+            events += 1;
+            match ev {
+                Event::Move(m) => {
+                    let vals = m.start.iter().chain(m.end.iter()).chain([&m.feed]);
+                    if vals.chain(m.extrusion.iter()).any(|v| !v.is_finite()) {
+                        return Err(format!(
+                            "line {}: a move with a non-finite number: {m:?}",
+                            m.line
+                        ));
+                    }
+                }
+                Event::Diagnostic(d) => {
+                    // What `lampost check` prints, for people and as JSON.
+                    let text = crate::report::render("fuzz.nc", &d);
+                    let j = crate::json::to_string(&crate::report::json("fuzz.nc", &d))
+                        .map_err(|e| format!("a diagnostic's JSON: {}", e.message))?;
+                    if text.is_empty() || j.is_empty() {
+                        return Err("an empty diagnostic".into());
+                    }
+                }
+            }
+            Ok(())
+        };
+        match mode {
+            0 => {
+                for ev in Stream::from_bytes(input, opts, stop) {
+                    check(ev.map_err(|e| e.to_string())?)?;
+                }
+            }
+            1 | 2 => {
+                let order = if mode == 1 {
+                    Order::File
+                } else {
+                    Order::Execution
+                };
+                let src = ProgramReader::new(Cursor::new(input.as_slice()), order);
+                for ev in Stream::new(src, opts, stop) {
+                    match ev {
+                        Ok(ev) => check(ev)?,
+                        // The reader's own refusals (a line too long) come as errors.
+                        Err(_) => break,
+                    }
+                }
+            }
+            _ => {
+                for d in lampost_gcode::check(input, opts) {
+                    check(Event::Diagnostic(d))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn fmt(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        self.program(r, input);
+        let renumber = if r.coin() {
+            None
+        } else {
+            let start = *r.pick(&[0, 1, 10, 9999, u64::MAX / 2, u64::MAX - 1, u64::MAX]);
+            let step = *r.pick(&[1, 5, 10, 1000, u64::MAX / 3, u64::MAX]);
+            Some((start, step))
+        };
+        let opts = EmitOptions {
+            dialect: *r.pick(&[None, Some(Dialect::Fadal), Some(Dialect::Iso)]),
+            renumber,
+            suppress_modal: r.coin(),
+            units: if r.coin() { Units::Mm } else { Units::Inch },
+        };
+        *note = format!("{opts:?}");
+        self.made(input, note);
+        let mut em = Emitter::new(Vec::new(), opts);
+        let mut reader = LineReader::new(Cursor::new(input.as_slice()));
+        loop {
+            let line = match reader.next_line() {
+                Ok(Some(l)) => l,
+                Ok(None) => break,
+                Err(_) => return Ok(()),
+            };
+            if let Ok(b) = parse_line(line.bytes, line.number, line.offset) {
+                if em.block(&b).is_err() {
+                    // A value the dialect cannot write: refused, nothing to check.
+                    return Ok(());
+                }
+            }
+        }
+        let Ok(out) = em.finish() else {
+            return Ok(());
+        };
+        // What fmt wrote must read back, every number finite.
+        for l in lampost_gcode::Lines::new(&out) {
+            match parse_line(l.bytes, l.number, l.offset) {
+                Ok(b) => {
+                    if let Some(w) = b.words().find(|w| !w.value.is_finite()) {
+                        return Err(format!(
+                            "output line {}: a non-finite word {}",
+                            l.number, w.text
+                        ));
+                    }
+                }
+                Err(d) => {
+                    return Err(format!(
+                        "output line {} does not read back: {} in {:?}",
+                        l.number,
+                        d.kind,
+                        String::from_utf8_lossy(l.bytes)
+                    ))
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn post(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        let mi = r.below(self.machines.len());
+        let m = &self.machines[mi];
+        let k = match m.units {
+            lampost_kinematics::Units::Inch => 1.0,
+            lampost_kinematics::Units::Mm => 25.4,
+        };
+        let tolerance = k * *r.pick(&[0.0005, 0.0005, 0.005, 0.00005]);
+        let head = r.below(m.heads.len());
+        let process = if r.coin() {
+            Process::Deposit {
+                power: *r.pick(&[500.0, 1000.0, 0.0, 1e6]),
+            }
+        } else {
+            Process::Machine {
+                tool: r.coin().then(|| r.below(100) as u32),
+                length_offset: r.coin().then(|| r.below(100) as u32),
+                work_offset: r
+                    .coin()
+                    .then(|| (*r.pick(&["E1", "G54", "G59", "E48"])).to_string()),
+                spindle: *r.pick(&[1000.0, 3000.0, 0.0]),
+                coolant: r.coin(),
+            }
+        };
+        let dialect = *r.pick(&[PostDialect::Fadal, PostDialect::Iso, PostDialect::Nrc]);
+        let renumber = r
+            .one_in(3)
+            .then(|| (*r.pick(&[0, 1, 10, 99_999]), *r.pick(&[1, 5, 10, 1000])));
+        let work = r.one_in(4).then(|| {
+            let mut w = WorkBounds::empty();
+            let lo = Vector3::new(0.0, 0.0, -0.5 * k);
+            let hi = Vector3::new(
+                r.range(0.1, 2.0) * k,
+                r.range(0.1, 2.0) * k,
+                r.range(0.0, 0.6) * k,
+            );
+            w.add_points([lo, hi]);
+            w
+        });
+        let cfg = PostConfig {
+            head,
+            process,
+            dialect,
+            renumber,
+            tolerance,
+            intended: IntendedOptions {
+                convert_units: r.coin(),
+                e_extrusion: r.one_in(4),
+                flavor: *r.pick(&FLAVORS),
+                units: *r.pick(&[None, Some(Units::Mm), Some(Units::Inch)]),
+            },
+            near: [0.0, 0.0],
+            program_number: *r.pick(&[1000, 1, 9999, 99_999_999]),
+            header: vec!["fuzz".into()],
+            verify_tolerance: 2.0 * tolerance,
+            work,
+            part: None,
+            max_output_bytes: Some(4 << 20),
+        };
+        let verify_tol = cfg.verify_tolerance.max(
+            k * if m.units == lampost_kinematics::Units::Inch {
+                0.001
+            } else {
+                0.02 / 25.4
+            },
+        );
+        if r.one_in(4) {
+            return self.post_points(r, m, &cfg, verify_tol, input, note, mi);
+        }
+        // One to three sections (a job), each with its own program, placement and
+        // orientation; the first section's program is the saved input.
+        let nsec = if r.one_in(3) { 2 + r.below(2) } else { 1 };
+        let layers = r.one_in(5).then(|| LayerSchedule {
+            axis: Vector3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-0.2, 0.2)),
+            point: Vector3::new(r.range(-1.0, 1.0), 0.0, 0.0) * k,
+            deg_per_layer: r.mostly(-5.0, 5.0),
+        });
+        let mut sections = Vec::new();
+        for s in 0..nsec {
+            let mut text = Vec::new();
+            if self.post_programs.is_empty() || r.coin() {
+                text.extend_from_slice(generated_program(r, k).as_bytes());
+                if r.one_in(4) {
+                    mutate(r, &mut text, GCODE_TOKENS);
+                }
+            } else {
+                text.extend_from_slice(r.pick_bytes(&self.post_programs));
+                mutate(r, &mut text, GCODE_TOKENS);
+            }
+            if s == 0 {
+                input.clear();
+                input.extend_from_slice(&text);
+            }
+            let origin =
+                Vector3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(0.0, 1.0)) * k;
+            let frame = if r.coin() {
+                Frame::translation(origin)
+            } else {
+                let x = Vector3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0));
+                let z = Vector3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0));
+                match Frame::from_axes(origin, x, z) {
+                    Ok(f) => f,
+                    Err(_) => Frame::translation(origin),
+                }
+            };
+            let orient = if layers.is_none() && r.coin() {
+                let mut ix = [0.0; 2];
+                for (i, rot) in m.rotary.iter().enumerate() {
+                    let (lo, hi) = rot.limits.unwrap_or((-180.0, 180.0));
+                    ix[i] = if r.coin() {
+                        (r.range(lo, hi) / 15.0).round() * 15.0
+                    } else {
+                        r.range(lo, hi)
+                    };
+                }
+                Orient::Index(ix)
+            } else {
+                Orient::ToolAxis
+            };
+            sections.push(Section {
+                name: format!("section{}.nc", s + 1),
+                source: Source::Bytes(text),
+                frame,
+                orient,
+                layers,
+            });
+        }
+        let split = r.one_in(3).then(|| 256 + r.below(8192));
+        *note = format!(
+            "machine {}, head {head}, {:?}, {dialect:?}, renumber {renumber:?}, tolerance {tolerance}, work {}, intended {:?}, split {split:?}, sections {:?}",
+            m.name,
+            cfg.process,
+            cfg.work.is_some(),
+            cfg.intended,
+            sections
+                .iter()
+                .map(|s| (s.name.clone(), s.frame, s.orient, s.layers))
+                .collect::<Vec<_>>()
+        );
+        self.made(input, note);
+        let mut out = Vec::new();
+        let Ok(report) = lampost_post::post(m, &sections, &cfg, &mut out, |_| {}) else {
+            return Ok(());
+        };
+        check_posted(&out)?;
+        let verify = |text: &[u8]| {
+            lampost_post::verify(
+                m,
+                &sections,
+                head,
+                cfg.intended,
+                ProgramReader::new(Cursor::new(text), Order::Execution),
+                verify_tol,
+                cfg.work.as_ref(),
+                None,
+            )
+        };
+        verify(&out).map_err(|e| {
+            format!(
+                "the posted program fails verify: {e}\n--- posted ---\n{}",
+                shown(&out)
+            )
+        })?;
+        if let Some(max) = split.filter(|&s| s < out.len()) {
+            let pieces = lampost_post::split::split(
+                &mut Cursor::new(out.as_slice()),
+                out.len() as u64,
+                &report,
+                dialect,
+                cfg.program_number,
+                max,
+            );
+            if let Ok(pieces) = pieces {
+                let mut joined = Vec::new();
+                for p in &pieces {
+                    // (FADAL: one file, number 0, whose subprograms are the pieces;
+                    // the split checks each of those itself.)
+                    if p.number > 0 && p.text.len() > max {
+                        return Err(format!(
+                            "split --max-bytes {max}: piece {} of {} holds {} bytes\n--- piece ---\n{}",
+                            p.number,
+                            pieces.len(),
+                            p.text.len(),
+                            shown(&p.text)
+                        ));
+                    }
+                    check_posted(&p.text)?;
+                    joined.extend_from_slice(&p.text);
+                }
+                verify(&joined).map_err(|e| {
+                    format!(
+                        "the pieces of split --max-bytes {max} fail verify: {e}\n--- pieces ---\n{}",
+                        shown(&joined)
+                    )
+                })?;
+            }
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn post_points(
+        &self,
+        r: &mut Rng,
+        m: &Machine,
+        cfg: &PostConfig,
+        verify_tol: f64,
+        input: &mut Vec<u8>,
+        note: &mut String,
+        mi: usize,
+    ) -> Result<(), String> {
+        input.clear();
+        if self.csv.is_empty() || r.coin() {
+            let k = if m.units == lampost_kinematics::Units::Inch {
+                1.0
+            } else {
+                25.4
+            };
+            input.extend_from_slice(generated_csv(r, k).as_bytes());
+            if r.one_in(4) {
+                mutate(r, input, POINT_TOKENS);
+            }
+        } else {
+            input.extend_from_slice(r.pick_bytes(&self.csv));
+            mutate(r, input, POINT_TOKENS);
+        }
+        let origin = Vector3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(0.0, 1.0));
+        let frame = Frame::translation(origin);
+        *note = format!(
+            "per-point on machine {mi} ({}), head {}, {:?}, {:?}, tolerance {}, work {}, origin {origin:?}",
+            m.name,
+            cfg.head,
+            cfg.process,
+            cfg.dialect,
+            cfg.tolerance,
+            cfg.work.is_some()
+        );
+        self.made(input, note);
+        let text = String::from_utf8_lossy(input);
+        let Ok(pts) = lampost_post::pointwise::read_points(&text, "fuzz.csv") else {
+            return Ok(());
+        };
+        if let Some(p) = pts.iter().find(|p| {
+            !(p.tip.iter().chain(p.axis.iter()).all(|v| v.is_finite()) && p.feed.is_finite())
+        }) {
+            return Err(format!("read_points: a non-finite point {p:?}"));
+        }
+        let mut out = Vec::new();
+        if lampost_post::pointwise::post_points(m, &pts, &frame, "fuzz.csv", cfg, &mut out).is_err()
+        {
+            return Ok(());
+        }
+        check_posted(&out)?;
+        lampost_post::pointwise::verify_points(
+            m,
+            &pts,
+            &frame,
+            cfg.head,
+            ProgramReader::new(Cursor::new(out.as_slice()), Order::Execution),
+            verify_tol,
+            cfg.work.as_ref(),
+        )
+        .map_err(|e| {
+            format!(
+                "the per-point program fails verify_points: {e}\n--- posted ---\n{}",
+                shown(&out)
+            )
+        })?;
+        Ok(())
+    }
+
+    fn toml(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        input.clear();
+        match r.below(3) {
+            0 => {
+                *note = "machine file".into();
+                input.extend_from_slice(r.pick_bytes(&self.machine_texts));
+                mutate(r, input, TOML_TOKENS);
+                self.made(input, note);
+                let text = String::from_utf8_lossy(input);
+                let Ok(def) = MachineDef::from_toml(&text, "fuzz.toml") else {
+                    return Ok(());
+                };
+                // What the file says must survive writing and reading again.
+                let again = def.to_toml();
+                MachineDef::from_toml(&again, "again.toml").map_err(|e| {
+                    format!("a machine file read, written and read again fails: {e}")
+                })?;
+                let Ok(m) = Machine::new(def, &[]) else {
+                    return Ok(());
+                };
+                // A machine that validates answers FK and IK with finite numbers.
+                for _ in 0..4 {
+                    let mut j = Joints {
+                        linear: [
+                            r.range(-10.0, 10.0),
+                            r.range(-10.0, 10.0),
+                            r.range(-10.0, 10.0),
+                        ],
+                        rotary: [0.0; 2],
+                    };
+                    for (i, rot) in m.rotary.iter().enumerate() {
+                        let (lo, hi) = rot.limits.unwrap_or((-180.0, 180.0));
+                        j.rotary[i] = r.range(lo, hi);
+                    }
+                    for h in 0..m.heads.len() {
+                        let p = m.forward(&j, h);
+                        if !p.tip.iter().chain(p.axis.iter()).all(|v| v.is_finite()) {
+                            return Err(format!("FK of {j:?} head {h}: {p:?}"));
+                        }
+                        if let Ok(sols) = m.inverse(&p.tip, &p.axis, h, &[0.0, 0.0]) {
+                            if shows_nonfinite(&format!("{sols:?}")) {
+                                return Err(format!("IK of {p:?}: {sols:?}"));
+                            }
+                        }
+                    }
+                }
+            }
+            1 => {
+                *note = "setup file".into();
+                let s = lampost_align::Setup {
+                    origin: [r.extreme(), r.mostly(-10.0, 10.0), r.mostly(-10.0, 10.0)],
+                    x_axis: [
+                        r.mostly(-1.0, 1.0),
+                        r.mostly(-1.0, 1.0),
+                        r.mostly(-1.0, 1.0),
+                    ],
+                    z_axis: [
+                        r.mostly(-1.0, 1.0),
+                        r.mostly(-1.0, 1.0),
+                        r.mostly(-1.0, 1.0),
+                    ],
+                    note: "fuzz".into(),
+                };
+                input.extend_from_slice(s.to_toml().as_bytes());
+                mutate(r, input, TOML_TOKENS);
+                self.made(input, note);
+                let text = String::from_utf8_lossy(input);
+                if let Ok(f) = lampost_post::read_setup(&text, "fuzz.toml") {
+                    if shows_nonfinite(&format!("{f:?}")) {
+                        return Err(format!("read_setup gave {f:?}"));
+                    }
+                }
+            }
+            _ => {
+                *note = "job file".into();
+                if self.jobs.is_empty() {
+                    input.extend_from_slice(b"[[section]]\nprogram = \"a.nc\"\n");
+                } else {
+                    input.extend_from_slice(r.pick_bytes(&self.jobs));
+                }
+                mutate(r, input, TOML_TOKENS);
+                self.made(input, note);
+                let text = String::from_utf8_lossy(input);
+                if let Ok(job) = lampost_post::job::parse(&text) {
+                    for s in &job.section {
+                        // What the CLI makes of each section.
+                        let f = Frame::from_axes(
+                            Vector3::from(s.origin.unwrap_or([0.0; 3])),
+                            Vector3::from(s.x_axis.unwrap_or([1.0, 0.0, 0.0])),
+                            Vector3::from(s.z_axis.unwrap_or([0.0, 0.0, 1.0])),
+                        );
+                        if let Ok(f) = f {
+                            if shows_nonfinite(&format!("{f:?}")) {
+                                return Err(format!("a job section's frame {f:?}"));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn points(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        input.clear();
+        let cli = r.coin();
+        *note = if cli {
+            "point file (fit, align)".into()
+        } else {
+            "per-point CSV".into()
+        };
+        let seeds = if cli { &self.points } else { &self.csv };
+        if seeds.is_empty() || r.coin() {
+            if cli {
+                for _ in 0..r.below(20) {
+                    input.extend_from_slice(
+                        format!(
+                            "{} {} {}\n",
+                            r.mostly(-10.0, 10.0),
+                            r.mostly(-10.0, 10.0),
+                            r.mostly(-10.0, 10.0)
+                        )
+                        .as_bytes(),
+                    );
+                }
+            } else {
+                input.extend_from_slice(generated_csv(r, 25.4).as_bytes());
+            }
+        } else {
+            input.extend_from_slice(r.pick_bytes(seeds));
+        }
+        mutate(r, input, POINT_TOKENS);
+        self.made(input, note);
+        let text = String::from_utf8_lossy(input);
+        if cli {
+            if let Ok(pts) = crate::points::parse_points(&text, "fuzz.txt") {
+                if let Some(p) = pts.iter().find(|p| !p.p.iter().all(|v| v.is_finite())) {
+                    return Err(format!("parse_points: a non-finite point {p:?}"));
+                }
+            }
+        } else if let Ok(pts) = lampost_post::pointwise::read_points(&text, "fuzz.csv") {
+            if let Some(p) = pts.iter().find(|p| {
+                !(p.tip.iter().chain(p.axis.iter()).all(|v| v.is_finite()) && p.feed.is_finite())
+            }) {
+                return Err(format!("read_points: a non-finite point {p:?}"));
+            }
+        }
+        Ok(())
+    }
+
+    fn stl(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        input.clear();
+        match r.below(3) {
+            0 if !self.stl.is_empty() => {
+                *note = "ASCII STL fixture, mutated".into();
+                input.extend_from_slice(r.pick_bytes(&self.stl));
+                mutate(r, input, STL_TOKENS);
+            }
+            1 => {
+                *note = "ASCII STL generated".into();
+                let lo = P3::new(
+                    r.mostly(-5.0, 0.0),
+                    r.mostly(-5.0, 0.0),
+                    r.mostly(-5.0, 0.0),
+                );
+                let hi = lo + P3::new(r.mostly(0.0, 5.0), r.mostly(0.0, 5.0), r.mostly(0.0, 5.0));
+                let m = mesh::box_mesh(lo, hi);
+                input.extend_from_slice(mesh::write_ascii_stl(&m, "fuzz").as_bytes());
+                if r.coin() {
+                    mutate(r, input, STL_TOKENS);
+                }
+            }
+            _ => {
+                *note = "binary STL".into();
+                let mut head = [b' '; 80];
+                if r.one_in(4) {
+                    head[..5].copy_from_slice(b"solid");
+                }
+                input.extend_from_slice(&head);
+                let n = r.below(40);
+                let said = if r.one_in(8) {
+                    r.next() as u32
+                } else {
+                    n as u32
+                };
+                input.extend_from_slice(&said.to_le_bytes());
+                let mut corners: Vec<[f32; 3]> = Vec::new();
+                for _ in 0..n {
+                    input.extend_from_slice(&[0u8; 12]);
+                    for _ in 0..3 {
+                        let c = if !corners.is_empty() && r.coin() {
+                            *r.pick(&corners)
+                        } else {
+                            [
+                                r.mostly(-5.0, 5.0) as f32,
+                                r.mostly(-5.0, 5.0) as f32,
+                                r.mostly(-5.0, 5.0) as f32,
+                            ]
+                        };
+                        corners.push(c);
+                        for v in c {
+                            input.extend_from_slice(&v.to_le_bytes());
+                        }
+                    }
+                    input.extend_from_slice(&[0u8; 2]);
+                }
+                if r.one_in(3) {
+                    mutate(r, input, &[]);
+                }
+            }
+        }
+        self.made(input, note);
+        let Ok(m) = mesh::read_stl(input) else {
+            return Ok(());
+        };
+        if m.vertices.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
+            return Err("read_stl: a non-finite vertex".into());
+        }
+        if m.triangles
+            .iter()
+            .any(|t| t.iter().any(|&i| i as usize >= m.vertices.len()))
+        {
+            return Err("read_stl: a triangle names a vertex that is not there".into());
+        }
+        let _ = mesh::manifold_report(&m);
+        // The post's part mesh (--part) built from it.
+        if let Ok(part) = lampost_post::collide::PartMesh::from_mesh(&m) {
+            let (lo, hi) = part.bounds();
+            if !lo.iter().chain(hi.iter()).all(|v| v.is_finite()) {
+                return Err(format!("PartMesh bounds {lo:?} {hi:?}"));
+            }
+            let p = (lo + hi) * 0.5;
+            let _ = part.contains(&p);
+        }
+        Ok(())
+    }
+}
+
+/// A posted text for a finding's note (its first 64 KiB).
+fn shown(out: &[u8]) -> String {
+    String::from_utf8_lossy(&out[..out.len().min(1 << 16)]).into_owned()
+}
+
+/// Check the posted text: every line reads, every word is finite.
+fn check_posted(out: &[u8]) -> Result<(), String> {
+    for l in lampost_gcode::Lines::new(out) {
+        match parse_line(l.bytes, l.number, l.offset) {
+            Ok(b) => {
+                if let Some(w) = b.words().find(|w| !w.value.is_finite()) {
+                    return Err(format!(
+                        "posted line {}: a non-finite word {}",
+                        l.number, w.text
+                    ));
+                }
+            }
+            Err(d) => {
+                return Err(format!(
+                    "posted line {} does not read: {}: {:?}",
+                    l.number,
+                    d.kind,
+                    String::from_utf8_lossy(l.bytes)
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A random planar program, `k` units per inch (1 or 25.4), about a 1-in square:
+/// rapids, retracts, lines, arcs (IJK and R), helices, full circles, dwell.
+fn generated_program(r: &mut Rng, k: f64) -> String {
+    let units = if k == 1.0 { "G20" } else { "G21" };
+    let f = |v: f64| format!("{:.4}", v * k);
+    let mut s = format!("{units} G90 G17\n");
+    for run in 0..1 + r.below(3) {
+        let (mut x, mut y) = (r.range(0.0, 1.0), r.range(0.0, 1.0));
+        let z0 = 0.02 * run as f64;
+        s += &format!("G0 X{} Y{} Z{}\n", f(x), f(y), f(z0 + 0.1));
+        s += &format!("G1 Z{} F{}\n", f(z0), f(20.0));
+        let mut z = z0;
+        for _ in 0..1 + r.below(6) {
+            match r.below(6) {
+                0 | 1 => {
+                    x = r.range(0.0, 1.0);
+                    y = r.range(0.0, 1.0);
+                    s += &format!("G1 X{} Y{}\n", f(x), f(y));
+                }
+                2 => s += "G4 P0.1\n",
+                _ => {
+                    let rad = r.range(0.05, 0.4);
+                    let a0 = r.range(0.0, std::f64::consts::TAU);
+                    let (cx, cy) = (x - rad * a0.cos(), y - rad * a0.sin());
+                    let a1 = a0 + r.range(-3.0, 3.0);
+                    let full = r.one_in(6);
+                    let (ex, ey) = if full {
+                        (x, y)
+                    } else {
+                        (cx + rad * a1.cos(), cy + rad * a1.sin())
+                    };
+                    let ez = if r.one_in(4) { z + 0.01 } else { z };
+                    let g = if r.coin() { "G2" } else { "G3" };
+                    if !full && r.one_in(3) {
+                        let chord = ((ex - x).powi(2) + (ey - y).powi(2)).sqrt();
+                        s += &format!("{g} X{} Y{} R{}\n", f(ex), f(ey), f((chord / 2.0).max(rad)));
+                    } else {
+                        s += &format!(
+                            "{g} X{} Y{} Z{} I{} J{}\n",
+                            f(ex),
+                            f(ey),
+                            f(ez),
+                            f(cx - x),
+                            f(cy - y)
+                        );
+                    }
+                    x = ex;
+                    y = ey;
+                    z = ez;
+                }
+            }
+        }
+        match r.below(3) {
+            0 => s += "G53 G0 Z-1.\n",
+            1 => s += "G28 G91 Z0.\nG90\n",
+            _ => s += &format!("G0 Z{}\n", f(z + 0.2)),
+        }
+    }
+    s + "M30\n"
+}
+
+/// Rows `x y z i j k feed laser` of a per-point path, `k` units per inch.
+fn generated_csv(r: &mut Rng, k: f64) -> String {
+    let mut s = String::new();
+    if r.coin() {
+        s += "x y z i j k feed laser\n";
+    }
+    let tilt = r.range(0.0, 0.6);
+    for i in 0..2 + r.below(30) {
+        let a = i as f64 * r.range(0.01, 0.3);
+        let (sa, ca) = a.sin_cos();
+        let (x, y) = (ca * k, sa * k);
+        let n = (tilt.sin() * ca, tilt.sin() * sa, tilt.cos());
+        let feed = if r.one_in(3) {
+            String::new()
+        } else {
+            format!(" {}", *r.pick(&["600", "20", "0.5", "1e9"]))
+        };
+        let laser = if feed.is_empty() {
+            ""
+        } else {
+            *r.pick(&["", " 0", " 1"])
+        };
+        s += &format!(
+            "{x:.6} {y:.6} 0 {:.6} {:.6} {:.6}{feed}{laser}\n",
+            n.0, n.1, n.2
+        );
+    }
+    s
+}
+
+fn probe_log(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    input.clear();
+    *note = "probe log".into();
+    for i in 0..r.below(30) {
+        match r.below(4) {
+            0 => input.extend_from_slice(b"RS-232 log: ignored line\n"),
+            1 => input.extend_from_slice(format!("P{i}: ").as_bytes()),
+            _ => {}
+        }
+        input.extend_from_slice(
+            format!(
+                "X{:.4} Y{:.4} Z{:.4}\n",
+                r.mostly(-5.0, 5.0),
+                r.mostly(-5.0, 5.0),
+                r.mostly(-5.0, 5.0)
+            )
+            .as_bytes(),
+        );
+    }
+    mutate(r, input, LOG_TOKENS);
+    ctx.made(input, note);
+    let text = String::from_utf8_lossy(input);
+    let Ok(pts) = probe::read_log(&text) else {
+        return Ok(());
+    };
+    if let Some(p) = pts.iter().find(|p| !p.1.iter().all(|v| v.is_finite())) {
+        return Err(format!("read_log: a non-finite point {p:?}"));
+    }
+    // What `probe fit` does with them.
+    let p3: Vec<P3> = pts.iter().map(|p| P3::from(p.1)).collect();
+    finite("sphere", &fit::sphere(&p3, None))?;
+    finite("plane", &fit::plane(&p3))?;
+    Ok(())
+}
+
+/// An `Ok` result must show no non-finite number.
+fn finite<T: std::fmt::Debug, E>(what: &str, r: &Result<T, E>) -> Result<(), String> {
+    if let Ok(v) = r {
+        let s = format!("{v:?}");
+        if shows_nonfinite(&s) {
+            return Err(format!("{what}: a non-finite number in {s}"));
+        }
+    }
+    Ok(())
+}
+
+/// Points of a shape of random size and place, maybe with noise, duplicates and
+/// extreme coordinates.
+fn shape_points(r: &mut Rng) -> (Vec<P3>, String) {
+    let n = *r.pick(&[0, 1, 3, 4, 5, 6, 8, 12, 30]);
+    let scale = if r.coin() {
+        r.extreme().abs()
+    } else {
+        r.range(0.1, 10.0)
+    };
+    let centre = P3::new(
+        r.mostly(-10.0, 10.0),
+        r.mostly(-10.0, 10.0),
+        r.mostly(-10.0, 10.0),
+    );
+    let kind = r.below(5);
+    let noise = *r.pick(&[0.0, 1e-9, 1e-4, 0.1]);
+    let mut pts = Vec::new();
+    for i in 0..n {
+        let p = match kind {
+            // A sphere cap.
+            0 => {
+                let (t, ph) = (r.range(0.0, 1.2), r.range(0.0, std::f64::consts::TAU));
+                P3::new(t.sin() * ph.cos(), t.sin() * ph.sin(), t.cos())
+            }
+            // A plane.
+            1 => P3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), 0.0),
+            // A circle.
+            2 => {
+                let a = i as f64 * 0.7;
+                P3::new(a.cos(), a.sin(), 0.0)
+            }
+            // A line.
+            3 => P3::new(i as f64, 0.0, 0.0),
+            // Anything, extreme.
+            _ => P3::new(r.extreme(), r.extreme(), r.extreme()),
+        };
+        let q = centre
+            + p * scale
+            + P3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0)) * noise * scale;
+        pts.push(q);
+        if r.one_in(6) {
+            pts.push(q);
+        }
+    }
+    pts.retain(|p| p.iter().all(|v| v.is_finite()));
+    (pts, format!("kind {kind}, scale {scale:e}, noise {noise}"))
+}
+
+fn numeric(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    let (pts, how) = shape_points(r);
+    input.clear();
+    for p in &pts {
+        input.extend_from_slice(format!("{:e} {:e} {:e}\n", p.x, p.y, p.z).as_bytes());
+    }
+    let which = r.below(10);
+    *note = format!("numeric case {which} on the points ({how})");
+    ctx.made(input, note);
+    match which {
+        0 => finite("sphere4", &fit::sphere4(&pts))?,
+        1 => {
+            let fixed = r.coin().then(|| r.extreme().abs());
+            finite("sphere", &fit::sphere(&pts, fixed))?;
+        }
+        2 => finite("plane", &fit::plane(&pts))?,
+        3 => finite("circle3d", &fit::circle3d(&pts))?,
+        4 => {
+            let lo = P3::new(
+                r.mostly(-5.0, 0.0),
+                r.mostly(-5.0, 0.0),
+                r.mostly(-5.0, 0.0),
+            );
+            let hi = lo + P3::new(r.mostly(0.1, 5.0), r.mostly(0.1, 5.0), r.mostly(0.1, 5.0));
+            let m = mesh::box_mesh(lo, hi);
+            let mut locks = register::Locks::default();
+            for k in 0..3 {
+                locks.translate[k] = r.one_in(3);
+                locks.rotate[k] = r.one_in(3);
+            }
+            *note += &format!(", box {lo:?}..{hi:?}, {locks:?}");
+            finite("register", &register::register(&m, &pts, locks))?;
+        }
+        5 | 6 => {
+            // Calibration on a machine: poses at random rotaries with measured centres.
+            let m = &ctx.machines[r.below(ctx.machines.len())];
+            let poses: Vec<calib::Pose> = pts
+                .iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let mut rot = [0.0; 2];
+                    for (k, rt) in m.rotary.iter().enumerate() {
+                        let (lo, hi) = rt.limits.unwrap_or((-180.0, 180.0));
+                        rot[k] = if r.coin() {
+                            (r.range(lo, hi) / 45.0).round() * 45.0
+                        } else {
+                            r.mostly(lo, hi)
+                        };
+                    }
+                    calib::Pose {
+                        rotary: rot,
+                        center: *c,
+                        row: i + 1,
+                        sigma: r.coin().then(|| [r.extreme().abs(); 3]),
+                    }
+                })
+                .collect();
+            *note += &format!(", machine {}, poses {poses:?}", m.name);
+            let res = match r.below(4) {
+                0 => calib::method_i(m, &poses),
+                1 => calib::method_iii(m, &poses),
+                2 => calib::method_fit(m, &poses),
+                _ => {
+                    finite("axes_from_circles", &calib::axes_from_circles(m, &poses))?;
+                    return Ok(());
+                }
+            };
+            // A design that cannot fix R reports its condition as infinite (the CLI
+            // prints "n/a"): a documented sentinel, not a number gone wrong.
+            let shown = res.clone().map(|mut p| {
+                if p.r.is_none() && p.condition == f64::INFINITY {
+                    p.condition = 0.0;
+                }
+                p
+            });
+            finite("calibration", &shown)?;
+            if let Ok(res) = res {
+                if let Ok(def) = calib::updated_machine(m, &res) {
+                    let text = def.to_toml();
+                    if shows_nonfinite(&text) {
+                        return Err(format!("updated_machine wrote {text}"));
+                    }
+                }
+            }
+        }
+        7 => {
+            let start = P3::new(r.extreme(), r.extreme(), r.extreme());
+            let step = r.extreme();
+            *note += &format!(", factorial start {start:?} step {step:e}");
+            let d = calib::factorial_design(start, step);
+            finite("factorial_design", &d)?;
+            let rows: Vec<(P3, f64)> = pts.iter().map(|p| (*p, r.extreme())).collect();
+            finite("factorial_fit", &calib::factorial_fit(&rows))?;
+        }
+        8 => {
+            let pairs: Vec<(P3, P3)> = pts
+                .chunks(2)
+                .filter(|c| c.len() == 2)
+                .map(|c| (c[0], c[1]))
+                .collect();
+            finite("laser_offset", &calib::laser_offset(&pairs))?;
+        }
+        _ => {
+            let m = &ctx.machines[r.below(ctx.machines.len())];
+            let n = P3::new(r.extreme(), r.extreme(), r.extreme());
+            *note += &format!(", machine {}, normal {n:?}", m.name);
+            finite("level", &setup::level(m, &n, &[0.0, 0.0]))?;
+            let cad = P3::new(r.extreme(), r.extreme(), r.extreme());
+            let a = setup::plane_angle(&n, &cad);
+            if (n.norm() > 0.0 && cad.norm() > 0.0) && shows_nonfinite(&format!("{a:?}")) {
+                return Err(format!("plane_angle({n:?}, {cad:?}) = {a:?}"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Not a reader: the fuzzer's own check (`--target selftest`, never in `all`). About one
+/// input in 5,000 each hangs, asks for 1 TiB, overflows an integer or panics, so a run
+/// shows the parent catching each (`cargo xtask fuzz --target selftest`).
+fn selftest(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    input.clear();
+    let pick = r.below(5_000);
+    input.extend_from_slice(format!("{pick}\n").as_bytes());
+    *note = format!("selftest {pick}");
+    ctx.made(input, note);
+    match pick {
+        0 => loop {
+            std::hint::black_box(&input);
+        },
+        1 => {
+            let v = vec![1u8; std::hint::black_box(1usize << 40)];
+            Err(format!("1 TiB allocated: {}", v.len()))
+        }
+        2 => {
+            let x = std::hint::black_box(u32::MAX);
+            Err(format!("no overflow check: {}", x + 1))
+        }
+        3 => panic!("selftest panic"),
+        _ => Ok(()),
+    }
+}
