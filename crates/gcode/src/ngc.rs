@@ -19,7 +19,7 @@ use crate::expr::{Eval, EvalError, Params};
 /// Subroutine calls nest at most this deep (LinuxCNC's `INTERP_SUB_ROUTINE_LEVELS`).
 pub const MAX_SUB_DEPTH: usize = 10;
 /// The most blocks run again through loops and subroutine calls in one program.
-pub const MAX_BLOCKS: u64 = 10_000_000;
+pub const MAX_BLOCKS: u64 = 1_000_000;
 /// The most O-word lines indexed in one file.
 const MAX_ENTRIES: usize = 1_000_000;
 
