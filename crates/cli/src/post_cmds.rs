@@ -252,8 +252,17 @@ fn index_arg(m: &Machine, text: &str) -> Result<[f64; 2], CliError> {
 }
 
 fn file_error(file: &str, text: &str, e: &toml::de::Error) -> CliError {
-    let (line, col) = e.span().map_or((0, 0), |sp| {
-        let before = &text[..sp.start.min(text.len())];
+    // Without a span (a check after reading, e.g. an array with extra values), the line
+    // that sets the key the message names in backquotes.
+    let at = e.span().map(|sp| sp.start).or_else(|| {
+        let key = e.message().split('`').nth(1)?;
+        let last = key
+            .rsplit(['.', ']'])
+            .find(|k| !k.is_empty() && !k.contains('['))?;
+        lampost_kinematics::check::key_offset(text, last)
+    });
+    let (line, col) = at.map_or((0, 0), |start| {
+        let before = &text[..start.min(text.len())];
         (
             before.matches('\n').count() + 1,
             before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1,

@@ -87,3 +87,86 @@ fn a_feed_that_rounds_to_zero_is_refused() {
         assert!(!out.exists(), "{name}: nothing written");
     }
 }
+
+/// An array with more values than its key takes is refused at its line, never cut short
+/// silently (`toml` reads `[1, 0, 0, 5]` into three numbers without a word): setup,
+/// job and machine files.
+#[test]
+fn arrays_with_extra_values_are_refused_at_their_line() {
+    let dir = tempdir("extra-values");
+    let prog = dir.join("p.nc");
+    std::fs::write(
+        &prog,
+        "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG1 X1.\nG0 Z0.2\nM30\n",
+    )
+    .expect("write");
+    let prog_s = prog.to_str().expect("utf-8");
+    let out = dir.join("o.nc");
+    let out_s = out.to_str().expect("utf-8");
+    let setup = dir.join("s.toml");
+    std::fs::write(
+        &setup,
+        "origin = [0, 0, 0]\nx_axis = [1, 0, 0, 5]\nz_axis = [0, 0, 1]\n",
+    )
+    .expect("write");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--setup",
+        setup.to_str().expect("utf-8"),
+        prog_s,
+        "-o",
+        out_s,
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("s.toml:2:1: `x_axis` has 4 values; it takes 3"),
+        "{}",
+        stderr(&o)
+    );
+    let job = dir.join("j.toml");
+    std::fs::write(
+        &job,
+        format!("[[section]]\nprogram = \"{prog_s}\"\nindex = {{ A = 0, B = 0 }}\norigin = [0, 0, 0, 1]\n"),
+    )
+    .expect("write");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--job",
+        job.to_str().expect("utf-8"),
+        "-o",
+        out_s,
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("`section[0].origin` has 4 values; it takes 3") && err.contains("j.toml:4:1"),
+        "{err}"
+    );
+    let shown = lampost(&["machines", "show", "fadal-lamp"]);
+    let text = String::from_utf8_lossy(&shown.stdout).replacen(
+        "direction = [1.0, 0.0, 0.0]",
+        "direction = [1.0, 0.0, 0.0, 7.0]",
+        1,
+    );
+    let m = dir.join("m.toml");
+    std::fs::write(&m, text).expect("write");
+    let o = lampost(&[
+        "kin",
+        "fk",
+        "--machine",
+        m.to_str().expect("utf-8"),
+        "--joints",
+        "X=0,Y=0,Z=0,A=0,B=0",
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("`linear[0].direction` has 4 values; it takes 3") && err.contains("m.toml:"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -418,6 +418,80 @@ impl ProcessDef {
     }
 }
 
+/// Arrays a typed reading dropped elements of. `toml` reads `[1, 0, 0, 5]` into a
+/// `[f64; 3]` without a word; comparing the document as written with the typed value
+/// written back finds it. The first such array: its dotted key, its byte offset in
+/// `text` (the line that sets it, where that can be found), and the lengths written and
+/// read. `None` when nothing was dropped (or the typed value cannot be written back).
+pub fn dropped_elements<T: serde::Serialize>(
+    text: &str,
+    typed: &T,
+) -> Option<(String, Option<usize>, usize, usize)> {
+    let original: toml::Table = text.parse().ok()?;
+    let back = toml::Table::try_from(typed).ok()?;
+    let (key, written, read) = dropped_in_table(&original, &back, "")?;
+    let last = key
+        .rsplit(['.', ']'])
+        .find(|k| !k.is_empty() && !k.starts_with('['));
+    let at = last.and_then(|k| key_offset(text, k.trim_start_matches('[')));
+    Some((key, at, written, read))
+}
+
+fn dropped_in_table(
+    original: &toml::Table,
+    typed: &toml::Table,
+    path: &str,
+) -> Option<(String, usize, usize)> {
+    for (k, v) in original {
+        let p = if path.is_empty() {
+            k.clone()
+        } else {
+            format!("{path}.{k}")
+        };
+        if let Some(t) = typed.get(k) {
+            if let Some(found) = dropped_in_value(v, t, &p) {
+                return Some(found);
+            }
+        }
+    }
+    None
+}
+
+fn dropped_in_value(
+    original: &toml::Value,
+    typed: &toml::Value,
+    path: &str,
+) -> Option<(String, usize, usize)> {
+    match (original, typed) {
+        (toml::Value::Array(a), toml::Value::Array(b)) => {
+            if a.len() > b.len() {
+                return Some((path.to_string(), a.len(), b.len()));
+            }
+            a.iter()
+                .zip(b)
+                .enumerate()
+                .find_map(|(i, (x, y))| dropped_in_value(x, y, &format!("{path}[{i}]")))
+        }
+        (toml::Value::Table(a), toml::Value::Table(b)) => dropped_in_table(a, b, path),
+        _ => None,
+    }
+}
+
+/// The byte offset of the first line that sets `key` (`key = …`).
+pub fn key_offset(text: &str, key: &str) -> Option<usize> {
+    let mut at = 0;
+    for line in text.split_inclusive('\n') {
+        let t = line.trim_start();
+        if let Some(rest) = t.strip_prefix(key) {
+            if rest.trim_start().starts_with('=') {
+                return Some(at + (line.len() - t.len()));
+            }
+        }
+        at += line.len();
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -339,6 +339,16 @@ impl MachineDef {
                 text: t,
             }
         })?;
+        if let Some((key, at, written, read)) = crate::check::dropped_elements(text, &def) {
+            let (line, column, t) = at.map_or((0, 0, String::new()), |a| line_col(text, a));
+            return Err(KinError::MachineFile {
+                file: file.to_string(),
+                line,
+                column,
+                message: format!("`{key}` has {written} values; it takes {read}"),
+                text: t,
+            });
+        }
         if let Err((place, refusal)) = def.check_values() {
             let (line, column, t) = match crate::check::locate(text, place, refusal.at) {
                 Some(at) => line_col(text, at),

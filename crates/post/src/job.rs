@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 /// A job file: its sections in order.
-#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct JobFile {
     /// The `[[section]]` tables.
@@ -12,7 +12,7 @@ pub struct JobFile {
 }
 
 /// One `[[section]]` of a job file.
-#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct JobSection {
     /// The planar program, relative to the job file.
@@ -31,5 +31,11 @@ pub struct JobSection {
 
 /// Read a job file's text; the error carries its span (the CLI locates it).
 pub fn parse(text: &str) -> Result<JobFile, toml::de::Error> {
-    toml::from_str(text)
+    let job: JobFile = toml::from_str(text)?;
+    if let Some((key, _, written, read)) = lampost_kinematics::check::dropped_elements(text, &job) {
+        return Err(serde::de::Error::custom(format!(
+            "`{key}` has {written} values; it takes {read}"
+        )));
+    }
+    Ok(job)
 }
