@@ -229,6 +229,12 @@ pub fn remove_temps_on_signal() {
     });
 }
 
+/// Whether `path` names something that is not a regular file or a folder: a character
+/// or block device, a FIFO or a socket (following symbolic links, so `/dev/stdout` too).
+pub fn is_special(path: &Path) -> bool {
+    fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 /// The one temporary-file helper: a file created beside its target (for standard
 /// output, in the temporary folder), removed when dropped, on an interrupt, or on any
 /// error; [`TempFile::persist`] renames it over the target.
@@ -242,6 +248,9 @@ impl TempFile {
     pub fn beside(target: Option<&str>) -> Result<(TempFile, File), CliError> {
         let target = target.filter(|t| *t != "-");
         let dir = match target {
+            // A device or a pipe (`-o /dev/null`) is written through, never renamed over:
+            // its temporary file lives in the temporary folder.
+            Some(t) if is_special(Path::new(t)) => std::env::temp_dir(),
             // A bare name: its folder is the current one (a rename never crosses file
             // systems).
             Some(t) => Path::new(t)
@@ -282,11 +291,23 @@ impl TempFile {
         &self.path
     }
 
-    /// Rename it over `target`.
+    /// Rename it over `target`; a device or a pipe (`/dev/null`, a FIFO) gets its
+    /// contents written to it instead (a rename would replace the device with a file).
     pub fn persist(self, target: &Path) -> Result<(), CliError> {
-        fs::rename(&self.path, target).map_err(|e| {
+        let werr = |e: io::Error| {
             CliError::usage(format!("error: cannot write {}: {e}", target.display()))
-        })?;
+        };
+        if is_special(target) {
+            let mut from = File::open(&self.path).map_err(werr)?;
+            let mut to = fs::OpenOptions::new()
+                .write(true)
+                .open(target)
+                .map_err(werr)?;
+            io::copy(&mut from, &mut to).map_err(werr)?;
+            to.flush().map_err(werr)?;
+            return Ok(()); // dropped: the temporary file is removed
+        }
+        fs::rename(&self.path, target).map_err(werr)?;
         live().retain(|p| p != &self.path);
         std::mem::forget(self);
         Ok(())

@@ -199,3 +199,48 @@ fn output_growth_is_bounded() {
         stderr(&o)
     );
 }
+
+/// `-o /dev/null` (any device, FIFO or socket) is written through, never renamed over:
+/// the atomic rename of a temporary file would replace the device with a regular file
+/// (and every later reader of /dev/null would read what was written there).
+#[cfg(unix)]
+#[test]
+fn output_to_a_device_is_written_through_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let is_device = || std::fs::metadata("/dev/null").is_ok_and(|m| m.file_type().is_char_device());
+    if !is_device() {
+        eprintln!("/dev/null is not a device here: test skipped");
+        return;
+    }
+    let dir = tempdir("devnull");
+    let prog = dir.join("p.nc");
+    std::fs::write(&prog, "G21 G90\nG0 X1 Y2\nM30\n").expect("write");
+    let p = prog.to_str().expect("utf-8");
+    for args in [
+        vec!["fmt", p, "-o", "/dev/null"],
+        vec!["trace", p, "-o", "/dev/null"],
+        vec![
+            "post",
+            "-q",
+            "--machine",
+            "nrc-lc",
+            "--index",
+            "B=0,C=0",
+            p,
+            "-o",
+            "/dev/null",
+        ],
+    ] {
+        let o = lampost(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        assert!(is_device(), "{args:?} replaced /dev/null with a file");
+    }
+    assert!(
+        std::fs::read_dir("/dev").expect("/dev").all(|e| !e
+            .expect("entry")
+            .file_name()
+            .to_string_lossy()
+            .ends_with(".tmp")),
+        "a temporary file was left in /dev"
+    );
+}
