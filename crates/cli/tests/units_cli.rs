@@ -20,6 +20,19 @@ fn span(text: &str, letter: char) -> f64 {
     max - min
 }
 
+/// `lampost post` (or `verify`) with `args`, then INPUT, then `-o OUT` for post or POSTED
+/// for verify.
+fn run(cmd: &str, args: &[&str], input: &str, out: &str) -> std::process::Output {
+    let mut v = vec![cmd];
+    v.extend_from_slice(args);
+    if cmd == "post" {
+        v.extend_from_slice(&[input, "-o", out]);
+    } else {
+        v.extend_from_slice(&[input, out]);
+    }
+    lampost(&v)
+}
+
 fn write(dir: &std::path::Path, name: &str, text: &str) -> String {
     let p = dir.join(name);
     std::fs::write(&p, text).expect("write");
@@ -31,16 +44,9 @@ fn a_program_without_g20_g21_is_read_in_the_machines_units_with_a_warning() {
     let dir = tempdir("units-assumed");
     let f = write(&dir, "inch.nc", NO_UNITS_INCH);
     let out = dir.join("inch.out.nc");
-    let o = lampost(&[
-        "post",
-        "--machine",
-        "fadal-lamp",
-        "--index",
-        "A=0,B=0",
-        &f,
-        "-o",
-        out.to_str().expect("utf-8"),
-    ]);
+    let out_s = out.to_str().expect("utf-8");
+    let index = ["--machine", "fadal-lamp", "--index", "A=0,B=0"];
+    let o = run("post", &index, &f, out_s);
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
@@ -49,16 +55,7 @@ fn a_program_without_g20_g21_is_read_in_the_machines_units_with_a_warning() {
     );
     // A program that says its units gets no such warning.
     let g = write(&dir, "said.nc", &format!("G20\n{NO_UNITS_INCH}"));
-    let o = lampost(&[
-        "post",
-        "--machine",
-        "fadal-lamp",
-        "--index",
-        "A=0,B=0",
-        &g,
-        "-o",
-        out.to_str().expect("utf-8"),
-    ]);
+    let o = run("post", &index, &g, out_s);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("G20/G21"), "{}", stderr(&o));
 }
@@ -98,10 +95,7 @@ fn units_and_convert_units_on_a_program() {
         "mm",
         "--convert-units",
     ];
-    let mut post = vec!["post"];
-    post.extend_from_slice(&args);
-    post.extend_from_slice(&[&f, "-o", out_s]);
-    let o = lampost(&post);
+    let o = run("post", &args, &f, out_s);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("read as millimetres (--units)"),
@@ -113,10 +107,7 @@ fn units_and_convert_units_on_a_program() {
     // is 11.811 in/min.
     assert!((span(&text, 'X') - 1.0).abs() < 1e-9, "{text}");
     assert!(text.contains("F11.81"), "{text}");
-    let mut verify = vec!["verify"];
-    verify.extend_from_slice(&args);
-    verify.extend_from_slice(&[&f, out_s]);
-    let v = lampost(&verify);
+    let v = run("verify", &args, &f, out_s);
     assert!(v.status.success(), "{}", stderr(&v));
 }
 
@@ -154,18 +145,12 @@ fn a_millimetre_per_point_path_posts_on_the_inch_fadal_when_converted() {
         "mm",
         "--convert-units",
     ];
-    let mut post = vec!["post"];
-    post.extend_from_slice(&args);
-    post.extend_from_slice(&[&f, "-o", out_s]);
-    let o = lampost(&post);
+    let o = run("post", &args, &f, out_s);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&out).expect("posted");
     assert!((span(&text, 'X') - 1.0).abs() < 1e-9, "{text}");
     assert!((span(&text, 'Y') - 1.0).abs() < 1e-9, "{text}");
-    let mut verify = vec!["verify"];
-    verify.extend_from_slice(&args);
-    verify.extend_from_slice(&[&f, out_s]);
-    let v = lampost(&verify);
+    let v = run("verify", &args, &f, out_s);
     assert!(v.status.success(), "{}", stderr(&v));
     // Inch points on the inch machine need nothing.
     let g = write(&dir, "inch.csv", "0 0 0 0 0 1 20\n1 0 0 0 0 1 20\n");
