@@ -143,10 +143,13 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
         for (i, r) in m.rotary.iter().enumerate() {
             if !r.within(p.rotary[i]) {
                 let (lo, hi) = r.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                return Err(AlignError::Degenerate(format!(
-                    "row {}: {} = {} is outside its limits [{lo}, {hi}]",
-                    p.row, r.name, p.rotary[i]
-                )));
+                return Err(AlignError::Calibration {
+                    what: format!(
+                        "row {}: {} = {} is outside its limits [{lo}, {hi}]",
+                        p.row, r.name, p.rotary[i]
+                    ),
+                    hint: "check the angle columns (their order follows the header, else the machine's rotary order) and the machine file's limits",
+                });
             }
         }
         if !p
@@ -176,11 +179,14 @@ pub fn check_poses(m: &Machine, poses: &[Pose], need: usize) -> Result<(), Align
             .flatten()
             .find(|s| !(s.is_finite() && (MIN_SIGMA..=crate::fit::MAX_COORD).contains(*s)))
         {
-            return Err(AlignError::Degenerate(format!(
-                "row {}: the uncertainty {s:e} is outside [{MIN_SIGMA:e}, {:e}] of the unit",
-                p.row,
-                crate::fit::MAX_COORD
-            )));
+            return Err(AlignError::Calibration {
+                what: format!(
+                    "row {}: the uncertainty {s:e} is outside [{MIN_SIGMA:e}, {:e}] of the unit",
+                    p.row,
+                    crate::fit::MAX_COORD
+                ),
+                hint: "give each coordinate's standard uncertainty in the machine's unit, or leave the three columns out",
+            });
         }
     }
     if poses.len() < need {
@@ -291,7 +297,10 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     };
     let x = svd
         .solve(&b, 1e-9 * smax)
-        .map_err(|_| AlignError::Degenerate("the Method III solve failed".into()))?;
+        .map_err(|_| AlignError::Calibration {
+            what: "the Method III solve failed".into(),
+            hint: "the poses are nearly degenerate: add poses that turn each rotary axis further",
+        })?;
     let r = P3::new(x[0], x[1], x[2]);
     let c = P3::new(x[3], x[4], x[5]);
     let per_pose = residuals(m, poses, &r, &c);
@@ -322,10 +331,10 @@ pub fn method_iii(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     }
     if smin <= 1e-9 * smax {
         // The null direction: R and c move oppositely along the poses' common axis.
-        let vt = svd
-            .v_t
-            .as_ref()
-            .ok_or_else(|| AlignError::Degenerate("the SVD failed".into()))?;
+        let vt = svd.v_t.as_ref().ok_or_else(|| AlignError::Calibration {
+            what: "the SVD of the Method III design failed".into(),
+            hint: "the poses are nearly degenerate: add poses that turn each rotary axis further",
+        })?;
         let j = (0..sv.len())
             .min_by(|&p, &q| sv[p].total_cmp(&sv[q]))
             .unwrap_or(0);
@@ -384,9 +393,10 @@ pub fn method_i(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError> 
     check_poses(m, poses, 4)?;
     let pts: Vec<P3> = poses.iter().map(|p| p.center).collect();
     let s = sphere(&pts, None).map_err(|e| match e {
-        AlignError::Degenerate(_) => AlignError::Degenerate(
-            "the ball centres lie on one plane (e.g. only one axis moved): Method I cannot place the rotation centre; move both axes, or use --method iii".into(),
-        ),
+        AlignError::Degenerate(_) => AlignError::Calibration {
+            what: "the ball centres lie on one plane (e.g. only one axis moved): Method I cannot place the rotation centre".into(),
+            hint: "add poses that move the other rotary axis, or use --method iii",
+        },
         other => other,
     })?;
     let c = P3::from(s.center);
@@ -534,7 +544,10 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
         let svd = crate::fit::svd_capped(j, true, true, "axis-line")?;
         let step = svd
             .solve(&(-&r), 1e-12 * svd.singular_values.max())
-            .map_err(|_| AlignError::Degenerate("the axis fit failed".into()))?;
+            .map_err(|_| AlignError::Calibration {
+                what: "the axis-line fit failed".into(),
+                hint: "the poses are nearly degenerate: move each axis to at least three angles, with the other axis at two or more positions",
+            })?;
         x += &step;
         if step.norm() < 1e-13 * scale {
             converged = true;
@@ -552,9 +565,10 @@ pub fn method_fit(m: &Machine, poses: &[Pose]) -> Result<PivotResult, AlignError
     let jsv = crate::fit::svd_capped(j.clone(), false, false, "axis-line")?.singular_values;
     let condition = jsv.max() / jsv.min().max(f64::MIN_POSITIVE);
     if jsv.min() <= 1e-9 * jsv.max() {
-        return Err(AlignError::Degenerate(
-            "the poses do not fix both axis lines: move each axis to at least three angles, with the other axis at two or more positions".into(),
-        ));
+        return Err(AlignError::Calibration {
+            what: "the poses do not fix both axis lines".into(),
+            hint: "move each axis to at least three angles, with the other axis at two or more positions, or use --method iii",
+        });
     }
     let ax = g.axes(&x);
     let b0 = P3::new(x[0], x[1], x[2]);
@@ -714,10 +728,13 @@ pub fn axes_from_circles(m: &Machine, poses: &[Pose]) -> Result<AxisErrors, Alig
             .filter(|&i| found[i].is_none())
             .map(|i| m.rotary[i].name.as_str())
             .collect();
-        return Err(AlignError::Degenerate(format!(
-            "no group of at least three poses moves {} alone (the other axis fixed): add such poses",
-            missing.join(" or ")
-        )));
+        return Err(AlignError::Calibration {
+            what: format!(
+                "no group of at least three poses moves {} alone (the other axis fixed)",
+                missing.join(" or ")
+            ),
+            hint: "probe at least three angles of that axis with the other axis fixed (`lampost probe poses --for axes` writes such a set)",
+        });
     };
     let (p, q) = closest(a0.0, a0.1, a1.0, a1.1);
     let nominal_angle = m.rotary[0].axis.angle(&m.rotary[1].axis);
@@ -742,17 +759,20 @@ pub fn axes_from_circles(m: &Machine, poses: &[Pose]) -> Result<AxisErrors, Alig
 /// positive): no machine has such a centre, and the runs' centres would overflow.
 pub fn factorial_design(start: P3, step: f64) -> Result<Vec<(usize, [i8; 3], P3)>, AlignError> {
     if !(step.is_finite() && step > 0.0 && step <= crate::fit::MAX_COORD) {
-        return Err(AlignError::Degenerate(format!(
-            "the step {step:e} must be positive and at most 1e9 of the unit"
-        )));
+        return Err(AlignError::Calibration {
+            what: format!("the step {step:e} must be positive and at most 1e9 of the unit"),
+            hint:
+                "give --step as the factor level, a small positive distance in the machine's unit",
+        });
     }
     if let Some(&value) = start
         .iter()
         .find(|x| !x.is_finite() || x.abs() > crate::fit::MAX_COORD)
     {
-        return Err(AlignError::Degenerate(format!(
-            "the start coordinate {value:e} is beyond ±1e9 of the unit"
-        )));
+        return Err(AlignError::Calibration {
+            what: format!("the start coordinate {value:e} is beyond ±1e9 of the unit"),
+            hint: "give --start as the nominal centre x,y,z in the machine's unit",
+        });
     }
     let mut v = Vec::new();
     let mut run = 1;
@@ -810,9 +830,10 @@ pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
         .map(|r| (r.0 - mean).abs().max())
         .fold(0.0, f64::max);
     if half <= 0.0 {
-        return Err(AlignError::Degenerate(
-            "all runs use the same centre".into(),
-        ));
+        return Err(AlignError::Calibration {
+            what: "all runs use the same centre".into(),
+            hint: "give the eight runs of the 2³ design (`lampost calibrate factorial --start … --step …` lists them)",
+        });
     }
     let a = DMatrix::from_fn(rows.len(), 4, |i, k| {
         if k == 0 {
@@ -824,13 +845,17 @@ pub fn factorial_fit(rows: &[(P3, f64)]) -> Result<FactorialFit, AlignError> {
     let b = DVector::from_fn(rows.len(), |i, _| rows[i].1);
     let svd = crate::fit::svd_capped(a.clone(), true, true, "factorial regression")?;
     if svd.singular_values.min() <= 1e-9 * svd.singular_values.max() {
-        return Err(AlignError::Degenerate(
-            "the runs do not vary x, y and z independently: use the full 2³ design".into(),
-        ));
+        return Err(AlignError::Calibration {
+            what: "the runs do not vary x, y and z independently".into(),
+            hint: "use the full 2³ design (`lampost calibrate factorial --start … --step …` lists its eight runs)",
+        });
     }
     let beta = svd
         .solve(&b, 1e-12)
-        .map_err(|_| AlignError::Degenerate("the regression failed".into()))?;
+        .map_err(|_| AlignError::Calibration {
+            what: "the factorial regression failed".into(),
+            hint: "use the full 2³ design (`lampost calibrate factorial --start … --step …` lists its eight runs)",
+        })?;
     let res = &a * &beta - &b;
     let g = P3::new(beta[1], beta[2], beta[3]);
     let u = if g.norm_squared() > 0.0 {
@@ -918,9 +943,10 @@ pub fn updated_machine(
     use lampost_kinematics::{ParamValue, VecExpr};
     let mut def = m.def.clone();
     let (Some(r), Some(home)) = (res.r, res.ball_home) else {
-        return Err(AlignError::Degenerate(
-            "the poses do not fix R; nothing to write".into(),
-        ));
+        return Err(AlignError::Calibration {
+            what: "the poses do not fix R; nothing to write".into(),
+            hint: "add poses that turn about both rotary axes (see the report's line of solutions)",
+        });
     };
     let mut numbers: Vec<f64> = r.iter().chain(home.iter()).copied().collect();
     numbers.extend(res.u_r.iter().flatten());
@@ -929,9 +955,10 @@ pub fn updated_machine(
         numbers.extend(a.direction.iter().chain(a.point.iter()));
     }
     if !numbers.iter().all(|x| x.is_finite()) {
-        return Err(AlignError::Degenerate(
-            "the calibration has a non-finite number (R, its uncertainty u_R, or the rms): no machine file is written from it".into(),
-        ));
+        return Err(AlignError::Calibration {
+            what: "the calibration has a non-finite number (R, its uncertainty u_R, or the rms): no machine file is written from it".into(),
+            hint: "check the ball centres for outliers and the poses for a degenerate set",
+        });
     }
     match &res.axes {
         Some(axes) => {
@@ -962,7 +989,10 @@ pub fn updated_machine(
     ));
     // Check it builds.
     Machine::new(def.clone(), &[])
-        .map_err(|e| AlignError::Degenerate(format!("the updated machine is not valid: {e}")))?;
+        .map_err(|e| AlignError::Calibration {
+            what: format!("the updated machine is not valid: {e}"),
+            hint: "the measured R moves the machine out of its own limits: check the poses and the ball centres",
+        })?;
     Ok(def)
 }
 
@@ -974,9 +1004,10 @@ pub fn pose_conditioning(
     rotary: &[[f64; 2]],
 ) -> Result<(f64, Option<[f64; 3]>), AlignError> {
     if rotary.is_empty() {
-        return Err(AlignError::Degenerate(
-            "the pose set is empty: it fixes nothing".into(),
-        ));
+        return Err(AlignError::Calibration {
+            what: "the pose set is empty: it fixes nothing".into(),
+            hint: "give poses turning about both rotary axes, e.g. A=0,B=0;A=90,B=0;A=0,B=30;A=90,B=30",
+        });
     }
     let poses: Vec<Pose> = rotary
         .iter()
@@ -995,10 +1026,13 @@ pub fn pose_conditioning(
     match (&r.r, &r.line) {
         (Some(_), _) => Ok((r.condition, None)),
         (None, Some(l)) => Ok((r.condition, Some(l.direction))),
-        (None, None) => Err(AlignError::Degenerate(format!(
-            "the pose set fixes nothing about R and the centre: {}",
-            r.notes.join("; ")
-        ))),
+        (None, None) => Err(AlignError::Calibration {
+            what: format!(
+                "the pose set fixes nothing about R and the centre: {}",
+                r.notes.join("; ")
+            ),
+            hint: "give poses turning about both rotary axes, e.g. A=0,B=0;A=90,B=0;A=0,B=30;A=90,B=30",
+        }),
     }
 }
 
@@ -1051,7 +1085,7 @@ mod tests {
             poses[1].sigma = Some([1e-4, bad, 1e-4]);
             let r = method_iii(&m, &poses);
             assert!(
-                matches!(&r, Err(AlignError::Degenerate(w)) if w.starts_with("row 2: the uncertainty")),
+                matches!(&r, Err(AlignError::Calibration { what, .. }) if what.starts_with("row 2: the uncertainty")),
                 "{bad}: {r:?}"
             );
         }

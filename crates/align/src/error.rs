@@ -25,6 +25,15 @@ pub enum AlignError {
     /// The points do not fix the shape (coplanar, collinear…).
     #[error("{0}")]
     Degenerate(String),
+    /// A calibration's poses or runs cannot give what was asked, with what to do about
+    /// it (each case its own advice: a pose set is not a point cloud).
+    #[error("{what}")]
+    Calibration {
+        /// What is wrong.
+        what: String,
+        /// What the user can do about it.
+        hint: &'static str,
+    },
     /// NaN or infinity in the input.
     #[error("point {0} is not finite")]
     NotFinite(usize),
@@ -48,6 +57,7 @@ impl AlignError {
             AlignError::TooFewPoints { .. } => "probe more points",
             AlignError::DuplicatePoints { .. } => "remove the repeated point, or probe a different place",
             AlignError::Degenerate(_) => "spread the points: a sphere needs points off one plane, a plane points off one line",
+            AlignError::Calibration { hint, .. } => hint,
             AlignError::NotFinite(_) => "check the point file",
             AlignError::TooLarge { .. } => "no machine measures that far: check the units and the numbers in the file",
             AlignError::NoConvergence(..) => "check the points for outliers; the shape may not fit them",

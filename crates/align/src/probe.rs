@@ -278,7 +278,7 @@ fn finish(mut em: Emitter<Vec<u8>>) -> std::io::Result<String> {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LogError {
     /// A line that starts like a touch line but cannot be read.
-    #[error("line {line}: `{text}` looks like a touch point but {why}")]
+    #[error("line {line}: `{text}` {why}")]
     Malformed {
         /// 1-based line.
         line: usize,
@@ -306,7 +306,7 @@ pub fn read_log(text: &str) -> Result<Vec<(usize, [f64; 3])>, LogError> {
         let bad = |why: &str| LogError::Malformed {
             line,
             text: raw.trim().to_string(),
-            why: why.to_string(),
+            why: format!("looks like a touch point but {why}"),
         };
         let mut vals = [None; 3];
         let mut rest = upper.as_str();
@@ -348,6 +348,116 @@ pub fn read_log(text: &str) -> Result<Vec<(usize, [f64; 3])>, LogError> {
         return Err(LogError::NoTouches);
     }
     Ok(out)
+}
+
+/// One pose of a `probe poses` log: its `POSE k A… B…` record and the touches after it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoggedPose {
+    /// 1-based line of the POSE record.
+    pub line: usize,
+    /// The pose's number in the record.
+    pub number: usize,
+    /// The rotary words of the record, e.g. `[(b'A', 0.0), (b'B', 45.0)]`.
+    #[serde(skip)]
+    pub rotary: Vec<(u8, f64)>,
+    /// The touches logged after the record (line, stylus centre).
+    pub touches: Vec<(usize, [f64; 3])>,
+}
+
+/// A pose record's number and rotary words.
+type PoseRecord = (usize, Vec<(u8, f64)>);
+
+/// A `POSE k A… B…` record (what [`poses_program`] sends before each pose's touches),
+/// maybe after a label ending in `:`. `None` when the line is not one; an error when it
+/// starts like one but cannot be read.
+fn pose_record(line: usize, raw: &str) -> Result<Option<PoseRecord>, LogError> {
+    let body = raw.rsplit(':').next().unwrap_or(raw).trim();
+    let upper = body.to_ascii_uppercase();
+    let Some(rest) = upper.strip_prefix("POSE") else {
+        return Ok(None);
+    };
+    let bad = |why: String| LogError::Malformed {
+        line,
+        text: raw.trim().to_string(),
+        why,
+    };
+    let mut tokens = rest.split_whitespace();
+    let number = tokens
+        .next()
+        .and_then(|t| t.parse::<usize>().ok())
+        .ok_or_else(|| bad("has no pose number after POSE".into()))?;
+    let mut rotary = Vec::new();
+    for t in tokens {
+        let mut chars = t.chars();
+        let letter = chars.next().filter(|c| c.is_ascii_alphabetic());
+        let value = chars.as_str().parse::<f64>().ok().filter(|v| v.is_finite());
+        match (letter, value) {
+            (Some(l), Some(v)) => {
+                if rotary.iter().any(|&(k, _)| k == l as u8) {
+                    return Err(bad(format!("names {l} twice")));
+                }
+                rotary.push((l as u8, v));
+            }
+            _ => {
+                return Err(bad(format!(
+                    "has `{t}` where a rotary word such as A90. belongs"
+                )))
+            }
+        }
+    }
+    if rotary.is_empty() {
+        return Err(bad("names no rotary angle".into()));
+    }
+    Ok(Some((number, rotary)))
+}
+
+/// Read a `probe poses` log: each `POSE k A… B…` record with the touches that follow
+/// it. `Ok(None)` when the log has no POSE records (a plain touch log: read it with
+/// [`read_log`]). A touch before the first record, a record with no touches after it,
+/// or a pose number given twice is an error at its line.
+pub fn read_pose_log(text: &str) -> Result<Option<Vec<LoggedPose>>, LogError> {
+    let mut poses: Vec<LoggedPose> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        if let Some((number, rotary)) = pose_record(i + 1, raw)? {
+            if let Some(prev) = poses.iter().find(|p| p.number == number) {
+                return Err(LogError::Malformed {
+                    line: i + 1,
+                    text: raw.trim().to_string(),
+                    why: format!("repeats pose {number} of line {}", prev.line),
+                });
+            }
+            poses.push(LoggedPose {
+                line: i + 1,
+                number,
+                rotary,
+                touches: Vec::new(),
+            });
+        }
+    }
+    if poses.is_empty() {
+        return Ok(None);
+    }
+    let lines: Vec<&str> = text.lines().collect();
+    for (line, p) in read_log(text)? {
+        match poses.iter_mut().rev().find(|q| q.line < line) {
+            Some(q) => q.touches.push((line, p)),
+            None => {
+                return Err(LogError::Malformed {
+                    line,
+                    text: lines.get(line - 1).map_or("", |t| t.trim()).to_string(),
+                    why: "comes before the first POSE record, so no pose owns it".into(),
+                })
+            }
+        }
+    }
+    if let Some(p) = poses.iter().find(|p| p.touches.is_empty()) {
+        return Err(LogError::Malformed {
+            line: p.line,
+            text: lines.get(p.line - 1).map_or("", |t| t.trim()).to_string(),
+            why: "has no touches after it (the log may have been cut short)".into(),
+        });
+    }
+    Ok(Some(poses))
 }
 
 #[cfg(test)]

@@ -520,24 +520,76 @@ pub fn probe_read(log: &str, output: Option<&str>, json: bool) -> Result<(), Cli
     let mut text = String::new();
     std::io::Read::read_to_string(&mut open_input(log)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
-    let pts = lampost_align::probe::read_log(&text).map_err(|e| match e {
+    let log_error = |e| {
+        match e {
         lampost_align::probe::LogError::Malformed { line, text: t, why } => CliError::failed(format!(
-            "error: {name}:{line}: `{t}` looks like a touch point but {why}\n  = help: fix or delete the line; touch lines read X… Y… Z…\n"
+            "error: {name}:{line}: `{t}` {why}\n  = help: fix or delete the line; touch lines read X… Y… Z…, pose records POSE k A… B…\n"
         )),
         lampost_align::probe::LogError::NoTouches => CliError::failed(format!(
             "error: {name} has no touch lines (X… Y… Z…)\n  = help: check that the log was captured from the RS-232 port while the probing program ran\n"
         )),
-    })?;
+    }
+    };
+    // A `probe poses` log keeps its POSE records: each pose's touches under a comment
+    // naming it (a point file still, for `fit`), and by pose in JSON.
+    let poses = lampost_align::probe::read_pose_log(&text).map_err(log_error)?;
+    let pts = match &poses {
+        Some(p) => p.iter().flat_map(|q| q.touches.iter().copied()).collect(),
+        None => lampost_align::probe::read_log(&text).map_err(log_error)?,
+    };
+    let label = |q: &lampost_align::probe::LoggedPose| {
+        q.rotary
+            .iter()
+            .map(|(l, v)| format!("{}{v}", char::from(*l)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
     let s = if json {
         let list: Vec<Obj> = pts
             .iter()
             .map(|(l, p)| obj! {"line": l, "point": p})
             .collect();
-        format!("{}\n", json::to_string(&obj! { "points": list })?)
+        let mut o = obj! { "points": list };
+        if let Some(p) = &poses {
+            let by_pose: Vec<Obj> = p
+                .iter()
+                .map(|q| {
+                    let mut r = obj! {"pose": q.number, "line": q.line};
+                    for (l, v) in &q.rotary {
+                        r.set(&char::from(*l).to_string(), v);
+                    }
+                    let t: Vec<Obj> = q
+                        .touches
+                        .iter()
+                        .map(|(l, p)| obj! {"line": l, "point": p})
+                        .collect();
+                    r.field("points", &t)
+                })
+                .collect();
+            o.set("poses", &by_pose);
+        }
+        format!("{}\n", json::to_string(&o)?)
     } else {
         let mut s = format!("# touch points from {name}\nx y z\n");
-        for (_, p) in &pts {
-            s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+        match &poses {
+            Some(p) => {
+                for q in p {
+                    s.push_str(&format!(
+                        "# pose {} {} (line {})\n",
+                        q.number,
+                        label(q),
+                        q.line
+                    ));
+                    for (_, p) in &q.touches {
+                        s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+                    }
+                }
+            }
+            None => {
+                for (_, p) in &pts {
+                    s.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+                }
+            }
         }
         s
     };

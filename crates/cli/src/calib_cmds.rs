@@ -34,8 +34,190 @@ fn read_text(file: &str) -> Result<(String, String), CliError> {
 /// POSES: `A B x y z [ux uy uz]` per row in the machine's rotary order (or the order a
 /// header names), `#` comments, an optional `# units: mm|inch` line checked against the
 /// machine.
-pub fn read_poses(m: &Machine, file: &str) -> Result<(String, Vec<Pose>), CliError> {
+///
+/// Or a `probe poses` log as the controller sent it: each `POSE k A… B…` record and the
+/// touches after it become one pose, its ball centre from a sphere fit of those touches
+/// (radius fixed at `--radius` + `--stylus-radius` when both are given, else free); the
+/// fits come back too, to report.
+pub fn read_poses(m: &Machine, file: &str, ball: &BallSize) -> Result<PoseInput, CliError> {
     let (name, text) = read_text(file)?;
+    let logged = lampost_align::probe::read_pose_log(&text).map_err(|e| log_error(&name, e))?;
+    if let Some(logged) = logged {
+        let (poses, fits) = poses_from_log(m, &name, &text, &logged, ball)?;
+        return Ok(PoseInput {
+            name,
+            poses,
+            fits: Some(fits),
+        });
+    }
+    if ball.radius.is_some() || ball.stylus_radius.is_some() {
+        return Err(CliError::usage(format!(
+            "error: --radius and --stylus-radius apply to a probe log, but {name} has no POSE records\n  = help: give the `probe poses` log as captured from the RS-232 port, or leave the radii out for a file of ball centres\n"
+        )));
+    }
+    let poses = parse_pose_rows(m, &name, &text)?;
+    Ok(PoseInput {
+        name,
+        poses,
+        fits: None,
+    })
+}
+
+/// What [`read_poses`] read.
+#[derive(Debug)]
+pub struct PoseInput {
+    /// The input's name as shown.
+    pub name: String,
+    /// The poses.
+    pub poses: Vec<Pose>,
+    /// Each pose's sphere fit, when read from a probe log.
+    pub fits: Option<Vec<PoseFit>>,
+}
+
+/// The ball and stylus radii for fitting a `probe poses` log.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BallSize {
+    /// The gage ball's radius.
+    pub radius: Option<f64>,
+    /// The stylus ball's radius.
+    pub stylus_radius: Option<f64>,
+}
+
+/// The sphere fit of one logged pose.
+#[derive(Debug, Clone)]
+pub struct PoseFit {
+    /// The pose's number in its record.
+    pub number: usize,
+    /// Line of the POSE record.
+    pub line: usize,
+    /// Rotary angles, machine order.
+    pub rotary: [f64; 2],
+    /// The fit of the stylus centres.
+    pub fit: lampost_align::fit::SphereFit,
+}
+
+impl PoseFit {
+    fn json(&self, m: &Machine) -> Obj {
+        let mut o = obj! {
+            "pose": self.number,
+            "line": self.line,
+        };
+        o.set(&m.rotary[0].name, &self.rotary[0]);
+        o.set(&m.rotary[1].name, &self.rotary[1]);
+        o.field("center", &self.fit.center)
+            .field("radius", &self.fit.radius)
+            .field("rms", &self.fit.rms)
+            .field("max_abs_residual", &self.fit.max_abs_residual)
+            .field("n", &self.fit.n)
+            .field("u_center", &self.fit.u_center)
+    }
+}
+/// A probe log's error at its line.
+fn log_error(name: &str, e: lampost_align::probe::LogError) -> CliError {
+    match e {
+        lampost_align::probe::LogError::Malformed { line, text, why } => located(
+            name,
+            line,
+            &text,
+            &format!("`{text}` {why}"),
+            "fix or delete the line: a POSE record reads `POSE k A… B…`, a touch line X… Y… Z…",
+        ),
+        lampost_align::probe::LogError::NoTouches => CliError::failed(format!(
+            "error: {name} has no touch lines (X… Y… Z…)\n  = help: check that the log was captured from the RS-232 port while the probing program ran\n"
+        )),
+    }
+}
+
+/// Stage 2 of reading a log: each logged pose's angles in machine order, and its ball
+/// centre from a sphere fit of its touches.
+fn poses_from_log(
+    m: &Machine,
+    name: &str,
+    text: &str,
+    logged: &[lampost_align::probe::LoggedPose],
+    ball: &BallSize,
+) -> Result<(Vec<Pose>, Vec<PoseFit>), CliError> {
+    let fixed = match (ball.radius, ball.stylus_radius) {
+        (Some(r), Some(s)) if r > 0.0 && s > 0.0 && (r + s).is_finite() => Some(r + s),
+        (None, None) => None,
+        _ => {
+            return Err(CliError::usage(
+                "error: give both --radius (the gage ball) and --stylus-radius, positive, or neither (the sphere radius is then fitted)\n".to_string(),
+            ))
+        }
+    };
+    let raw = |line: usize| text.lines().nth(line - 1).unwrap_or("").trim().to_string();
+    let mut poses = Vec::with_capacity(logged.len());
+    let mut fits = Vec::with_capacity(logged.len());
+    for lp in logged {
+        let mut rotary = [0.0; 2];
+        let mut seen = [false; 2];
+        for &(letter, v) in &lp.rotary {
+            let Some(i) = m.rotary.iter().position(|a| {
+                a.name
+                    .as_bytes()
+                    .first()
+                    .is_some_and(|c| c.eq_ignore_ascii_case(&letter))
+            }) else {
+                return Err(located(
+                    name,
+                    lp.line,
+                    &raw(lp.line),
+                    &format!(
+                        "the record names axis {} but machine {} has {} and {}",
+                        char::from(letter),
+                        m.name,
+                        m.rotary[0].name,
+                        m.rotary[1].name
+                    ),
+                    "use the machine the probing program was written for (`--machine`)",
+                ));
+            };
+            rotary[i] = v;
+            seen[i] = true;
+        }
+        if let Some(i) = seen.iter().position(|s| !s) {
+            return Err(located(
+                name,
+                lp.line,
+                &raw(lp.line),
+                &format!("the record does not give {}", m.rotary[i].name),
+                "a POSE record names both rotary angles, as `lampost probe poses` writes it",
+            ));
+        }
+        let pts: Vec<P3> = lp.touches.iter().map(|(_, p)| P3::from(*p)).collect();
+        let fit = lampost_align::fit::sphere(&pts, fixed).map_err(|e| {
+            located(
+                name,
+                lp.line,
+                &raw(lp.line),
+                &format!(
+                    "pose {}: the sphere fit of its {} touches failed: {e}",
+                    lp.number,
+                    pts.len()
+                ),
+                e.hint(),
+            )
+        })?;
+        poses.push(Pose {
+            rotary,
+            center: P3::from(fit.center),
+            row: lp.line,
+            sigma: None,
+        });
+        fits.push(PoseFit {
+            number: lp.number,
+            line: lp.line,
+            rotary,
+            fit,
+        });
+    }
+    Ok((poses, fits))
+}
+
+/// Stage 2 of reading a file of ball centres: one pose per row.
+fn parse_pose_rows(m: &Machine, name: &str, text: &str) -> Result<Vec<Pose>, CliError> {
+    let name = name.to_string();
     let names = [m.rotary[0].name.as_str(), m.rotary[1].name.as_str()];
     let mut order = [0usize, 1];
     let mut poses = Vec::new();
@@ -152,7 +334,28 @@ pub fn read_poses(m: &Machine, file: &str) -> Result<(String, Vec<Pose>), CliErr
             names[0], names[1]
         )));
     }
-    Ok((name, poses))
+    Ok(poses)
+}
+
+/// The per-pose fits as report lines.
+fn report_fits(m: &Machine, fits: &[PoseFit]) -> String {
+    let mut s = String::new();
+    for f in fits {
+        s.push_str(&format!(
+            "pose {} (line {}) {} {} {} {}: centre {} radius {:.6} rms {:.3e} ({} touches)\n",
+            f.number,
+            f.line,
+            m.rotary[0].name,
+            f.rotary[0],
+            m.rotary[1].name,
+            f.rotary[1],
+            v3(f.fit.center),
+            f.fit.radius,
+            f.fit.rms,
+            f.fit.n
+        ));
+    }
+    s
 }
 
 fn out_text(s: String) -> Result<(), CliError> {
@@ -212,16 +415,18 @@ fn report_pivot(m: &Machine, r: &PivotResult) -> String {
     s
 }
 
+#[allow(clippy::too_many_arguments)]
 pub fn pivot(
     machine: &str,
     sets: &[String],
     file: &str,
+    ball: &BallSize,
     method: Option<&str>,
     write: Option<&str>,
     json: bool,
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
-    let (name, poses) = read_poses(&m, file)?;
+    let PoseInput { name, poses, fits } = read_poses(&m, file, ball)?;
     let method = match method {
         Some("i") => Method::I,
         Some("iii") => Method::Iii,
@@ -260,20 +465,46 @@ pub fn pivot(
         o.commit()?;
     }
     if json {
-        out_text(format!("{}\n", json::to_string(&res)?))
+        let mut o = Obj::of(&res)?;
+        if let Some(f) = &fits {
+            o.set(
+                "pose_fits",
+                &f.iter().map(|f| f.json(&m)).collect::<Vec<_>>(),
+            );
+        }
+        out_text(format!("{}\n", json::to_string(&o)?))
     } else {
-        out_text(report_pivot(&m, &res))
+        let mut s = fits
+            .as_deref()
+            .map_or(String::new(), |f| report_fits(&m, f));
+        s.push_str(&report_pivot(&m, &res));
+        out_text(s)
     }
 }
 
-pub fn axes(machine: &str, sets: &[String], file: &str, json: bool) -> Result<(), CliError> {
+pub fn axes(
+    machine: &str,
+    sets: &[String],
+    file: &str,
+    ball: &BallSize,
+    json: bool,
+) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
-    let (name, poses) = read_poses(&m, file)?;
+    let PoseInput { name, poses, fits } = read_poses(&m, file, ball)?;
     let e = calib::axes_from_circles(&m, &poses).map_err(|e| align_error(&name, e))?;
     if json {
-        return out_text(format!("{}\n", json::to_string(&e)?));
+        let mut o = Obj::of(&e)?;
+        if let Some(f) = &fits {
+            o.set(
+                "pose_fits",
+                &f.iter().map(|f| f.json(&m)).collect::<Vec<_>>(),
+            );
+        }
+        return out_text(format!("{}\n", json::to_string(&o)?));
     }
-    let mut s = String::new();
+    let mut s = fits
+        .as_deref()
+        .map_or(String::new(), |f| report_fits(&m, f));
     for a in &e.axes {
         s.push_str(&format!(
             "{}: direction {} through {}; tilt from nominal {:.6}° ({:.1} µrad); circle rms {:.3e}\n",
@@ -434,13 +665,15 @@ pub fn laser(
     ))
 }
 
-/// `A=0,B=0;A=90,B=0;…` or the default 8-pose set.
-fn pose_set(m: &Machine, text: Option<&str>) -> Result<Vec<[f64; 2]>, CliError> {
+/// `A=0,B=0;A=90,B=0;…`, or the default set for `purpose`: `pivot`, the inner axis at
+/// 0/90/180/270 at two tilts of the outer (8 poses); `axes`, those and the outer axis at
+/// half the tilt and at minus it (or three-quarters, if its limits forbid that) with the
+/// inner at home, so the outer axis turns alone through three angles (10 poses).
+fn pose_set(m: &Machine, text: Option<&str>, purpose: &str) -> Result<Vec<[f64; 2]>, CliError> {
     let Some(t) = text else {
         let (i, o) = (m.inner, m.outer);
-        let tilt = m.rotary[o]
-            .limits
-            .map_or(45.0, |(lo, hi)| 45f64.min(hi).max(lo));
+        let clamp = |x: f64| m.rotary[o].limits.map_or(x, |(lo, hi)| x.min(hi).max(lo));
+        let tilt = clamp(45.0);
         let mut v = Vec::new();
         for b in [0.0, tilt] {
             for a in [0.0, 90.0, 180.0, 270.0] {
@@ -448,6 +681,26 @@ fn pose_set(m: &Machine, text: Option<&str>) -> Result<Vec<[f64; 2]>, CliError> 
                 r[i] = a;
                 r[o] = b;
                 v.push(r);
+            }
+        }
+        match purpose {
+            "pivot" => {}
+            "axes" => {
+                let third = if m.rotary[o].within(-tilt) {
+                    -tilt
+                } else {
+                    0.75 * tilt
+                };
+                for b in [0.5 * tilt, third] {
+                    let mut r = [0.0; 2];
+                    r[o] = b;
+                    v.push(r);
+                }
+            }
+            other => {
+                return Err(CliError::usage(format!(
+                    "error: --for {other}: give pivot or axes\n"
+                )))
             }
         }
         return Ok(v);
@@ -481,6 +734,7 @@ pub fn probe_poses(
     sets: &[String],
     ball: &str,
     poses: Option<&str>,
+    purpose: &str,
     radius: f64,
     stylus: f64,
     points: usize,
@@ -488,7 +742,7 @@ pub fn probe_poses(
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
     let b0 = vector("--ball", ball)?;
-    let set = pose_set(&m, poses)?;
+    let set = pose_set(&m, poses, purpose)?;
     for r in &set {
         for (i, ax) in m.rotary.iter().enumerate() {
             if !ax.within(r[i]) {

@@ -31,6 +31,21 @@ impl Obj {
         self
     }
 
+    /// The fields of a value that serialises as an object (a library's report), to add
+    /// more to; a non-finite number in it is an error naming its place.
+    pub fn of<T: Serialize + ?Sized>(v: &T) -> Result<Obj, CliError> {
+        find_non_finite(v).map_err(|at| non_finite(&at))?;
+        match serde_json::to_value(v) {
+            Ok(serde_json::Value::Object(map)) => Ok(Obj {
+                fields: map.into_iter().map(|(k, v)| (k, Ok(v))).collect(),
+            }),
+            Ok(_) => Err(CliError::usage(
+                "error: internal: the report is not a JSON object\n".to_string(),
+            )),
+            Err(e) => Err(CliError::usage(format!("error: cannot write JSON: {e}\n"))),
+        }
+    }
+
     /// Add `key: value` in place.
     pub fn set<T: Serialize + ?Sized>(&mut self, key: &str, value: &T) {
         let v = match find_non_finite(value) {

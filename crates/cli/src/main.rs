@@ -244,8 +244,10 @@ enum AlignCmd {
 enum CalibrateCmd {
     /// The rotation centre / R from ball centres measured at several rotary poses.
     Pivot {
-        /// Rows `A B x y z [ux uy uz]`: rotary angles and the measured ball centre (machine coordinates).
+        /// Rows `A B x y z [ux uy uz]`: rotary angles and the measured ball centre (machine coordinates); or the RS-232 log of a `probe poses` program (each pose's centre fitted from its touches).
         poses: String,
+        #[command(flatten)]
+        ball: LogBall,
         /// i (sphere of centres), iii (eq. 21, least squares), fit (both axis lines); default fit (iii under 4 poses).
         #[arg(long)]
         method: Option<String>,
@@ -257,8 +259,10 @@ enum CalibrateCmd {
     },
     /// Each rotary axis as a line from poses that move one axis at a time; ISO 230-1 style location errors.
     Axes {
-        /// Rows `A B x y z`.
+        /// Rows `A B x y z`, or the RS-232 log of a `probe poses` program.
         poses: String,
+        #[command(flatten)]
+        ball: LogBall,
         #[command(flatten)]
         m: CalibMachine,
     },
@@ -293,6 +297,26 @@ enum CalibrateCmd {
     },
 }
 
+/// The radii for fitting each pose of a `probe poses` log.
+#[derive(clap::Args, Debug, Clone)]
+pub struct LogBall {
+    /// With a log: the gage ball's radius (with --stylus-radius, fixes each pose's sphere fit at their sum; without both, the radius is fitted).
+    #[arg(long)]
+    radius: Option<f64>,
+    /// With a log: the stylus ball's radius.
+    #[arg(long)]
+    stylus_radius: Option<f64>,
+}
+
+impl LogBall {
+    fn size(&self) -> calib_cmds::BallSize {
+        calib_cmds::BallSize {
+            radius: self.radius,
+            stylus_radius: self.stylus_radius,
+        }
+    }
+}
+
 /// Machine options of the calibration commands.
 #[derive(clap::Args, Debug, Clone)]
 pub struct CalibMachine {
@@ -321,9 +345,12 @@ enum ProbeCmd {
         /// Ball centre x,y,z at A = B = 0, machine coordinates.
         #[arg(long, allow_hyphen_values = true)]
         ball: String,
-        /// Poses "A=0,B=0;A=90,B=45;…" (default: four platter angles at two tilts).
+        /// Poses "A=0,B=0;A=90,B=45;…" (default: the set --for names).
         #[arg(long)]
         poses: Option<String>,
+        /// The default set serves: pivot (four platter angles at two tilts, for `calibrate pivot`) or axes (adds tilts at the platter's home, so each axis turns alone through three angles, for `calibrate axes` and `calibrate pivot`).
+        #[arg(long = "for", value_name = "pivot|axes", default_value = "pivot")]
+        for_: String,
         /// Ball radius.
         #[arg(long)]
         radius: f64,
@@ -621,6 +648,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
             cmd:
                 CalibrateCmd::Pivot {
                     poses,
+                    ball,
                     method,
                     write,
                     m,
@@ -629,13 +657,14 @@ fn run(cli: Cli) -> Result<(), CliError> {
             &m.machine,
             &m.set,
             &poses,
+            &ball.size(),
             method.as_deref(),
             write.as_deref(),
             m.json,
         ),
         Command::Calibrate {
-            cmd: CalibrateCmd::Axes { poses, m },
-        } => calib_cmds::axes(&m.machine, &m.set, &poses, m.json),
+            cmd: CalibrateCmd::Axes { poses, ball, m },
+        } => calib_cmds::axes(&m.machine, &m.set, &poses, &ball.size(), m.json),
         Command::Calibrate {
             cmd:
                 CalibrateCmd::Factorial {
@@ -661,6 +690,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     set,
                     ball,
                     poses,
+                    for_,
                     radius,
                     stylus_radius,
                     points,
@@ -671,6 +701,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
             &set,
             &ball,
             poses.as_deref(),
+            &for_,
             radius,
             stylus_radius,
             points,
