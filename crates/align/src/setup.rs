@@ -128,14 +128,20 @@ pub struct Setup {
 }
 
 impl Setup {
-    /// A setup from an origin and a rotation of the program frame about the part's Z.
-    pub fn from_rotation_about_z(origin: P3, degrees: f64, note: &str) -> Self {
-        let r = Rotation3::from_axis_angle(&P3::z_axis(), degrees.to_radians());
-        let x = r * P3::x();
+    /// A setup from an origin and a rotation of the program frame (axis, degrees; a zero
+    /// axis is no rotation): its X and Z axes are the part's X and Z turned by it.
+    pub fn from_rotation(origin: P3, axis: [f64; 3], degrees: f64, note: &str) -> Self {
+        let axis = P3::from(axis);
+        let r = if axis.norm() > 0.0 && degrees.is_finite() {
+            Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), degrees.to_radians())
+        } else {
+            Rotation3::identity()
+        };
+        let (x, z) = (r * P3::x(), r * P3::z());
         Setup {
             origin: [origin.x, origin.y, origin.z],
             x_axis: [x.x, x.y, x.z],
-            z_axis: [0.0, 0.0, 1.0],
+            z_axis: [z.x, z.y, z.z],
             note: note.to_string(),
         }
     }

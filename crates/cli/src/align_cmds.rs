@@ -315,11 +315,16 @@ pub fn angle(
         Some(o) => crate::kin_cmds::vector("--origin", o)?,
         None => P3::from(pl.point),
     };
-    let setup = lampost_align::Setup::from_rotation_about_z(
+    // The program frame turned by the rotation that takes the CAD plane's normal onto the
+    // probed one: with the CAD face as the program's XY plane (--to-normal 0,0,1), the
+    // setup's Z is the probed normal, so the post tilts the path with the part.
+    let setup = lampost_align::Setup::from_rotation(
         origin,
-        r.rotation_about_z_deg.unwrap_or(0.0),
+        r.rotation_axis,
+        r.rotation_deg,
         &format!(
-            "lampost align angle {name}: model rotated about the tool axis to the probed plane"
+            "lampost align angle {name}: program frame turned by {:.6} deg about ({:.6}, {:.6}, {:.6}), the CAD plane's normal onto the probed plane's",
+            r.rotation_deg, r.rotation_axis[0], r.rotation_axis[1], r.rotation_axis[2]
         ),
     );
     if let Some(path) = write_setup {

@@ -170,6 +170,20 @@ fn level_and_angle() {
     assert!((v["angle_deg"].as_f64().expect("a") - want).abs() < 1e-9);
     let text = std::fs::read_to_string(&setup).expect("setup written");
     assert!(text.contains("origin = [") && text.contains("x_axis") && text.contains("z_axis"));
+    // The setup keeps what was probed: its Z is the probed normal (the CAD face was the
+    // program's XY plane), its X perpendicular to it, so the post tilts with the part.
+    let z = &v["setup"]["z_axis"];
+    let x = &v["setup"]["x_axis"];
+    let mut dot = 0.0;
+    for k in 0..3 {
+        let zk = z[k].as_f64().expect("z");
+        assert!(
+            (zk - n[k]).abs() < 1e-9,
+            "setup z {z} vs probed normal {n:?}"
+        );
+        dot += zk * x[k].as_f64().expect("x");
+    }
+    assert!(dot.abs() < 1e-12, "x ⟂ z: {dot}");
     let o = lampost_stdin(&["align", "angle", "-"], plane);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("exactly one of"));

@@ -3,9 +3,11 @@
 //! calibration) runs it against a gage ball on a table whose true R differs from the
 //! machine file's, and `calibrate pivot` / `calibrate axes` read the log it sends.
 //!
-//! The simulated log is also the fixture `fixtures/calibration/fadal-poses.log` that the
-//! user guide uses; this test regenerates it and fails if the committed one differs
-//! (`LAMPOST_UPDATE_FIXTURES=1` rewrites it).
+//! The simulated logs are also fixtures the user guide uses
+//! (`fixtures/calibration/fadal-poses.log`, and `fixtures/points/tilted-face.log`: a
+//! `probe plane` grid run against a face tilted by a known small angle); this test
+//! regenerates them and fails if a committed one differs (`LAMPOST_UPDATE_FIXTURES=1`
+//! rewrites them).
 
 mod common;
 
@@ -158,14 +160,105 @@ fn fixture() -> std::path::PathBuf {
     root().join("fixtures/calibration/fadal-poses.log")
 }
 
-#[test]
-fn the_committed_log_is_what_the_simulated_probe_sends() {
-    let log = poses_log();
-    if std::env::var_os("LAMPOST_UPDATE_FIXTURES").is_some() {
-        std::fs::write(fixture(), &log).expect("write fixture");
+/// The tilted face: z = 1 + x·tan 0.4° − y·tan 0.25° (inch).
+fn face_z(x: f64, y: f64) -> f64 {
+    1.0 + x * 0.4f64.to_radians().tan() - y * 0.25f64.to_radians().tan()
+}
+
+/// `probe plane` (a 4 × 3 in rectangle at z = 1, 4 × 3 touches, 1/16-in stylus) run
+/// against the tilted face: each vertical `G31` move stops where the stylus ball meets
+/// the face, its centre one stylus radius off the face along the normal.
+fn face_log() -> String {
+    let program = ok(&lampost(&[
+        "probe", "plane", "--corner", "0,0,1", "--size", "4,3", "--grid", "4,3",
+    ]));
+    let (a, b) = (0.4f64.to_radians().tan(), -0.25f64.to_radians().tan());
+    let lift = STYLUS * (1.0 + a * a + b * b).sqrt();
+    let mut log =
+        String::from("FADAL RS-232 CAPTURE (simulated by crates/cli/tests/calib_log_cli.rs)\n");
+    let mut pos = [0.0f64; 3];
+    let mut touch = None;
+    for line in program.lines() {
+        let t = line.trim();
+        if t.starts_with("#SPRINT") {
+            let p: [f64; 3] = touch.take().expect("a touch before its #SPRINT");
+            log.push_str(&format!("X{:.4} Y{:.4} Z{:.4}\n", p[0], p[1], p[2]));
+            continue;
+        }
+        if t.starts_with('(') || t.starts_with('#') || t == "%" {
+            continue;
+        }
+        let w = words(t);
+        let mut to = pos;
+        for &(l, v) in &w {
+            match l {
+                'X' => to[0] = v,
+                'Y' => to[1] = v,
+                'Z' => to[2] = v,
+                _ => {}
+            }
+        }
+        if w.iter().any(|&(l, v)| l == 'G' && v == 31.0) {
+            assert!(
+                to[0] == pos[0] && to[1] == pos[1],
+                "a vertical probing move: {t}"
+            );
+            let z = face_z(pos[0], pos[1]) + lift;
+            assert!(z <= pos[2] && z >= to[2], "the probe reaches the face: {t}");
+            let p = [pos[0], pos[1], z];
+            touch = Some(p);
+            pos = p;
+        } else {
+            pos = to;
+        }
     }
-    let committed = std::fs::read_to_string(fixture()).expect("fixture");
-    assert_eq!(committed, log, "regenerate with LAMPOST_UPDATE_FIXTURES=1");
+    log
+}
+
+#[test]
+fn the_committed_logs_are_what_the_simulated_probe_sends() {
+    let face = root().join("fixtures/points/tilted-face.log");
+    for (path, log) in [(fixture(), poses_log()), (face, face_log())] {
+        if std::env::var_os("LAMPOST_UPDATE_FIXTURES").is_some() {
+            std::fs::write(&path, &log).expect("write fixture");
+        }
+        let committed = std::fs::read_to_string(&path).expect("fixture");
+        assert_eq!(
+            committed,
+            log,
+            "{}: regenerate with LAMPOST_UPDATE_FIXTURES=1",
+            path.display()
+        );
+    }
+}
+
+#[test]
+fn the_face_log_levels_to_its_tilt() {
+    let face = root().join("fixtures/points/tilted-face.log");
+    let dir = tempdir("calib-log-face");
+    let pts = dir.join("face.txt");
+    ok(&lampost(&[
+        "probe",
+        "read",
+        face.to_str().expect("utf8"),
+        "-o",
+        pts.to_str().expect("utf8"),
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&ok(&lampost(&[
+        "fit",
+        "plane",
+        pts.to_str().expect("utf8"),
+        "--json",
+    ])))
+    .expect("json");
+    let n = &v["normal"];
+    let (a, b) = (0.4f64.to_radians().tan(), -0.25f64.to_radians().tan());
+    let k = (1.0 + a * a + b * b).sqrt();
+    let want = [-a / k, -b / k, 1.0 / k];
+    for i in 0..3 {
+        let got = n[i].as_f64().expect("normal");
+        assert!((got - want[i]).abs() < 5e-5, "normal {n} vs {want:?}");
+    }
 }
 
 #[test]
