@@ -74,6 +74,14 @@ pub struct Registration {
     pub residuals: Vec<f64>,
     /// Iterations taken.
     pub iterations: usize,
+    /// Standard uncertainty (degrees) of the small rotations about axes through the
+    /// probed points' centroid along the CAD frame's x, y and z, from the residuals'
+    /// spread and the fit's Jacobian at the solution (`s²·(JᵀJ)⁻¹`, s² = SS/(n − p)); 0
+    /// for a locked rotation; `None` with no redundancy (n ≤ free parameters).
+    pub u_rotation_deg: Option<[f64; 3]>,
+    /// Standard uncertainty of the translation of that centroid along the CAD frame's
+    /// x, y and z (0 for a locked one; `None` with no redundancy).
+    pub u_translation: Option<[f64; 3]>,
 }
 
 const NAMES: [&str; 6] = [
@@ -136,6 +144,8 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
     let mut t = P3::zeros();
     let mut iterations = 0;
     let mut residuals = vec![0.0; n];
+    // (JᵀJ)⁻¹'s diagonal in the scaled parameters, from the last iteration's SVD.
+    let mut inv_diag = vec![0.0; free.len()];
     loop {
         iterations += 1;
         let xs: Vec<P3> = points.iter().map(|p| r * p + t).collect();
@@ -198,6 +208,11 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
                 what.join(" with ")
             )));
         }
+        if let Some(vt) = svd.v_t.as_ref() {
+            for (col, d) in inv_diag.iter_mut().enumerate() {
+                *d = (0..sv.len()).map(|k| (vt[(k, col)] / sv[k]).powi(2)).sum();
+            }
+        }
         let y = svd
             .solve(&rhs, 1e-15)
             .map_err(|_| AlignError::Degenerate("the registration step failed".into()))?;
@@ -243,6 +258,23 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
     );
     let angle = (0.5 * skew.norm()).atan2(((rp.trace() - 1.0) / 2.0).clamp(-1.0, 1.0));
     let ss: f64 = residuals.iter().map(|x| x * x).sum();
+    let (u_rotation_deg, u_translation) = if n > free.len() {
+        let s2 = ss / (n - free.len()) as f64;
+        let mut ur = [0.0; 3];
+        let mut ut = [0.0; 3];
+        for (col, &k) in free.iter().enumerate() {
+            let u = (s2 * inv_diag[col]).sqrt();
+            if k < 3 {
+                ur[k] = (u / size).to_degrees();
+            } else {
+                ut[k - 3] = u;
+            }
+        }
+        let finite = ur.iter().chain(&ut).all(|x| x.is_finite());
+        (finite.then_some(ur), finite.then_some(ut))
+    } else {
+        (None, None)
+    };
     Ok(Registration {
         rotation: [
             [rp[(0, 0)], rp[(0, 1)], rp[(0, 2)]],
@@ -256,6 +288,8 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
         max_abs_residual: residuals.iter().fold(0.0, |m, x| f64::max(m, x.abs())),
         residuals,
         iterations,
+        u_rotation_deg,
+        u_translation,
     })
 }
 

@@ -659,6 +659,7 @@ pub fn register(
         write_json(obj! {
             "rotation": reg.rotation, "translation": reg.translation, "axis": reg.axis, "angle_deg": reg.angle_deg,
             "rms": reg.rms, "max_abs_residual": reg.max_abs_residual, "iterations": reg.iterations,
+            "u_rotation_deg": reg.u_rotation_deg, "u_translation": reg.u_translation,
             "residuals": per_point, "warnings": warnings,
         })
     } else {
@@ -667,6 +668,12 @@ pub fn register(
             g(reg.translation[0]), g(reg.translation[1]), g(reg.translation[2]),
             g(reg.axis[0]), g(reg.axis[1]), g(reg.axis[2]), g(reg.angle_deg), reg.rms, reg.max_abs_residual
         );
+        if let (Some(ur), Some(ut)) = (reg.u_rotation_deg, reg.u_translation) {
+            s.push_str(&format!(
+                "u_rotation_deg {:.3e} {:.3e} {:.3e} (about x, y, z through the points' centroid)\nu_translation {:.3e} {:.3e} {:.3e}\n",
+                ur[0], ur[1], ur[2], ut[0], ut[1], ut[2]
+            ));
+        }
         for (p, r) in pts.iter().zip(&reg.residuals) {
             s.push_str(&format!("line {} residual {:+.3e}\n", p.line, r));
         }

@@ -539,3 +539,83 @@ fn fits_say_when_they_do_not_fit() {
         stderr(&o)
     );
 }
+
+/// The reported uncertainties of a registration are what the scatter of repeated fits
+/// shows: 60 copies of the probed block points with independent noise (σ = 2e-4, a
+/// deterministic generator), registered one by one; the spread of each rotation
+/// component about the true turn, over the trials, is within 35 % of the mean reported
+/// `u_rotation_deg`.
+#[test]
+fn register_uncertainties_match_the_scatter_of_repeated_fits() {
+    let text =
+        std::fs::read_to_string(root().join("fixtures/points/block-probed.txt")).expect("read");
+    let pts: Vec<[f64; 3]> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('x'))
+        .map(|l| {
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .map(|f| f.parse().expect("number"))
+                .collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    let stl = root().join("fixtures/meshes/block.stl");
+    let dir = tempdir("register-u");
+    // A xorshift generator and Box–Muller: the same noise on every run.
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut uniform = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let sigma = 2e-4;
+    let trials = 60;
+    let mut rot: Vec<[f64; 3]> = Vec::new();
+    let mut reported = [0.0; 3];
+    for trial in 0..trials {
+        let mut s = String::from("x y z\n");
+        for p in &pts {
+            let mut q = *p;
+            for c in &mut q {
+                let (u1, u2) = (uniform().max(1e-300), uniform());
+                *c += sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+            }
+            s.push_str(&format!("{:.12} {:.12} {:.12}\n", q[0], q[1], q[2]));
+        }
+        let f = dir.join(format!("noisy-{trial}.txt"));
+        std::fs::write(&f, s).expect("write");
+        let v = json(&lampost(&[
+            "align",
+            "register",
+            f.to_str().expect("utf8"),
+            "--mesh",
+            stl.to_str().expect("utf8"),
+            "--json",
+        ]));
+        let ang = v["angle_deg"].as_f64().expect("angle");
+        let axis: Vec<f64> = (0..3)
+            .map(|k| v["axis"][k].as_f64().expect("axis"))
+            .collect();
+        rot.push([axis[0] * ang, axis[1] * ang, axis[2] * ang]);
+        for (k, r) in reported.iter_mut().enumerate() {
+            *r += v["u_rotation_deg"][k].as_f64().expect("u") / trials as f64;
+        }
+    }
+    for k in 0..3 {
+        let mean = rot.iter().map(|r| r[k]).sum::<f64>() / trials as f64;
+        let sd =
+            (rot.iter().map(|r| (r[k] - mean).powi(2)).sum::<f64>() / (trials - 1) as f64).sqrt();
+        let ratio = sd / reported[k];
+        eprintln!(
+            "rotation {k}: scatter {sd:.3e} reported {:.3e} ratio {ratio:.2}",
+            reported[k]
+        );
+        assert!(
+            (0.65..=1.35).contains(&ratio),
+            "rotation component {k}: scatter {sd:.3e} vs reported {:.3e} (ratio {ratio:.2})",
+            reported[k]
+        );
+    }
+}
