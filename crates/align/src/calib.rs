@@ -984,8 +984,9 @@ pub fn updated_machine(
         }
     }
     def.assumptions.push(format!(
-        "Rotary pivots calibrated by lampost calibrate pivot (method {:?}), rms {:.3e}.",
-        res.method, res.rms
+        "Rotary pivots calibrated by lampost calibrate pivot (method {}), rms {:.3e}.",
+        format!("{:?}", res.method).to_lowercase(),
+        res.rms
     ));
     // Check it builds.
     Machine::new(def.clone(), &[])

@@ -14,6 +14,7 @@
 pub mod calib;
 pub mod error;
 pub mod fit;
+pub mod machine_file;
 pub mod mesh;
 pub mod probe;
 pub mod register;

@@ -456,9 +456,16 @@ pub fn pivot(
     numbers.push(res.rms);
     crate::kin_cmds::finite("the calibration (R, its centre, u_R or the rms)", &numbers)?;
     if let Some(path) = write {
-        let def = calib::updated_machine(&m, &res).map_err(|e| align_error(&name, e))?;
+        // An edit of the machine file the calibration started from (its comments and
+        // layout kept), or of the built-in it names.
+        let original = match lampost_kinematics::def::builtin_text(machine) {
+            Some(t) => t.to_string(),
+            None => std::fs::read_to_string(machine)
+                .map_err(|e| CliError::usage(format!("error: cannot read {machine}: {e}\n")))?,
+        };
+        let text = lampost_align::machine_file::calibrated_text(&original, &m, &res, &name)
+            .map_err(|e| align_error(&name, e))?;
         let mut o = Output::create(Some(path))?;
-        let text = format!("# Calibrated by lampost from {name}\n{}", def.to_toml());
         o.writer()
             .write_all(text.as_bytes())
             .map_err(|e| CliError::write(&e))?;

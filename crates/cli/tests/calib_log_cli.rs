@@ -459,3 +459,86 @@ fn bad_logs_are_located() {
         stderr(&o)
     );
 }
+
+/// `--write` edits the machine file it started from: comments and layout kept, only the
+/// calibrated numbers replaced (rounded a digit below their uncertainty), a distinct
+/// name, one more assumption and a `[calibration]` table; the posted header names it;
+/// calibrating the calibrated file again replaces the table, not adds one.
+#[test]
+fn the_written_machine_file_is_an_edit_of_the_original() {
+    let dir = tempdir("calib-write");
+    let out = dir.join("fadal-cal.toml");
+    let log = fixture();
+    let args = |machine: &str, out: &std::path::Path| {
+        ok(&lampost(&[
+            "calibrate",
+            "pivot",
+            "--machine",
+            machine,
+            log.to_str().expect("utf8"),
+            "--radius",
+            "0.5",
+            "--stylus-radius",
+            "0.0625",
+            "--method",
+            "iii",
+            "--write",
+            out.to_str().expect("utf8"),
+        ]))
+    };
+    args("fadal-lamp", &out);
+    let original = ok(&lampost(&["machines", "show", "fadal-lamp"]));
+    let text = std::fs::read_to_string(&out).expect("written");
+    // Every comment of the original is still there, in order.
+    let comments = |t: &str| -> Vec<String> {
+        t.lines()
+            .filter(|l| l.trim_start().starts_with('#'))
+            .map(str::to_string)
+            .collect()
+    };
+    let (c0, c1) = (comments(&original), comments(&text));
+    assert!(c0.iter().all(|c| c1.contains(c)), "{text}");
+    assert!(text.contains("name = \"fadal-lamp-cal\""), "{text}");
+    assert!(
+        text.contains("R = [-4.865211, 1.491088, 7.080284]"),
+        "{text}"
+    );
+    assert!(
+        text.contains("L = [-10.10308, 0.03632, -8.72762]"),
+        "{text}"
+    );
+    assert!(
+        text.contains("\n[calibration]\n") && text.contains("method = \"iii\""),
+        "{text}"
+    );
+    assert!(text.contains("calibrated_from = \"fadal-lamp\""), "{text}");
+    assert!(
+        !text.contains("e-16") && !text.contains("00000000"),
+        "{text}"
+    );
+    // Only those lines differ.
+    let changed = original
+        .lines()
+        .filter(|l| !text.lines().any(|m| m == *l))
+        .count();
+    assert_eq!(changed, 2, "the name and R lines only:\n{text}");
+    // The posted header names the calibrated file.
+    let posted = ok(&lampost(&[
+        "post",
+        "--machine",
+        out.to_str().expect("utf8"),
+        "--job",
+        root()
+            .join("fixtures/post/bearing-seat/job.toml")
+            .to_str()
+            .expect("utf8"),
+        "-q",
+    ]));
+    assert!(posted.contains("POST FOR FADAL-LAMP-CAL)"), "{posted}");
+    // Again from the calibrated file: one [calibration] table, the same name.
+    let again = dir.join("again.toml");
+    args(out.to_str().expect("utf8"), &again);
+    let t2 = std::fs::read_to_string(&again).expect("written");
+    assert_eq!(t2.matches("[calibration]").count(), 1, "{t2}");
+    assert!(t2.contains("name = \"fadal-lamp-cal\""), "{t2}");
+}

@@ -142,6 +142,31 @@ pub struct MachineDef {
     /// Process codes and post settings.
     #[serde(default)]
     pub process: ProcessDef,
+    /// Where a calibrated file's numbers came from (`lampost calibrate pivot --write`):
+    /// a record for people, not used by the kinematics.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationRecord>,
+}
+
+/// The `[calibration]` table of a calibrated machine file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationRecord {
+    /// The measurement file (ball centres or probe log).
+    pub source: String,
+    /// The method (`i`, `iii`, `fit`).
+    pub method: String,
+    /// Number of poses.
+    pub poses: u64,
+    /// RMS of the pose residuals, machine units.
+    pub rms: f64,
+    /// Largest pose residual, machine units.
+    pub max_pose_residual: f64,
+    /// Standard uncertainty of R's components.
+    #[serde(rename = "u_R", default, skip_serializing_if = "Option::is_none")]
+    pub u_r: Option<[f64; 3]>,
+    /// The machine file the calibration started from (its name).
+    pub calibrated_from: String,
 }
 
 /// Process codes (M, S, P and Q words only, e.g. `"M71"` or `"M98 P10"`; see

@@ -29,7 +29,9 @@ pub mod machine;
 pub mod trig;
 
 pub use batch::IkQuery;
-pub use def::{MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS};
+pub use def::{
+    CalibrationRecord, MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS,
+};
 pub use error::KinError;
 pub use machine::{
     Affine, Choice, Head, Joints, Linear, Machine, Orientation, Placed, Pose, Rotary, Solution,
