@@ -64,18 +64,25 @@ pub fn vector(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
 /// `i,j,k` as a unit direction: scaled by its largest component before its length is
 /// taken, so `1e300,1e300,1e300` is (1,1,1)/√3, not an overflow; zero length refused.
 pub fn direction(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
-    let v = vector(flag, text)?;
+    unit(vector(flag, text)?).ok_or_else(|| {
+        usage(
+            flag,
+            format!("`{text}` has zero length: it names no direction"),
+            "give a non-zero direction i,j,k, e.g. 0,0,1",
+        )
+    })
+}
+
+/// `v` as a unit vector, its length taken without overflow (scaled by its largest
+/// component first); `None` for a zero (or vanishing) vector.
+pub fn unit(v: Vector3<f64>) -> Option<Vector3<f64>> {
     let big = v.amax();
     let u = if big > 0.0 { v / big } else { v };
     let n = u.norm();
     if !(n > 0.0 && n.is_finite()) || big < 1e-300 {
-        return Err(usage(
-            flag,
-            format!("`{text}` has zero length: it names no direction"),
-            "give a non-zero direction i,j,k, e.g. 0,0,1",
-        ));
+        return None;
     }
-    Ok(u / n)
+    Some(u / n)
 }
 
 /// Refuse a result with a non-finite number: say so instead of printing it.
@@ -375,6 +382,102 @@ pub fn ik(
             s.push('\n');
         }
         s
+    };
+    write_out(&mut out, &text)?;
+    out.commit()
+}
+
+/// `kin ik --points FILE`: every row's pose (tip `x y z`, tool axis `i j k`) solved by
+/// the batch solver ([`Machine::inverse_into`], the scalar function's answers bit for
+/// bit), each ranked from `--near`; out, one row of joints per pose (the best within
+/// limits), or the first pose no solution reaches, named by its line.
+pub fn ik_points(
+    machine: &str,
+    file: &str,
+    head: Option<&str>,
+    near: Option<&str>,
+    sets: &[String],
+    json: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let h = head_index(&m, head)?;
+    let near = match near {
+        Some(t) => {
+            let v = joints_arg(&m, "--near", t, &[3, 4], &[])?;
+            [v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)]
+        }
+        None => [0.0, 0.0],
+    };
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {file}: {e}\n")))?;
+    let name = display_name(file);
+    let pts = parse_points(&text, &name)?;
+    // Stage 1: the queries, each axis a direction.
+    let mut queries = Vec::with_capacity(pts.len());
+    for pt in &pts {
+        let Some(n) = pt.normal else {
+            return Err(CliError::failed(format!(
+                "error: {name} has no tool axis columns\n  = help: start the file with a header naming the columns: x y z i j k\n"
+            )));
+        };
+        // Made unit as `--axis` is, so each row asks what `kin ik --axis` would.
+        let Some(axis) = unit(Vector3::from(n)) else {
+            return Err(CliError::failed(format!(
+                "error: {name}:{}: the tool axis ({}, {}, {}) has no direction\n  = help: give i j k of the axis from the tip into the head\n",
+                pt.line, n[0], n[1], n[2]
+            )));
+        };
+        queries.push(lampost_kinematics::IkQuery {
+            tip: Vector3::from(pt.p),
+            axis,
+            near,
+        });
+    }
+    // Stage 2: all solved at once, then the best within limits of each.
+    let mut sols = Vec::new();
+    m.inverse_into(&queries, h, &mut sols);
+    let mut rows = Vec::with_capacity(pts.len());
+    for ((pt, q), s) in pts.iter().zip(&queries).zip(&sols) {
+        let at = |e: KinError| {
+            CliError::failed(format!(
+                "error: {name}:{}: {e}\n  = help: {}\n",
+                pt.line,
+                e.hint()
+            ))
+        };
+        let s = s.clone().map_err(at)?;
+        let c = m.choose(&s, None, &q.axis, h).map_err(at)?;
+        finite(
+            &format!("the joints of the pose on {name}:{}", pt.line),
+            &c.solution.joints.values(),
+        )?;
+        rows.push(c.solution);
+    }
+    // Stage 3: written.
+    let names = m.axis_names();
+    let mut out = Output::create(None)?;
+    let text = if json {
+        let list: Vec<Obj> = pts
+            .iter()
+            .zip(&rows)
+            .map(|(pt, s)| {
+                let mut j = Obj::new();
+                for (n, v) in names.iter().zip(s.joints.values()) {
+                    j.set(n, &v);
+                }
+                obj! {"line": pt.line, "joints": j, "branch": s.branch, "singular": s.singular}
+            })
+            .collect();
+        format!("{}\n", json::to_string(&obj! { "poses": list })?)
+    } else {
+        let mut t = format!("{}\n", names.join(" "));
+        for s in &rows {
+            let v: Vec<String> = s.joints.values().iter().map(|x| fmt6(*x)).collect();
+            t.push_str(&v.join(" "));
+            t.push('\n');
+        }
+        t
     };
     write_out(&mut out, &text)?;
     out.commit()

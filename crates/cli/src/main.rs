@@ -154,11 +154,14 @@ enum KinCmd {
     /// Inverse kinematics: tool tip and axis in the part frame → every joint solution, best first.
     Ik {
         /// Tool tip x,y,z in the part frame.
-        #[arg(long, allow_hyphen_values = true)]
-        position: String,
+        #[arg(long, allow_hyphen_values = true, required_unless_present = "points")]
+        position: Option<String>,
         /// Tool axis i,j,k (from the tip into the head), part frame.
-        #[arg(long, allow_hyphen_values = true)]
-        axis: String,
+        #[arg(long, allow_hyphen_values = true, required_unless_present = "points")]
+        axis: Option<String>,
+        /// Or many poses: a point file with a header naming x y z i j k (tip and tool axis per row; - for standard input), solved together by the batch solver; one row of joints out per pose (the best within limits, ranked from --near).
+        #[arg(long, conflicts_with_all = ["position", "axis"])]
+        points: Option<String>,
         /// Previous rotary position, e.g. A=0,B=0 (default all 0).
         #[arg(long, allow_hyphen_values = true)]
         near: Option<String>,
@@ -822,18 +825,32 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 KinCmd::Ik {
                     position,
                     axis,
+                    points,
                     near,
                     m,
                 },
-        } => kin_cmds::ik(
-            &m.machine,
-            &position,
-            &axis,
-            m.head.as_deref(),
-            near.as_deref(),
-            &m.set,
-            m.json,
-        ),
+        } => match (points, position, axis) {
+            (Some(file), _, _) => kin_cmds::ik_points(
+                &m.machine,
+                &file,
+                m.head.as_deref(),
+                near.as_deref(),
+                &m.set,
+                m.json,
+            ),
+            (None, Some(position), Some(axis)) => kin_cmds::ik(
+                &m.machine,
+                &position,
+                &axis,
+                m.head.as_deref(),
+                near.as_deref(),
+                &m.set,
+                m.json,
+            ),
+            _ => Err(report::CliError::usage(
+                "error: give --position and --axis, or --points FILE\n".to_string(),
+            )),
+        },
         Command::Kin {
             cmd: KinCmd::Rotate { joints, file, m },
         } => kin_cmds::rotate(

@@ -12,6 +12,8 @@ pub struct Point {
     pub p: [f64; 3],
     /// 1-based source line.
     pub line: usize,
+    /// The normal (or tool axis) `i j k`, when the header names those columns.
+    pub normal: Option<[f64; 3]>,
 }
 
 fn located(file: &str, line: usize, col: usize, text: &str, what: &str, hint: &str) -> CliError {
@@ -147,6 +149,19 @@ fn header_columns(
         }
         cols.push(c);
     }
+    let normals = (0..3)
+        .filter(|&k| cols.contains(&Column::Normal(k)))
+        .count();
+    if normals != 0 && normals != 3 {
+        return Err(located(
+            file,
+            line,
+            1,
+            raw,
+            "the header names some of the normal's columns i, j, k but not all three",
+            "name all three of i, j, k, or none",
+        ));
+    }
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if !cols.contains(&Column::Coord(k)) {
             return Err(located(
@@ -247,6 +262,7 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<Point>, CliError> {
             .clone()
             .unwrap_or_else(|| (0..3).map(Column::Coord).collect());
         let mut p = [0.0; 3];
+        let mut normal = [0.0; 3];
         for (k, c) in cols.iter().enumerate() {
             if *c == Column::Id {
                 continue;
@@ -277,11 +293,18 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<Point>, CliError> {
                     ));
                 }
             };
-            if let Column::Coord(a) = c {
-                p[*a] = v;
+            match c {
+                Column::Coord(a) => p[*a] = v,
+                Column::Normal(a) => normal[*a] = v,
+                Column::Id => {}
             }
         }
-        out.push(Point { p, line });
+        let has_normal = cols.iter().any(|c| matches!(c, Column::Normal(_)));
+        out.push(Point {
+            p,
+            line,
+            normal: has_normal.then_some(normal),
+        });
     }
     if let Some((n, line)) = expected {
         if n != out.len() {

@@ -367,3 +367,90 @@ fn bad_input_is_refused_clearly() {
 fn lampost_kinematics_text() -> String {
     std::fs::read_to_string(root().join("fixtures/machines/fadal-lamp.toml")).expect("fixture")
 }
+
+/// `kin ik --points`: many poses solved by the batch solver give, row by row, the first
+/// within-limits solution the one-pose `kin ik` lists (the scalar solver), on both
+/// machines; bad rows are named by their line.
+#[test]
+fn ik_points_agrees_with_the_one_pose_solver() {
+    let dir = tempdir("ik-points");
+    // A deterministic spread of tips and tool axes within 60° of +Z.
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut u = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (machine, size) in [("fadal-lamp", 3.0), ("nrc-lc", 60.0)] {
+        let mut rows = String::from("x y z i j k\n");
+        let mut poses = Vec::new();
+        for _ in 0..41 {
+            let p = [size * (u() - 0.5), size * (u() - 0.5), size * 0.3 * u()];
+            let (th, ph) = (60f64.to_radians() * u(), std::f64::consts::TAU * u());
+            let a = [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()];
+            rows.push_str(&format!(
+                "{} {} {} {} {} {}\n",
+                p[0], p[1], p[2], a[0], a[1], a[2]
+            ));
+            poses.push((p, a));
+        }
+        let f = dir.join(format!("{machine}.txt"));
+        std::fs::write(&f, rows).expect("write");
+        let v = json(&lampost(&[
+            "kin",
+            "ik",
+            "--machine",
+            machine,
+            "--points",
+            f.to_str().expect("utf8"),
+            "--json",
+        ]));
+        let got = v["poses"].as_array().expect("poses");
+        assert_eq!(got.len(), poses.len());
+        for (k, ((p, a), g)) in poses.iter().zip(got).enumerate() {
+            let one = json(&lampost(&[
+                "kin",
+                "ik",
+                "--machine",
+                machine,
+                "--position",
+                &format!("{},{},{}", p[0], p[1], p[2]),
+                "--axis",
+                &format!("{},{},{}", a[0], a[1], a[2]),
+                "--json",
+            ]));
+            let best = one["solutions"]
+                .as_array()
+                .expect("solutions")
+                .iter()
+                .find(|s| s["within_limits"] == true)
+                .expect("a solution within limits");
+            assert_eq!(g["line"], k + 2);
+            assert_eq!(
+                g["joints"], best["joints"],
+                "{machine} pose {k}: {g} vs {best}"
+            );
+        }
+    }
+    // Bad input: no axis columns, a zero axis, a pose out of reach.
+    for (rows, want) in [
+        ("x y z\n1 2 3\n", "no tool axis columns"),
+        (
+            "x y z i j k\n1 2 3 0 0 1\n1 2 3 0 0 0\n",
+            "<stdin>:3: the tool axis (0, 0, 0) has no direction",
+        ),
+        (
+            "x y z i j k\n1 2 3 0 0 -1\n",
+            "<stdin>:2: no solution within limits",
+        ),
+        ("x y z i j\n1 2 3 0 0\n", "not all three"),
+    ] {
+        let o = lampost_stdin(
+            &["kin", "ik", "--machine", "fadal-lamp", "--points", "-"],
+            rows.as_bytes(),
+        );
+        assert!(!o.status.success(), "{rows}");
+        assert!(stderr(&o).contains(want), "{rows}: {}", stderr(&o));
+    }
+}
