@@ -109,7 +109,9 @@ pub fn fit(
     noise: Option<f64>,
     json: bool,
 ) -> Result<(), CliError> {
+    let bar = crate::progress::Progress::working("reading the points", false);
     let (name, pts) = read_points(file)?;
+    drop(bar);
     let v = p3(&pts);
     for (flag, val) in [
         ("--radius", radius),
@@ -632,8 +634,10 @@ pub fn register(
         })?,
         None => lampost_align::register::Locks::default(),
     };
-    let reg = lampost_align::register::register(&mesh, &p3(&pts), locks)
-        .map_err(|e| with_lines(&name, &pts, e))?;
+    let bar = crate::progress::Progress::working("registering", false);
+    let reg = lampost_align::register::register(&mesh, &p3(&pts), locks);
+    drop(bar);
+    let reg = reg.map_err(|e| with_lines(&name, &pts, e))?;
     if let Some(path) = write_setup {
         let r = &reg.rotation;
         let setup = lampost_align::Setup {

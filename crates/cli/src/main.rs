@@ -13,6 +13,7 @@ mod kin_cmds;
 mod points;
 mod post_cmds;
 mod posted;
+mod progress;
 mod report;
 
 use clap::{Parser, Subcommand, ValueEnum};

@@ -1,6 +1,6 @@
 //! `lampost post` and `lampost verify`.
 
-use std::io::{BufReader, IsTerminal, Write};
+use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use lampost_kinematics::{Machine, Vector3};
@@ -714,20 +714,14 @@ pub fn post(
     } else {
         let secs = sections(&m, &a.place, input)?;
         let cfg = config(&m, a, &secs)?;
-        let show = std::io::stderr().is_terminal();
+        let bar = crate::progress::Progress::counting("posting", "moves", a.place.quiet);
         // The post verifies every written feed point in-process (FK of the values as
         // written) and every rapid against the safe height; nothing reaches the user's
         // path unless that passed.
-        let r = lampost_post::post(&m, &secs, &cfg, &mut bw, |n| {
-            if show && n > 0 {
-                eprint!("\rposting: {n} moves");
-            }
-        })
-        .map_err(post_error)?;
+        let r = lampost_post::post(&m, &secs, &cfg, &mut bw, |n| bar.set(n as u64))
+            .map_err(post_error)?;
         bw.flush().map_err(werr)?;
-        if show {
-            eprint!("\r                                \r");
-        }
+        drop(bar);
         (r, cfg)
     };
     drop(bw);
@@ -886,6 +880,7 @@ pub fn verify(
     let f = crate::posted::open(posted)?;
     let located = |e| post_error(crate::posted::locate(posted, e));
     let part = part_mesh(place, &m)?;
+    let bar = crate::progress::Progress::working("verifying", place.quiet);
     let v = if is_per_point(place, input) {
         let (frame, mut pts, name) = per_point_input(place, input.unwrap_or("-"))?;
         per_point_units(&m, place, &name, &mut pts)?;
@@ -906,6 +901,7 @@ pub fn verify(
         lampost_post::verify(&m, &secs, h, opts, f, tol, work.as_ref(), part.as_deref())
             .map_err(located)?
     };
+    drop(bar);
     let s = if json {
         format!(
             "{}\n",
