@@ -454,6 +454,30 @@ enum Command {
         #[arg(long)]
         json_report: Option<String>,
     },
+    /// Draw a posted program as SVG: the toolpath in the part frame, one colour per index, rapids dashed, the machine's travel at each index.
+    Preview {
+        /// The posted program (several files: the DNC pieces of a split program, in order).
+        #[arg(num_args = 1.., required = true)]
+        posted: Vec<String>,
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Head (default: laser for deposit, spindle for machine).
+        #[arg(long)]
+        head: Option<String>,
+        /// deposit or machine (chooses the default head; solid lines are deposition or cutting).
+        #[arg(long, default_value = "deposit")]
+        process: String,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// top (part XY) or iso.
+        #[arg(long, default_value = "top", value_name = "top|iso")]
+        view: String,
+        /// The SVG file (atomic).
+        #[arg(short, long)]
+        output: String,
+    },
     /// Replay a posted program through forward kinematics and compare it with the intended path.
     Verify {
         /// INPUT POSTED...: the planar program and the posted program (with --job, POSTED
@@ -615,6 +639,23 @@ fn run(cli: Cli) -> Result<(), CliError> {
             output.as_deref(),
             max_bytes,
             json_report.as_deref(),
+        ),
+        Command::Preview {
+            posted,
+            machine,
+            head,
+            process,
+            set,
+            view,
+            output,
+        } => post_cmds::preview(
+            &machine,
+            &set,
+            head.as_deref(),
+            &process,
+            &posted,
+            &output,
+            &view,
         ),
         Command::Verify {
             files,

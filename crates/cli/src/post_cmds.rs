@@ -462,6 +462,12 @@ pub struct PostArgs {
     /// Built-in machine name or machine file.
     #[arg(long)]
     pub machine: String,
+    /// Also draw the posted program (part frame, one colour per index, rapids dashed, the travel at each index) as SVG into this file; needs -o.
+    #[arg(long, value_name = "FILE.svg")]
+    pub preview: Option<String>,
+    /// The preview's view: top (part XY) or iso.
+    #[arg(long, default_value = "top", value_name = "top|iso")]
+    pub view: String,
     #[command(flatten)]
     pub place: Placement,
     /// Head: laser, spindle, … (default: laser for deposit, spindle/probe for machine).
@@ -676,6 +682,13 @@ pub fn post(
             ));
         }
     }
+    let view = view_arg(&a.view)?;
+    if a.preview.is_some() && output.is_none_or(|o| o == "-") {
+        return Err(CliError::usage(
+            "error: --preview needs -o OUT (the picture is drawn from the written program)\n"
+                .to_string(),
+        ));
+    }
     let (tmp, file) = crate::io::TempFile::beside(output)?;
     let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
     let (report, cfg) = if is_per_point(&a.place, input) {
@@ -816,7 +829,72 @@ pub fn post(
             t0.elapsed().as_secs_f64()
         );
     }
+    if let Some(svg) = &a.preview {
+        // Drawn from the program as written (read back as verify reads it); the program
+        // stays written whatever happens here.
+        let head_name = default_head(&m, &a.process, a.head.as_deref());
+        let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
+        preview_files(&m, h, &written, svg, a.process == "deposit", view).map_err(|e| {
+            CliError::failed(format!(
+                "{}  = note: the program was written ({}); only the preview failed\n",
+                e.message,
+                written.join(", ")
+            ))
+        })?;
+        if !a.place.quiet {
+            eprintln!("preview: {svg}");
+        }
+    }
     Ok(())
+}
+
+/// `--view top|iso`.
+fn view_arg(v: &str) -> Result<lampost_post::preview::View, CliError> {
+    match v {
+        "top" => Ok(lampost_post::preview::View::Top),
+        "iso" => Ok(lampost_post::preview::View::Iso),
+        other => Err(CliError::usage(format!(
+            "error: --view {other}: give top or iso\n"
+        ))),
+    }
+}
+
+/// Draw the posted files (one program, FADAL subprograms followed, or DNC pieces in
+/// order) into an SVG file.
+fn preview_files(
+    m: &Machine,
+    head: usize,
+    posted: &[String],
+    out: &str,
+    deposit: bool,
+    view: lampost_post::preview::View,
+) -> Result<(), CliError> {
+    let f = crate::posted::open(posted)?;
+    let p = lampost_post::preview::replay(m, head, f)
+        .map_err(|e| post_error(crate::posted::locate(posted, e)))?;
+    let title = format!("{} on {}", posted.join(", "), m.def.name);
+    let text = lampost_post::preview::svg(m, head, &p, view, &title, deposit);
+    let mut o = crate::io::Output::create(Some(out))?;
+    o.writer().write_all(text.as_bytes()).map_err(werr)?;
+    o.commit()
+}
+
+/// `lampost preview POSTED… --machine M -o FILE.svg`.
+#[allow(clippy::too_many_arguments)]
+pub fn preview(
+    machine: &str,
+    sets: &[String],
+    head: Option<&str>,
+    process: &str,
+    posted: &[String],
+    output: &str,
+    view: &str,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let view = view_arg(view)?;
+    let head_name = default_head(&m, process, head);
+    let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
+    preview_files(&m, h, posted, output, process == "deposit", view)
 }
 
 /// The machine's length unit, as outputs name it.

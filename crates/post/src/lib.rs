@@ -33,6 +33,7 @@ mod orient;
 pub mod pipeline;
 pub mod pointwise;
 pub mod post;
+pub mod preview;
 pub mod safety;
 pub mod split;
 pub mod verify;
