@@ -437,6 +437,8 @@ enum ProbeCmd {
 }
 
 #[derive(Subcommand, Debug)]
+// Parsed once per run: the size of the largest subcommand's options costs nothing.
+#[allow(clippy::large_enum_variant)]
 enum Command {
     /// Post a planar toolpath into a 5-axis deposition or machining program.
     Post {
