@@ -7,6 +7,7 @@ mod align_cmds;
 mod calib_cmds;
 mod docs;
 mod gcode_cmds;
+mod inspect_cmds;
 mod io;
 mod json;
 mod kin_cmds;
@@ -436,6 +437,72 @@ enum ProbeCmd {
     },
 }
 
+/// `lampost inspect` subcommands.
+#[derive(Subcommand, Debug)]
+enum InspectCmd {
+    /// A measuring plan: for each point (x y z i j k, the outward normal) the machine position that puts the sensor's zero on it with the beam along the normal (Figure 7b's rows), ordered to keep rotary motion small; optionally the program that runs it.
+    Plan {
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// The sensor head (default: the first head with a sensor).
+        #[arg(long)]
+        head: Option<String>,
+        /// Sampling points with their outward normals: a point file with a header naming x y z i j k.
+        #[arg(long)]
+        points: String,
+        /// Largest tilt of the beam from a normal, degrees (at most the sensor's).
+        #[arg(long)]
+        max_tilt: Option<f64>,
+        /// Plan the reachable points and list the others, rather than refusing.
+        #[arg(long)]
+        skip_unreachable: bool,
+        /// Also write the measuring program (ISO) here.
+        #[arg(long, value_name = "FILE.nc")]
+        program: Option<String>,
+        /// The plan file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+    },
+    /// Readings (a log of `id r`) back to workpiece coordinates through the plan's machine positions; each point's deviation along its normal; out-of-range and missing readings flagged.
+    Reduce {
+        /// The plan file `inspect plan` wrote.
+        #[arg(long)]
+        plan: String,
+        /// The sensor's log: `id r` per line.
+        log: String,
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// The sensor head (default: the first head with a sensor).
+        #[arg(long)]
+        head: Option<String>,
+        /// Output file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Deviation statistics of a reduced file (mean, sd, rms, min, max, percentiles, share within ±tol).
+    Compare {
+        /// The file `inspect reduce` wrote.
+        measured: String,
+        /// Tolerance ± (same unit).
+        #[arg(long)]
+        tol: Option<f64>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
 #[derive(Subcommand, Debug)]
 // Parsed once per run: the size of the largest subcommand's options costs nothing.
 #[allow(clippy::large_enum_variant)]
@@ -455,6 +522,11 @@ enum Command {
         /// Write a JSON report (moves, warnings, limits used, verification, time) to this file.
         #[arg(long)]
         json_report: Option<String>,
+    },
+    /// In-line measurement with the machine's displacement sensor (paper 003): plan, reduce, compare.
+    Inspect {
+        #[command(subcommand)]
+        cmd: InspectCmd,
     },
     /// Draw a posted program as SVG: the toolpath in the part frame, one colour per index, rapids dashed, the machine's travel at each index.
     Preview {
@@ -642,6 +714,56 @@ fn run(cli: Cli) -> Result<(), CliError> {
             max_bytes,
             json_report.as_deref(),
         ),
+        Command::Inspect {
+            cmd:
+                InspectCmd::Plan {
+                    machine,
+                    set,
+                    head,
+                    points,
+                    max_tilt,
+                    skip_unreachable,
+                    program,
+                    output,
+                },
+        } => inspect_cmds::plan_cmd(
+            &machine,
+            &set,
+            head.as_deref(),
+            &points,
+            max_tilt,
+            output.as_deref(),
+            program.as_deref(),
+            skip_unreachable,
+        ),
+        Command::Inspect {
+            cmd:
+                InspectCmd::Reduce {
+                    plan,
+                    log,
+                    machine,
+                    set,
+                    head,
+                    output,
+                    json,
+                },
+        } => inspect_cmds::reduce_cmd(
+            &machine,
+            &set,
+            head.as_deref(),
+            &plan,
+            &log,
+            output.as_deref(),
+            json,
+        ),
+        Command::Inspect {
+            cmd:
+                InspectCmd::Compare {
+                    measured,
+                    tol,
+                    json,
+                },
+        } => inspect_cmds::compare_cmd(&measured, tol, json),
         Command::Preview {
             posted,
             machine,

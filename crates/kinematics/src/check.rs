@@ -305,8 +305,31 @@ impl MachineDef {
                 .map_err(|e| (Place::Rotary(i), e))?;
             taken.push(r.name.clone());
         }
-        for (i, h) in self.heads.iter().enumerate() {
+        for (i, h) in self.heads.iter_mut().enumerate() {
             label("head name", &h.name).map_err(|r| (Place::Head(i), r))?;
+            if let Some(sn) = &mut h.sensor {
+                let positive = |what: &str, v: f64, hi: f64| {
+                    if v.is_finite() && v > 0.0 && v <= hi {
+                        Ok(())
+                    } else {
+                        Err((
+                            Place::Head(i),
+                            Refusal {
+                                message: format!(
+                                    "head `{}`: sensor.{what} = {v}: it must be a finite number > 0 and at most {hi}",
+                                    h.name
+                                ),
+                                at: 0,
+                            },
+                        ))
+                    }
+                };
+                positive("reference", sn.reference, 1e6)?;
+                positive("range", sn.range, 1e6)?;
+                positive("max_tilt_deg", sn.max_tilt_deg, 90.0)?;
+                sn.trigger =
+                    process_code("sensor.trigger", &sn.trigger).map_err(|r| (Place::Head(i), r))?;
+            }
         }
         let p = &mut self.process;
         for (key, code) in p.codes_mut() {

@@ -110,6 +110,26 @@ pub struct HeadDef {
     pub name: String,
     /// Offset of the head's tool point from the spindle point, machine frame.
     pub offset: VecExpr,
+    /// A measuring head: the displacement sensor's parameters (its tool point is the
+    /// sensor's zero, the middle of its range, on its beam).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<SensorDef>,
+}
+
+/// A laser displacement sensor on a head (paper 003): it reads `r`, the distance of the
+/// surface beyond its zero along the beam (the tool axis, from the head to the tip), and
+/// the surface is at `z_m = z_t − r` along that axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorDef {
+    /// Reference (stand-off) distance from the sensor's face to its zero, machine units.
+    pub reference: f64,
+    /// Measuring range: readings within ±range of the zero are valid, machine units.
+    pub range: f64,
+    /// Largest tilt of the beam from the surface normal at which readings hold, degrees.
+    pub max_tilt_deg: f64,
+    /// The code that takes a reading (M, S, P, Q words, as the process codes).
+    pub trigger: String,
 }
 
 /// A whole machine file.

@@ -30,7 +30,8 @@ pub mod trig;
 
 pub use batch::IkQuery;
 pub use def::{
-    CalibrationRecord, MachineDef, Moves, ParamValue, ProcessDef, Units, VecExpr, BUILTINS,
+    CalibrationRecord, MachineDef, Moves, ParamValue, ProcessDef, SensorDef, Units, VecExpr,
+    BUILTINS,
 };
 pub use error::KinError;
 pub use machine::{

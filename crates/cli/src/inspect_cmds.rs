@@ -1,0 +1,303 @@
+//! `lampost inspect plan|reduce|compare`: flags onto `lampost_inspect` calls.
+
+use lampost_inspect::{compare, plan, program, reduce, InspectError, Measured, Status, Target};
+use lampost_kinematics::Machine;
+
+use crate::io::{display_name, open_input, Output};
+use crate::json::{self, obj, Obj};
+use crate::kin_cmds::{kin_error, load_machine};
+use crate::points::parse_points;
+use crate::report::CliError;
+
+fn read(file: &str) -> Result<(String, String), CliError> {
+    let name = display_name(file);
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
+    Ok((name, text))
+}
+
+/// An inspect error, at its file's line where it has one.
+fn error(name: &str, text: &str, e: InspectError) -> CliError {
+    match e {
+        InspectError::At { line, what } => CliError::failed(format!(
+            "error: {what}\n  --> {name}:{line}\n   | {}\n  = help: {}\n",
+            text.lines().nth(line - 1).unwrap_or("").trim(),
+            "fix or remove the line"
+        )),
+        InspectError::NoSensor { .. } => CliError::failed(format!(
+            "error: {e}\n  = help: use a head with a sensor (nrc-lc's `sensor`), or add a sensor table to the machine file's head\n"
+        )),
+        other => CliError::failed(format!("error: {other} ({name})\n")),
+    }
+}
+
+/// The sensor head: `--head`, else the first head with a sensor.
+fn sensor_head(m: &Machine, head: Option<&str>) -> Result<usize, CliError> {
+    match head {
+        Some(h) => m.head(h).map_err(kin_error),
+        None => m
+            .def
+            .heads
+            .iter()
+            .position(|h| h.sensor.is_some())
+            .ok_or_else(|| {
+                CliError::failed(format!(
+                    "error: machine {} has no head with a sensor\n  = help: give a machine whose head has a `sensor` table (nrc-lc), or add one to the machine file\n",
+                    m.def.name
+                ))
+            }),
+    }
+}
+
+fn write_file(path: Option<&str>, text: &str) -> Result<(), CliError> {
+    let mut o = Output::create(path)?;
+    o.writer()
+        .write_all(text.as_bytes())
+        .map_err(|e| CliError::write(&e))?;
+    o.commit()
+}
+
+/// `inspect plan`.
+#[allow(clippy::too_many_arguments)]
+pub fn plan_cmd(
+    machine: &str,
+    sets: &[String],
+    head: Option<&str>,
+    points: &str,
+    max_tilt: Option<f64>,
+    output: Option<&str>,
+    program_out: Option<&str>,
+    skip_unreachable: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let h = sensor_head(&m, head)?;
+    let (name, text) = read(points)?;
+    let pts = parse_points(&text, &name)?;
+    let mut targets = Vec::with_capacity(pts.len());
+    for (k, p) in pts.iter().enumerate() {
+        let Some(n) = p.normal else {
+            return Err(CliError::failed(format!(
+                "error: {name} has no normal columns\n  = help: start the file with a header naming the columns: x y z i j k (the outward surface normal), optionally with an id\n"
+            )));
+        };
+        targets.push(Target {
+            id: format!("p{}", k + 1),
+            point: p.p,
+            normal: n,
+        });
+    }
+    let plan = plan::plan(&m, h, &targets, max_tilt).map_err(|e| error(&name, &text, e))?;
+    if !plan.unreachable.is_empty() {
+        let list: Vec<String> = plan.unreachable.iter().map(|e| format!("  {e}")).collect();
+        let msg = format!(
+            "{} of {} points cannot be measured:\n{}\n",
+            plan.unreachable.len(),
+            targets.len(),
+            list.join("\n")
+        );
+        if !skip_unreachable {
+            return Err(CliError::failed(format!(
+                "error: {msg}  = help: move or re-fixture the part, allow more --max-tilt (up to the sensor's), or pass --skip-unreachable to plan the rest\n"
+            )));
+        }
+        eprint!("warning: {msg}");
+    }
+    if plan.rows.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: no point of {name} can be measured; nothing written\n"
+        )));
+    }
+    // Everything is made before anything is written.
+    let table = plan::to_text(&m, h, &plan.rows);
+    let prog = match program_out {
+        Some(_) => {
+            let p = program::write(&m, h, &plan.rows).map_err(|e| error(&name, &text, e))?;
+            let diags = lampost_gcode::check(p.as_bytes(), lampost_gcode::Options::default());
+            if let Some(d) = diags.iter().find(|d| d.is_error()) {
+                return Err(CliError::failed(format!(
+                    "error: internal: the measuring program does not check: {d}\n"
+                )));
+            }
+            Some(p)
+        }
+        None => None,
+    };
+    if let (Some(path), Some(p)) = (program_out, &prog) {
+        write_file(Some(path), p)?;
+    }
+    write_file(output, &table)?;
+    let tilted = plan.rows.iter().filter(|r| r.tilt_deg > 0.0).count();
+    eprintln!(
+        "planned {} points on {} (head {}){}",
+        plan.rows.len(),
+        m.def.name,
+        m.def.heads[h].name,
+        if tilted > 0 {
+            format!(", {tilted} with the beam tilted from the normal")
+        } else {
+            String::new()
+        }
+    );
+    Ok(())
+}
+
+fn status_name(s: Status) -> &'static str {
+    match s {
+        Status::Ok => "ok",
+        Status::OutOfRange => "out_of_range",
+        Status::NoReading => "no_reading",
+        Status::Missing => "missing",
+    }
+}
+
+/// `inspect reduce`.
+pub fn reduce_cmd(
+    machine: &str,
+    sets: &[String],
+    head: Option<&str>,
+    plan_file: &str,
+    log: &str,
+    output: Option<&str>,
+    json_out: bool,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let h = sensor_head(&m, head)?;
+    let (pname, ptext) = read(plan_file)?;
+    let rows = plan::read_text(&m, h, &ptext).map_err(|e| error(&pname, &ptext, e))?;
+    let (lname, ltext) = read(log)?;
+    let readings = reduce::read_log(&ltext).map_err(|e| error(&lname, &ltext, e))?;
+    let got = reduce::reduce(&m, h, &rows, &readings).map_err(|e| error(&lname, &ltext, e))?;
+    let flagged: Vec<&Measured> = got.iter().filter(|g| g.status != Status::Ok).collect();
+    for f in &flagged {
+        eprintln!(
+            "warning: point {}: {}{}",
+            f.id,
+            status_name(f.status).replace('_', " "),
+            f.reading
+                .map_or(String::new(), |r| format!(" (reading {r})"))
+        );
+    }
+    let text = if json_out {
+        format!("{}\n", json::to_string(&obj! {"points": got})?)
+    } else {
+        let mut s = format!(
+            "# lampost inspect measured: machine {}, plan {pname}, log {lname}; deviation along the nominal normal (+ outside)\nid x y z i j k mx my mz reading deviation status\n",
+            m.def.name
+        );
+        let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.9}"));
+        for g in &got {
+            let mm = g
+                .measured
+                .map_or(["-".to_string(), "-".into(), "-".into()], |q| {
+                    q.map(|x| format!("{x:.9}"))
+                });
+            s.push_str(&format!(
+                "{} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {} {} {} {} {} {}\n",
+                g.id,
+                g.nominal[0],
+                g.nominal[1],
+                g.nominal[2],
+                g.normal[0],
+                g.normal[1],
+                g.normal[2],
+                mm[0],
+                mm[1],
+                mm[2],
+                opt(g.reading),
+                opt(g.deviation),
+                status_name(g.status)
+            ));
+        }
+        s
+    };
+    write_file(output, &text)?;
+    eprintln!(
+        "reduced {} of {} points ({} flagged)",
+        got.len() - flagged.len(),
+        got.len(),
+        flagged.len()
+    );
+    Ok(())
+}
+
+/// `inspect compare`: deviations of a reduced file, with statistics.
+pub fn compare_cmd(measured: &str, tol: Option<f64>, json_out: bool) -> Result<(), CliError> {
+    if let Some(t) = tol {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(CliError::usage(format!(
+                "error: --tol {t}: give a positive tolerance\n"
+            )));
+        }
+    }
+    let (name, text) = read(measured)?;
+    let mut devs = Vec::new();
+    let mut rows: Vec<Obj> = Vec::new();
+    let mut header = false;
+    let mut flagged = 0usize;
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        if !header {
+            if !t.starts_with("id x y z i j k") {
+                return Err(CliError::failed(format!(
+                    "error: {name}:{}: not a file `lampost inspect reduce` wrote (its header is `id x y z i j k mx my mz reading deviation status`)\n",
+                    i + 1
+                )));
+            }
+            header = true;
+            continue;
+        }
+        let f: Vec<&str> = t.split_whitespace().collect();
+        if f.len() != 13 {
+            return Err(CliError::failed(format!(
+                "error: {name}:{}: {} columns, a reduced row has 13\n   | {t}\n",
+                i + 1,
+                f.len()
+            )));
+        }
+        if f[12] != "ok" {
+            flagged += 1;
+            continue;
+        }
+        let d: f64 = f[11]
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite())
+            .ok_or_else(|| {
+                CliError::failed(format!(
+                    "error: {name}:{}: the deviation `{}` is not a finite number\n",
+                    i + 1,
+                    f[11]
+                ))
+            })?;
+        devs.push(d);
+        rows.push(obj! {"id": f[0], "deviation": d, "within_tol": tol.map(|t| d.abs() <= t)});
+    }
+    let Some(s) = compare::stats(&devs, tol) else {
+        return Err(CliError::failed(format!(
+            "error: {name} has no measured point\n  = help: every row is flagged (see its status column)\n"
+        )));
+    };
+    let text = if json_out {
+        format!(
+            "{}\n",
+            json::to_string(&obj! {"stats": s, "flagged": flagged, "points": rows})?
+        )
+    } else {
+        let mut t = format!(
+            "n {}\nmean {:.6}\nsd {:.6}\nrms {:.6}\nmin {:.6}\nmax {:.6}\np05 {:.6}\np50 {:.6}\np95 {:.6}\n",
+            s.n, s.mean, s.sd, s.rms, s.min, s.max, s.p05, s.p50, s.p95
+        );
+        if let (Some(w), Some(tl)) = (s.within_tol, tol) {
+            t.push_str(&format!("within ±{tl}: {:.1} %\n", 100.0 * w));
+        }
+        if flagged > 0 {
+            t.push_str(&format!("flagged (not counted): {flagged}\n"));
+        }
+        t
+    };
+    write_file(None, &text)
+}

@@ -1,0 +1,398 @@
+//! `lampost inspect` end to end on the NRC cell, with the truth known: sampling points on
+//! a dome (a sphere cap), readings made in this test by intersecting each planned beam
+//! with an "actual" sphere (grown and moved by known amounts), reduced back; checked
+//! against paper 003's eq. (3) written out here, and against the actual sphere.
+
+mod common;
+
+use common::*;
+
+const R: f64 = 20.0;
+const C: [f64; 3] = [0.0, 0.0, -10.0];
+const H: f64 = 150.0;
+
+fn dome(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut s = String::from("x y z i j k\n");
+    for t in (0..=60).step_by(15) {
+        let az: Vec<i32> = if t == 0 {
+            vec![0]
+        } else {
+            (0..360).step_by(60).collect()
+        };
+        for a in az {
+            let (th, ph) = (f64::from(t).to_radians(), f64::from(a).to_radians());
+            let n = [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()];
+            s.push_str(&format!(
+                "{} {} {} {} {} {}\n",
+                C[0] + R * n[0],
+                C[1] + R * n[1],
+                C[2] + R * n[2],
+                n[0],
+                n[1],
+                n[2]
+            ));
+        }
+    }
+    let p = dir.join("dome.txt");
+    std::fs::write(&p, s).expect("write");
+    p
+}
+
+fn ok(o: &std::process::Output) -> String {
+    assert!(o.status.success(), "{}", stderr(o));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Plan rows: (id, X, Y, Z, B, C, nominal point, normal).
+type Row = (String, [f64; 5], [f64; 3], [f64; 3]);
+
+fn rows(plan: &str) -> Vec<Row> {
+    plan.lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("id "))
+        .map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            let v: Vec<f64> = f[1..].iter().map(|x| x.parse().expect("number")).collect();
+            (
+                f[0].to_string(),
+                [v[0], v[1], v[2], v[3], v[4]],
+                [v[5], v[6], v[7]],
+                [v[8], v[9], v[10]],
+            )
+        })
+        .collect()
+}
+
+/// Paper 003's eq. (3): x_w = Rot(B, C)·(x_t + (−X, −Y, Z + H)) − (0, 0, H), with the
+/// surface at x_t = (0, 0, −r) in the tool frame.
+fn eq3(j: &[f64; 5], r: f64) -> [f64; 3] {
+    let (sb, cb) = j[3].to_radians().sin_cos();
+    let (sc, cc) = j[4].to_radians().sin_cos();
+    let rot = [
+        [cc * cb, sc, -cc * sb],
+        [-sc * cb, cc, sc * sb],
+        [sb, 0.0, cb],
+    ];
+    let v = [-j[0], -j[1], -r + j[2] + H];
+    let mut x = [0.0; 3];
+    for i in 0..3 {
+        x[i] = (0..3).map(|k| rot[i][k] * v[k]).sum();
+    }
+    x[2] -= H;
+    x
+}
+
+/// The reading at a row: where the beam from the sensor's zero (eq. (3) at r = 0) into
+/// the part meets the actual sphere, as a distance beyond the zero.
+fn reading(j: &[f64; 5], centre: [f64; 3], radius: f64) -> f64 {
+    let p = eq3(j, 0.0);
+    let q = eq3(j, 1.0);
+    let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]]; // unit: one unit of r
+    let f = [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]];
+    let b: f64 = 2.0 * (0..3).map(|k| d[k] * f[k]).sum::<f64>();
+    let c: f64 = f.iter().map(|x| x * x).sum::<f64>() - radius * radius;
+    let disc = b * b - 4.0 * c;
+    assert!(disc > 0.0);
+    let (t1, t2) = ((-b - disc.sqrt()) / 2.0, (-b + disc.sqrt()) / 2.0);
+    if t1.abs() < t2.abs() {
+        t1
+    } else {
+        t2
+    }
+}
+
+#[test]
+fn plan_simulate_reduce_compare_on_the_nrc_cell() {
+    let dir = tempdir("inspect");
+    let pts = dome(&dir);
+    let plan = dir.join("dome.plan");
+    let prog = dir.join("dome.nc");
+    ok(&lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--points",
+        pts.to_str().expect("utf8"),
+        "-o",
+        plan.to_str().expect("utf8"),
+        "--program",
+        prog.to_str().expect("utf8"),
+    ]));
+    let text = std::fs::read_to_string(&plan).expect("plan");
+    let rs = rows(&text);
+    assert_eq!(rs.len(), 25);
+    // The plan puts the sensor's zero on each nominal point, the beam along its normal
+    // (eq. (3) written out: r = 0 is the point, r = 1 one unit inside along −n).
+    for (id, j, p, n) in &rs {
+        let z = eq3(j, 0.0);
+        let inside = eq3(j, 1.0);
+        for k in 0..3 {
+            assert!((z[k] - p[k]).abs() < 1e-5, "{id}: {z:?} vs {p:?}");
+            assert!(((z[k] - inside[k]) - n[k]).abs() < 1e-6, "{id}: beam");
+        }
+    }
+    // The order keeps rotary motion small: less in all than measuring the points in the
+    // order they were given (the same rows, sorted by id).
+    let travel = |order: &[&Row]| -> f64 {
+        order
+            .windows(2)
+            .map(|w| {
+                let db = (w[1].1[3] - w[0].1[3]).abs();
+                let dc = (w[1].1[4] - w[0].1[4]).abs().rem_euclid(360.0);
+                db + dc.min(360.0 - dc)
+            })
+            .sum()
+    };
+    let planned: Vec<&Row> = rs.iter().collect();
+    let mut given = planned.clone();
+    given.sort_by_key(|r| r.0[1..].parse::<usize>().expect("id"));
+    let (tp, tg) = (travel(&planned), travel(&given));
+    assert!(
+        tp < tg,
+        "planned order {tp}° of rotary motion, given order {tg}°"
+    );
+    // The program reads back clean.
+    let o = lampost(&["check", prog.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The actual part: the dome grown by 0.03 and moved by (0.01, −0.02, 0.015).
+    let centre = [C[0] + 0.01, C[1] - 0.02, C[2] + 0.015];
+    let radius = R + 0.03;
+    let mut log = String::from("# simulated readings\n");
+    let mut want = Vec::new();
+    for (id, j, _, _) in &rs {
+        let r = reading(j, centre, radius);
+        log.push_str(&format!("{id} {r:.12}\n"));
+        want.push(eq3(j, r));
+    }
+    let logf = dir.join("dome.log");
+    std::fs::write(&logf, &log).expect("log");
+    let v: serde_json::Value = serde_json::from_str(&ok(&lampost(&[
+        "inspect",
+        "reduce",
+        "--machine",
+        "nrc-lc",
+        "--plan",
+        plan.to_str().expect("utf8"),
+        logf.to_str().expect("utf8"),
+        "--json",
+    ])))
+    .expect("json");
+    let got = v["points"].as_array().expect("points");
+    assert_eq!(got.len(), 25);
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g["status"], "ok");
+        for k in 0..3 {
+            let q = g["measured"][k].as_f64().expect("measured");
+            // eq. (3) and lampost's kinematics agree, and the point is on the actual sphere.
+            assert!((q - w[k]).abs() < 1e-9, "{g} vs {w:?}");
+        }
+        let q: Vec<f64> = (0..3)
+            .map(|k| g["measured"][k].as_f64().expect("m"))
+            .collect();
+        let dist =
+            ((q[0] - centre[0]).powi(2) + (q[1] - centre[1]).powi(2) + (q[2] - centre[2]).powi(2))
+                .sqrt();
+        assert!((dist - radius).abs() < 1e-9, "{g}: {dist}");
+        // Deviation along the normal ≈ growth + the move's component along the normal.
+        let n: Vec<f64> = (0..3)
+            .map(|k| g["normal"][k].as_f64().expect("n"))
+            .collect();
+        let expect = 0.03 + 0.01 * n[0] - 0.02 * n[1] + 0.015 * n[2];
+        assert!(
+            (g["deviation"].as_f64().expect("d") - expect).abs() < 1e-4,
+            "{g}"
+        );
+    }
+    // The text form and the statistics.
+    let red = dir.join("dome.measured");
+    ok(&lampost(&[
+        "inspect",
+        "reduce",
+        "--machine",
+        "nrc-lc",
+        "--plan",
+        plan.to_str().expect("utf8"),
+        logf.to_str().expect("utf8"),
+        "-o",
+        red.to_str().expect("utf8"),
+    ]));
+    let s: serde_json::Value = serde_json::from_str(&ok(&lampost(&[
+        "inspect",
+        "compare",
+        red.to_str().expect("utf8"),
+        "--tol",
+        "0.04",
+        "--json",
+    ])))
+    .expect("json");
+    assert_eq!(s["stats"]["n"], 25);
+    let mean = s["stats"]["mean"].as_f64().expect("mean");
+    assert!((mean - 0.03).abs() < 0.02, "{s}");
+    // Growth 0.03 plus the move (|m| = 0.0269) along each normal: within 0.03 ± 0.0270.
+    let (lo, hi) = (
+        s["stats"]["min"].as_f64().expect("min"),
+        s["stats"]["max"].as_f64().expect("max"),
+    );
+    assert!(lo > 0.03 - 0.027 && hi < 0.03 + 0.027, "{s}");
+    let share = s["stats"]["within_tol"].as_f64().expect("share");
+    assert!(share > 0.0 && share < 1.0, "{s}");
+}
+
+#[test]
+fn readings_out_of_range_or_missing_are_flagged_and_bad_logs_refused() {
+    let dir = tempdir("inspect-bad");
+    let pts = dome(&dir);
+    let plan = dir.join("dome.plan");
+    ok(&lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--points",
+        pts.to_str().expect("utf8"),
+        "-o",
+        plan.to_str().expect("utf8"),
+    ]));
+    let text = std::fs::read_to_string(&plan).expect("plan");
+    let ids: Vec<String> = rows(&text).into_iter().map(|r| r.0).collect();
+    // p? out of range (7 > ±5), one with no reading, the last missing from the log.
+    let mut log = format!("{} 7.0\n{} none\n", ids[0], ids[1]);
+    for id in &ids[2..ids.len() - 1] {
+        log.push_str(&format!("{id} 0.01\n"));
+    }
+    let logf = dir.join("bad.log");
+    std::fs::write(&logf, &log).expect("log");
+    let reduce = |log: &std::path::Path| {
+        lampost(&[
+            "inspect",
+            "reduce",
+            "--machine",
+            "nrc-lc",
+            "--plan",
+            plan.to_str().expect("utf8"),
+            log.to_str().expect("utf8"),
+            "--json",
+        ])
+    };
+    let o = reduce(&logf);
+    let v: serde_json::Value = serde_json::from_str(&ok(&o)).expect("json");
+    let status: Vec<&str> = v["points"]
+        .as_array()
+        .expect("points")
+        .iter()
+        .map(|p| p["status"].as_str().expect("status"))
+        .collect();
+    assert_eq!(status[0], "out_of_range");
+    assert_eq!(status[1], "no_reading");
+    assert_eq!(status[ids.len() - 1], "missing");
+    assert_eq!(status.iter().filter(|s| **s == "ok").count(), ids.len() - 3);
+    let e = stderr(&o);
+    assert!(
+        e.contains(&format!("point {}: out of range (reading 7)", ids[0])),
+        "{e}"
+    );
+    // A log whose ids do not match the plan; an id read twice; a garbled reading.
+    for (bad, want) in [
+        ("p999 0.1\n".to_string(), "not in the plan"),
+        (
+            format!("{0} 0.1\n{0} 0.2\n", ids[0]),
+            "read already at line 1",
+        ),
+        (format!("{} 0..1\n", ids[0]), "neither a reading"),
+    ] {
+        let f = dir.join("x.log");
+        std::fs::write(&f, bad).expect("log");
+        let o = reduce(&f);
+        assert!(!o.status.success());
+        assert!(
+            stderr(&o).contains(want) && stderr(&o).contains("x.log:"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    // A plan for another machine.
+    let other = dir.join("other.plan");
+    std::fs::write(
+        &other,
+        text.replacen("machine nrc-lc", "machine fadal-lamp", 1),
+    )
+    .expect("w");
+    let o = lampost(&[
+        "inspect",
+        "reduce",
+        "--machine",
+        "nrc-lc",
+        "--plan",
+        other.to_str().expect("utf8"),
+        logf.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("this plan is for machine fadal-lamp"),
+        "{}",
+        stderr(&o)
+    );
+    // A sensor table with a bad value: refused at its head, with the file's line.
+    let shown = ok(&lampost(&["machines", "show", "nrc-lc"]));
+    let badm = dir.join("bad-sensor.toml");
+    std::fs::write(&badm, shown.replace("range = 5.0", "range = -1.0")).expect("w");
+    let o = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        badm.to_str().expect("utf8"),
+        "--points",
+        pts.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("sensor.range = -1"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains("bad-sensor.toml:"), "{}", stderr(&o));
+    // A machine without a sensor; points no orientation reaches (nothing written).
+    let o = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "fadal-lamp",
+        "--points",
+        pts.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("no head with a sensor"),
+        "{}",
+        stderr(&o)
+    );
+    let under = dir.join("under.txt");
+    std::fs::write(&under, "x y z i j k\n0 0 0 0 0 1\n0 0 -5 0 0 -1\n").expect("w");
+    let out = dir.join("under.plan");
+    let o = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--points",
+        under.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("1 of 2 points cannot be measured"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists(), "nothing written");
+    let o = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--points",
+        under.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+        "--skip-unreachable",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(rows(&std::fs::read_to_string(&out).expect("plan")).len(), 1);
+}
