@@ -32,10 +32,12 @@ fn error(name: &str, text: &str, e: InspectError) -> CliError {
     }
 }
 
-/// The sensor head: `--head`, else the first head with a sensor.
-fn sensor_head(m: &Machine, head: Option<&str>) -> Result<usize, CliError> {
+/// The measuring head: `--head`; else, for a touch probe, the head named `probe`; else
+/// the first head with a sensor.
+fn sensor_head(m: &Machine, head: Option<&str>, touch: bool) -> Result<usize, CliError> {
     match head {
         Some(h) => m.head(h).map_err(kin_error),
+        None if touch => m.head("probe").or_else(|_| Ok(0)),
         None => m
             .def
             .heads
@@ -43,7 +45,7 @@ fn sensor_head(m: &Machine, head: Option<&str>) -> Result<usize, CliError> {
             .position(|h| h.sensor.is_some())
             .ok_or_else(|| {
                 CliError::failed(format!(
-                    "error: machine {} has no head with a sensor\n  = help: give a machine whose head has a `sensor` table (nrc-lc), or add one to the machine file\n",
+                    "error: machine {} has no head with a sensor\n  = help: give a machine whose head has a `sensor` table (nrc-lc), add one to the machine file, or measure with a touch probe (--stylus-radius)\n",
                     m.def.name
                 ))
             }),
@@ -69,9 +71,14 @@ pub fn plan_cmd(
     output: Option<&str>,
     program_out: Option<&str>,
     skip_unreachable: bool,
+    stylus: Option<f64>,
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
-    let h = sensor_head(&m, head)?;
+    let h = sensor_head(&m, head, stylus.is_some())?;
+    let probe = match stylus {
+        Some(r) => plan::Probe::Touch { stylus: r },
+        None => plan::Probe::Sensor,
+    };
     let (name, text) = read(points)?;
     let pts = parse_points(&text, &name)?;
     let mut targets = Vec::with_capacity(pts.len());
@@ -87,7 +94,7 @@ pub fn plan_cmd(
             normal: n,
         });
     }
-    let plan = plan::plan(&m, h, &targets, max_tilt).map_err(|e| error(&name, &text, e))?;
+    let plan = plan::plan(&m, h, probe, &targets, max_tilt).map_err(|e| error(&name, &text, e))?;
     if !plan.unreachable.is_empty() {
         let list: Vec<String> = plan.unreachable.iter().map(|e| format!("  {e}")).collect();
         let msg = format!(
@@ -109,11 +116,25 @@ pub fn plan_cmd(
         )));
     }
     // Everything is made before anything is written.
-    let table = plan::to_text(&m, h, &plan.rows);
+    let table = plan::to_text(&m, h, probe, &plan.rows);
     let prog = match program_out {
         Some(_) => {
-            let p = program::write(&m, h, &plan.rows).map_err(|e| error(&name, &text, e))?;
-            let diags = lampost_gcode::check(p.as_bytes(), lampost_gcode::Options::default());
+            let p = match probe {
+                plan::Probe::Sensor => program::write(&m, h, &plan.rows),
+                plan::Probe::Touch { stylus } => program::write_touch(&m, h, stylus, &plan.rows),
+            }
+            .map_err(|e| error(&name, &text, e))?;
+            let units = match m.units {
+                lampost_kinematics::Units::Inch => lampost_gcode::Units::Inch,
+                lampost_kinematics::Units::Mm => lampost_gcode::Units::Mm,
+            };
+            let diags = lampost_gcode::check(
+                p.as_bytes(),
+                lampost_gcode::Options {
+                    units,
+                    ..lampost_gcode::Options::default()
+                },
+            );
             if let Some(d) = diags.iter().find(|d| d.is_error()) {
                 return Err(CliError::failed(format!(
                     "error: internal: the measuring program does not check: {d}\n"
@@ -162,12 +183,35 @@ pub fn reduce_cmd(
     json_out: bool,
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
-    let h = sensor_head(&m, head)?;
     let (pname, ptext) = read(plan_file)?;
-    let rows = plan::read_text(&m, h, &ptext).map_err(|e| error(&pname, &ptext, e))?;
+    let touch = ptext
+        .lines()
+        .any(|l| l.starts_with("# lampost inspect plan:") && l.contains(", stylus "));
+    let h = sensor_head(&m, head, touch)?;
+    let (probe, rows) = plan::read_text(&m, h, &ptext).map_err(|e| error(&pname, &ptext, e))?;
     let (lname, ltext) = read(log)?;
-    let readings = reduce::read_log(&ltext).map_err(|e| error(&lname, &ltext, e))?;
-    let got = reduce::reduce(&m, h, &rows, &readings).map_err(|e| error(&lname, &ltext, e))?;
+    let got = match probe {
+        plan::Probe::Sensor => {
+            let readings = reduce::read_log(&ltext).map_err(|e| error(&lname, &ltext, e))?;
+            reduce::reduce(&m, h, &rows, &readings).map_err(|e| error(&lname, &ltext, e))?
+        }
+        plan::Probe::Touch { stylus } => {
+            let poses = lampost_align::probe::read_pose_log(&ltext)
+                .map_err(|e| match e {
+                    lampost_align::probe::LogError::Malformed { line, text: _, why } => {
+                        error(&lname, &ltext, InspectError::At { line, what: why })
+                    }
+                    other => CliError::failed(format!("error: {lname}: {other}\n")),
+                })?
+                .ok_or_else(|| {
+                    CliError::failed(format!(
+                        "error: {lname} has no POSE records\n  = help: give the RS-232 log of the measuring program `inspect plan --program` wrote\n"
+                    ))
+                })?;
+            reduce::reduce_touch(&m, h, stylus, &rows, &poses)
+                .map_err(|e| error(&lname, &ltext, e))?
+        }
+    };
     let flagged: Vec<&Measured> = got.iter().filter(|g| g.status != Status::Ok).collect();
     for f in &flagged {
         eprintln!(

@@ -460,6 +460,9 @@ enum InspectCmd {
         /// Plan the reachable points and list the others, rather than refusing.
         #[arg(long)]
         skip_unreachable: bool,
+        /// Measure with a touch probe of this stylus-ball radius (the FADAL's) instead of a displacement sensor: a G31 probing program along the normals.
+        #[arg(long)]
+        stylus_radius: Option<f64>,
         /// Also write the measuring program (ISO) here.
         #[arg(long, value_name = "FILE.nc")]
         program: Option<String>,
@@ -723,6 +726,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     points,
                     max_tilt,
                     skip_unreachable,
+                    stylus_radius,
                     program,
                     output,
                 },
@@ -735,6 +739,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
             output.as_deref(),
             program.as_deref(),
             skip_unreachable,
+            stylus_radius,
         ),
         Command::Inspect {
             cmd:

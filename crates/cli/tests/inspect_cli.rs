@@ -396,3 +396,176 @@ fn readings_out_of_range_or_missing_are_flagged_and_bad_logs_refused() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(rows(&std::fs::read_to_string(&out).expect("plan")).len(), 1);
 }
+
+/// The FADAL's touch probe: `inspect plan --stylus-radius` writes a G31 program along the
+/// normals (a POSE record per table position); a probe simulated here with paper 000's
+/// table transform written out (a part point p sits at M(a, b)·(p + R) − R, M =
+/// Ry(−b)·Rz(a)) touches an "actual" sphere; `inspect reduce` reads the RS-232 log.
+#[test]
+fn touch_probe_inspection_on_the_fadal() {
+    const RT: [f64; 3] = [-4.877, 1.4798, 7.0918];
+    let (r0, c0) = (1.0, [0.0, 0.0, 0.5]);
+    let stylus = 0.0625;
+    let dir = tempdir("inspect-fadal");
+    let mut s = String::from("x y z i j k\n");
+    for t in [0, 30, 60] {
+        let az: Vec<i32> = if t == 0 {
+            vec![0]
+        } else {
+            vec![0, 90, 180, 270]
+        };
+        for a in az {
+            let (th, ph) = (f64::from(t).to_radians(), f64::from(a).to_radians());
+            let n = [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()];
+            s.push_str(&format!(
+                "{} {} {} {} {} {}\n",
+                c0[0] + r0 * n[0],
+                c0[1] + r0 * n[1],
+                c0[2] + r0 * n[2],
+                n[0],
+                n[1],
+                n[2]
+            ));
+        }
+    }
+    let pts = dir.join("dome.txt");
+    std::fs::write(&pts, s).expect("w");
+    let (plan, prog) = (dir.join("dome.plan"), dir.join("dome.nc"));
+    ok(&lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "fadal-lamp",
+        "--points",
+        pts.to_str().expect("utf8"),
+        "--stylus-radius",
+        "0.0625",
+        "-o",
+        plan.to_str().expect("utf8"),
+        "--program",
+        prog.to_str().expect("utf8"),
+    ]));
+    let program = std::fs::read_to_string(&prog).expect("program");
+    // Machine → part: p = M⁻¹·(q + R) − R, M = Ry(−b)·Rz(a).
+    let to_part = |q: [f64; 3], a: f64, b: f64| {
+        let v = [q[0] + RT[0], q[1] + RT[1], q[2] + RT[2]];
+        // M⁻¹ = Rz(−a)·Ry(b).
+        let (sb, cb) = b.to_radians().sin_cos();
+        let w = [cb * v[0] + sb * v[2], v[1], -sb * v[0] + cb * v[2]];
+        let (sa, ca) = (-a).to_radians().sin_cos();
+        let u = [ca * w[0] - sa * w[1], sa * w[0] + ca * w[1], w[2]];
+        [u[0] - RT[0], u[1] - RT[1], u[2] - RT[2]]
+    };
+    let centre = [0.004, -0.003, 0.5 + 0.002];
+    let radius = r0 + 0.005;
+    let mut log = String::from("SIMULATED RS-232 CAPTURE\n");
+    let (mut pos, mut rot) = ([0.0f64; 3], (0.0, 0.0));
+    let mut touch = None;
+    for line in program.lines() {
+        let t = line.trim();
+        if let Some(rec) = t.strip_prefix("#SPRINT \"POSE") {
+            log.push_str(&format!("POSE{}\n", rec.trim_end_matches('"')));
+            continue;
+        }
+        if t.starts_with("#SPRINT") {
+            let p: [f64; 3] = touch.take().expect("touch");
+            log.push_str(&format!("X{:.4} Y{:.4} Z{:.4}\n", p[0], p[1], p[2]));
+            continue;
+        }
+        if t.starts_with('(') || t.starts_with('#') || t == "%" {
+            continue;
+        }
+        let mut to = pos;
+        let mut g31 = false;
+        for w in t.split_whitespace() {
+            let (l, v) = w.split_at(1);
+            let Ok(v) = v.trim_end_matches('.').parse::<f64>() else {
+                continue;
+            };
+            match l {
+                "X" => to[0] = v,
+                "Y" => to[1] = v,
+                "Z" => to[2] = v,
+                "A" => rot.0 = v,
+                "B" => rot.1 = v,
+                "G" if v == 31.0 => g31 = true,
+                _ => {}
+            }
+        }
+        if g31 {
+            let (p0, p1) = (to_part(pos, rot.0, rot.1), to_part(to, rot.0, rot.1));
+            let d = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+            let f = [p0[0] - centre[0], p0[1] - centre[1], p0[2] - centre[2]];
+            let a: f64 = d.iter().map(|x| x * x).sum();
+            let b: f64 = 2.0 * (0..3).map(|k| d[k] * f[k]).sum::<f64>();
+            let c: f64 = f.iter().map(|x| x * x).sum::<f64>() - (radius + stylus).powi(2);
+            let tt = (-b - (b * b - 4.0 * a * c).sqrt()) / (2.0 * a);
+            assert!((0.0..=1.0).contains(&tt), "{t}: {tt}");
+            let q = [
+                pos[0] + tt * (to[0] - pos[0]),
+                pos[1] + tt * (to[1] - pos[1]),
+                pos[2] + tt * (to[2] - pos[2]),
+            ];
+            touch = Some(q);
+            pos = q;
+        } else {
+            pos = to;
+        }
+    }
+    let logf = dir.join("dome.log");
+    std::fs::write(&logf, &log).expect("log");
+    let v: serde_json::Value = serde_json::from_str(&ok(&lampost(&[
+        "inspect",
+        "reduce",
+        "--machine",
+        "fadal-lamp",
+        "--plan",
+        plan.to_str().expect("utf8"),
+        logf.to_str().expect("utf8"),
+        "--json",
+    ])))
+    .expect("json");
+    let got = v["points"].as_array().expect("points");
+    assert_eq!(got.len(), 9);
+    for g in got {
+        assert_eq!(g["status"], "ok", "{g}");
+        let q: Vec<f64> = (0..3)
+            .map(|k| g["measured"][k].as_f64().expect("m"))
+            .collect();
+        let n: Vec<f64> = (0..3)
+            .map(|k| g["normal"][k].as_f64().expect("n"))
+            .collect();
+        // On the actual sphere, to the 0.0001-in rounding of the log.
+        let dist =
+            ((q[0] - centre[0]).powi(2) + (q[1] - centre[1]).powi(2) + (q[2] - centre[2]).powi(2))
+                .sqrt();
+        assert!((dist - radius).abs() < 2e-4, "{g}: {dist}");
+        let expect = 0.005 + 0.004 * n[0] - 0.003 * n[1] + 0.002 * n[2];
+        assert!(
+            (g["deviation"].as_f64().expect("d") - expect).abs() < 2e-4,
+            "{g}"
+        );
+    }
+    // A log with a touch too few at a pose is refused at that POSE record.
+    let cut: Vec<&str> = log.lines().collect();
+    let k = cut.iter().rposition(|l| l.starts_with('X')).expect("touch");
+    let short: String = cut
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != k)
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let bad = dir.join("short.log");
+    std::fs::write(&bad, short).expect("w");
+    let o = lampost(&[
+        "inspect",
+        "reduce",
+        "--machine",
+        "fadal-lamp",
+        "--plan",
+        plan.to_str().expect("utf8"),
+        bad.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("short.log:"), "{}", stderr(&o));
+}

@@ -19,7 +19,7 @@
 //! let m = lampost_kinematics::Machine::builtin("nrc-lc", &[]).unwrap();
 //! let head = m.head("sensor").unwrap();
 //! let t = Target { id: "p1".into(), point: [10.0, 5.0, 2.0], normal: [0.0, 0.0, 1.0] };
-//! let p = plan::plan(&m, head, &[t], None).unwrap();
+//! let p = plan::plan(&m, head, plan::Probe::Sensor, &[t], None).unwrap();
 //! // A reading of 0.05: the surface is 0.05 below the nominal point, along the beam.
 //! let got = reduce::reduce(&m, head, &p.rows, &[("p1".into(), reduce::Reading::Value(0.05), 1)]).unwrap();
 //! assert!((got[0].deviation.unwrap() + 0.05).abs() < 1e-12);

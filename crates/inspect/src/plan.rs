@@ -36,6 +36,29 @@ pub struct PlanRow {
     pub tilt_deg: f64,
 }
 
+/// How the head measures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Probe {
+    /// A displacement sensor (the head's `sensor` table): its zero on the point.
+    Sensor,
+    /// A touch probe with this stylus-ball radius: it touches each point moving along the
+    /// normal, its stylus centre then one radius out from the surface.
+    Touch {
+        /// Stylus-ball radius.
+        stylus: f64,
+    },
+}
+
+impl Probe {
+    /// Where the tool point is when the point is measured: on it, or a stylus radius out.
+    pub fn standoff(self) -> f64 {
+        match self {
+            Probe::Sensor => 0.0,
+            Probe::Touch { stylus } => stylus,
+        }
+    }
+}
+
 /// A plan: the rows in the order to measure, and the points no orientation reaches.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Plan {
@@ -100,8 +123,9 @@ fn solve(
     n: &Vector3<f64>,
     max_tilt: f64,
     near: &[f64; 2],
+    standoff: f64,
 ) -> Result<(Joints, Vector3<f64>, f64), InspectError> {
-    let tip = Vector3::from(t.point);
+    let tip = Vector3::from(t.point) + n * standoff;
     let mut first_err = None;
     for (beam, tilt) in beams(n, max_tilt) {
         match m
@@ -137,27 +161,40 @@ fn rotary_distance(m: &Machine, a: &[f64; 2], b: &[f64; 2]) -> f64 {
         .sum()
 }
 
-/// Stage 1: plan `targets` for the sensor on `head`, the beam within `max_tilt` degrees
-/// of each normal (at most the sensor's own limit; default it). Each target is solved on
+/// Stage 1: plan `targets` for `probe` on `head`, the beam within `max_tilt` degrees of
+/// each normal (a sensor: at most its own limit, by default that; a touch probe: 30° by
+/// default). Each target is solved on
 /// its own first, the reachable ones ordered greedily (the next is the one with the
 /// least rotary motion, then the shortest move), then solved again in that order with
 /// the rotaries near the previous row's, so a continuous axis does not unwind.
 pub fn plan(
     m: &Machine,
     head: usize,
+    probe: Probe,
     targets: &[Target],
     max_tilt: Option<f64>,
 ) -> Result<Plan, InspectError> {
-    let sn = sensor(m, head)?;
+    let limit = match probe {
+        Probe::Sensor => sensor(m, head)?.max_tilt_deg,
+        Probe::Touch { stylus } => {
+            if !(stylus.is_finite() && stylus > 0.0) {
+                return Err(InspectError::Input(format!(
+                    "the stylus radius {stylus} must be a positive number"
+                )));
+            }
+            90.0
+        }
+    };
     let max_tilt = match max_tilt {
-        Some(t) if t.is_finite() && t >= 0.0 => t.min(sn.max_tilt_deg),
+        Some(t) if t.is_finite() && t >= 0.0 => t.min(limit),
         Some(t) => {
             return Err(InspectError::Input(format!(
                 "--max-tilt {t}: give an angle in degrees, 0 or more"
             )))
         }
-        None => sn.max_tilt_deg,
+        None => limit.min(30.0),
     };
+    let standoff = probe.standoff();
     let mut seen = std::collections::HashSet::new();
     let mut solved = Vec::with_capacity(targets.len());
     let mut out = Plan::default();
@@ -180,7 +217,7 @@ pub fn plan(
                 t.id, t.normal[0], t.normal[1], t.normal[2]
             )));
         };
-        match solve(m, head, t, &n, max_tilt, &[0.0, 0.0]) {
+        match solve(m, head, t, &n, max_tilt, &[0.0, 0.0], standoff) {
             Ok((j, _, _)) => solved.push((t, n, j.rotary)),
             Err(e) => out.unreachable.push(e),
         }
@@ -217,7 +254,7 @@ pub fn plan(
     let mut near = [0.0, 0.0];
     for i in order {
         let (t, n, _) = &solved[i];
-        let (joints, beam, tilt) = solve(m, head, t, n, max_tilt, &near)?;
+        let (joints, beam, tilt) = solve(m, head, t, n, max_tilt, &near, standoff)?;
         near = joints.rotary;
         out.rows.push(PlanRow {
             id: t.id.clone(),
@@ -233,11 +270,15 @@ pub fn plan(
 
 /// The plan as text: a comment naming the machine and head, a header of the machine's
 /// axis names, then per row `id X Y Z B C x y z i j k tilt_deg`.
-pub fn to_text(m: &Machine, head: usize, rows: &[PlanRow]) -> String {
+pub fn to_text(m: &Machine, head: usize, probe: Probe, rows: &[PlanRow]) -> String {
     let names = m.axis_names();
     let head_name = m.def.heads.get(head).map_or("?", |h| h.name.as_str());
+    let touch = match probe {
+        Probe::Sensor => String::new(),
+        Probe::Touch { stylus } => format!(", stylus {stylus}"),
+    };
     let mut s = format!(
-        "# lampost inspect plan: machine {}, head {head_name}, {} points (machine position to measure each, then the nominal point and outward normal, part frame)\nid {} x y z i j k tilt_deg\n",
+        "# lampost inspect plan: machine {}, head {head_name}{touch}, {} points (machine position to measure each, then the nominal point and outward normal, part frame)\nid {} x y z i j k tilt_deg\n",
         m.def.name,
         rows.len(),
         names.join(" ")
@@ -269,9 +310,14 @@ pub fn to_text(m: &Machine, head: usize, rows: &[PlanRow]) -> String {
 /// each row is recomputed from its joints by forward kinematics. A plan for another
 /// machine or head, a row with the wrong number of columns, a value that is not a
 /// finite number, or an id given twice, is an error at its line.
-pub fn read_text(m: &Machine, head: usize, text: &str) -> Result<Vec<PlanRow>, InspectError> {
+pub fn read_text(
+    m: &Machine,
+    head: usize,
+    text: &str,
+) -> Result<(Probe, Vec<PlanRow>), InspectError> {
     let head_name = m.def.heads.get(head).map_or("?", |h| h.name.as_str());
     let mut rows: Vec<PlanRow> = Vec::new();
+    let mut probe = Probe::Sensor;
     let mut said = false;
     let mut header = false;
     for (i, raw) in text.lines().enumerate() {
@@ -293,6 +339,15 @@ pub fn read_text(m: &Machine, head: usize, text: &str) -> Result<Vec<PlanRow>, I
                         m.def.name
                     ),
                 });
+            }
+            if let Some(st) = field("stylus ") {
+                let stylus = st.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0);
+                probe = Probe::Touch {
+                    stylus: stylus.ok_or_else(|| InspectError::At {
+                        line,
+                        what: format!("stylus `{st}` is not a positive number"),
+                    })?,
+                };
             }
             said = true;
             continue;
@@ -352,5 +407,5 @@ pub fn read_text(m: &Machine, head: usize, text: &str) -> Result<Vec<PlanRow>, I
                 .into(),
         ));
     }
-    Ok(rows)
+    Ok((probe, rows))
 }

@@ -98,3 +98,69 @@ pub fn write(m: &Machine, head: usize, rows: &[PlanRow]) -> Result<String, Inspe
     let bytes = em.finish().map_err(io)?;
     Ok(String::from_utf8_lossy(&bytes).into_owned())
 }
+
+/// The touch-probe measuring program (FADAL): the rows grouped by table position, each
+/// group one pose of a `probe poses`-style program (the index, a `POSE k …` record, the
+/// touches), so the log says which touches belong to which rows. Each touch starts
+/// `clearance` out from the surface along the normal, aims `overtravel` past it, and
+/// expects the stylus centre a stylus radius out; positions are the linear axes that put
+/// the probe's tool point there at that table position.
+pub fn write_touch(
+    m: &Machine,
+    head: usize,
+    stylus: f64,
+    rows: &[PlanRow],
+) -> Result<String, InspectError> {
+    use lampost_align::probe::{poses_program, PoseTouches, ProbeOptions, Touch};
+    use lampost_kinematics::Vector3;
+    let units = match m.units {
+        MUnits::Inch => Units::Inch,
+        MUnits::Mm => Units::Mm,
+    };
+    let opts = ProbeOptions {
+        program_number: 9601,
+        ..ProbeOptions::defaults(units)
+    };
+    let names = m.axis_names();
+    let letter = |k: usize| names[k].as_bytes().first().copied().unwrap_or(b'A');
+    let mut poses: Vec<PoseTouches> = Vec::new();
+    let mut last: Option<[f64; 2]> = None;
+    let mut top = f64::NEG_INFINITY;
+    for r in rows {
+        let rot = r.joints.rotary;
+        let n = Vector3::from(r.normal);
+        let p = Vector3::from(r.point);
+        let mut at = |q: Vector3<f64>| {
+            let x = m.linear_for(&m.part_to_machine(&rot, &q), head);
+            top = top.max(x[2]);
+            x
+        };
+        let touch = Touch {
+            start: at(p + n * (stylus + opts.clearance)),
+            target: at(p + n * (stylus - opts.overtravel)),
+            expected: at(p + n * stylus),
+        };
+        if last != Some(rot) {
+            poses.push(PoseTouches {
+                rotary: vec![(letter(3), rot[0]), (letter(4), rot[1])],
+                touches: Vec::new(),
+            });
+            last = Some(rot);
+        }
+        if let Some(g) = poses.last_mut() {
+            g.touches.push(touch);
+        }
+    }
+    let safe = top + 10.0 * opts.clearance;
+    poses_program(
+        &poses,
+        safe,
+        &format!("LAMPOST INSPECTION {} POINTS", rows.len()),
+        &[format!(
+            "MACHINE {} - TOUCH PROBE, STYLUS RADIUS {stylus}",
+            m.def.name.to_uppercase()
+        )],
+        &opts,
+    )
+    .map_err(|e| InspectError::Input(format!("cannot write the program: {e}")))
+}

@@ -146,3 +146,81 @@ pub fn reduce(
     }
     Ok(out)
 }
+
+/// Reduce a touch probe's RS-232 log (the program of [`crate::program::write_touch`]):
+/// its POSE records in order are the plan's groups of rows at one table position, and
+/// each group's touches its rows in order. A touch (the stylus centre, linear axes) goes
+/// to the part frame by forward kinematics at the group's table position; the surface
+/// point is one stylus radius back along the nominal normal. Rows of a pose the log lacks
+/// are `missing`; a pose with another number of touches than the plan's is an error at
+/// its record.
+pub fn reduce_touch(
+    m: &Machine,
+    head: usize,
+    stylus: f64,
+    rows: &[PlanRow],
+    log: &[lampost_align::probe::LoggedPose],
+) -> Result<Vec<Measured>, InspectError> {
+    // The plan's groups: consecutive rows at one table position.
+    let mut groups: Vec<Vec<&PlanRow>> = Vec::new();
+    for r in rows {
+        match groups.last_mut() {
+            Some(g) if g[0].joints.rotary == r.joints.rotary => g.push(r),
+            _ => groups.push(vec![r]),
+        }
+    }
+    let mut out = Vec::with_capacity(rows.len());
+    for (k, g) in groups.iter().enumerate() {
+        let logged = log.iter().find(|p| p.number == k + 1);
+        if let Some(lp) = logged {
+            if lp.touches.len() != g.len() {
+                return Err(InspectError::At {
+                    line: lp.line,
+                    what: format!(
+                        "pose {} has {} touches; the plan has {} points at that table position",
+                        lp.number,
+                        lp.touches.len(),
+                        g.len()
+                    ),
+                });
+            }
+        }
+        for (i, r) in g.iter().enumerate() {
+            let mut row = Measured {
+                id: r.id.clone(),
+                nominal: r.point,
+                normal: r.normal,
+                reading: None,
+                measured: None,
+                deviation: None,
+                status: Status::Missing,
+            };
+            if let Some((_, x)) = logged.and_then(|lp| lp.touches.get(i)) {
+                let j = lampost_kinematics::Joints {
+                    linear: *x,
+                    rotary: r.joints.rotary,
+                };
+                let n = Vector3::from(r.normal);
+                let q = m.forward(&j, head).tip - n * stylus;
+                row.measured = Some([q.x, q.y, q.z]);
+                row.deviation = Some((q - Vector3::from(r.point)).dot(&n));
+                row.status = Status::Ok;
+            }
+            out.push(row);
+        }
+    }
+    if let Some(extra) = log
+        .iter()
+        .find(|p| p.number > groups.len() || p.number == 0)
+    {
+        return Err(InspectError::At {
+            line: extra.line,
+            what: format!(
+                "pose {} is not in the plan (it has {} table positions)",
+                extra.number,
+                groups.len()
+            ),
+        });
+    }
+    Ok(out)
+}
