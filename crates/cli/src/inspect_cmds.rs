@@ -37,7 +37,7 @@ fn error(name: &str, text: &str, e: InspectError) -> CliError {
 fn sensor_head(m: &Machine, head: Option<&str>, touch: bool) -> Result<usize, CliError> {
     match head {
         Some(h) => m.head(h).map_err(kin_error),
-        None if touch => m.head("probe").or_else(|_| Ok(0)),
+        None if touch => Ok(m.head("probe").unwrap_or(0)),
         None => m
             .def
             .heads
