@@ -32,7 +32,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let m = Machine::builtin("fadal-lamp", &[])?;
     let r = method_iii(&m, &poses)?;
     let rr = r.r.ok_or("the poses do not fix R")?;
-    println!("R = ({:.6}, {:.6}, {:.6}), rms {:.1e}", rr[0], rr[1], rr[2], r.rms);
+    println!(
+        "R = ({:.6}, {:.6}, {:.6}), rms {:.1e}",
+        rr[0], rr[1], rr[2], r.rms
+    );
     for (k, want) in [-4.877, 1.4798, 7.0918].iter().enumerate() {
         assert!((rr[k] - want).abs() < 1e-6);
     }

@@ -84,6 +84,56 @@ pub struct PostConfig {
     pub max_output_bytes: Option<u64>,
 }
 
+impl PostConfig {
+    /// The settings `lampost post` starts from for `process` on `m`: the laser head for
+    /// deposition and the spindle for machining (else the first head); the FADAL dialect
+    /// on a `fadal…` machine, NRC on an `nrc…` one, ISO otherwise; a chord tolerance of
+    /// 0.0005 in or 0.01 mm and a verification tolerance twice that; programs read as
+    /// FADAL-flavoured in the machine's units; the rotaries starting near 0; program 1000;
+    /// no part, stock or size bound. Change any field before posting.
+    pub fn new(m: &Machine, process: Process) -> PostConfig {
+        let want = match process {
+            Process::Deposit { .. } => "laser",
+            Process::Machine { .. } => "spindle",
+        };
+        let tolerance = match m.units {
+            lampost_kinematics::Units::Inch => 0.0005,
+            lampost_kinematics::Units::Mm => 0.01,
+        };
+        let dialect = if m.name.starts_with("fadal") {
+            PostDialect::Fadal
+        } else if m.name.starts_with("nrc") {
+            PostDialect::Nrc
+        } else {
+            PostDialect::Iso
+        };
+        PostConfig {
+            head: m.head(want).unwrap_or(0),
+            process,
+            dialect,
+            renumber: None,
+            tolerance,
+            intended: IntendedOptions {
+                convert_units: false,
+                e_extrusion: false,
+                flavor: lampost_gcode::Flavor::Fadal,
+                units: None,
+            },
+            near: [0.0, 0.0],
+            program_number: 1000,
+            header: vec![format!(
+                "lampost {} post for {}",
+                env!("CARGO_PKG_VERSION"),
+                m.name
+            )],
+            verify_tolerance: 2.0 * tolerance,
+            work: None,
+            part: None,
+            max_output_bytes: None,
+        }
+    }
+}
+
 /// What a post did.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct PostReport {

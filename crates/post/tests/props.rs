@@ -2,10 +2,7 @@
 //! program that leaves the travel is refused.
 
 use lampost_kinematics::{Machine, Vector3};
-use lampost_post::{
-    post, verify, Frame, IntendedOptions, Orient, PostConfig, PostDialect, PostError, Process,
-    Section, Source,
-};
+use lampost_post::{post, verify, Frame, Orient, PostConfig, PostError, Process, Section, Source};
 use proptest::prelude::*;
 
 const PROGRAM: &str = "G20 G90 G17\nG0 X0 Y0 Z0.1\nG1 Z0 F20.\nG1 X0.8 F30.\nG2 X1.0 Y0.2 I0 J0.2\nG1 Y0.6\nG3 X0.6 Y1.0 I-0.4 J0\nG1 X0 Y0.5\nG1 X0 Y0\nG0 Z0.2\nM30\n";
@@ -21,26 +18,11 @@ fn section(frame: Frame, orient: Orient, program: &str) -> Section {
 }
 
 fn config(m: &Machine, process: Process) -> PostConfig {
-    PostConfig {
-        head: m.head("spindle").unwrap_or(0),
-        process,
-        dialect: PostDialect::Fadal,
-        renumber: None,
-        tolerance: 0.0005,
-        intended: IntendedOptions {
-            convert_units: false,
-            e_extrusion: false,
-            flavor: lampost_gcode::Flavor::Fadal,
-            units: None,
-        },
-        near: [0.0, 0.0],
-        program_number: 1000,
-        header: vec!["prop".into()],
-        verify_tolerance: 0.001,
-        work: None,
-        part: None,
-        max_output_bytes: None,
-    }
+    let mut cfg = PostConfig::new(m, process);
+    cfg.head = m.head("spindle").unwrap_or(0);
+    cfg.verify_tolerance = 0.001;
+    cfg.header = vec!["prop".into()];
+    cfg
 }
 
 proptest! {

@@ -12,8 +12,8 @@ mod papers;
 use lampost_gcode::{Event, MoveKind, Options, Stream, Units};
 use lampost_kinematics::{Machine, MachineDef, Vector3};
 use lampost_post::{
-    post, verify, Frame, IntendedOptions, LayerSchedule, Orient, PostConfig, PostDialect,
-    PostError, Process, Section, Source,
+    post, verify, Frame, LayerSchedule, Orient, PostConfig, PostDialect, PostError, Process,
+    Section, Source,
 };
 use papers::{fadal_tip, nrc_tip};
 
@@ -106,40 +106,26 @@ fn trt() -> Machine {
 }
 
 fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
-    let tolerance = match m.units {
-        lampost_kinematics::Units::Inch => 0.0005,
-        lampost_kinematics::Units::Mm => 0.0125,
+    let process = if deposit {
+        Process::Deposit { power: 500.0 }
+    } else {
+        Process::Machine {
+            tool: None,
+            length_offset: None,
+            work_offset: None,
+            spindle: 1000.0,
+            coolant: false,
+        }
     };
-    PostConfig {
-        head,
-        process: if deposit {
-            Process::Deposit { power: 500.0 }
-        } else {
-            Process::Machine {
-                tool: None,
-                length_offset: None,
-                work_offset: None,
-                spindle: 1000.0,
-                coolant: false,
-            }
-        },
-        dialect: PostDialect::Iso,
-        renumber: None,
-        tolerance,
-        intended: IntendedOptions {
-            convert_units: false,
-            e_extrusion: false,
-            flavor: lampost_gcode::Flavor::Fadal,
-            units: None,
-        },
-        near: [0.0, 0.0],
-        program_number: 1000,
-        header: vec!["tamper".into()],
-        verify_tolerance: 2.0 * tolerance,
-        work: None,
-        part: None,
-        max_output_bytes: None,
+    let mut cfg = PostConfig::new(m, process);
+    cfg.head = head;
+    cfg.dialect = PostDialect::Iso;
+    if m.units == lampost_kinematics::Units::Mm {
+        cfg.tolerance = 0.0125;
+        cfg.verify_tolerance = 0.025;
     }
+    cfg.header = vec!["tamper".into()];
+    cfg
 }
 
 /// (line, kind, start, end) of every move of a posted program (X Y Z A B C of AXES).
