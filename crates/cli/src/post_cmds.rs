@@ -514,20 +514,12 @@ pub struct PostArgs {
     pub max_growth: f64,
 }
 
-/// The head a process uses unless one is named: laser for deposition, spindle for
-/// machining, else the machine's first head.
+/// The head a process uses unless one is named (the library's choice).
 fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
     named.map(str::to_string).unwrap_or_else(|| {
-        let want = if process == "deposit" {
-            "laser"
-        } else {
-            "spindle"
-        };
-        if m.head(want).is_ok() {
-            want.to_string()
-        } else {
-            m.heads[0].name.clone()
-        }
+        m.heads
+            .get(lampost_post::default_head(m, process == "deposit"))
+            .map_or_else(String::new, |h| h.name.clone())
     })
 }
 
@@ -549,8 +541,13 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
             )))
         }
     };
-    let head_name = default_head(m, &a.process, a.head.as_deref());
-    let head = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
+    // The library's defaults (head, dialect, tolerances), then what the flags say.
+    let defaults = PostConfig::new(m, process.clone());
+    let head = match a.head.as_deref() {
+        Some(h) => m.head(h).map_err(crate::kin_cmds::kin_error)?,
+        None => defaults.head,
+    };
+    let head_name = m.heads[head].name.clone();
     let dialect = match a.dialect.as_deref() {
         Some("fadal") => PostDialect::Fadal,
         Some("iso") => PostDialect::Iso,
@@ -560,14 +557,9 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
                 "error: --dialect {other}: use fadal, iso or nrc\n"
             )))
         }
-        None if m.name.starts_with("fadal") => PostDialect::Fadal,
-        None if m.name.starts_with("nrc") => PostDialect::Nrc,
-        None => PostDialect::Iso,
+        None => defaults.dialect,
     };
-    let tolerance = a.tolerance.unwrap_or(match m.units {
-        lampost_kinematics::Units::Inch => 0.0005,
-        lampost_kinematics::Units::Mm => 0.01,
-    });
+    let tolerance = a.tolerance.unwrap_or(defaults.tolerance);
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(CliError::usage(format!(
             "error: --tolerance {tolerance}: must be positive\n"
@@ -586,10 +578,8 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         })
         .transpose()?;
     let near = crate::kin_cmds::near_rotary(m, a.place.near.as_deref())?;
-    let mut header = vec![
-        format!("lampost {} post for {}", env!("CARGO_PKG_VERSION"), m.name),
-        format!("head {head_name}, process {}", a.process),
-    ];
+    let mut header = defaults.header.clone();
+    header.push(format!("head {head_name}, process {}", a.process));
     for s in sections {
         let f = &s.frame;
         let place = match s.orient {

@@ -43,5 +43,5 @@ pub use error::PostError;
 pub use frame::{read_setup, Frame};
 pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
 pub use pipeline::{post, Rewind};
-pub use post::{PostConfig, PostDialect, PostReport, Process};
+pub use post::{default_head, PostConfig, PostDialect, PostReport, Process};
 pub use verify::{verify, VerifyReport};

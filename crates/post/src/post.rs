@@ -84,6 +84,13 @@ pub struct PostConfig {
     pub max_output_bytes: Option<u64>,
 }
 
+/// The head a process uses unless one is named: the laser for deposition, the spindle for
+/// machining, else the machine's first head.
+pub fn default_head(m: &Machine, deposit: bool) -> usize {
+    m.head(if deposit { "laser" } else { "spindle" })
+        .unwrap_or(0)
+}
+
 impl PostConfig {
     /// The settings `lampost post` starts from for `process` on `m`: the laser head for
     /// deposition and the spindle for machining (else the first head); the FADAL dialect
@@ -92,10 +99,7 @@ impl PostConfig {
     /// FADAL-flavoured in the machine's units; the rotaries starting near 0; program 1000;
     /// no part, stock or size bound. Change any field before posting.
     pub fn new(m: &Machine, process: Process) -> PostConfig {
-        let want = match process {
-            Process::Deposit { .. } => "laser",
-            Process::Machine { .. } => "spindle",
-        };
+        let head = default_head(m, matches!(process, Process::Deposit { .. }));
         let tolerance = match m.units {
             lampost_kinematics::Units::Inch => 0.0005,
             lampost_kinematics::Units::Mm => 0.01,
@@ -108,7 +112,7 @@ impl PostConfig {
             PostDialect::Iso
         };
         PostConfig {
-            head: m.head(want).unwrap_or(0),
+            head,
             process,
             dialect,
             renumber: None,
