@@ -6,11 +6,12 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use lampost_align::{calib, fit, mesh, probe, register, setup, P3};
+use lampost_align::{calib, fit, probe, register, setup, P3};
 use lampost_gcode::{
     parse_line, Dialect, EWord, EmitOptions, Emitter, Event, Flavor, LineReader, Options, Order,
     ProgramReader, Stream, Units,
 };
+use lampost_mesh as mesh;
 
 /// Every resolved flavour (`auto` is resolved before a program is read).
 const FLAVORS: [Flavor; 7] = [
