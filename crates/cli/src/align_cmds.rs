@@ -617,16 +617,7 @@ pub fn register(
     }
 }
 
-/// An STL file (ASCII or binary) as a mesh, with located errors.
+/// A mesh file (STL, OBJ or OFF) as a mesh, with located errors.
 pub fn read_mesh(path: &str) -> Result<lampost_mesh::Mesh, CliError> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        CliError::usage(format!(
-            "error: cannot read {path}: {e}\n  = help: give an STL file (ASCII or binary)\n"
-        ))
-    })?;
-    lampost_mesh::read_stl(&bytes).map_err(|e| {
-        CliError::failed(format!(
-            "error: {path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
-        ))
-    })
+    crate::mesh_cmds::read_mesh_file(path)
 }
