@@ -196,22 +196,22 @@ pub struct SliceArgs {
     /// The mesh (STL, OBJ or OFF).
     pub file: String,
     /// Layer height (mm) for parallel planes.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub layer: Option<f64>,
     /// Build direction x,y,z (parallel planes; the fan's direction at angle 0).
     #[arg(long, default_value = "0,0,1", allow_hyphen_values = true)]
     pub build_dir: String,
     /// Height of the first plane above the part's lowest point (default: half a layer).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub first: Option<f64>,
     /// Fan of planes about an axis: px,py,pz,ax,ay,az (a point and the axis direction).
     #[arg(long, allow_hyphen_values = true, requires = "fan_step")]
     pub fan_axis: Option<String>,
     /// Fan: degrees between layers.
-    #[arg(long, requires = "fan_axis")]
+    #[arg(long, requires = "fan_axis", allow_negative_numbers = true)]
     pub fan_step: Option<f64>,
     /// Largest gap stitched between open chains (mm; default 1e-6 of the part's diagonal).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub stitch: Option<f64>,
     /// The mesh file's units (default mm); the slices are in mm.
     #[arg(long, value_enum)]
@@ -319,7 +319,11 @@ pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
     if a.json {
         write_json(None, slicing_json(&a.file, &s, &report))?;
     } else if let Some(out) = &a.output {
-        write_out(Some(out), csv(&s).as_bytes())?;
+        // Loops with open chains beside them are not a slicing to build from: the file
+        // is not written (the warnings say what did not close).
+        if open == 0 {
+            write_out(Some(out), csv(&s).as_bytes())?;
+        }
     } else {
         let loops: usize = s.slices.iter().map(|sl| sl.loops.len()).sum();
         let mut t = format!(
@@ -344,8 +348,9 @@ pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
     }
     if open > 0 {
         return Err(CliError::failed(format!(
-            "error: {}: {open} chains could not be closed into loops (see the warnings above)\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
-            a.file
+            "error: {}: {open} chains could not be closed into loops (see the warnings above){}\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
+            a.file,
+            if a.output.is_some() { "; nothing written" } else { "" }
         )));
     }
     Ok(())
