@@ -41,10 +41,14 @@
 //! ([`Slice::open`]), never as a loop.
 //!
 //! ## Speed
-//! Each triangle's range of layers is found once (its lowest and highest vertex against
-//! the sorted plane heights) and the triangles are bucketed by layer; layers are then
-//! independent and run on `threads` threads in contiguous blocks of equal work, each with
-//! an edge-indexed table reused from layer to layer (no hashing).
+//! Parallel planes: each triangle's range of layers is found once (its lowest and
+//! highest vertex against the plane heights); the triangles are copied, corners and edge
+//! ids together, into records ordered by their first layer, and a sweep keeps the
+//! records that cut the current layer in one compact list (no random access into the
+//! mesh per layer). Segments are chained through a small per-layer hash map of edge ids
+//! that stays in cache. Blocks of layers of about equal work run on `threads` threads,
+//! each sweep starting at its block; the result does not depend on the thread count.
+//! Fans compute every vertex's height per layer and test every triangle.
 
 use lampost_mesh::{Mesh, P3};
 
@@ -177,12 +181,10 @@ pub struct Slicing {
 /// Most layers a slicing may have.
 pub const MAX_LAYERS: usize = 10_000_000;
 
-/// The mesh's edges: each triangle's three edge ids and each edge's vertices.
+/// The mesh's edges: each triangle's three edge ids.
 struct Topo {
     /// `tri_edges[t][k]`: edge from corner `k` to corner `k + 1`.
     tri_edges: Vec<[u32; 3]>,
-    /// `[lo, hi]` vertex indices.
-    edge_verts: Vec<[u32; 2]>,
     /// Every edge in exactly two triangles.
     closed: bool,
 }
@@ -218,7 +220,6 @@ fn topo(mesh: &Mesh) -> Topo {
     let mut uoff = vec![0u32; n + 1];
     let mut uhi: Vec<u32> = Vec::with_capacity(his.len() / 2 + 1);
     let mut uses: Vec<u32> = Vec::with_capacity(his.len() / 2 + 1);
-    let mut edge_verts = Vec::with_capacity(his.len() / 2 + 1);
     for v in 0..n {
         let row = &mut his[off[v] as usize..off[v + 1] as usize];
         row.sort_unstable();
@@ -230,7 +231,6 @@ fn topo(mesh: &Mesh) -> Topo {
             }
             uhi.push(row[i]);
             uses.push(u32::try_from(j - i).unwrap_or(u32::MAX));
-            edge_verts.push([u32::try_from(v).unwrap_or(u32::MAX), row[i]]);
             i = j;
         }
         uoff[v + 1] = u32::try_from(uhi.len()).unwrap_or(u32::MAX);
@@ -257,50 +257,102 @@ fn topo(mesh: &Mesh) -> Topo {
     let closed = uses.iter().all(|&u| u == 2)
         && !uses.is_empty()
         && mesh.triangles.iter().all(|t| !degenerate(t));
-    Topo {
-        tri_edges,
-        edge_verts,
-        closed,
-    }
+    Topo { tri_edges, closed }
 }
 
-/// One cut triangle: the edge its segment starts on, the one it ends on, the triangle.
+/// One cut triangle: the edges its segment starts and ends on, the triangle, and the
+/// two crossing points.
 #[derive(Clone, Copy)]
 struct Seg {
     from: u32,
     to: u32,
     face: u32,
+    p: P3,
+    q: P3,
+}
+
+/// A small open-addressing map from edge id to segment, sized per layer (it stays in
+/// the first-level cache, where a table over all edges would miss on every segment).
+#[derive(Default)]
+struct EdgeMap {
+    keys: Vec<u32>,
+    vals: Vec<u32>,
+    mask: usize,
+    /// Second segments on an edge already taken (non-manifold edges).
+    extra: Vec<(u32, u32)>,
+}
+
+const EMPTY: u32 = u32::MAX;
+
+impl EdgeMap {
+    fn reset(&mut self, n: usize) {
+        let size = (2 * n).next_power_of_two().max(16);
+        if self.keys.len() < size {
+            self.keys.resize(size, EMPTY);
+            self.vals.resize(size, 0);
+        }
+        self.keys[..size].fill(EMPTY);
+        self.mask = size - 1;
+        self.extra.clear();
+    }
+
+    #[inline]
+    fn slot(&self, e: u32) -> usize {
+        (e.wrapping_mul(0x9E37_79B1) as usize ^ (e as usize >> 7)) & self.mask
+    }
+
+    #[inline]
+    fn insert(&mut self, e: u32, s: u32) {
+        let mut i = self.slot(e);
+        loop {
+            let k = self.keys[i];
+            if k == EMPTY {
+                self.keys[i] = e;
+                self.vals[i] = s;
+                return;
+            }
+            if k == e {
+                self.extra.push((e, s));
+                return;
+            }
+            i = (i + 1) & self.mask;
+        }
+    }
+
+    /// The segment on `e` that `ok` accepts.
+    #[inline]
+    fn find(&self, e: u32, ok: impl Fn(u32) -> bool) -> Option<u32> {
+        let mut i = self.slot(e);
+        loop {
+            let k = self.keys[i];
+            if k == EMPTY {
+                return None;
+            }
+            if k == e {
+                let s = self.vals[i];
+                if ok(s) {
+                    return Some(s);
+                }
+                return self
+                    .extra
+                    .iter()
+                    .find(|&&(x, s)| x == e && ok(s))
+                    .map(|&(_, s)| s);
+            }
+            i = (i + 1) & self.mask;
+        }
+    }
 }
 
 /// Per-thread tables, reused across layers.
+#[derive(Default)]
 struct Scratch {
-    /// Per edge: (layer generation, segment starting there).
-    start: Vec<(u32, u32)>,
-    /// Per edge: (layer generation, segment ending there).
-    end: Vec<(u32, u32)>,
-    /// Segments starting/ending on an edge already taken (non-manifold edges).
-    extra_start: Vec<(u32, u32)>,
-    extra_end: Vec<(u32, u32)>,
-    gen: u32,
+    starts: EdgeMap,
+    ends: EdgeMap,
     segs: Vec<Seg>,
     used: Vec<bool>,
     /// Per-vertex heights (fan layers).
     heights: Vec<f64>,
-}
-
-impl Scratch {
-    fn new(edges: usize) -> Scratch {
-        Scratch {
-            start: vec![(0, 0); edges],
-            end: vec![(0, 0); edges],
-            extra_start: Vec::new(),
-            extra_end: Vec::new(),
-            gen: 0,
-            segs: Vec::new(),
-            used: Vec::new(),
-            heights: Vec::new(),
-        }
-    }
 }
 
 struct Ctx<'a> {
@@ -319,88 +371,67 @@ struct LayerOut {
     degenerate: usize,
 }
 
-/// The crossing of edge `e` with the plane at height `z` (heights `h`).
+/// The crossing of the edge from `pa` (height `ha`) to `pb` (height `hb`) with the plane
+/// at height `z`: computed from the lower end, so both triangles of an edge get the same
+/// point; the upper end itself when it is in the plane.
 #[inline]
-fn crossing(ctx: &Ctx, h: &[f64], z: f64, e: u32) -> P3 {
-    let [a, b] = ctx.topo.edge_verts[e as usize];
-    let (lo, hi) = if h[a as usize] < h[b as usize] {
-        (a, b)
+fn cross(pa: &P3, ha: f64, pb: &P3, hb: f64, z: f64) -> P3 {
+    let (pl, hl, ph, hh) = if ha < hb {
+        (pa, ha, pb, hb)
     } else {
-        (b, a)
+        (pb, hb, pa, ha)
     };
-    let (hl, hh) = (h[lo as usize], h[hi as usize]);
-    let vh = ctx.mesh.vertices[hi as usize];
     if hh == z {
-        return vh;
+        return *ph;
     }
-    let vl = ctx.mesh.vertices[lo as usize];
     let t = (z - hl) / (hh - hl);
-    vl + (vh - vl) * t
+    pl + (ph - pl) * t
 }
 
-/// Cut the given triangles at height `z` and chain the segments.
-fn cut_layer(
-    ctx: &Ctx,
-    h: &[f64],
+/// The segment of a triangle with corners `p` at heights `h` (some below `z`, some at or
+/// above it), edges `e`; `None` when the plane does not cut it.
+#[inline]
+fn cut_triangle(
+    p: &[P3; 3],
+    h: [f64; 3],
+    e: &[u32; 3],
+    face: u32,
     z: f64,
-    tris: &mut dyn Iterator<Item = u32>,
-    sc: &mut Scratch,
-) -> LayerOut {
-    sc.gen = sc.gen.wrapping_add(1);
-    if sc.gen == 0 {
-        // Generation wrapped: clear the tables once.
-        sc.start.iter_mut().for_each(|s| *s = (0, 0));
-        sc.end.iter_mut().for_each(|s| *s = (0, 0));
-        sc.gen = 1;
+    flip: bool,
+) -> Option<Seg> {
+    let above = [h[0] >= z, h[1] >= z, h[2] >= z];
+    if above[0] == above[1] && above[1] == above[2] {
+        return None;
     }
-    let gen = sc.gen;
-    sc.segs.clear();
-    sc.extra_start.clear();
-    sc.extra_end.clear();
-    for t in tris {
-        let tri = &ctx.mesh.triangles[t as usize];
-        let edges = &ctx.topo.tri_edges[t as usize];
-        if edges[0] == u32::MAX {
-            continue;
-        }
-        let above = [
-            h[tri[0] as usize] >= z,
-            h[tri[1] as usize] >= z,
-            h[tri[2] as usize] >= z,
-        ];
-        if above[0] == above[1] && above[1] == above[2] {
-            continue;
-        }
-        let (mut up, mut down) = (0, 0);
-        for k in 0..3 {
-            let kn = if k == 2 { 0 } else { k + 1 };
-            if !above[k] && above[kn] {
-                up = k;
-            } else if above[k] && !above[kn] {
-                down = k;
-            }
-        }
-        let (from, to) = if ctx.flip {
-            (edges[up], edges[down])
-        } else {
-            (edges[down], edges[up])
-        };
-        let id = u32::try_from(sc.segs.len()).unwrap_or(u32::MAX);
-        sc.segs.push(Seg { from, to, face: t });
-        let s = &mut sc.start[from as usize];
-        if s.0 == gen {
-            sc.extra_start.push((from, id));
-        } else {
-            *s = (gen, id);
-        }
-        let e = &mut sc.end[to as usize];
-        if e.0 == gen {
-            sc.extra_end.push((to, id));
-        } else {
-            *e = (gen, id);
+    let (mut up, mut down) = (0, 0);
+    for k in 0..3 {
+        let kn = if k == 2 { 0 } else { k + 1 };
+        if !above[k] && above[kn] {
+            up = k;
+        } else if above[k] && !above[kn] {
+            down = k;
         }
     }
+    let (a, b) = if flip { (up, down) } else { (down, up) };
+    let (an, bn) = ((a + 1) % 3, (b + 1) % 3);
+    Some(Seg {
+        from: e[a],
+        to: e[b],
+        face,
+        p: cross(&p[a], h[a], &p[an], h[an], z),
+        q: cross(&p[b], h[b], &p[bn], h[bn], z),
+    })
+}
+
+/// Chain the layer's segments (`sc.segs`) into loops and open chains, and stitch.
+fn assemble(ctx: &Ctx, sc: &mut Scratch) -> LayerOut {
     let n = sc.segs.len();
+    sc.starts.reset(n);
+    for (i, s) in sc.segs.iter().enumerate() {
+        sc.starts.insert(s.from, i as u32);
+    }
+    // The map of segment ends is needed only to walk an open chain back to its start.
+    let mut ends_built = false;
     sc.used.clear();
     sc.used.resize(n, false);
     let mut out = LayerOut {
@@ -412,12 +443,12 @@ fn cut_layer(
     };
     let mut chain: Vec<u32> = Vec::new();
     let mut back: Vec<u32> = Vec::new();
-    let mut opens: Vec<Vec<u32>> = Vec::new();
+    let mut chains: Vec<OpenChain> = Vec::new();
     for first in 0..n {
         if sc.used[first] {
             continue;
         }
-        let first32 = u32::try_from(first).unwrap_or(u32::MAX);
+        let first32 = first as u32;
         chain.clear();
         chain.push(first32);
         sc.used[first] = true;
@@ -425,8 +456,8 @@ fn cut_layer(
         let mut closed = false;
         loop {
             let e = sc.segs[cur].to;
-            let next = next_from(sc, gen, e, first32);
-            match next {
+            let used = &sc.used;
+            match sc.starts.find(e, |s| s == first32 || !used[s as usize]) {
                 Some(s) if s == first32 => {
                     closed = true;
                     break;
@@ -443,8 +474,8 @@ fn cut_layer(
             let mut points = Vec::with_capacity(chain.len());
             let mut faces = Vec::with_capacity(chain.len());
             for &s in &chain {
-                let seg = sc.segs[s as usize];
-                points.push(crossing(ctx, h, z, seg.from));
+                let seg = &sc.segs[s as usize];
+                points.push(seg.p);
                 faces.push(seg.face);
             }
             match make_loop(points, faces, 0) {
@@ -454,11 +485,19 @@ fn cut_layer(
             continue;
         }
         // Open: walk back from the first segment to the chain's start.
+        if !ends_built {
+            sc.ends.reset(n);
+            for (i, s) in sc.segs.iter().enumerate() {
+                sc.ends.insert(s.to, i as u32);
+            }
+            ends_built = true;
+        }
         back.clear();
         let mut cur = first;
         loop {
             let e = sc.segs[cur].from;
-            match prev_to(sc, gen, e) {
+            let used = &sc.used;
+            match sc.ends.find(e, |s| !used[s as usize]) {
                 Some(s) => {
                     sc.used[s as usize] = true;
                     back.push(s);
@@ -467,30 +506,32 @@ fn cut_layer(
                 None => break,
             }
         }
-        let mut whole: Vec<u32> = back.iter().rev().copied().collect();
-        whole.extend_from_slice(&chain);
-        opens.push(whole);
+        let whole = back.iter().rev().chain(chain.iter());
+        let mut points = Vec::with_capacity(back.len() + chain.len() + 1);
+        let mut faces = Vec::with_capacity(back.len() + chain.len());
+        let mut last = None;
+        for &s in whole {
+            let seg = &sc.segs[s as usize];
+            points.push(seg.p);
+            faces.push(seg.face);
+            last = Some(seg.q);
+        }
+        if let Some(q) = last {
+            points.push(q);
+        }
+        chains.push(OpenChain { points, faces });
     }
-    // Open chains as points, then stitched where the gaps are small.
-    let mut chains: Vec<OpenChain> = opens
-        .iter()
-        .map(|c| {
-            let mut points = Vec::with_capacity(c.len() + 1);
-            let mut faces = Vec::with_capacity(c.len());
-            for &s in c {
-                let seg = sc.segs[s as usize];
-                points.push(crossing(ctx, h, z, seg.from));
-                faces.push(seg.face);
-            }
-            if let Some(&last) = c.last() {
-                points.push(crossing(ctx, h, z, sc.segs[last as usize].to));
-            }
-            OpenChain { points, faces }
-        })
-        .collect();
+    if !chains.is_empty() {
+        stitch(ctx, chains, &mut out);
+    }
+    out
+}
+
+/// Join open chains end to start where the gap is within the tolerance (the smallest
+/// gap first; a chain's own start closes it); what remains stays open.
+fn stitch(ctx: &Ctx, mut chains: Vec<OpenChain>, out: &mut LayerOut) {
     let mut stitched_in: Vec<usize> = vec![0; chains.len()];
     loop {
-        // The smallest gap from an end to a start (its own start closes the chain).
         let mut best: Option<(f64, usize, usize)> = None;
         for (i, a) in chains.iter().enumerate() {
             for (j, b) in chains.iter().enumerate() {
@@ -539,60 +580,33 @@ fn cut_layer(
         }
     }
     out.open = chains;
-    out
 }
 
-fn next_from(sc: &Scratch, gen: u32, e: u32, first: u32) -> Option<u32> {
-    let (g, s) = sc.start[e as usize];
-    let ok = |s: u32| s == first || !sc.used[s as usize];
-    if g == gen && ok(s) {
-        return Some(s);
-    }
-    if g != gen {
-        return None;
-    }
-    sc.extra_start
-        .iter()
-        .find(|&&(x, s)| x == e && ok(s))
-        .map(|&(_, s)| s)
-}
-
-fn prev_to(sc: &Scratch, gen: u32, e: u32) -> Option<u32> {
-    let (g, s) = sc.end[e as usize];
-    if g != gen {
-        return None;
-    }
-    if !sc.used[s as usize] {
-        return Some(s);
-    }
-    sc.extra_end
-        .iter()
-        .find(|&&(x, s)| x == e && !sc.used[s as usize])
-        .map(|&(_, s)| s)
-}
-
-/// Merge repeated points, then measure. `None` when fewer than three points remain.
-fn make_loop(points: Vec<P3>, faces: Vec<u32>, stitched: usize) -> Option<Loop> {
+/// Merge repeated points (in place), then measure. `None` when fewer than three points
+/// remain.
+fn make_loop(mut points: Vec<P3>, mut faces: Vec<u32>, stitched: usize) -> Option<Loop> {
     let n = points.len();
-    let mut p = Vec::with_capacity(n);
-    let mut f = Vec::with_capacity(n);
+    // Point i repeats point i + 1: the segment between them is empty, the next one
+    // (face i + 1) starts at the same place, so entry i goes.
+    let mut w = 0;
     for i in 0..n {
-        // Point i repeats point i + 1: the segment between them is empty, the next one
-        // (face i + 1) starts at the same place.
         if points[i] == points[(i + 1) % n] {
             continue;
         }
-        p.push(points[i]);
-        f.push(faces[i]);
+        points[w] = points[i];
+        faces[w] = faces[i];
+        w += 1;
     }
-    if p.len() < 3 {
+    if w < 3 {
         return None;
     }
+    points.truncate(w);
+    faces.truncate(w);
     Some(Loop {
         area: 0.0,
         length: 0.0,
-        points: p,
-        faces: f,
+        points,
+        faces,
         stitched,
     })
 }
@@ -665,17 +679,14 @@ pub fn slice(mesh: &Mesh, opts: &SliceOptions) -> Result<Slicing, PlanError> {
         stitch,
     };
     let threads = opts.threads.max(1);
-    let edges = topo.edge_verts.len();
     let (slices, degenerate) = match &opts.planes {
-        Planes::Parallel { dir, layer, first } => {
-            parallel(&ctx, *dir, *layer, *first, threads, edges)?
-        }
+        Planes::Parallel { dir, layer, first } => parallel(&ctx, *dir, *layer, *first, threads)?,
         Planes::Fan {
             point,
             axis,
             dir,
             step_deg,
-        } => fan(&ctx, *point, *axis, *dir, *step_deg, threads, edges, diag)?,
+        } => fan(&ctx, *point, *axis, *dir, *step_deg, threads, diag)?,
     };
     let segments = slices.iter().map(|s| s.segments).sum();
     Ok(Slicing {
@@ -750,26 +761,17 @@ fn finish(out: LayerOut, index: usize, normal: P3, origin: P3, height: f64) -> (
     )
 }
 
-fn run_blocks<F>(
-    n: usize,
-    work: &[usize],
-    threads: usize,
-    edges: usize,
-    f: F,
-) -> (Vec<Slice>, usize)
+/// Run `f` over contiguous blocks of layers of about equal `work`, one thread each,
+/// and concatenate their slices in order.
+fn run_blocks<F>(n: usize, work: &[usize], threads: usize, f: F) -> (Vec<Slice>, usize)
 where
-    F: Fn(usize, &mut Scratch) -> (Slice, usize) + Sync,
+    F: Fn(usize, usize, &mut Scratch, &mut Vec<Slice>) -> usize + Sync,
 {
     let parts = blocks(work, threads);
     let run = |(a, b): (usize, usize)| {
-        let mut sc = Scratch::new(edges);
+        let mut sc = Scratch::default();
         let mut v = Vec::with_capacity(b - a);
-        let mut deg = 0;
-        for k in a..b {
-            let (s, d) = f(k, &mut sc);
-            deg += d;
-            v.push(s);
-        }
+        let deg = f(a, b, &mut sc, &mut v);
         (v, deg)
     };
     let results: Vec<(Vec<Slice>, usize)> = if parts.len() <= 1 || n == 0 {
@@ -798,13 +800,21 @@ where
     (slices, deg)
 }
 
+/// A triangle as the sweep keeps it: corners, edges, and its layers `k0..k1`.
+#[derive(Clone, Copy)]
+struct Rec {
+    p: [P3; 3],
+    e: [u32; 3],
+    face: u32,
+    k1: u32,
+}
+
 fn parallel(
     ctx: &Ctx,
     dir: P3,
     layer: f64,
     first: Option<f64>,
     threads: usize,
-    edges: usize,
 ) -> Result<(Vec<Slice>, usize), PlanError> {
     let d = unit(dir, "build direction")?;
     if !(layer.is_finite() && layer > 0.0) {
@@ -855,45 +865,84 @@ fn parallel(
         }
         k
     };
+    // Triangles sorted by their first layer (counting sort, stable in triangle order),
+    // and the segments per layer (for balancing the threads' blocks).
     let mut ranges: Vec<(u32, u32)> = Vec::with_capacity(mesh.triangles.len());
     let mut count = vec![0isize; n + 1];
-    for t in &mesh.triangles {
+    let mut starts = vec![0usize; n + 1];
+    for (t, e) in mesh.triangles.iter().zip(&ctx.topo.tri_edges) {
         let a = h[t[0] as usize];
         let b = h[t[1] as usize];
         let c = h[t[2] as usize];
         let (mn, mx) = (a.min(b).min(c), a.max(b).max(c));
         let (k0, k1) = (first_above(mn), first_above(mx));
-        ranges.push((k0 as u32, k1 as u32));
-        if k1 > k0 {
+        if k1 > k0 && e[0] != u32::MAX {
             count[k0] += 1;
             count[k1] -= 1;
+            starts[k0 + 1] += 1;
+            ranges.push((k0 as u32, k1 as u32));
+        } else {
+            ranges.push((0, 0));
         }
     }
-    // Difference array to per-layer counts, then bucket offsets.
     let mut per = vec![0usize; n];
     let mut run = 0isize;
     for k in 0..n {
         run += count[k];
         per[k] = run.unsigned_abs();
+        starts[k + 1] += starts[k];
     }
-    let mut off = vec![0usize; n + 1];
-    for k in 0..n {
-        off[k + 1] = off[k] + per[k];
-    }
-    let mut fill = off.clone();
-    let mut bucket = vec![0u32; off[n]];
+    let mut fill = starts.clone();
+    let mut recs: Vec<Rec> = Vec::with_capacity(starts[n]);
+    // Placeholders, then each record at its place.
+    recs.resize(
+        starts[n],
+        Rec {
+            p: [P3::zeros(); 3],
+            e: [0; 3],
+            face: 0,
+            k1: 0,
+        },
+    );
     for (t, &(k0, k1)) in ranges.iter().enumerate() {
-        for k in k0 as usize..k1 as usize {
-            bucket[fill[k]] = t as u32;
-            fill[k] += 1;
+        if k1 > k0 {
+            let tri = &mesh.triangles[t];
+            recs[fill[k0 as usize]] = Rec {
+                p: tri.map(|i| mesh.vertices[i as usize]),
+                e: ctx.topo.tri_edges[t],
+                face: t as u32,
+                k1,
+            };
+            fill[k0 as usize] += 1;
         }
     }
     drop(ranges);
-    let out = run_blocks(n, &per, threads, edges, |k, sc| {
-        let z = zs[k];
-        let mut it = bucket[off[k]..off[k + 1]].iter().copied();
-        let o = cut_layer(ctx, &h, z, &mut it, sc);
-        finish(o, k, d, d * z, z)
+    let flip = ctx.flip;
+    let out = run_blocks(n, &per, threads, |ka, kb, sc, out| {
+        // The sweep: the triangles cutting layer k, in record order (deterministic
+        // whatever the block's start).
+        let mut active: Vec<Rec> = recs[..starts[ka]]
+            .iter()
+            .filter(|r| r.k1 as usize > ka)
+            .copied()
+            .collect();
+        let mut deg = 0;
+        for (k, &z) in zs.iter().enumerate().take(kb).skip(ka) {
+            active.retain(|r| r.k1 as usize > k);
+            active.extend_from_slice(&recs[starts[k]..starts[k + 1]]);
+            sc.segs.clear();
+            for r in &active {
+                let hh = [d.dot(&r.p[0]), d.dot(&r.p[1]), d.dot(&r.p[2])];
+                if let Some(seg) = cut_triangle(&r.p, hh, &r.e, r.face, z, flip) {
+                    sc.segs.push(seg);
+                }
+            }
+            let o = assemble(ctx, sc);
+            let (slice, dg) = finish(o, k, d, d * z, z);
+            deg += dg;
+            out.push(slice);
+        }
+        deg
     });
     Ok(out)
 }
@@ -906,7 +955,6 @@ fn fan(
     dir: P3,
     step_deg: f64,
     threads: usize,
-    edges: usize,
     diag: f64,
 ) -> Result<(Vec<Slice>, usize), PlanError> {
     if !c.iter().all(|x| x.is_finite()) {
@@ -975,17 +1023,32 @@ fn fan(
     let p0 = pmin + 0.5 * step;
     let n = layer_count(p0, step, pmax, "fan step")?;
     let work = vec![mesh.triangles.len(); n];
-    let ntri = u32::try_from(mesh.triangles.len()).unwrap_or(u32::MAX);
-    let out = run_blocks(n, &work, threads, edges, |k, sc| {
-        let phi = p0 + k as f64 * step;
-        let b = d * phi.cos() - w * phi.sin();
-        let mut h = std::mem::take(&mut sc.heights);
-        h.clear();
-        h.extend(mesh.vertices.iter().map(|v| b.dot(&(v - c))));
-        let mut it = 0..ntri;
-        let o = cut_layer(ctx, &h, 0.0, &mut it, sc);
-        sc.heights = h;
-        finish(o, k, b, c, phi.to_degrees())
+    let flip = ctx.flip;
+    let out = run_blocks(n, &work, threads, |ka, kb, sc, out| {
+        let mut deg = 0;
+        for k in ka..kb {
+            let phi = p0 + k as f64 * step;
+            let b = d * phi.cos() - w * phi.sin();
+            let h = &mut sc.heights;
+            h.clear();
+            h.extend(mesh.vertices.iter().map(|v| b.dot(&(v - c))));
+            sc.segs.clear();
+            for (t, (tri, e)) in mesh.triangles.iter().zip(&ctx.topo.tri_edges).enumerate() {
+                if e[0] == u32::MAX {
+                    continue;
+                }
+                let p = tri.map(|i| mesh.vertices[i as usize]);
+                let hh = tri.map(|i| sc.heights[i as usize]);
+                if let Some(seg) = cut_triangle(&p, hh, e, t as u32, 0.0, flip) {
+                    sc.segs.push(seg);
+                }
+            }
+            let o = assemble(ctx, sc);
+            let (slice, dg) = finish(o, k, b, c, phi.to_degrees());
+            deg += dg;
+            out.push(slice);
+        }
+        deg
     });
     Ok(out)
 }
