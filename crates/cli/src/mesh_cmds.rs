@@ -103,6 +103,12 @@ pub fn info(path: &str, units: Option<MeshUnits>, json_out: bool) -> Result<(), 
     let (lo, hi) = lampost_mesh::props::bounds(&mesh).unwrap_or_default();
     let area = lampost_mesh::props::area(&mesh);
     let volume = report.closed().then(|| lampost_mesh::props::volume(&mesh));
+    if !area.is_finite() || volume.is_some_and(|v| !v.is_finite()) {
+        return Err(CliError::failed(format!(
+            "error: {path}: the area or volume overflows (coordinates up to {:e})\n  = help: check the file's units and scale\n",
+            lo.abs().max().max(hi.abs().max())
+        )));
+    }
     let listed: Vec<_> = report.bad_edges.iter().take(MAX_EDGES_LISTED).collect();
     if json_out {
         let edges: Vec<Obj> = listed

@@ -565,7 +565,7 @@ pub fn read_off(bytes: &[u8]) -> Result<Mesh, MeshError> {
                 text: text(t0),
                 why: format!("`{}` is not a face's vertex count", text(t0)),
             })?;
-        if n < 3 || toks.len() < n + 1 {
+        if n < 3 || toks.len() - 1 < n {
             return Err(MeshError::Syntax {
                 at: Pos::Line { line: ln, col: c0 },
                 text: text(t0),

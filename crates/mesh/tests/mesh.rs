@@ -192,6 +192,19 @@ fn off_round_trips_and_reads_headers_polygons_and_comments() {
         ),
         "{e:?}"
     );
+    // A face's count beyond any index count (found by the fuzzer: it overflowed).
+    let e = read_off(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n18446744073709551615 0 1 2\n")
+        .expect_err("count");
+    assert!(
+        matches!(
+            e,
+            MeshError::Syntax {
+                at: Pos::Line { line: 6, col: 1 },
+                ..
+            }
+        ),
+        "{e:?}"
+    );
     // A huge count does not allocate for it.
     assert!(read_off(b"OFF\n99999999999 1 0\n").is_err());
 }

@@ -178,8 +178,12 @@ pub struct Slicing {
     pub stitch: f64,
 }
 
+/// Largest coordinate magnitude sliced (a million kilometres in millimetres): beyond it,
+/// squared lengths could overflow `f64`.
+pub const MAX_COORD: f64 = 1e12;
+
 /// Most layers a slicing may have.
-pub const MAX_LAYERS: usize = 10_000_000;
+pub const MAX_LAYERS: usize = 1_000_000;
 
 /// The mesh's edges: each triangle's three edge ids.
 struct Topo {
@@ -645,6 +649,12 @@ pub fn slice(mesh: &Mesh, opts: &SliceOptions) -> Result<Slicing, PlanError> {
     for (i, v) in mesh.vertices.iter().enumerate() {
         if !v.iter().all(|x| x.is_finite()) {
             return Err(PlanError::Mesh(format!("vertex {i} is not finite")));
+        }
+        if v.iter().any(|x| x.abs() > MAX_COORD) {
+            return Err(PlanError::Mesh(format!(
+                "vertex {i} ({}, {}, {}) is beyond ±{MAX_COORD:e} (lengths and areas would overflow)",
+                v.x, v.y, v.z
+            )));
         }
     }
     for (i, t) in mesh.triangles.iter().enumerate() {

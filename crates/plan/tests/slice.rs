@@ -333,6 +333,12 @@ fn bad_directions_and_layers_are_refused() {
         parallel(&m, z(), 1e-9, 1),
         Err(PlanError::Layer { .. })
     ));
+    let mut huge = m.clone();
+    huge.vertices[2].x = 1e200;
+    assert!(matches!(
+        parallel(&huge, z(), 1.0, 1),
+        Err(PlanError::Mesh(_))
+    ));
     let mut nan = m.clone();
     nan.vertices[3].y = f64::NAN;
     assert!(matches!(
