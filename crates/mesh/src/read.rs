@@ -179,7 +179,7 @@ fn read_binary_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
             count: 0,
             len: bytes.len(),
             fits: 0,
-            rest: format!(", and the header alone is 84 bytes"),
+            rest: ", and the header alone is 84 bytes".to_string(),
         });
     }
     let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]);
@@ -447,13 +447,16 @@ fn off_header(line: &[u8]) -> Option<&[u8]> {
     Some(&line[p + 3..])
 }
 
+/// A line's number and its tokens with their columns.
+type Row<'a> = (usize, Vec<(usize, &'a [u8])>);
+
 /// Read an OFF file: the `OFF` keyword, `nv nf ne`, `nv` vertices (`x y z`, colour and
 /// other values after them ignored), `nf` faces (`n i1 … in`, 0-based, colour after
 /// them ignored), fan-triangulated. `#` starts a comment.
 pub fn read_off(bytes: &[u8]) -> Result<Mesh, MeshError> {
     // Tokens of the whole file with their places, comments removed, the header keyword
     // consumed.
-    let mut rows: Vec<(usize, Vec<(usize, &[u8])>)> = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
     let mut seen_header = false;
     for (ln, line) in lines(bytes) {
         let body = match line.iter().position(|&b| b == b'#') {
@@ -487,10 +490,7 @@ pub fn read_off(bytes: &[u8]) -> Result<Mesh, MeshError> {
     }
     let last_line = lines(bytes).count();
     let mut rows = rows.into_iter();
-    let count = |row: Option<&(usize, Vec<(usize, &[u8])>)>,
-                 k: usize,
-                 what: &str|
-     -> Result<usize, MeshError> {
+    let count = |row: Option<&Row>, k: usize, what: &str| -> Result<usize, MeshError> {
         let Some((ln, toks)) = row else {
             return Err(MeshError::Syntax {
                 at: Pos::Line {

@@ -1019,7 +1019,7 @@ fn fan(
         pmin = pmin.min(psi);
         pmax = pmax.max(psi);
     }
-    if !(pmax > pmin) {
+    if pmax.partial_cmp(&pmin) != Some(std::cmp::Ordering::Greater) {
         return Err(PlanError::Fan(
             "the part has no extent about the axis".into(),
         ));
