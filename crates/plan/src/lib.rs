@@ -1,6 +1,6 @@
 //! # lampost-plan
 //!
-//! Planning metal deposition from a solid model (paper 001). So far: [`slice`], the
+//! Planning metal deposition from a solid model (paper 001). So far: [`slice()`], the
 //! layers of a closed triangle mesh cut by planes normal to a build direction, or by a
 //! fan of planes turned about an axis, as closed oriented loops that keep the face each
 //! piece came from (perimeters with approach directions and raster fill come next).
