@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# Install the Python oracle for the part-mesh collision test (crates/post/tests/
-# collide_oracle.rs): a project-local virtual environment in .tools/py with pinned
-# trimesh, numpy, scipy (trimesh's proximity queries use its k-d tree) and rtree
-# (trimesh's triangle index for ray and proximity queries).
+# Install the Python oracles for the part-mesh collision test (crates/post/tests/
+# collide_oracle.rs) and the slicing test (crates/plan/tests/slice_oracle.rs): a
+# project-local virtual environment in .tools/py with pinned trimesh, numpy, scipy
+# (trimesh's proximity queries use its k-d tree), rtree (trimesh's triangle index for
+# ray and proximity queries), networkx and shapely (trimesh's sections as closed paths).
 # No system install. Safe to run again; prints the interpreter's path.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 dest="$here/.tools/py"
 py="$dest/bin/python"
-pins=(numpy==2.4.6 scipy==1.17.1 trimesh==5.2.0 rtree==1.4.1)
+pins=(numpy==2.4.6 scipy==1.17.1 trimesh==5.2.0 rtree==1.4.1 networkx==3.6.1 shapely==2.2.0)
 if [ ! -x "$py" ]; then
   rm -rf "$dest"
   python3 -m venv "$dest"
@@ -19,7 +20,7 @@ from importlib.metadata import version
 for pin in sys.argv[1:]:
     name, want = pin.split("==")
     assert version(name) == want, pin
-import numpy, scipy, trimesh, rtree  # noqa: F401
+import numpy, scipy, trimesh, rtree, networkx, shapely  # noqa: F401
 PY
 then
   "$py" -m pip install --quiet --disable-pip-version-check "${pins[@]}"

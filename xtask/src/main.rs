@@ -7,6 +7,9 @@
 //! - `cargo xtask bench kin`: IK + FK pairs per second on both built-in machines.
 //! - `cargo xtask bench post`: `lampost post` on a generated 1,000,000-line program
 //!   against `lampost fmt` and a numpy script (`xtask/post_baseline.py`), same run.
+//! - `cargo xtask bench plan`: slicing a 75k-triangle mesh at 0.1 mm layers against
+//!   trimesh's `section_multiplane` (same run), and a 1M-triangle mesh at 1,000 layers
+//!   (`plan.rs`).
 //! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
 //!   the calibration table (`cargo xtask calibration` alone).
 //! - `cargo xtask fuzz [--target T] [--seconds N] …`: every reader fuzzed in a child
@@ -326,6 +329,7 @@ fn accuracy() -> Result<(), String> {
 }
 
 mod fuzz;
+mod plan;
 
 /// The manual pages, from the command line's definition, into `target/man`.
 fn man() -> Result<(), String> {
@@ -342,12 +346,13 @@ fn main() -> ExitCode {
         ["bench", "gcode"] => bench_gcode(),
         ["bench", "kin"] => bench_kin(),
         ["bench", "post"] => bench_post(),
+        ["bench", "plan"] => plan::bench(&root()),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),
         ["calibration"] => calibration(200),
         ["man"] => man(),
         ["fuzz", rest @ ..] => fuzz::Config::parse(rest).and_then(|c| fuzz::run(&root(), &c)),
-        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
+        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,6 +8,7 @@
 //! - `lampost-kinematics`: the machines for levelling;
 //! - `lampost-gcode`: the FADAL emitter for probing programs;
 //! - `parry3d-f64`: closest points on a triangle mesh (BVH) for registration, in f64;
+//! - `lampost-mesh`: the CAD mesh registration aligns to;
 //! - `serde`: fit results serialise to JSON for `lampost fit --json`;
 //! - `thiserror`: the typed [`AlignError`].
 
@@ -15,7 +16,6 @@ pub mod calib;
 pub mod error;
 pub mod fit;
 pub mod machine_file;
-pub mod mesh;
 pub mod probe;
 pub mod register;
 pub mod setup;

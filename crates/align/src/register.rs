@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::error::AlignError;
 use crate::fit::{check_points, P3};
-use crate::mesh::Mesh;
+use lampost_mesh::Mesh;
 
 /// Degrees of freedom held fixed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -296,7 +296,7 @@ pub fn register(mesh: &Mesh, points: &[P3], locks: Locks) -> Result<Registration
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::box_mesh;
+    use lampost_mesh::box_mesh;
 
     fn moved(points: &[P3], axis: P3, deg: f64, t: P3) -> Vec<P3> {
         let r = Rotation3::from_axis_angle(&Unit::new_normalize(axis), deg.to_radians());

@@ -1,8 +1,8 @@
 //! The mesh and point fixtures in `fixtures/` are what this code writes: regenerate them
 //! with `LAMPOST_WRITE_FIXTURES=1 cargo test -p lampost-align --test fixtures`.
 
-use lampost_align::mesh::{box_mesh, read_stl, write_ascii_stl};
 use lampost_align::P3;
+use lampost_mesh::{box_mesh, read_stl, write_ascii_stl};
 
 fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")

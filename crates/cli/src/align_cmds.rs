@@ -616,7 +616,7 @@ pub fn register(
 ) -> Result<(), CliError> {
     let (name, pts) = read_points(file)?;
     let mesh = read_mesh(mesh_path)?;
-    let report = lampost_align::mesh::manifold_report(&mesh);
+    let report = lampost_mesh::manifold_report(&mesh);
     let mut warnings = Vec::new();
     if !report.closed() {
         let w = format!(
@@ -685,16 +685,7 @@ pub fn register(
     }
 }
 
-/// An STL file (ASCII or binary) as a mesh, with located errors.
-pub fn read_mesh(path: &str) -> Result<lampost_align::mesh::Mesh, CliError> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        CliError::usage(format!(
-            "error: cannot read {path}: {e}\n  = help: give an STL file (ASCII or binary)\n"
-        ))
-    })?;
-    lampost_align::mesh::read_stl(&bytes).map_err(|e| {
-        CliError::failed(format!(
-            "error: {path}: {e}\n  = help: export the part as an STL (ASCII or binary)\n"
-        ))
-    })
+/// A mesh file (STL, OBJ or OFF) as a mesh, with located errors.
+pub fn read_mesh(path: &str) -> Result<lampost_mesh::Mesh, CliError> {
+    crate::mesh_cmds::read_mesh_file(path)
 }

@@ -11,6 +11,7 @@ mod inspect_cmds;
 mod io;
 mod json;
 mod kin_cmds;
+mod mesh_cmds;
 mod points;
 mod post_cmds;
 mod posted;
@@ -507,9 +508,40 @@ enum InspectCmd {
 }
 
 #[derive(Subcommand, Debug)]
+enum MeshCmd {
+    /// Triangles, welded vertices, bounds, area, volume, and the bad edges of the manifold report.
+    Info {
+        /// The mesh (STL, OBJ or OFF).
+        file: String,
+        /// The file's units (default mm); the figures are in mm.
+        #[arg(long, value_enum)]
+        units: Option<mesh_cmds::MeshUnits>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum PlanCmd {
+    /// Slice a mesh into closed oriented loops: planes normal to a build direction, or a fan about an axis.
+    Slice(mesh_cmds::SliceArgs),
+}
+
+#[derive(Subcommand, Debug)]
 // Parsed once per run: the size of the largest subcommand's options costs nothing.
 #[allow(clippy::large_enum_variant)]
 enum Command {
+    /// Triangle meshes (STL, OBJ, OFF): measures and the closed-manifold report.
+    Mesh {
+        #[command(subcommand)]
+        cmd: MeshCmd,
+    },
+    /// Deposition planning from a solid mesh (paper 001): slicing.
+    Plan {
+        #[command(subcommand)]
+        cmd: PlanCmd,
+    },
     /// Post a planar toolpath into a 5-axis deposition or machining program.
     Post {
         /// The planar program (or - for standard input); not with --job.
@@ -984,6 +1016,12 @@ fn run(cli: Cli) -> Result<(), CliError> {
             noise,
             json,
         } => align_cmds::fit(kind, &file, radius, ball_radius, noise, json),
+        Command::Mesh {
+            cmd: MeshCmd::Info { file, units, json },
+        } => mesh_cmds::info(&file, units, json),
+        Command::Plan {
+            cmd: PlanCmd::Slice(a),
+        } => mesh_cmds::slice(&a),
         Command::Machines { cmd: None } => kin_cmds::machines(None),
         Command::Machines {
             cmd: Some(MachinesCmd::Show { name }),

@@ -5,8 +5,10 @@ mod common;
 use common::*;
 
 /// Every subcommand users type, as the completion scripts and pages must know them.
-const SUBCOMMANDS: [&str; 12] = [
+const SUBCOMMANDS: [&str; 14] = [
     "post",
+    "mesh",
+    "plan",
     "verify",
     "check",
     "fmt",

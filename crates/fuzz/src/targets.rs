@@ -6,11 +6,12 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use lampost_align::{calib, fit, mesh, probe, register, setup, P3};
+use lampost_align::{calib, fit, probe, register, setup, P3};
 use lampost_gcode::{
     parse_line, Dialect, EWord, EmitOptions, Emitter, Event, Flavor, LineReader, Options, Order,
     ProgramReader, Stream, Units,
 };
+use lampost_mesh as mesh;
 
 /// Every resolved flavour (`auto` is resolved before a program is read).
 const FLAVORS: [Flavor; 7] = [
@@ -214,6 +215,24 @@ const LOG_TOKENS: &[&str] = &[
     "Yinf",
     "\u{e9}",
     "\0",
+];
+
+const MESH_TOKENS: &[&str] = &[
+    "OFF",
+    "OFF 3 1 0",
+    "3 0 1 2",
+    "4 0 1 2 3",
+    "v 0 0 0",
+    "v nan 1 2",
+    "f 1 2 3",
+    "f -1 -2 -3",
+    "f 1/1/1 2//2 3",
+    "f 0 1 2",
+    "99999999999",
+    "-1",
+    "#",
+    "\n",
+    " ",
 ];
 
 const STL_TOKENS: &[&str] = &[
@@ -888,7 +907,46 @@ impl Ctx {
 
     fn stl(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
         input.clear();
-        match r.below(3) {
+        match r.below(5) {
+            3 | 4 => {
+                // OBJ and OFF: a generated box or sphere, written in the format, mutated.
+                let c = P3::new(
+                    r.mostly(-5.0, 5.0),
+                    r.mostly(-5.0, 5.0),
+                    r.mostly(-5.0, 5.0),
+                );
+                let m = if r.coin() {
+                    mesh::box_mesh(
+                        c,
+                        c + P3::new(r.mostly(0.0, 5.0), r.mostly(0.0, 5.0), r.mostly(0.0, 5.0)),
+                    )
+                } else {
+                    mesh::uv_sphere(
+                        c,
+                        r.mostly(0.0, 5.0),
+                        2 + r.below(6) as u32,
+                        3 + r.below(8) as u32,
+                    )
+                };
+                let text = mesh::write_off(&m);
+                if r.coin() {
+                    *note = "OFF generated".into();
+                    input.extend_from_slice(text.as_bytes());
+                } else {
+                    *note = "OBJ generated".into();
+                    for v in &m.vertices {
+                        input.extend_from_slice(format!("v {} {} {}\n", v.x, v.y, v.z).as_bytes());
+                    }
+                    for t in &m.triangles {
+                        input.extend_from_slice(
+                            format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1).as_bytes(),
+                        );
+                    }
+                }
+                if r.coin() {
+                    mutate(r, input, MESH_TOKENS);
+                }
+            }
             0 if !self.stl.is_empty() => {
                 *note = "ASCII STL fixture, mutated".into();
                 input.extend_from_slice(r.pick_bytes(&self.stl));
@@ -948,19 +1006,19 @@ impl Ctx {
             }
         }
         self.made(input, note);
+        // Every reader on every input; each mesh read is checked and sliced.
+        for (name, m) in [
+            ("read_obj", mesh::read_obj(input)),
+            ("read_off", mesh::read_off(input)),
+        ] {
+            if let Ok(m) = m {
+                check_mesh(name, &m)?;
+            }
+        }
         let Ok(m) = mesh::read_stl(input) else {
             return Ok(());
         };
-        if m.vertices.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
-            return Err("read_stl: a non-finite vertex".into());
-        }
-        if m.triangles
-            .iter()
-            .any(|t| t.iter().any(|&i| i as usize >= m.vertices.len()))
-        {
-            return Err("read_stl: a triangle names a vertex that is not there".into());
-        }
-        let _ = mesh::manifold_report(&m);
+        check_mesh("read_stl", &m)?;
         // The post's part mesh (--part) built from it.
         if let Ok(part) = lampost_post::collide::PartMesh::from_mesh(&m) {
             let (lo, hi) = part.bounds();
@@ -972,6 +1030,55 @@ impl Ctx {
         }
         Ok(())
     }
+}
+
+/// A mesh a reader returned: finite vertices, indices in range; its report and slices at
+/// a few layer counts, every number in them finite.
+fn check_mesh(name: &str, m: &mesh::Mesh) -> Result<(), String> {
+    if m.vertices.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
+        return Err(format!("{name}: a non-finite vertex"));
+    }
+    if m.triangles
+        .iter()
+        .any(|t| t.iter().any(|&i| i as usize >= m.vertices.len()))
+    {
+        return Err(format!(
+            "{name}: a triangle names a vertex that is not there"
+        ));
+    }
+    let _ = mesh::manifold_report(m);
+    let Some((lo, hi)) = mesh::props::bounds(m) else {
+        return Ok(());
+    };
+    for layers in [1.0, 3.0, 17.0] {
+        let layer = (hi.z - lo.z) / layers;
+        let opts = lampost_plan::SliceOptions {
+            planes: lampost_plan::Planes::Parallel {
+                dir: P3::new(0.0, 0.0, 1.0),
+                layer,
+                first: None,
+            },
+            stitch: None,
+            threads: 1,
+        };
+        if let Ok(s) = lampost_plan::slice(m, &opts) {
+            for sl in &s.slices {
+                for l in &sl.loops {
+                    if !(l.area.is_finite() && l.length.is_finite())
+                        || l.points.iter().any(|p| !p.iter().all(|x| x.is_finite()))
+                        || l.faces.len() != l.points.len()
+                        || l.faces.iter().any(|&f| f as usize >= m.triangles.len())
+                    {
+                        return Err(format!(
+                            "{name}: slice layer {}: a bad loop {l:?}",
+                            sl.index
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A posted text for a finding's note (its first 64 KiB).

@@ -37,7 +37,7 @@
 
 use std::collections::HashMap;
 
-use lampost_align::mesh::{manifold_report, ManifoldReport, Mesh};
+use lampost_mesh::{manifold_report, ManifoldReport, Mesh};
 use nalgebra::{Matrix3, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector as PV};
 use parry3d_f64::partitioning::BvhNode;
@@ -234,7 +234,7 @@ impl PartMesh {
         })
     }
 
-    /// A part mesh from a mesh read by `lampost_align::mesh::read_stl` (already in the part
+    /// A part mesh from a mesh read by `lampost_mesh::read_stl` (already in the part
     /// frame; see [`PartMesh::placed`]).
     pub fn from_mesh(mesh: &Mesh) -> Result<PartMesh, CollideError> {
         PartMesh::new(mesh.vertices.clone(), mesh.triangles.clone())
@@ -311,9 +311,9 @@ impl PartMesh {
     }
 
     /// How far the mesh is from a closed manifold (after welding equal vertices), as
-    /// `lampost_align` reports it: the caller warns on an open or non-manifold mesh.
-    pub fn manifold(&self) -> ManifoldReport {
-        self.report
+    /// `lampost_mesh` reports it: the caller warns on an open or non-manifold mesh.
+    pub fn manifold(&self) -> &ManifoldReport {
+        &self.report
     }
 
     /// True when every edge is shared by an even number of triangles, so the mesh bounds
@@ -897,7 +897,7 @@ fn flat(pts: &[Vector3<f64>], scale: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lampost_align::mesh::box_mesh;
+    use lampost_mesh::box_mesh;
 
     fn v(x: f64, y: f64, z: f64) -> Vector3<f64> {
         Vector3::new(x, y, z)

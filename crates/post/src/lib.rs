@@ -18,7 +18,8 @@
 //!
 //! ## Why these dependencies
 //! - `lampost-gcode`, `lampost-kinematics`: reading programs, writing them, the machines;
-//! - `lampost-align`: the setup file format `lampost align` writes, and its STL meshes;
+//! - `lampost-align`: the setup file format `lampost align` writes;
+//! - `lampost-mesh`: the part mesh (STL) and its manifold report;
 //! - `parry3d-f64`: the part mesh's collision queries;
 //! - `toml`: setup and job files; `nalgebra`: frames; `thiserror`: [`PostError`].
 

@@ -17,7 +17,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use lampost_align::mesh::{read_stl, write_ascii_stl, Mesh};
+use lampost_mesh::{read_stl, write_ascii_stl, Mesh};
 use lampost_post::collide::PartMesh;
 use nalgebra::Vector3;
 
