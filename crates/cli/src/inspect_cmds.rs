@@ -60,13 +60,46 @@ fn write_file(path: Option<&str>, text: &str) -> Result<(), CliError> {
     o.commit()
 }
 
+/// Where the sampling points come from.
+#[derive(Debug)]
+pub struct Sampling {
+    /// A point file with normals.
+    pub points: Option<String>,
+    /// Or a mesh to sample.
+    pub mesh: Option<String>,
+    /// Spacing of the samples on the mesh.
+    pub spacing: Option<f64>,
+    /// The mesh file's units.
+    pub mesh_units: Option<crate::mesh_cmds::MeshUnits>,
+}
+
+/// A mesh file in the machine's units (`units`: the file's, default the machine's).
+fn mesh_in(
+    m: &Machine,
+    path: &str,
+    units: Option<crate::mesh_cmds::MeshUnits>,
+) -> Result<lampost_mesh::Mesh, CliError> {
+    use crate::mesh_cmds::MeshUnits;
+    let mesh = crate::mesh_cmds::read_mesh_file(path)?;
+    let factor = match (units, m.units) {
+        (Some(MeshUnits::Mm), lampost_kinematics::Units::Inch) => 1.0 / 25.4,
+        (Some(MeshUnits::In), lampost_kinematics::Units::Mm) => 25.4,
+        _ => 1.0,
+    };
+    Ok(if factor == 1.0 {
+        mesh
+    } else {
+        mesh.scaled(factor)
+    })
+}
+
 /// `inspect plan`.
 #[allow(clippy::too_many_arguments)]
 pub fn plan_cmd(
     machine: &str,
     sets: &[String],
     head: Option<&str>,
-    points: &str,
+    sampling: &Sampling,
     max_tilt: Option<f64>,
     output: Option<&str>,
     program_out: Option<&str>,
@@ -79,21 +112,37 @@ pub fn plan_cmd(
         Some(r) => plan::Probe::Touch { stylus: r },
         None => plan::Probe::Sensor,
     };
-    let (name, text) = read(points)?;
-    let pts = parse_points(&text, &name)?;
-    let mut targets = Vec::with_capacity(pts.len());
-    for (k, p) in pts.iter().enumerate() {
-        let Some(n) = p.normal else {
-            return Err(CliError::failed(format!(
-                "error: {name} has no normal columns\n  = help: start the file with a header naming the columns: x y z i j k (the outward surface normal), optionally with an id\n"
-            )));
-        };
-        targets.push(Target {
-            id: format!("p{}", k + 1),
-            point: p.p,
-            normal: n,
-        });
-    }
+    let (name, text, targets) = match (&sampling.points, &sampling.mesh) {
+        (Some(points), _) => {
+            let (name, text) = read(points)?;
+            let pts = parse_points(&text, &name)?;
+            let mut targets = Vec::with_capacity(pts.len());
+            for (k, p) in pts.iter().enumerate() {
+                let Some(n) = p.normal else {
+                    return Err(CliError::failed(format!(
+                        "error: {name} has no normal columns\n  = help: start the file with a header naming the columns: x y z i j k (the outward surface normal), optionally with an id\n"
+                    )));
+                };
+                targets.push(Target {
+                    id: format!("p{}", k + 1),
+                    point: p.p,
+                    normal: n,
+                });
+            }
+            (name, text, targets)
+        }
+        (None, Some(mesh)) => {
+            let part = mesh_in(&m, mesh, sampling.mesh_units)?;
+            let targets = lampost_inspect::surface::sample(&part, sampling.spacing.unwrap_or(0.0))
+                .map_err(|e| error(mesh, "", e))?;
+            (display_name(mesh), String::new(), targets)
+        }
+        (None, None) => {
+            return Err(CliError::usage(
+                "error: give --points FILE or --mesh PART --spacing S\n".to_string(),
+            ))
+        }
+    };
     let plan = plan::plan(&m, h, probe, &targets, max_tilt).map_err(|e| error(&name, &text, e))?;
     if !plan.unreachable.is_empty() {
         let list: Vec<String> = plan.unreachable.iter().map(|e| format!("  {e}")).collect();
@@ -265,8 +314,64 @@ pub fn reduce_cmd(
     Ok(())
 }
 
+/// `inspect simulate`.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_cmd(
+    machine: &str,
+    sets: &[String],
+    head: Option<&str>,
+    plan_file: &str,
+    mesh: &str,
+    mesh_units: Option<crate::mesh_cmds::MeshUnits>,
+    noise: f64,
+    seed: u64,
+    output: Option<&str>,
+) -> Result<(), CliError> {
+    let m = load_machine(machine, sets)?;
+    let (pname, ptext) = read(plan_file)?;
+    let h = sensor_head(&m, head, false)?;
+    let (probe, rows) = plan::read_text(&m, h, &ptext).map_err(|e| error(&pname, &ptext, e))?;
+    if probe != plan::Probe::Sensor {
+        return Err(CliError::failed(format!(
+            "error: {pname} is a touch-probe plan; the simulator reads with a displacement sensor\n"
+        )));
+    }
+    let actual = mesh_in(&m, mesh, mesh_units)?;
+    let got = lampost_inspect::surface::simulate(
+        &m,
+        h,
+        &rows,
+        &actual,
+        lampost_inspect::surface::SimOptions { noise, seed },
+    )
+    .map_err(|e| error(mesh, "", e))?;
+    let mut s = format!(
+        "# simulated by lampost inspect simulate: plan {pname}, actual {}, noise {noise}, seed {seed}\n",
+        display_name(mesh)
+    );
+    let mut none = 0;
+    for (id, r) in &got {
+        match r {
+            reduce::Reading::Value(v) => s.push_str(&format!("{id} {v:.9}\n")),
+            reduce::Reading::None(_) => {
+                none += 1;
+                s.push_str(&format!("{id} none\n"));
+            }
+        }
+    }
+    write_file(output, &s)?;
+    eprintln!("simulated {} readings ({none} with no reading)", got.len());
+    Ok(())
+}
+
 /// `inspect compare`: deviations of a reduced file, with statistics.
-pub fn compare_cmd(measured: &str, tol: Option<f64>, json_out: bool) -> Result<(), CliError> {
+pub fn compare_cmd(
+    measured: &str,
+    mesh: Option<&str>,
+    mesh_units: Option<crate::mesh_cmds::MeshUnits>,
+    tol: Option<f64>,
+    json_out: bool,
+) -> Result<(), CliError> {
     if let Some(t) = tol {
         if !(t.is_finite() && t > 0.0) {
             return Err(CliError::usage(format!(
@@ -279,6 +384,7 @@ pub fn compare_cmd(measured: &str, tol: Option<f64>, json_out: bool) -> Result<(
     let mut rows: Vec<Obj> = Vec::new();
     let mut header = false;
     let mut flagged = 0usize;
+    let mut measured_pts: Vec<[f64; 3]> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let t = raw.trim();
         if t.is_empty() || t.starts_with('#') {
@@ -318,6 +424,10 @@ pub fn compare_cmd(measured: &str, tol: Option<f64>, json_out: bool) -> Result<(
                 ))
             })?;
         devs.push(d);
+        let q: Vec<f64> = f[7..10].iter().filter_map(|x| x.parse().ok()).collect();
+        if q.len() == 3 {
+            measured_pts.push([q[0], q[1], q[2]]);
+        }
         rows.push(obj! {"id": f[0], "deviation": d, "within_tol": tol.map(|t| d.abs() <= t)});
     }
     let Some(s) = compare::stats(&devs, tol) else {
@@ -325,11 +435,32 @@ pub fn compare_cmd(measured: &str, tol: Option<f64>, json_out: bool) -> Result<(
             "error: {name} has no measured point\n  = help: every row is flagged (see its status column)\n"
         )));
     };
+    // Distances to the CAD mesh, signed where it is a closed solid.
+    let mesh_stats = match mesh {
+        Some(path) => {
+            let mut part = crate::mesh_cmds::read_mesh_file(path)?;
+            if let Some(crate::mesh_cmds::MeshUnits::In) = mesh_units {
+                part = part.scaled(25.4);
+            }
+            let (d, signed) = lampost_inspect::surface::distances(&part, &measured_pts)
+                .map_err(|e| error(path, "", e))?;
+            if !signed {
+                eprintln!("warning: {path} is not a closed, consistently oriented solid: its distances are unsigned");
+            }
+            for (row, x) in rows.iter_mut().zip(&d) {
+                row.set("mesh_distance", x);
+            }
+            compare::stats(&d, tol).map(|st| (st, signed))
+        }
+        None => None,
+    };
     let text = if json_out {
-        format!(
-            "{}\n",
-            json::to_string(&obj! {"stats": s, "flagged": flagged, "points": rows})?
-        )
+        let mut o = obj! {"stats": s, "flagged": flagged, "points": rows};
+        if let Some((ms, signed)) = &mesh_stats {
+            o.set("mesh_stats", ms);
+            o.set("mesh_signed", signed);
+        }
+        format!("{}\n", json::to_string(&o)?)
     } else {
         let mut t = format!(
             "n {}\nmean {:.6}\nsd {:.6}\nrms {:.6}\nmin {:.6}\nmax {:.6}\np05 {:.6}\np50 {:.6}\np95 {:.6}\n",
@@ -340,6 +471,16 @@ pub fn compare_cmd(measured: &str, tol: Option<f64>, json_out: bool) -> Result<(
         }
         if flagged > 0 {
             t.push_str(&format!("flagged (not counted): {flagged}\n"));
+        }
+        if let Some((ms, signed)) = &mesh_stats {
+            t.push_str(&format!(
+                "distance to the mesh ({}): mean {:.6} sd {:.6} min {:.6} max {:.6}\n",
+                if *signed { "signed" } else { "unsigned" },
+                ms.mean,
+                ms.sd,
+                ms.min,
+                ms.max
+            ));
         }
         t
     };

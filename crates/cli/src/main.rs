@@ -453,8 +453,17 @@ enum InspectCmd {
         #[arg(long)]
         head: Option<String>,
         /// Sampling points with their outward normals: a point file with a header naming x y z i j k.
+        #[arg(long, required_unless_present = "mesh", conflicts_with = "mesh")]
+        points: Option<String>,
+        /// Or sample the CAD mesh (STL, OBJ, OFF; in the machine's units unless --mesh-units) about --spacing apart, with its face normals.
+        #[arg(long, requires = "spacing")]
+        mesh: Option<String>,
+        /// Distance between sampling points on the mesh.
         #[arg(long)]
-        points: String,
+        spacing: Option<f64>,
+        /// The mesh file's units (default: the machine's).
+        #[arg(long, value_enum)]
+        mesh_units: Option<mesh_cmds::MeshUnits>,
         /// Largest tilt of the beam from a normal, degrees (at most the sensor's).
         #[arg(long)]
         max_tilt: Option<f64>,
@@ -494,10 +503,46 @@ enum InspectCmd {
         #[arg(long)]
         json: bool,
     },
+    /// What the plan's sensor would read on an "actual" mesh: the beam cast over its range, a tilt-dependent bias, Gaussian noise (seeded), no reading beyond the range; a log `inspect reduce` reads.
+    Simulate {
+        /// The plan file `inspect plan` wrote.
+        #[arg(long)]
+        plan: String,
+        /// The actual part (STL, OBJ, OFF; the machine's units unless --mesh-units).
+        #[arg(long)]
+        mesh: String,
+        /// The mesh file's units (default: the machine's).
+        #[arg(long, value_enum)]
+        mesh_units: Option<mesh_cmds::MeshUnits>,
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// The sensor head (default: the first head with a sensor).
+        #[arg(long)]
+        head: Option<String>,
+        /// Standard deviation of the reading noise.
+        #[arg(long, default_value_t = 0.0)]
+        noise: f64,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// The log (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+    },
     /// Deviation statistics of a reduced file (mean, sd, rms, min, max, percentiles, share within ±tol).
     Compare {
         /// The file `inspect reduce` wrote.
         measured: String,
+        /// The nominal CAD mesh: each measured point's signed distance to it too (unsigned where the mesh is open).
+        #[arg(long)]
+        mesh: Option<String>,
+        /// The mesh file's units, when not the measured file's machine's.
+        #[arg(long, value_enum)]
+        mesh_units: Option<mesh_cmds::MeshUnits>,
         /// Tolerance ± (same unit).
         #[arg(long)]
         tol: Option<f64>,
@@ -756,6 +801,9 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     set,
                     head,
                     points,
+                    mesh,
+                    spacing,
+                    mesh_units,
                     max_tilt,
                     skip_unreachable,
                     stylus_radius,
@@ -766,7 +814,12 @@ fn run(cli: Cli) -> Result<(), CliError> {
             &machine,
             &set,
             head.as_deref(),
-            &points,
+            &inspect_cmds::Sampling {
+                points,
+                mesh,
+                spacing,
+                mesh_units,
+            },
             max_tilt,
             output.as_deref(),
             program.as_deref(),
@@ -795,12 +848,38 @@ fn run(cli: Cli) -> Result<(), CliError> {
         ),
         Command::Inspect {
             cmd:
+                InspectCmd::Simulate {
+                    plan,
+                    mesh,
+                    mesh_units,
+                    machine,
+                    set,
+                    head,
+                    noise,
+                    seed,
+                    output,
+                },
+        } => inspect_cmds::simulate_cmd(
+            &machine,
+            &set,
+            head.as_deref(),
+            &plan,
+            &mesh,
+            mesh_units,
+            noise,
+            seed,
+            output.as_deref(),
+        ),
+        Command::Inspect {
+            cmd:
                 InspectCmd::Compare {
                     measured,
+                    mesh,
+                    mesh_units,
                     tol,
                     json,
                 },
-        } => inspect_cmds::compare_cmd(&measured, tol, json),
+        } => inspect_cmds::compare_cmd(&measured, mesh.as_deref(), mesh_units, tol, json),
         Command::Preview {
             posted,
             machine,

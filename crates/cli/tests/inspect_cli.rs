@@ -569,3 +569,126 @@ fn touch_probe_inspection_on_the_fadal() {
     assert!(!o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("short.log:"), "{}", stderr(&o));
 }
+
+/// From a CAD mesh: sample it, simulate the sensor on an "actual" mesh (grown by 0.1 and
+/// moved by (0.05, 0, 0.02)), reduce and compare with the CAD mesh: the deviations are the
+/// growth plus the move along each normal; the simulator's readings are exact without
+/// noise and scatter by the noise asked for with it.
+#[test]
+fn from_a_mesh_simulated_and_compared() {
+    let dir = tempdir("inspect-mesh");
+    let write = |name: &str, mesh: &lampost_mesh::Mesh| {
+        let p = dir.join(name);
+        std::fs::write(&p, lampost_mesh::write_ascii_stl(mesh, name)).expect("stl");
+        p
+    };
+    let c = lampost_mesh::P3::new(0.0, 0.0, -10.0);
+    let nominal = write("nominal.stl", &lampost_mesh::uv_sphere(c, 20.0, 24, 48));
+    let moved = c + lampost_mesh::P3::new(0.05, 0.0, 0.02);
+    let actual = write("actual.stl", &lampost_mesh::uv_sphere(moved, 20.1, 24, 48));
+    let plan = dir.join("s.plan");
+    let o = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--mesh",
+        nominal.to_str().expect("utf8"),
+        "--spacing",
+        "8",
+        "--skip-unreachable",
+        "-o",
+        plan.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let n_rows = rows(&std::fs::read_to_string(&plan).expect("plan")).len();
+    assert!(n_rows > 100, "{n_rows} rows");
+    let sim = |noise: &str, out: &std::path::Path| {
+        ok(&lampost(&[
+            "inspect",
+            "simulate",
+            "--machine",
+            "nrc-lc",
+            "--plan",
+            plan.to_str().expect("utf8"),
+            "--mesh",
+            actual.to_str().expect("utf8"),
+            "--noise",
+            noise,
+            "--seed",
+            "7",
+            "-o",
+            out.to_str().expect("utf8"),
+        ]))
+    };
+    let (exact_log, noisy_log) = (dir.join("exact.log"), dir.join("noisy.log"));
+    sim("0", &exact_log);
+    sim("0.002", &noisy_log);
+    let reduce = |log: &std::path::Path, out: &std::path::Path| {
+        ok(&lampost(&[
+            "inspect",
+            "reduce",
+            "--machine",
+            "nrc-lc",
+            "--plan",
+            plan.to_str().expect("utf8"),
+            log.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ]))
+    };
+    let (exact, noisy) = (dir.join("exact.m"), dir.join("noisy.m"));
+    reduce(&exact_log, &exact);
+    reduce(&noisy_log, &noisy);
+    let compare = |m: &std::path::Path, mesh: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&ok(&lampost(&[
+            "inspect",
+            "compare",
+            m.to_str().expect("utf8"),
+            "--mesh",
+            mesh.to_str().expect("utf8"),
+            "--json",
+        ])))
+        .expect("json")
+    };
+    // Without noise every measured point is on the actual mesh, or inside it by the
+    // sensor's tilt bias exactly (0.15 % or 0.5 % of its 5 mm range where the beam meets
+    // a facet tilted 5–15° or 15–30° from it, near the facets' edges).
+    let on_actual = compare(&exact, &actual);
+    assert_eq!(on_actual["mesh_signed"], true);
+    let mut biased = 0;
+    for p in on_actual["points"].as_array().expect("points") {
+        let d = p["mesh_distance"].as_f64().expect("d");
+        // The bias runs along the beam: off a facet tilted by θ it is b·cos θ.
+        let within = |b: f64, lo_deg: f64, hi_deg: f64| {
+            d <= -b * hi_deg.to_radians().cos() + 1e-9 && d >= -b * lo_deg.to_radians().cos() - 1e-9
+        };
+        let ok = d.abs() < 1e-8 || within(0.0075, 5.0, 15.0) || within(0.025, 15.0, 30.0);
+        assert!(ok, "{p}");
+        biased += usize::from(d.abs() > 1e-8);
+    }
+    let total = on_actual["points"].as_array().expect("points").len();
+    assert!(biased * 2 < total, "{biased} of {total} biased");
+    // Against the nominal mesh: the growth plus the move along the normal, within the
+    // facets' chordal error (a 24 × 48 sphere of radius 20: under 0.2).
+    let v = compare(&exact, &nominal);
+    let dev = &v["stats"];
+    assert!(
+        (dev["mean"].as_f64().expect("mean") - 0.1).abs() < 0.06,
+        "{dev}"
+    );
+    for p in v["points"].as_array().expect("points") {
+        let (d, m) = (
+            p["deviation"].as_f64().expect("d"),
+            p["mesh_distance"].as_f64().expect("m"),
+        );
+        assert!((d - m).abs() < 0.2, "{p}");
+    }
+    // With noise σ = 0.002: the same mean, the scatter of the noise (and the facets).
+    let w = compare(&noisy, &nominal);
+    let (m0, m1) = (
+        dev["mean"].as_f64().expect("m"),
+        w["stats"]["mean"].as_f64().expect("m"),
+    );
+    assert!((m0 - m1).abs() < 0.002, "{m0} vs {m1}");
+}

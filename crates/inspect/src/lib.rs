@@ -30,6 +30,7 @@ pub mod error;
 pub mod plan;
 pub mod program;
 pub mod reduce;
+pub mod surface;
 
 pub use error::InspectError;
 pub use plan::{Plan, PlanRow, Target};
