@@ -27,7 +27,7 @@ pub fn sample(mesh: &Mesh, spacing: f64) -> Result<Vec<Target>, InspectError> {
     for (f, t) in mesh.triangles.iter().enumerate() {
         let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
         let n = (b - a).cross(&(c - a));
-        if !(n.norm() > 0.0) {
+        if n.norm() == 0.0 || !n.norm().is_finite() {
             continue;
         }
         let n = n / n.norm();
