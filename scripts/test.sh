@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The project's test command (README, .ci/run): installs LinuxCNC's rs274 for the
-# comparison tests and a Python venv with trimesh for the collision oracle, then runs
+# comparison tests, a Python venv with trimesh for the collision oracle and one with the
+# Robotics Toolbox for the robot oracle (.tools/py-rtb), then runs
 # every test of the workspace. rs274 is required here, so
 # the comparison can never be skipped silently.
 set -euo pipefail
@@ -10,4 +11,5 @@ exec </dev/null
 cd "$(dirname "$0")/.."
 ./scripts/install-rs274.sh
 ./scripts/install-python.sh
+./scripts/install-robotics.sh
 LAMPOST_REQUIRE_RS274=1 LAMPOST_REQUIRE_PY=1 cargo test --workspace --locked
