@@ -261,13 +261,15 @@ pub fn machines(show: Option<&str>) -> Result<(), CliError> {
             write_out(&mut out, &s)?;
         }
         Some(name) => {
-            let text = def::builtin_text(name).or_else(|| lampost_robot::def::builtin_text(name)).ok_or_else(|| {
-                let names = builtin_names();
-                CliError::usage(format!(
+            let text = def::builtin_text(name)
+                .or_else(|| lampost_robot::def::builtin_text(name))
+                .ok_or_else(|| {
+                    let names = builtin_names();
+                    CliError::usage(format!(
                     "error: no built-in machine named {name}\n  = help: built-in machines: {}\n",
                     names.join(", ")
                 ))
-            })?;
+                })?;
             write_out(&mut out, text)?;
         }
     }

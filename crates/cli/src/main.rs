@@ -406,6 +406,8 @@ enum ProbeCmd {
     },
 }
 
+// Parsed once per run: the size of the largest variant costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Post a planar toolpath into a 5-axis deposition or machining program.
@@ -615,7 +617,8 @@ fn run(cli: Cli) -> Result<(), CliError> {
             }
             if input.is_some() {
                 return Err(CliError::usage(
-                    "error: --input is for arm output; for a program give INPUT POSTED\n".to_string(),
+                    "error: --input is for arm output; for a program give INPUT POSTED\n"
+                        .to_string(),
                 ));
             }
             let (input, posted) = match files.as_slice() {

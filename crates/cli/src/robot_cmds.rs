@@ -79,7 +79,10 @@ fn refuse_placement(pl: &Placement) -> Result<(), CliError> {
         (pl.setup.is_some(), "--setup"),
         (pl.job.is_some(), "--job"),
         (pl.origin.is_some(), "--origin"),
-        (pl.layer_axis.is_some() || pl.layer_angle.is_some(), "--layer-axis/--layer-angle"),
+        (
+            pl.layer_axis.is_some() || pl.layer_angle.is_some(),
+            "--layer-axis/--layer-angle",
+        ),
         (pl.near.is_some(), "--near"),
         (pl.stock.is_some(), "--stock"),
         (pl.part.is_some(), "--part"),
@@ -197,8 +200,11 @@ pub fn post(
         });
     }
     // Verify what is about to be written, as `lampost verify` reads it.
-    let rep = chunk::verify(arm, &samples, cfg, &files, arm.tolerance)
-        .map_err(|e| CliError::failed(format!("error: {e}\n  = help: this is a lampost fault; nothing was written\n")))?;
+    let rep = chunk::verify(arm, &samples, cfg, &files, arm.tolerance).map_err(|e| {
+        CliError::failed(format!(
+            "error: {e}\n  = help: this is a lampost fault; nothing was written\n"
+        ))
+    })?;
     let seconds: f64 = samples.iter().map(|s| s.dt).sum();
     let laser_s: f64 = samples.iter().filter(|s| s.deposit).map(|s| s.dt).sum();
     let chunks: Vec<Obj> = files
@@ -228,9 +234,8 @@ pub fn post(
     let manifest = json::to_string(&manifest)?;
     // Nothing is written until everything is planned and verified; then every file is
     // staged beside its target and renamed into place together.
-    std::fs::create_dir_all(dir).map_err(|e| {
-        CliError::usage(format!("error: cannot create the folder {dir}: {e}\n"))
-    })?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::usage(format!("error: cannot create the folder {dir}: {e}\n")))?;
     let mut staged: Vec<(TempFile, PathBuf)> = Vec::new();
     let mut stage = |file: &str, body: &str| -> Result<(), CliError> {
         let target = Path::new(dir).join(file);
@@ -295,8 +300,8 @@ pub fn verify(
     };
     let mtext = std::fs::read_to_string(&mpath)
         .map_err(|e| CliError::usage(format!("error: cannot read {mname}: {e}\n  = help: give the folder `lampost post --machine {} … -o DIR` wrote\n", arm.name)))?;
-    let m: serde_json::Value = serde_json::from_str(&mtext)
-        .map_err(|e| bad(e.line(), format!("not JSON: {e}")))?;
+    let m: serde_json::Value =
+        serde_json::from_str(&mtext).map_err(|e| bad(e.line(), format!("not JSON: {e}")))?;
     let field = |k: &str| m.get(k).ok_or_else(|| bad(0, format!("no `{k}`")));
     let s = |k: &str| -> Result<String, CliError> {
         field(k)?
@@ -308,7 +313,10 @@ pub fn verify(
         return Err(bad(0, format!("format is not `{}`", chunk::FORMAT)));
     }
     if s("machine")? != arm.name {
-        return Err(bad(0, format!("posted for {}, not {}", s("machine")?, arm.name)));
+        return Err(bad(
+            0,
+            format!("posted for {}, not {}", s("machine")?, arm.name),
+        ));
     }
     let cfg = Config::parse(&s("config")?).ok_or_else(|| bad(0, "bad `config`".into()))?;
     let spacing = field("spacing")?
@@ -319,7 +327,10 @@ pub fn verify(
         .ok_or_else(|| bad(0, "`chunks` is not a list".into()))?;
     let mut files = Vec::with_capacity(list.len());
     for (k, c) in list.iter().enumerate() {
-        let get = |key: &str| c.get(key).ok_or_else(|| bad(0, format!("chunk {}: no `{key}`", k + 1)));
+        let get = |key: &str| {
+            c.get(key)
+                .ok_or_else(|| bad(0, format!("chunk {}: no `{key}`", k + 1)))
+        };
         let file = get("file")?
             .as_str()
             .filter(|f| !f.contains('/') && !f.contains('\\') && !f.starts_with('.'))
@@ -333,7 +344,15 @@ pub fn verify(
         };
         let path = Path::new(dir).join(&file);
         let text = std::fs::read_to_string(&path).map_err(|e| {
-            bad(0, format!("chunk {} of {}: cannot read {}: {e} (a missing chunk)", k + 1, list.len(), path.display()))
+            bad(
+                0,
+                format!(
+                    "chunk {} of {}: cannot read {}: {e} (a missing chunk)",
+                    k + 1,
+                    list.len(),
+                    path.display()
+                ),
+            )
         })?;
         files.push(ChunkFile {
             name: path.to_string_lossy().into_owned(),
@@ -346,13 +365,17 @@ pub fn verify(
     let _ = (&name, &text);
     let tol = tolerance.unwrap_or(arm.tolerance);
     if !(tol.is_finite() && tol > 0.0) {
-        return Err(CliError::usage(format!("error: --tolerance {tol}: must be positive\n")));
+        return Err(CliError::usage(format!(
+            "error: --tolerance {tol}: must be positive\n"
+        )));
     }
     let rep = chunk::verify(arm, &samples, cfg, &files, tol).map_err(|e| robot_error(e, None))?;
     let out = if json_out {
         format!(
             "{}\n",
-            json::to_string(&obj! {"max_focus_error": rep.max_focus_error, "max_axis_error_deg": rep.max_axis_error_deg, "locations": rep.locations, "chunks": rep.chunks, "ok": true})?
+            json::to_string(
+                &obj! {"max_focus_error": rep.max_focus_error, "max_axis_error_deg": rep.max_axis_error_deg, "locations": rep.locations, "chunks": rep.chunks, "ok": true}
+            )?
         )
     } else {
         format!(

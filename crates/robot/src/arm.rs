@@ -259,12 +259,16 @@ impl Arm {
             let j = &def.joint[i];
             let alpha = r(j.alpha);
             // Exact quarter turns: sin 90° = 1 and cos 90° = 0, not 6e-17.
-            let (sa, ca) = match j.alpha {
-                x if x == 90.0 => (1.0, 0.0),
-                x if x == -90.0 => (-1.0, 0.0),
-                x if x == 0.0 => (0.0, 1.0),
-                x if x == 180.0 || x == -180.0 => (0.0, -1.0),
-                _ => alpha.sin_cos(),
+            let (sa, ca) = if j.alpha == 90.0 {
+                (1.0, 0.0)
+            } else if j.alpha == -90.0 {
+                (-1.0, 0.0)
+            } else if j.alpha == 0.0 {
+                (0.0, 1.0)
+            } else if j.alpha.abs() == 180.0 {
+                (0.0, -1.0)
+            } else {
+                alpha.sin_cos()
             };
             Link {
                 name: j.name.clone(),
@@ -346,10 +350,7 @@ impl Arm {
 
     /// The flange (in the base frame) that puts the part frame at `part` (world).
     pub fn flange_for(&self, part: &Frame) -> Frame {
-        self.base
-            .inverse()
-            .mul(part)
-            .mul(&self.holder.inverse())
+        self.base.inverse().mul(part).mul(&self.holder.inverse())
     }
 
     /// Whether every joint lies within its limits (1e-9 rad of slack for rounding).
@@ -595,7 +596,10 @@ mod tests {
         }
         assert_eq!(Config::parse("lu"), None);
         assert_eq!(Config::parse("lrn"), None);
-        assert_eq!(Config::parse("nul").map(|c| c.letters()), Some("lun".into()));
+        assert_eq!(
+            Config::parse("nul").map(|c| c.letters()),
+            Some("lun".into())
+        );
     }
 
     #[test]

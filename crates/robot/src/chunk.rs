@@ -34,7 +34,10 @@ pub const AXIS_TOLERANCE_DEG: f64 = 0.01;
 
 /// Where to cut: ranges of sample indices, each at most `chunk_points − 2` long, every
 /// cut before a sample reached with the laser off.
-pub fn chunk_ranges(samples: &[Sample], chunk_points: usize) -> Result<Vec<Range<usize>>, RobotError> {
+pub fn chunk_ranges(
+    samples: &[Sample],
+    chunk_points: usize,
+) -> Result<Vec<Range<usize>>, RobotError> {
     if chunk_points < 3 {
         return Err(RobotError::Option(format!(
             "--chunk-points {chunk_points}: a chunk holds the two safe locations and at least one path location (3)"
@@ -101,6 +104,7 @@ pub fn from_zyz(e: [f64; 3]) -> Matrix3<f64> {
     Frame::rot_z(e[0]) * ry * Frame::rot_z(e[2])
 }
 
+#[allow(clippy::too_many_arguments)]
 fn row(
     out: &mut String,
     n: usize,
@@ -250,13 +254,12 @@ pub fn verify(
             format!("chunk {} of {}", k + 1, chunks.len()),
             format!("config {}", cfg.letters()),
         ];
-        for (w, (line, h)) in want.iter().zip(header.iter().chain(std::iter::repeat(&(0, "")))) {
+        for (w, (line, h)) in want
+            .iter()
+            .zip(header.iter().chain(std::iter::repeat(&(0, ""))))
+        {
             if h != w {
-                return Err(verr(
-                    f,
-                    *line,
-                    format!("header says `{h}`, expected `{w}`"),
-                ));
+                return Err(verr(f, *line, format!("header says `{h}`, expected `{w}`")));
             }
         }
         if rows.len() != c.count + 2 {
@@ -288,10 +291,14 @@ pub fn verify(
                     .ok_or_else(|| verr(f, line, format!("`{}` is not a finite number", fields[k])))
             };
             if fields[0] != (r + 1).to_string() {
-                return Err(verr(f, line, format!("row number `{}`, expected {}", fields[0], r + 1)));
+                return Err(verr(
+                    f,
+                    line,
+                    format!("row number `{}`, expected {}", fields[0], r + 1),
+                ));
             }
-            let q: Q = [num(11)?, num(12)?, num(13)?, num(14)?, num(15)?, num(16)?]
-                .map(f64::to_radians);
+            let q: Q =
+                [num(11)?, num(12)?, num(13)?, num(14)?, num(15)?, num(16)?].map(f64::to_radians);
             if let Some(j) = arm.within_limits(&q) {
                 return Err(verr(
                     f,
@@ -348,30 +355,57 @@ pub fn verify(
                 ));
             }
             let Some(s) = samples.get(i) else {
-                return Err(verr(f, line, format!("location {i} is beyond the path's {} locations", samples.len())));
+                return Err(verr(
+                    f,
+                    line,
+                    format!(
+                        "location {i} is beyond the path's {} locations",
+                        samples.len()
+                    ),
+                ));
             };
             let first_row = r == 1;
             let want_laser = !first_row && s.deposit;
             if first_row && i > 0 && s.deposit {
-                return Err(verr(f, line, "the chunk starts inside a laser-on run".into()));
+                return Err(verr(
+                    f,
+                    line,
+                    "the chunk starts inside a laser-on run".into(),
+                ));
             }
             if laser != want_laser {
-                return Err(verr(f, line, format!("laser {}, the path has it {}", u8::from(laser), u8::from(want_laser))));
+                return Err(verr(
+                    f,
+                    line,
+                    format!(
+                        "laser {}, the path has it {}",
+                        u8::from(laser),
+                        u8::from(want_laser)
+                    ),
+                ));
             }
             let dt = num(3)?;
             let want_dt = if first_row { 0.0 } else { s.dt };
             if (dt - want_dt).abs() > 1e-6 * want_dt.max(1.0) {
-                return Err(verr(f, line, format!("dt {dt}, the path's feed gives {want_dt:.6}")));
+                return Err(verr(
+                    f,
+                    line,
+                    format!("dt {dt}, the path's feed gives {want_dt:.6}"),
+                ));
             }
             // The focus on the path, the approach along the beam.
             let focus = part.apply(&s.tip).norm();
             let axis = part.r * s.axis;
             let ang = axis.cross(&Vector3::z()).norm().atan2(axis.z).to_degrees();
             if focus > tol {
-                return Err(verr(f, line, format!(
-                    "the focus is {focus:.4} from the path point of line {} (tolerance {tol})",
-                    s.line
-                )));
+                return Err(verr(
+                    f,
+                    line,
+                    format!(
+                        "the focus is {focus:.4} from the path point of line {} (tolerance {tol})",
+                        s.line
+                    ),
+                ));
             }
             if ang > AXIS_TOLERANCE_DEG {
                 return Err(verr(f, line, format!(
@@ -412,7 +446,11 @@ pub fn verify(
 }
 
 fn gap(samples: &[Sample], a: usize, b: usize) -> String {
-    let line = |i: usize| samples.get(i.min(samples.len().saturating_sub(1))).map_or(0, |s| s.line);
+    let line = |i: usize| {
+        samples
+            .get(i.min(samples.len().saturating_sub(1)))
+            .map_or(0, |s| s.line)
+    };
     format!(
         "path locations {a} to {} (lines {} to {}) are in no chunk, or in two: a chunk is missing or repeated",
         b.saturating_sub(1),

@@ -309,7 +309,7 @@ impl ArmDef {
                     format!("joint {}: a limit is not a finite number", j.name),
                 ));
             }
-            if !(lo < hi) || hi - lo > 720.0 {
+            if lo >= hi || hi - lo > 720.0 {
                 return Err((Place::Joint(i, "limits"), format!(
                     "joint {}: limits [{lo}, {hi}] must be [min, max] with min < max, spanning at most 720°",
                     j.name

@@ -79,7 +79,10 @@ pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotEr
         if len == 0.0 && turn < 1e-12 {
             continue;
         }
-        let n = (len / spacing).ceil().max((turn / MAX_TURN).ceil()).max(1.0);
+        let n = (len / spacing)
+            .ceil()
+            .max((turn / MAX_TURN).ceil())
+            .max(1.0);
         total += n;
         if total > MAX_SAMPLES {
             return Err(RobotError::Option(format!(

@@ -86,7 +86,9 @@ fn singular_wrist_keeps_the_last_wrist_angle() {
         up: c.up.unwrap_or(false),
         flip: false,
     };
-    let s2 = arm.inverse_closed(&t, cfg, 1.1).unwrap_or_else(|e| panic!("{e:?}"));
+    let s2 = arm
+        .inverse_closed(&t, cfg, 1.1)
+        .unwrap_or_else(|e| panic!("{e:?}"));
     assert!((s2[3] - 1.1).abs() < 1e-12, "J4 kept: {}", s2[3]);
     assert!(close(&arm.flange(&s2), &t, 1e-9));
     let _ = s;
@@ -98,7 +100,10 @@ fn a_pose_beyond_reach_names_the_elbow() {
     let mut t = arm.flange(&[0.0, 0.5, -0.5, 0.0, -0.5, 0.0]);
     t.t *= 10.0;
     for c in Config::ALL {
-        let e = arm.inverse_closed(&t, c, 0.0).err().unwrap_or_else(|| panic!("reached"));
+        let e = arm
+            .inverse_closed(&t, c, 0.0)
+            .err()
+            .unwrap_or_else(|| panic!("reached"));
         assert_eq!(e.joint, 2, "{}", e.why);
     }
 }
@@ -107,7 +112,11 @@ fn a_pose_beyond_reach_names_the_elbow() {
 fn a_non_puma_arm_uses_the_numerical_inverse() {
     let text = lampost_robot::def::builtin_text("puma-lens")
         .unwrap_or_default()
-        .replacen("d = 0.0\na = 0.0\nalpha = -90.0", "d = 35.0\na = 12.0\nalpha = -90.0", 1);
+        .replacen(
+            "d = 0.0\na = 0.0\nalpha = -90.0",
+            "d = 35.0\na = 12.0\nalpha = -90.0",
+            1,
+        );
     let arm = Arm::from_toml(&text, "offset-wrist.toml").unwrap_or_else(|e| panic!("{e}"));
     assert!(!arm.closed_form);
     let q: Q = [0.2, 1.0, -1.4, 0.3, -0.6, 0.9];
@@ -167,7 +176,10 @@ fn bad_arm_files_are_refused_at_their_line() {
     assert!(msg.contains("J5") && msg.contains("min < max"), "{msg}");
     assert_eq!(line, line_of(&rev, "limits = [100.0, -100.0]", 0));
     let wide = base.replacen("limits = [-266.0, 266.0]", "limits = [-400.0, 400.0]", 1);
-    assert_eq!(refusal(&wide).0, line_of(&wide, "limits = [-400.0, 400.0]", 0));
+    assert_eq!(
+        refusal(&wide).0,
+        line_of(&wide, "limits = [-400.0, 400.0]", 0)
+    );
     // Five joints.
     let five = base.replacen("[[joint]]\nname = \"J6\"", "[unused]\nname = \"J6\"", 1);
     assert!(ArmDef::from_toml(&five, "arm.toml").is_err());
@@ -182,7 +194,11 @@ fn bad_arm_files_are_refused_at_their_line() {
     assert_eq!(refusal(&craig).0, line_of(&craig, "convention", 0));
     let cfg = base.replacen("config = \"ldn\"", "config = \"lx\"", 1);
     assert_eq!(refusal(&cfg).0, line_of(&cfg, "config", 0));
-    let par = base.replacen("z_axis = [0.0, 0.0, 1.0]\n\n[cell]", "z_axis = [1.0, 0.0, 0.0]\n\n[cell]", 1);
+    let par = base.replacen(
+        "z_axis = [0.0, 0.0, 1.0]\n\n[cell]",
+        "z_axis = [1.0, 0.0, 0.0]\n\n[cell]",
+        1,
+    );
     let (_, msg) = refusal(&par);
     assert!(msg.contains("[head]") && msg.contains("parallel"), "{msg}");
     // An unknown key (a typo) is refused too.
