@@ -412,3 +412,31 @@ fn a_degenerate_arm_file_is_refused_at_its_line() {
     );
     assert!(!dir.join("out").exists());
 }
+
+/// Paper 001's demo part at full size (600 × 200 mm, twisted 90° about a long edge): 20
+/// layers posted for puma-lens at the default 1 mm spacing into 1000-location chunks, and
+/// verified. The chunk count and sizes are printed (`--nocapture`).
+#[test]
+fn the_full_size_twisted_plate_posts_and_verifies() {
+    let dir = tempdir("robot-twisted");
+    std::fs::write(dir.join("plate.txt"), plate(1.0, 20, 61, 600.0)).unwrap_or_default();
+    let said = err_or_ok(&post(&dir, "plate.txt", "out", &[]));
+    let m: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("out/manifest.json")).unwrap_or_default(),
+    )
+    .unwrap_or_default();
+    let sizes: Vec<u64> = m["chunks"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|c| c["locations"].as_u64()).collect())
+        .unwrap_or_default();
+    eprintln!(
+        "twisted plate: {} locations, {:.0} s of motion ({:.0} s laser on), {} chunks of at most 1000 locations: {sizes:?}\n{said}",
+        m["locations"], m["path_s"].as_f64().unwrap_or(0.0), m["laser_on_s"].as_f64().unwrap_or(0.0), sizes.len()
+    );
+    assert!(
+        sizes.len() >= 13 && sizes.iter().all(|&s| s <= 1000),
+        "{sizes:?}"
+    );
+    let v = ok(&verify(&dir, "plate.txt", "out"));
+    assert!(v.starts_with("ok: "), "{v}");
+}
