@@ -352,7 +352,7 @@ fn bench_robot() -> Result<(), String> {
     }
     // The toolbox solves the flange poses lampost wrote (joints → fkine → ikine_a): the
     // closed-form inverse alone, without the search about the beam or any file work.
-    let script = r#"
+    let script = r##"
 import sys, glob, time
 import numpy as np
 import roboticstoolbox as rtb
@@ -370,7 +370,7 @@ t = time.perf_counter()
 s = p.ikine_a(T, config=sys.argv[2])
 dt = time.perf_counter() - t
 print(len(q), dt, int(s.success))
-"#;
+"##;
     let o = Command::new(&py)
         .args(["-c", script])
         .arg(&out)

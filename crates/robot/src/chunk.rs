@@ -48,7 +48,7 @@ pub fn chunk_ranges(
     let mut out = Vec::new();
     let mut start = 0;
     while start < n {
-        let end = start + cap;
+        let end = start.saturating_add(cap);
         if end >= n {
             out.push(start..n);
             break;
@@ -262,7 +262,7 @@ pub fn verify(
                 return Err(verr(f, *line, format!("header says `{h}`, expected `{w}`")));
             }
         }
-        if rows.len() != c.count + 2 {
+        if c.count.checked_add(2) != Some(rows.len()) {
             return Err(verr(
                 f,
                 0,
@@ -346,7 +346,7 @@ pub fn verify(
                 prev = None;
                 continue;
             }
-            let i = c.first + r - 1;
+            let i = c.first.saturating_add(r - 1);
             if fields[1] != "path" || fields[2] != i.to_string() {
                 return Err(verr(
                     f,
@@ -433,7 +433,7 @@ pub fn verify(
             rep.locations += 1;
             prev = Some(q);
         }
-        next = c.first + c.count;
+        next = c.first.saturating_add(c.count);
     }
     if next != samples.len() {
         return Err(verr(

@@ -40,7 +40,7 @@ pub struct Sample {
 }
 
 /// The most locations a path may become.
-pub const MAX_SAMPLES: f64 = 20_000_000.0;
+pub const MAX_SAMPLES: f64 = 2_000_000.0;
 
 /// Largest turn of the axis between two locations, radians (1°).
 pub const MAX_TURN: f64 = std::f64::consts::PI / 180.0;
@@ -91,6 +91,12 @@ pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotEr
         }
         let n = n as usize;
         let dt = len / n as f64 / b.feed * 60.0;
+        if !dt.is_finite() {
+            return Err(RobotError::Option(format!(
+                "line {}: the time for the segment at feed {} is not a finite number",
+                b.line, b.feed
+            )));
+        }
         for k in 1..=n {
             let f = k as f64 / n as f64;
             let (tip, axis) = if k == n {

@@ -192,7 +192,7 @@ fn bad_arm_files_are_refused_at_their_line() {
     assert_eq!(line, line_of(&safe, "safe = ", 0));
     let craig = base.replacen("convention = \"classic\"", "convention = \"modified\"", 1);
     assert_eq!(refusal(&craig).0, line_of(&craig, "convention", 0));
-    let cfg = base.replacen("config = \"ldn\"", "config = \"lx\"", 1);
+    let cfg = base.replacen("config = \"rdf\"", "config = \"lx\"", 1);
     assert_eq!(refusal(&cfg).0, line_of(&cfg, "config", 0));
     let par = base.replacen(
         "z_axis = [0.0, 0.0, 1.0]\n\n[cell]",
