@@ -775,7 +775,7 @@ impl Ctx {
             if let Some(s) = back {
                 let g = arm.flange(&s);
                 let err = (g.t - f.t).norm() / arm.scale.max(1.0) + (g.r - f.r).abs().max();
-                if !(err < 1e-6) {
+                if err.is_nan() || err >= 1e-6 {
                     return Err(format!("IK of FK({q:?}) = {s:?} misses by {err:e}"));
                 }
             }
