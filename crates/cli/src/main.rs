@@ -447,7 +447,7 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
         /// Largest allowed distance from the intended path (default 0.001 in / 0.02 mm;
-        /// for an arm, its file's [cell] tolerance).
+        /// for an arm, its file's `[cell]` tolerance).
         #[arg(long)]
         tolerance: Option<f64>,
         /// Arms: the path the folder was posted from (`verify --machine ARM DIR --input PATH`).

@@ -247,6 +247,10 @@ pub struct Arm {
     pub closed_form: bool,
     /// Characteristic length (sum of |a| + |d|), for scaling.
     pub scale: f64,
+    /// For an arm with the PUMA's twists but small offsets the closed form does not
+    /// allow (a1, d2, a4, a5, d5): the same arm with them zeroed, whose closed-form
+    /// solution in the asked configuration seeds the numerical inverse.
+    pub approx: Option<Box<Arm>>,
     /// The file it came from.
     pub def: ArmDef,
 }
@@ -297,7 +301,22 @@ impl Arm {
             && links[1].a != 0.0
             && links[2].a.hypot(links[3].d) > 0.0;
         let scale = links.iter().map(|l| l.a.abs() + l.d.abs()).sum::<f64>();
+        let puma_twists =
+            deg[0] == 90.0 && deg[1] == 0.0 && deg[2] == -90.0 && deg[3] == 90.0 && deg[4] == -90.0;
+        let approx = (!closed_form && puma_twists)
+            .then(|| {
+                let mut d = def.clone();
+                d.joint[0].a = 0.0;
+                d.joint[1].d = 0.0;
+                d.joint[3].a = 0.0;
+                d.joint[4].a = 0.0;
+                d.joint[4].d = 0.0;
+                let a = Arm::new(d);
+                a.closed_form.then(|| Box::new(a))
+            })
+            .flatten();
         Arm {
+            approx,
             name: def.name.clone(),
             units: def.units,
             base: Frame::from_def(&def.base),

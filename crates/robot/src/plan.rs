@@ -195,14 +195,25 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
             }
         };
         a_prev = s.axis;
-        let solve = |psi: f64| -> Result<(Q, Frame), NoReach> {
+        let solve = |psi: f64, fresh: bool| -> Result<(Q, Frame), NoReach> {
             let part = part_in_work(&s.tip, &s.axis, &u, psi);
             let world = arm.head.mul(&part);
             let flange = arm.flange_for(&world);
             let raw = if arm.closed_form {
                 arm.inverse_closed(&flange, cfg, prev[3])?
             } else {
-                arm.inverse_dls(&flange, &prev).ok_or_else(|| NoReach {
+                // The first location (or one after a blocked turn) starts from the
+                // near-PUMA closed form in the asked configuration where there is one;
+                // then each location from the last.
+                let seed = match (&arm.approx, fresh) {
+                    (Some(ap), true) => ap
+                        .inverse_closed(&ap.flange_for(&world), cfg, prev[3])
+                        .ok()
+                        .and_then(|q| ap.fit_limits(&q, &prev).ok())
+                        .unwrap_or(prev),
+                    _ => prev,
+                };
+                arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
                     joint: 2,
                     why: "the numerical inverse does not converge (out of reach?)".into(),
                 })?
@@ -220,7 +231,8 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
             Ok((q, part))
         };
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-        let eval = |psi: f64| solve(psi).map(|(q, p)| (cost(&q), q, p));
+        let eval = |psi: f64| solve(psi, i == 0).map(|(q, p)| (cost(&q), q, p));
+        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, p)| (cost(&q), q, p));
         let mut best: Option<(f64, f64, Q, Frame)> = None; // (cost, psi, q, part)
         if i > 0 {
             if let Ok((c, q, p)) = eval(psi_prev) {
@@ -232,7 +244,7 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
             let mut fails: Vec<NoReach> = Vec::new();
             for k in 0..72 {
                 let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / 72.0;
-                match eval(psi) {
+                match eval_fresh(psi) {
                     Ok((c, q, p)) => {
                         if best.as_ref().is_none_or(|b| c < b.0) {
                             best = Some((c, psi, q, p));
