@@ -604,6 +604,12 @@ fn run(cli: Cli) -> Result<(), CliError> {
             json,
         } => {
             if let Some(arm) = robot_cmds::arm_for(&machine)? {
+                if !set.is_empty() || head.is_some() {
+                    return Err(CliError::usage(format!(
+                        "error: --set and --head are for table machines; {} is an arm (its settings are in its file)\n",
+                        arm.name
+                    )));
+                }
                 let (path, dir) = match (files.as_slice(), input.as_deref()) {
                     ([dir], Some(p)) => (p.to_string(), dir.clone()),
                     ([p, dir], None) => (p.clone(), dir.clone()),

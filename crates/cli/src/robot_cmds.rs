@@ -164,6 +164,23 @@ pub fn post(
 ) -> Result<(), CliError> {
     let t0 = std::time::Instant::now();
     refuse_placement(&a.place)?;
+    let table_only = [
+        (!a.set.is_empty(), "--set"),
+        (a.head.is_some(), "--head"),
+        (a.dialect.is_some(), "--dialect"),
+        (a.renumber.is_some(), "--renumber"),
+        (a.tolerance.is_some(), "--tolerance"),
+        (a.tool.is_some(), "--tool"),
+        (a.length_offset.is_some(), "--length-offset"),
+        (a.work_offset.is_some(), "--work-offset"),
+        (a.coolant, "--coolant"),
+    ];
+    if let Some((_, flag)) = table_only.iter().find(|(g, _)| *g) {
+        return Err(CliError::usage(format!(
+            "error: {flag} is for programs of table machines; {} is an arm\n  = help: an arm's settings are in its file (`lampost machines show {}`); the arm options are --config, --spacing, --chunk-points\n",
+            arm.name, arm.name
+        )));
+    }
     if max_bytes.is_some() || json_report.is_some() {
         return Err(CliError::usage("error: --max-bytes and --json-report are for programs: an arm's output is chunked by --chunk-points, and its manifest.json is the report\n".to_string()));
     }

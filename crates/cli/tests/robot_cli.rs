@@ -367,6 +367,8 @@ fn bad_paths_are_refused_with_their_line_and_nothing_written() {
     // Table-machine options are refused for an arm, arm options for a table machine.
     let e = err(&post(&dir, "run.txt", "x", &["--index", "A=0,B=0"]));
     assert!(e.contains("--index does not apply to an arm"), "{e}");
+    let e = err(&post(&dir, "run.txt", "x", &["--set", "H=1"]));
+    assert!(e.contains("--set is for programs of table machines"), "{e}");
     let e = err(&post(&dir, "run.txt", "x", &["--config", "abc"]));
     assert!(e.contains("--config abc"), "{e}");
     let p = dir.join("run.txt");
