@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The project's test command (README, .ci/run): installs LinuxCNC's rs274 for the
 # comparison tests, a Python venv with trimesh for the collision and slicing oracles and
-# the real meshes of the slicing oracle (scripts/install-meshes.sh), then runs
+# the real meshes of the slicing oracle (scripts/install-meshes.sh), one with the Robotics
+# Toolbox for the robot oracle (.tools/py-rtb), then runs
 # every test of the workspace. rs274 is required here, so
 # the comparison can never be skipped silently.
 set -euo pipefail
@@ -12,4 +13,5 @@ cd "$(dirname "$0")/.."
 ./scripts/install-rs274.sh
 ./scripts/install-python.sh
 ./scripts/install-meshes.sh
+./scripts/install-robotics.sh
 LAMPOST_REQUIRE_RS274=1 LAMPOST_REQUIRE_PY=1 cargo test --workspace --locked

@@ -10,6 +10,9 @@
 //! - `cargo xtask bench plan`: slicing a 75k-triangle mesh at 0.1 mm layers against
 //!   trimesh's `section_multiplane` (same run), and a 1M-triangle mesh at 1,000 layers
 //!   (`plan.rs`).
+//! - `cargo xtask bench robot`: `lampost post --machine puma-lens` and `lampost verify`
+//!   on paper 001's twisted plate at full size (about 10,000 locations), against the
+//!   Robotics Toolbox's `ikine_a` solving the same poses (`.tools/py-rtb`), same run.
 //! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
 //!   the calibration table (`cargo xtask calibration` alone).
 //! - `cargo xtask fuzz [--target T] [--seconds N] …`: every reader fuzzed in a child
@@ -260,6 +263,145 @@ fn bench_post() -> Result<(), String> {
     Ok(())
 }
 
+/// Paper 001's twisted plate (600 × 200 mm, turned 90° about a long edge): `layers`
+/// passes along the edge, `n` points each, the approach along the face; laser off on each
+/// pass's first point.
+fn twisted_plate(layers: usize, n: usize, feed: f64) -> String {
+    let (len, width) = (600.0, 200.0);
+    let mut s = String::from("x y z i j k feed laser\n");
+    for k in 0..layers {
+        let v = width * (k as f64 + 0.5) / layers as f64;
+        for i in 0..n {
+            let i_along = if k % 2 == 1 { n - 1 - i } else { i };
+            let u = -len / 2.0 + len * i_along as f64 / (n - 1) as f64;
+            let th = std::f64::consts::FRAC_PI_2 * (u + len / 2.0) / len;
+            let (sn, cs) = th.sin_cos();
+            s.push_str(&format!(
+                "{u:.6} {:.6} {:.6} 0 {sn:.12} {cs:.12} {feed} {}\n",
+                v * sn,
+                v * cs,
+                u8::from(i > 0)
+            ));
+        }
+    }
+    s
+}
+
+fn bench_robot() -> Result<(), String> {
+    println!("== lampost post/verify --machine puma-lens on the full-size twisted plate (paper 001), against the Robotics Toolbox's ikine_a on the same poses, same run");
+    let mut c = cargo();
+    c.args(["build", "--release", "-q", "-p", "lampost-cli"]);
+    run(c)?;
+    let dir = root().join("target/xtask");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let input = dir.join("twisted-plate.txt");
+    std::fs::write(&input, twisted_plate(15, 61, 600.0)).map_err(|e| e.to_string())?;
+    let bin = std::env::var_os("CARGO_TARGET_DIR")
+        .map_or_else(|| root().join("target"), PathBuf::from)
+        .join("release/lampost");
+    let out = dir.join("twisted-plate.robot");
+    let best = |args: &[&std::ffi::OsStr]| -> Result<(Duration, String), String> {
+        let mut t = Duration::MAX;
+        let mut said = String::new();
+        for _ in 0..5 {
+            let start = Instant::now();
+            let o = Command::new(&bin)
+                .args(args)
+                .output()
+                .map_err(|e| e.to_string())?;
+            t = t.min(start.elapsed());
+            if !o.status.success() {
+                return Err(String::from_utf8_lossy(&o.stderr).into_owned());
+            }
+            said = String::from_utf8_lossy(&o.stderr).into_owned();
+        }
+        Ok((t, said))
+    };
+    let (tp, said) = best(&[
+        "post".as_ref(),
+        "--machine".as_ref(),
+        "puma-lens".as_ref(),
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ])?;
+    print!("{said}");
+    let (tv, _) = best(&[
+        "verify".as_ref(),
+        "--machine".as_ref(),
+        "puma-lens".as_ref(),
+        out.as_os_str(),
+        "--input".as_ref(),
+        input.as_os_str(),
+        "-q".as_ref(),
+    ])?;
+    let manifest = std::fs::read_to_string(out.join("manifest.json")).map_err(|e| e.to_string())?;
+    let locations: f64 = manifest
+        .split("\"locations\":")
+        .nth(1)
+        .and_then(|r| r.split([',', '}']).next())
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(0.0);
+    println!(
+        "lampost post (plan: IK and the turn about the beam per location, chunks, in-process verify, write): {:.0} ms for {locations} locations, {:.1} µs each (target: the plate under 500 ms)",
+        tp.as_secs_f64() * 1e3,
+        tp.as_secs_f64() * 1e6 / locations.max(1.0)
+    );
+    println!("lampost verify: {:.0} ms", tv.as_secs_f64() * 1e3);
+    let py = root().join(".tools/py-rtb/bin/python");
+    if !py.exists() {
+        println!("Robotics Toolbox baseline skipped: run scripts/install-robotics.sh");
+        return Ok(());
+    }
+    // The toolbox solves the flange poses lampost wrote (joints → fkine → ikine_a): the
+    // closed-form inverse alone, without the search about the beam or any file work.
+    let script = r##"
+import sys, glob, time
+import numpy as np
+import roboticstoolbox as rtb
+rows = []
+for f in sorted(glob.glob(sys.argv[1] + "/chunk-*.loc")):
+    for l in open(f):
+        w = l.split()
+        if l.startswith("#") or w[1] != "path":
+            continue
+        rows.append([float(x) for x in w[11:17]])
+q = np.radians(np.array(rows))
+p = rtb.models.DH.Puma560()
+T = p.fkine(q)
+t = time.perf_counter()
+s = p.ikine_a(T, config=sys.argv[2])
+dt = time.perf_counter() - t
+print(len(q), dt, int(s.success))
+"##;
+    let o = Command::new(&py)
+        .args(["-c", script])
+        .arg(&out)
+        .arg("rdf")
+        .output()
+        .map_err(|e| e.to_string())?;
+    let text = String::from_utf8_lossy(&o.stdout);
+    let w: Vec<f64> = text
+        .split_whitespace()
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    if let [n, secs, ok] = w[..] {
+        println!(
+            "Robotics Toolbox ikine_a on the same {n} poses: {:.0} ms ({}), {:.1} µs each; toolbox IK alone / lampost whole post = {:.1}",
+            secs * 1e3,
+            if ok == 1.0 { "all solved" } else { "NOT all solved" },
+            secs * 1e6 / n.max(1.0),
+            secs / tp.as_secs_f64()
+        );
+    } else {
+        println!(
+            "Robotics Toolbox baseline failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    Ok(())
+}
+
 fn bench_kin() -> Result<(), String> {
     println!("== IK + FK pairs per second (one core)");
     let mut c = cargo();
@@ -347,12 +489,13 @@ fn main() -> ExitCode {
         ["bench", "kin"] => bench_kin(),
         ["bench", "post"] => bench_post(),
         ["bench", "plan"] => plan::bench(&root()),
+        ["bench", "robot"] => bench_robot(),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),
         ["calibration"] => calibration(200),
         ["man"] => man(),
         ["fuzz", rest @ ..] => fuzz::Config::parse(rest).and_then(|c| fuzz::run(&root(), &c)),
-        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
+        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan|robot] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

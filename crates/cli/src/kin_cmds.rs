@@ -128,14 +128,28 @@ pub fn overrides(sets: &[String]) -> Result<Vec<(String, ParamValue)>, CliError>
     Ok(out)
 }
 
+/// Every built-in machine's name, tables and arms.
+pub fn builtin_names() -> Vec<&'static str> {
+    def::BUILTINS
+        .iter()
+        .chain(lampost_robot::ARM_BUILTINS.iter())
+        .map(|(n, _)| *n)
+        .collect()
+}
+
 /// Load a machine by built-in name or path.
 pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
     let ov = overrides(sets)?;
+    if crate::robot_cmds::arm_for(spec)?.is_some() {
+        return Err(CliError::usage(format!(
+            "error: --machine {spec}: an arm (six-axis robot); this command is for table machines\n  = help: arms are posted and verified: `lampost post --machine {spec} PATH -o DIR`, `lampost verify --machine {spec} DIR --input PATH`\n"
+        )));
+    }
     if def::builtin_text(spec).is_some() {
         return Machine::builtin(spec, &ov).map_err(kin_error);
     }
     let text = std::fs::read_to_string(spec).map_err(|e| {
-        let names: Vec<&str> = def::BUILTINS.iter().map(|(n, _)| *n).collect();
+        let names = builtin_names();
         CliError::usage(format!(
             "error: --machine {spec}: not a built-in machine and not a readable file ({e})\n  = help: built-in machines: {}; or give the path of a machine file\n",
             names.join(", ")
@@ -245,16 +259,24 @@ pub fn machines(show: Option<&str>) -> Result<(), CliError> {
                     .unwrap_or_default();
                 s.push_str(&format!("{name:<12} {d}\n"));
             }
+            for (name, _) in lampost_robot::ARM_BUILTINS {
+                let d = lampost_robot::ArmDef::builtin(name)
+                    .map(|d| d.description)
+                    .unwrap_or_default();
+                s.push_str(&format!("{name:<12} {d}\n"));
+            }
             write_out(&mut out, &s)?;
         }
         Some(name) => {
-            let text = def::builtin_text(name).ok_or_else(|| {
-                let names: Vec<&str> = def::BUILTINS.iter().map(|(n, _)| *n).collect();
-                CliError::usage(format!(
+            let text = def::builtin_text(name)
+                .or_else(|| lampost_robot::def::builtin_text(name))
+                .ok_or_else(|| {
+                    let names = builtin_names();
+                    CliError::usage(format!(
                     "error: no built-in machine named {name}\n  = help: built-in machines: {}\n",
                     names.join(", ")
                 ))
-            })?;
+                })?;
             write_out(&mut out, text)?;
         }
     }

@@ -17,6 +17,7 @@ mod post_cmds;
 mod posted;
 mod progress;
 mod report;
+mod robot_cmds;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -652,9 +653,13 @@ enum Command {
         /// Override a machine parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
-        /// Largest allowed distance from the intended path (default 0.001 in / 0.02 mm).
+        /// Largest allowed distance from the intended path (default 0.001 in / 0.02 mm;
+        /// for an arm, its file's `[cell]` tolerance).
         #[arg(long)]
         tolerance: Option<f64>,
+        /// Arms: the path the folder was posted from (`verify --machine ARM DIR --input PATH`).
+        #[arg(long)]
+        input: Option<String>,
         /// Write JSON.
         #[arg(long)]
         json: bool,
@@ -905,8 +910,33 @@ fn run(cli: Cli) -> Result<(), CliError> {
             process,
             set,
             tolerance,
+            input,
             json,
         } => {
+            if let Some(arm) = robot_cmds::arm_for(&machine)? {
+                if !set.is_empty() || head.is_some() {
+                    return Err(CliError::usage(format!(
+                        "error: --set and --head are for table machines; {} is an arm (its settings are in its file)\n",
+                        arm.name
+                    )));
+                }
+                let (path, dir) = match (files.as_slice(), input.as_deref()) {
+                    ([dir], Some(p)) => (p.to_string(), dir.clone()),
+                    ([p, dir], None) => (p.clone(), dir.clone()),
+                    _ => {
+                        return Err(CliError::usage(
+                            "error: give the output folder and the path: verify --machine ARM DIR --input PATH\n".to_string(),
+                        ))
+                    }
+                };
+                return robot_cmds::verify(&arm, &place, &path, &dir, tolerance, json);
+            }
+            if input.is_some() {
+                return Err(CliError::usage(
+                    "error: --input is for arm output; for a program give INPUT POSTED\n"
+                        .to_string(),
+                ));
+            }
             let (input, posted) = match files.as_slice() {
                 [p] => (None, vec![p.clone()]),
                 all if place.job.is_some() => (None, all.to_vec()),

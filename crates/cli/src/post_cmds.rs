@@ -512,6 +512,15 @@ pub struct PostArgs {
     /// The largest posted program, as a multiple of the input's size (at least 16 MiB).
     #[arg(long, default_value_t = 50.0)]
     pub max_growth: f64,
+    /// Arms: configuration letters, l/r shoulder, u/d elbow, n/f wrist (default: the arm file's).
+    #[arg(long)]
+    pub config: Option<String>,
+    /// Arms: largest distance between locations along the path (default: the arm file's).
+    #[arg(long)]
+    pub spacing: Option<f64>,
+    /// Arms: locations per controller file, the two safe ones included (default: the arm file's).
+    #[arg(long)]
+    pub chunk_points: Option<usize>,
 }
 
 /// The head a process uses unless one is named (the library's choice).
@@ -659,6 +668,15 @@ pub fn post(
     json_report: Option<&str>,
 ) -> Result<(), CliError> {
     let t0 = std::time::Instant::now();
+    if let Some(arm) = crate::robot_cmds::arm_for(&a.machine)? {
+        return crate::robot_cmds::post(&arm, a, input, output, max_bytes, json_report);
+    }
+    if a.config.is_some() || a.spacing.is_some() || a.chunk_points.is_some() {
+        return Err(CliError::usage(format!(
+            "error: --config, --spacing and --chunk-points are for arms; {} is a table machine\n",
+            a.machine
+        )));
+    }
     let m = load_machine(&a.machine, &a.set)?;
     if let Some(max) = max_bytes {
         if max < MIN_PIECE_BYTES {

@@ -254,6 +254,7 @@ const STL_TOKENS: &[&str] = &[
 pub struct Ctx {
     machines: Vec<Machine>,
     machine_texts: Vec<Vec<u8>>,
+    arm_texts: Vec<Vec<u8>>,
     programs: Vec<Vec<u8>>,
     post_programs: Vec<Vec<u8>>,
     csv: Vec<Vec<u8>>,
@@ -273,7 +274,12 @@ impl Ctx {
             .iter()
             .map(|(_, t)| t.as_bytes().to_vec())
             .collect();
-        machine_texts.extend(read_dir(&fx.join("machines"), &["toml"]));
+        // Arm files (kind = "arm", crates/robot) are fuzzed apart: `arm_texts`.
+        let (arm_texts, tables): (Vec<Vec<u8>>, Vec<Vec<u8>>) =
+            read_dir(&fx.join("machines"), &["toml"])
+                .into_iter()
+                .partition(|t| lampost_robot::def::is_arm_text(&String::from_utf8_lossy(t)));
+        machine_texts.extend(tables);
         let mut machines = Vec::new();
         for t in &machine_texts {
             let text = String::from_utf8_lossy(t);
@@ -303,6 +309,7 @@ impl Ctx {
         Ok(Ctx {
             machines,
             machine_texts,
+            arm_texts,
             programs,
             post_programs,
             csv: read_dir(&fx.join("post"), &["csv"]),
@@ -755,8 +762,51 @@ impl Ctx {
         Ok(())
     }
 
+    /// An arm file (crates/robot): refused with a location, or an arm whose FK and IK
+    /// answer with finite numbers and whose IK reaches what FK gives.
+    fn arm(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+        *note = "arm file".into();
+        input.extend_from_slice(r.pick_bytes(&self.arm_texts));
+        mutate(r, input, TOML_TOKENS);
+        self.made(input, note);
+        let text = String::from_utf8_lossy(input);
+        let def = match lampost_robot::ArmDef::from_toml(&text, "fuzz.toml") {
+            Ok(d) => d,
+            Err(lampost_robot::RobotError::MachineFile { .. }) => return Ok(()),
+            Err(e) => return Err(format!("an arm file refused without a place: {e}")),
+        };
+        let again = def.to_toml();
+        lampost_robot::ArmDef::from_toml(&again, "again.toml")
+            .map_err(|e| format!("an arm file read, written and read again fails: {e}"))?;
+        let arm = lampost_robot::Arm::new(def);
+        for _ in 0..4 {
+            let q: lampost_robot::Q =
+                std::array::from_fn(|j| r.range(arm.links[j].lo, arm.links[j].hi));
+            let f = arm.flange(&q);
+            if !f.t.iter().chain(f.r.iter()).all(|v| v.is_finite()) {
+                return Err(format!("FK of {q:?}: {f:?}"));
+            }
+            let back = if arm.closed_form {
+                arm.inverse_closed(&f, arm.config, q[3]).ok()
+            } else {
+                arm.inverse_dls(&f, &q)
+            };
+            if let Some(s) = back {
+                let g = arm.flange(&s);
+                let err = (g.t - f.t).norm() / arm.scale.max(1.0) + (g.r - f.r).abs().max();
+                if err.is_nan() || err >= 1e-6 {
+                    return Err(format!("IK of FK({q:?}) = {s:?} misses by {err:e}"));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn toml(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
         input.clear();
+        if !self.arm_texts.is_empty() && r.below(4) == 0 {
+            return self.arm(r, input, note);
+        }
         match r.below(3) {
             0 => {
                 *note = "machine file".into();

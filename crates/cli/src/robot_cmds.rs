@@ -1,0 +1,417 @@
+//! `lampost post` and `lampost verify` for arm machines (paper 001's robot cell): a
+//! per-point path becomes chunked location files and a manifest in a folder.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use lampost_robot::arm::{Arm, Config};
+use lampost_robot::chunk::{self, ChunkFile};
+use lampost_robot::plan::{self, PathPoint, Sample};
+use lampost_robot::RobotError;
+
+use crate::io::{display_name, TempFile};
+use crate::json::{self, obj, Obj};
+use crate::post_cmds::{post_error, Placement, PostArgs};
+use crate::report::CliError;
+
+/// The arm a `--machine` names, if it is one: a built-in arm, or a file with
+/// `kind = "arm"`.
+pub fn arm_for(spec: &str) -> Result<Option<Arm>, CliError> {
+    if let Some(text) = lampost_robot::def::builtin_text(spec) {
+        return Arm::from_toml(text, &format!("<built-in {spec}>"))
+            .map(Some)
+            .map_err(|e| robot_error(e, None));
+    }
+    if lampost_kinematics::def::builtin_text(spec).is_some() {
+        return Ok(None);
+    }
+    let Ok(text) = std::fs::read_to_string(spec) else {
+        return Ok(None);
+    };
+    if !lampost_robot::def::is_arm_text(&text) {
+        return Ok(None);
+    }
+    Arm::from_toml(&text, spec)
+        .map(Some)
+        .map_err(|e| robot_error(e, None))
+}
+
+/// Render a robot error; `path` (file name, text) locates errors about path points.
+pub fn robot_error(e: RobotError, path: Option<(&str, &str)>) -> CliError {
+    let hint = e.hint();
+    match (&e, path, e.point_line()) {
+        (
+            RobotError::MachineFile {
+                file,
+                line,
+                column,
+                message,
+                text,
+            },
+            _,
+            _,
+        ) if *line > 0 => {
+            let num = line.to_string();
+            let pad = " ".repeat(num.len());
+            CliError::failed(format!(
+                "error: {message}\n{pad}--> {file}:{line}:{column}\n{pad} |\n{num} | {text}\n{pad} | {}^\n  = help: {hint}\n",
+                " ".repeat(column.saturating_sub(1))
+            ))
+        }
+        (_, Some((file, text)), Some(line)) if line > 0 => {
+            let shown = text.lines().nth(line - 1).unwrap_or("");
+            let col = shown.len() - shown.trim_start().len() + 1;
+            let num = line.to_string();
+            let pad = " ".repeat(num.len());
+            CliError::failed(format!(
+                "error: {e}\n{pad}--> {file}:{line}:{col}\n{pad} |\n{num} | {shown}\n{pad} | {}^\n  = help: {hint}\n",
+                " ".repeat(col - 1)
+            ))
+        }
+        _ => CliError::failed(format!("error: {e}\n  = help: {hint}\n")),
+    }
+}
+
+/// Placement options a robot path does not take.
+fn refuse_placement(pl: &Placement) -> Result<(), CliError> {
+    let given = [
+        (pl.index.is_some(), "--index"),
+        (pl.setup.is_some(), "--setup"),
+        (pl.job.is_some(), "--job"),
+        (pl.origin.is_some(), "--origin"),
+        (
+            pl.layer_axis.is_some() || pl.layer_angle.is_some(),
+            "--layer-axis/--layer-angle",
+        ),
+        (pl.near.is_some(), "--near"),
+        (pl.stock.is_some(), "--stock"),
+        (pl.part.is_some(), "--part"),
+        (pl.e_extrusion, "--e-extrusion"),
+    ];
+    if let Some((_, flag)) = given.iter().find(|(g, _)| *g) {
+        return Err(CliError::usage(format!(
+            "error: {flag} does not apply to an arm: the path is in the part frame, which the arm file's [holder] places on the flange\n  = help: give the path (x y z i j k feed laser) and the arm options --config, --spacing, --chunk-points\n"
+        )));
+    }
+    Ok(())
+}
+
+/// The path file: its name, text and resampled locations (`spacing` apart at most).
+fn read_path(
+    arm: &Arm,
+    pl: &Placement,
+    input: &str,
+    spacing: f64,
+) -> Result<(String, String, Vec<Sample>), CliError> {
+    let name = display_name(input);
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut crate::io::open_input(input)?, &mut text)
+        .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
+    let pts = lampost_post::pointwise::read_points(&text, &name).map_err(post_error)?;
+    let arm_mm = arm.units == lampost_robot::def::Units::Mm;
+    let k = match pl.units {
+        Some(u) if matches!(u, crate::UnitsArg::Mm) != arm_mm => {
+            if !pl.convert_units {
+                let (from, to) = if arm_mm {
+                    ("inches", "millimetres")
+                } else {
+                    ("millimetres", "inches")
+                };
+                return Err(CliError::usage(format!(
+                    "error: {name}: the points are in {from} (--units), the arm {} works in {to}\n  = help: add --convert-units to scale the points and feeds to {to}\n",
+                    arm.name
+                )));
+            }
+            if arm_mm {
+                25.4
+            } else {
+                1.0 / 25.4
+            }
+        }
+        _ => 1.0,
+    };
+    let path: Vec<PathPoint> = pts
+        .iter()
+        .map(|p| PathPoint {
+            tip: p.tip * k,
+            axis: p.axis,
+            feed: p.feed * k,
+            deposit: p.deposit,
+            line: p.line,
+        })
+        .collect();
+    let samples =
+        plan::resample(&path, spacing).map_err(|e| robot_error(e, Some((&name, &text))))?;
+    Ok((name, text, samples))
+}
+
+fn chunk_name(k: usize) -> String {
+    format!("chunk-{k:03}.loc")
+}
+
+fn werr(e: std::io::Error) -> CliError {
+    CliError::write(&e)
+}
+
+/// `lampost post --machine ARM PATH -o DIR`.
+pub fn post(
+    arm: &Arm,
+    a: &PostArgs,
+    input: Option<&str>,
+    output: Option<&str>,
+    max_bytes: Option<usize>,
+    json_report: Option<&str>,
+) -> Result<(), CliError> {
+    let t0 = std::time::Instant::now();
+    refuse_placement(&a.place)?;
+    let table_only = [
+        (!a.set.is_empty(), "--set"),
+        (a.head.is_some(), "--head"),
+        (a.dialect.is_some(), "--dialect"),
+        (a.renumber.is_some(), "--renumber"),
+        (a.tolerance.is_some(), "--tolerance"),
+        (a.tool.is_some(), "--tool"),
+        (a.length_offset.is_some(), "--length-offset"),
+        (a.work_offset.is_some(), "--work-offset"),
+        (a.coolant, "--coolant"),
+    ];
+    if let Some((_, flag)) = table_only.iter().find(|(g, _)| *g) {
+        return Err(CliError::usage(format!(
+            "error: {flag} is for programs of table machines; {} is an arm\n  = help: an arm's settings are in its file (`lampost machines show {}`); the arm options are --config, --spacing, --chunk-points\n",
+            arm.name, arm.name
+        )));
+    }
+    if max_bytes.is_some() || json_report.is_some() {
+        return Err(CliError::usage("error: --max-bytes and --json-report are for programs: an arm's output is chunked by --chunk-points, and its manifest.json is the report\n".to_string()));
+    }
+    let Some(dir) = output.filter(|o| *o != "-") else {
+        return Err(CliError::usage(
+            "error: an arm's output is a folder of location files: give -o DIR\n".to_string(),
+        ));
+    };
+    let input = input.ok_or_else(|| {
+        CliError::usage("error: give the PATH (rows x y z i j k [feed] [laser])\n".to_string())
+    })?;
+    let cfg = match a.config.as_deref() {
+        Some(c) => Config::parse(c).ok_or_else(|| {
+            CliError::usage(format!(
+                "error: --config {c}: give three letters, l or r (shoulder), u or d (elbow), n or f (wrist), e.g. ldn\n"
+            ))
+        })?,
+        None => arm.config,
+    };
+    let spacing = a.spacing.unwrap_or(arm.spacing);
+    let chunk_points = a.chunk_points.unwrap_or(arm.chunk_points);
+    let (name, text, samples) = read_path(arm, &a.place, input, spacing)?;
+    let located = |e| robot_error(e, Some((&name, &text)));
+    let poses = plan::plan(arm, &samples, cfg).map_err(located)?;
+    let ranges = chunk::chunk_ranges(&samples, chunk_points).map_err(located)?;
+    let total = ranges.len();
+    let mut files = Vec::with_capacity(total);
+    for (k, r) in ranges.iter().enumerate() {
+        files.push(ChunkFile {
+            name: chunk_name(k + 1),
+            first: r.start,
+            count: r.len(),
+            text: chunk::write_chunk(arm, cfg, &samples, &poses, r.clone(), k + 1, total),
+        });
+    }
+    // Verify what is about to be written, as `lampost verify` reads it.
+    let rep = chunk::verify(arm, &samples, cfg, &files, arm.tolerance).map_err(|e| {
+        CliError::failed(format!(
+            "error: {e}\n  = help: this is a lampost fault; nothing was written\n"
+        ))
+    })?;
+    let seconds: f64 = samples.iter().map(|s| s.dt).sum();
+    let laser_s: f64 = samples.iter().filter(|s| s.deposit).map(|s| s.dt).sum();
+    let chunks: Vec<Obj> = files
+        .iter()
+        .zip(&ranges)
+        .map(|(f, r)| {
+            let secs: f64 = samples[r.start + 1..r.end].iter().map(|s| s.dt).sum();
+            obj! {"file": f.name, "first": f.first, "count": f.count, "locations": f.count + 2, "path_s": secs}
+        })
+        .collect();
+    let manifest = obj! {
+        "format": chunk::FORMAT,
+        "machine": arm.name,
+        "input": name,
+        "units": if arm.units == lampost_robot::def::Units::Mm { "mm" } else { "inch" },
+        "config": cfg.letters(),
+        "spacing": spacing,
+        "chunk_points": chunk_points,
+        "locations": samples.len(),
+        "path_s": seconds,
+        "laser_on_s": laser_s,
+        "chunks": chunks,
+        "safe": arm.safe.map(f64::to_degrees),
+        "loading": "each chunk starts and ends at the safe location; a controller that loads chunk k+1 while chunk k runs needs room for two chunks (2 × chunk_points locations) and a handshake at the safe location",
+        "verify": obj!{"max_focus_error": rep.max_focus_error, "max_axis_error_deg": rep.max_axis_error_deg},
+    };
+    let manifest = json::to_string(&manifest)?;
+    // Nothing is written until everything is planned and verified; then every file is
+    // staged beside its target and renamed into place together.
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::usage(format!("error: cannot create the folder {dir}: {e}\n")))?;
+    let mut staged: Vec<(TempFile, PathBuf)> = Vec::new();
+    let mut stage = |file: &str, body: &str| -> Result<(), CliError> {
+        let target = Path::new(dir).join(file);
+        let (t, mut f) = TempFile::beside(Some(&target.to_string_lossy()))?;
+        f.write_all(body.as_bytes()).map_err(werr)?;
+        f.flush().map_err(werr)?;
+        staged.push((t, target));
+        Ok(())
+    };
+    for f in &files {
+        stage(&f.name, &f.text)?;
+    }
+    stage("manifest.json", &format!("{manifest}\n"))?;
+    for (t, target) in staged {
+        t.persist(&target)?;
+    }
+    // Chunks of an earlier, longer run are stale.
+    for k in total + 1.. {
+        let stale = Path::new(dir).join(chunk_name(k));
+        if std::fs::remove_file(&stale).is_err() {
+            break;
+        }
+        eprintln!("removed {}: a chunk of an earlier run", stale.display());
+    }
+    if !a.place.quiet {
+        let sizes: Vec<String> = files.iter().map(|f| (f.count + 2).to_string()).collect();
+        eprintln!(
+            "posted {} locations in {total} chunks of at most {chunk_points} ({}) to {dir}, configuration {}; verified: max focus error {:.2e}, max approach error {:.2e}°; {:.2} s",
+            samples.len(),
+            sizes.join(", "),
+            cfg.letters(),
+            rep.max_focus_error,
+            rep.max_axis_error_deg,
+            t0.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// `lampost verify --machine ARM DIR --input PATH`.
+pub fn verify(
+    arm: &Arm,
+    place: &Placement,
+    input: &str,
+    dir: &str,
+    tolerance: Option<f64>,
+    json_out: bool,
+) -> Result<(), CliError> {
+    let t0 = std::time::Instant::now();
+    refuse_placement(place)?;
+    let mpath = Path::new(dir).join("manifest.json");
+    let mname = mpath.to_string_lossy().into_owned();
+    let bad = |line: usize, msg: String| {
+        robot_error(
+            RobotError::Verify {
+                file: mname.clone(),
+                line,
+                message: msg,
+            },
+            None,
+        )
+    };
+    let mtext = std::fs::read_to_string(&mpath)
+        .map_err(|e| CliError::usage(format!("error: cannot read {mname}: {e}\n  = help: give the folder `lampost post --machine {} … -o DIR` wrote\n", arm.name)))?;
+    let m: serde_json::Value =
+        serde_json::from_str(&mtext).map_err(|e| bad(e.line(), format!("not JSON: {e}")))?;
+    let field = |k: &str| m.get(k).ok_or_else(|| bad(0, format!("no `{k}`")));
+    let s = |k: &str| -> Result<String, CliError> {
+        field(k)?
+            .as_str()
+            .map(str::to_string)
+            .ok_or_else(|| bad(0, format!("`{k}` is not a string")))
+    };
+    if s("format")? != chunk::FORMAT {
+        return Err(bad(0, format!("format is not `{}`", chunk::FORMAT)));
+    }
+    if s("machine")? != arm.name {
+        return Err(bad(
+            0,
+            format!("posted for {}, not {}", s("machine")?, arm.name),
+        ));
+    }
+    let cfg = Config::parse(&s("config")?).ok_or_else(|| bad(0, "bad `config`".into()))?;
+    let spacing = field("spacing")?
+        .as_f64()
+        .ok_or_else(|| bad(0, "`spacing` is not a number".into()))?;
+    let list = field("chunks")?
+        .as_array()
+        .ok_or_else(|| bad(0, "`chunks` is not a list".into()))?;
+    let mut files = Vec::with_capacity(list.len());
+    for (k, c) in list.iter().enumerate() {
+        let get = |key: &str| {
+            c.get(key)
+                .ok_or_else(|| bad(0, format!("chunk {}: no `{key}`", k + 1)))
+        };
+        let file = get("file")?
+            .as_str()
+            .filter(|f| !f.contains('/') && !f.contains('\\') && !f.starts_with('.'))
+            .ok_or_else(|| bad(0, format!("chunk {}: `file` is not a file name", k + 1)))?
+            .to_string();
+        let num = |key: &str| {
+            get(key)?
+                .as_u64()
+                .and_then(|v| usize::try_from(v).ok())
+                .ok_or_else(|| bad(0, format!("chunk {}: `{key}` is not a count", k + 1)))
+        };
+        let path = Path::new(dir).join(&file);
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            bad(
+                0,
+                format!(
+                    "chunk {} of {}: cannot read {}: {e} (a missing chunk)",
+                    k + 1,
+                    list.len(),
+                    path.display()
+                ),
+            )
+        })?;
+        files.push(ChunkFile {
+            name: path.to_string_lossy().into_owned(),
+            first: num("first")?,
+            count: num("count")?,
+            text,
+        });
+    }
+    let (name, text, samples) = read_path(arm, place, input, spacing)?;
+    let _ = (&name, &text);
+    let tol = tolerance.unwrap_or(arm.tolerance);
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(CliError::usage(format!(
+            "error: --tolerance {tol}: must be positive\n"
+        )));
+    }
+    let rep = chunk::verify(arm, &samples, cfg, &files, tol).map_err(|e| robot_error(e, None))?;
+    let out = if json_out {
+        format!(
+            "{}\n",
+            json::to_string(
+                &obj! {"max_focus_error": rep.max_focus_error, "max_axis_error_deg": rep.max_axis_error_deg, "locations": rep.locations, "chunks": rep.chunks, "ok": true}
+            )?
+        )
+    } else {
+        format!(
+            "ok: {} locations in {} chunks\nmax_focus_error {:.3e}\nmax_axis_error_deg {:.3e}\n",
+            rep.locations, rep.chunks, rep.max_focus_error, rep.max_axis_error_deg
+        )
+    };
+    let mut o = crate::io::Output::create(None)?;
+    o.writer().write_all(out.as_bytes()).map_err(werr)?;
+    o.commit()?;
+    if !place.quiet {
+        eprintln!(
+            "verified {} locations in {} chunks of {dir}: max focus error {:.2e}, max approach error {:.2e}°; {:.2} s",
+            rep.locations,
+            rep.chunks,
+            rep.max_focus_error,
+            rep.max_axis_error_deg,
+            t0.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}

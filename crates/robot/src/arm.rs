@@ -1,0 +1,630 @@
+//! The arm: classic Denavit–Hartenberg forward kinematics, the closed-form inverse of a
+//! PUMA-type arm (all eight configurations), a damped-least-squares inverse for other
+//! arms, and joint limits.
+//!
+//! Classic DH: `A_i(q_i) = Rz(q_i + offset_i) · Tz(d_i) · Tx(a_i) · Rx(α_i)`; the flange is
+//! `A_1 ⋯ A_6` in the base frame; the part frame in the world is
+//! `base · A_1 ⋯ A_6 · holder`. Angles are radians here and degrees in files.
+//!
+//! The closed form holds for arms with α = (90°, 0, −90°, 90°, −90°, any), a1 = d2 = 0 and
+//! a4 = a5 = d5 = 0 (the PUMA 560's shape: a shoulder offset d3, a forearm offset a3 and a
+//! spherical wrist). It follows Paul and Zhang (1986), as the Robotics Toolbox's
+//! `ikine_a` does, and names the configurations the same way: `l`/`r` shoulder (left,
+//! right), `u`/`d` elbow (up, down), `n`/`f` wrist (not flipped: θ5 ≤ 0; flipped: θ5 > 0).
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+
+use crate::def::{ArmDef, FrameDef, Units};
+use crate::error::RobotError;
+
+/// Joint values, radians.
+pub type Q = [f64; 6];
+
+const TAU: f64 = std::f64::consts::TAU;
+const PI: f64 = std::f64::consts::PI;
+
+/// A rigid transform: `p_parent = r · p_child + t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frame {
+    /// Rotation (columns: the child's axes in the parent).
+    pub r: Matrix3<f64>,
+    /// Translation (the child's origin in the parent).
+    pub t: Vector3<f64>,
+}
+
+impl Frame {
+    /// The identity.
+    pub fn identity() -> Frame {
+        Frame {
+            r: Matrix3::identity(),
+            t: Vector3::zeros(),
+        }
+    }
+
+    /// `self · other`.
+    pub fn mul(&self, o: &Frame) -> Frame {
+        Frame {
+            r: self.r * o.r,
+            t: self.r * o.t + self.t,
+        }
+    }
+
+    /// The inverse transform.
+    pub fn inverse(&self) -> Frame {
+        let rt = self.r.transpose();
+        Frame {
+            r: rt,
+            t: -(rt * self.t),
+        }
+    }
+
+    /// A point of the child frame in the parent.
+    pub fn apply(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.r * p + self.t
+    }
+
+    /// From a file's origin and axes (x made orthogonal to z; y = z × x).
+    pub fn from_def(f: &FrameDef) -> Frame {
+        let z = Vector3::from(f.z_axis).normalize();
+        let y = z.cross(&Vector3::from(f.x_axis)).normalize();
+        let x = y.cross(&z);
+        Frame {
+            r: Matrix3::from_columns(&[x, y, z]),
+            t: Vector3::from(f.origin),
+        }
+    }
+
+    /// Rotation about z by `a` radians.
+    pub fn rot_z(a: f64) -> Matrix3<f64> {
+        let (s, c) = a.sin_cos();
+        Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+    }
+}
+
+/// One joint, radians and file units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Link {
+    /// Name.
+    pub name: String,
+    /// DH d.
+    pub d: f64,
+    /// DH a.
+    pub a: f64,
+    /// DH α, radians.
+    pub alpha: f64,
+    /// Added to the joint value to give θ, radians.
+    pub offset: f64,
+    /// Lower limit, radians.
+    pub lo: f64,
+    /// Upper limit, radians.
+    pub hi: f64,
+    /// Fastest turn, radians per second.
+    pub max_speed: f64,
+    sa: f64,
+    ca: f64,
+}
+
+impl Link {
+    /// `A_i(q)`.
+    pub fn transform(&self, q: f64) -> Frame {
+        let (st, ct) = (q + self.offset).sin_cos();
+        let (sa, ca) = (self.sa, self.ca);
+        Frame {
+            r: Matrix3::new(ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca),
+            t: Vector3::new(self.a * ct, self.a * st, self.d),
+        }
+    }
+}
+
+/// An arm configuration: shoulder, elbow, wrist.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Config {
+    /// Right shoulder (`r`), else left (`l`).
+    pub right: bool,
+    /// Elbow up (`u`), else down (`d`).
+    pub up: bool,
+    /// Wrist flipped (`f`), else not (`n`).
+    pub flip: bool,
+}
+
+impl Config {
+    /// All eight.
+    pub const ALL: [Config; 8] = {
+        let mut all = [Config {
+            right: false,
+            up: false,
+            flip: false,
+        }; 8];
+        let mut i = 0;
+        while i < 8 {
+            all[i] = Config {
+                right: i & 4 != 0,
+                up: i & 2 != 0,
+                flip: i & 1 != 0,
+            };
+            i += 1;
+        }
+        all
+    };
+
+    /// Three letters, in any order: `l`/`r`, `u`/`d`, `n`/`f`.
+    pub fn parse(s: &str) -> Option<Config> {
+        let s = s.trim().to_ascii_lowercase();
+        if s.len() != 3 {
+            return None;
+        }
+        let has = |a: char, b: char| match (s.contains(a), s.contains(b)) {
+            (true, false) => Some(true),
+            (false, true) => Some(false),
+            _ => None,
+        };
+        Some(Config {
+            right: has('r', 'l')?,
+            up: has('u', 'd')?,
+            flip: has('f', 'n')?,
+        })
+    }
+
+    /// The letters, e.g. `lun`.
+    pub fn letters(&self) -> String {
+        format!(
+            "{}{}{}",
+            if self.right { 'r' } else { 'l' },
+            if self.up { 'u' } else { 'd' },
+            if self.flip { 'f' } else { 'n' }
+        )
+    }
+}
+
+/// The configuration of joint values; `None` where they lie on the boundary between two
+/// (a singular pose), so either configuration holds there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ConfigOf {
+    /// Right shoulder.
+    pub right: Option<bool>,
+    /// Elbow up.
+    pub up: Option<bool>,
+    /// Wrist flipped.
+    pub flip: Option<bool>,
+}
+
+impl ConfigOf {
+    /// Whether `c` holds for these joint values.
+    pub fn fits(&self, c: Config) -> bool {
+        self.right.is_none_or(|r| r == c.right)
+            && self.up.is_none_or(|u| u == c.up)
+            && self.flip.is_none_or(|f| f == c.flip)
+    }
+}
+
+/// Why an inverse has no answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoReach {
+    /// The limiting joint (0-based).
+    pub joint: usize,
+    /// Why, in words.
+    pub why: String,
+}
+
+/// Wrap an angle into (−π, π].
+pub fn wrap(a: f64) -> f64 {
+    let w = a - TAU * (a / TAU).round();
+    if w <= -PI {
+        w + TAU
+    } else if w > PI {
+        w - TAU
+    } else {
+        w
+    }
+}
+
+/// A validated arm.
+#[derive(Debug, Clone)]
+pub struct Arm {
+    /// Machine name.
+    pub name: String,
+    /// Length units.
+    pub units: Units,
+    /// The joints.
+    pub links: [Link; 6],
+    /// World to base.
+    pub base: Frame,
+    /// Flange to part.
+    pub holder: Frame,
+    /// World to working frame (origin: the focus; z: into the head).
+    pub head: Frame,
+    /// The safe location, radians.
+    pub safe: Q,
+    /// Default configuration.
+    pub config: Config,
+    /// Locations per controller file, the two safe ones included.
+    pub chunk_points: usize,
+    /// Largest distance between locations.
+    pub spacing: f64,
+    /// Verification tolerance (focus to path).
+    pub tolerance: f64,
+    /// The PUMA closed form applies.
+    pub closed_form: bool,
+    /// Characteristic length (sum of |a| + |d|), for scaling.
+    pub scale: f64,
+    /// For an arm with the PUMA's twists but small offsets the closed form does not
+    /// allow (a1, d2, a4, a5, d5): the same arm with them zeroed, whose closed-form
+    /// solution in the asked configuration seeds the numerical inverse.
+    pub approx: Option<Box<Arm>>,
+    /// The file it came from.
+    pub def: ArmDef,
+}
+
+impl Arm {
+    /// From a checked file.
+    pub fn new(def: ArmDef) -> Arm {
+        let r = f64::to_radians;
+        let links: [Link; 6] = std::array::from_fn(|i| {
+            let j = &def.joint[i];
+            let alpha = r(j.alpha);
+            // Exact quarter turns: sin 90° = 1 and cos 90° = 0, not 6e-17.
+            let (sa, ca) = if j.alpha == 90.0 {
+                (1.0, 0.0)
+            } else if j.alpha == -90.0 {
+                (-1.0, 0.0)
+            } else if j.alpha == 0.0 {
+                (0.0, 1.0)
+            } else if j.alpha.abs() == 180.0 {
+                (0.0, -1.0)
+            } else {
+                alpha.sin_cos()
+            };
+            Link {
+                name: j.name.clone(),
+                d: j.d,
+                a: j.a,
+                alpha,
+                offset: r(j.offset),
+                lo: r(j.limits[0]),
+                hi: r(j.limits[1]),
+                max_speed: r(j.max_speed),
+                sa,
+                ca,
+            }
+        });
+        let deg: Vec<f64> = def.joint.iter().map(|j| j.alpha).collect();
+        let closed_form = deg[0] == 90.0
+            && deg[1] == 0.0
+            && deg[2] == -90.0
+            && deg[3] == 90.0
+            && deg[4] == -90.0
+            && links[0].a == 0.0
+            && links[1].d == 0.0
+            && links[3].a == 0.0
+            && links[4].a == 0.0
+            && links[4].d == 0.0
+            && links[1].a != 0.0
+            && links[2].a.hypot(links[3].d) > 0.0;
+        let scale = links.iter().map(|l| l.a.abs() + l.d.abs()).sum::<f64>();
+        let puma_twists =
+            deg[0] == 90.0 && deg[1] == 0.0 && deg[2] == -90.0 && deg[3] == 90.0 && deg[4] == -90.0;
+        let approx = (!closed_form && puma_twists)
+            .then(|| {
+                let mut d = def.clone();
+                d.joint[0].a = 0.0;
+                d.joint[1].d = 0.0;
+                d.joint[3].a = 0.0;
+                d.joint[4].a = 0.0;
+                d.joint[4].d = 0.0;
+                let a = Arm::new(d);
+                a.closed_form.then(|| Box::new(a))
+            })
+            .flatten();
+        Arm {
+            approx,
+            name: def.name.clone(),
+            units: def.units,
+            base: Frame::from_def(&def.base),
+            holder: Frame::from_def(&def.holder),
+            head: Frame::from_def(&def.head),
+            safe: std::array::from_fn(|i| r(def.cell.safe[i])),
+            config: Config::parse(&def.cell.config).unwrap_or(Config {
+                right: false,
+                up: true,
+                flip: false,
+            }),
+            chunk_points: def.cell.chunk_points,
+            spacing: def.cell.spacing,
+            tolerance: def.cell.tolerance,
+            closed_form,
+            scale,
+            links,
+            def,
+        }
+    }
+
+    /// A built-in arm.
+    pub fn builtin(name: &str) -> Option<Arm> {
+        ArmDef::builtin(name).map(Arm::new)
+    }
+
+    /// Read an arm file.
+    pub fn from_toml(text: &str, file: &str) -> Result<Arm, RobotError> {
+        ArmDef::from_toml(text, file).map(Arm::new)
+    }
+
+    /// Joint names.
+    pub fn joint_name(&self, j: usize) -> &str {
+        self.links.get(j).map_or("?", |l| l.name.as_str())
+    }
+
+    /// The flange in the base frame, `A_1 ⋯ A_6`.
+    pub fn flange(&self, q: &Q) -> Frame {
+        let mut t = Frame::identity();
+        for (l, &v) in self.links.iter().zip(q) {
+            t = t.mul(&l.transform(v));
+        }
+        t
+    }
+
+    /// The part frame in the world: `base · flange · holder`.
+    pub fn part(&self, q: &Q) -> Frame {
+        self.base.mul(&self.flange(q)).mul(&self.holder)
+    }
+
+    /// The flange (in the base frame) that puts the part frame at `part` (world).
+    pub fn flange_for(&self, part: &Frame) -> Frame {
+        self.base.inverse().mul(part).mul(&self.holder.inverse())
+    }
+
+    /// Whether every joint lies within its limits (1e-9 rad of slack for rounding).
+    pub fn within_limits(&self, q: &Q) -> Option<usize> {
+        self.links
+            .iter()
+            .zip(q)
+            .position(|(l, &v)| !(v >= l.lo - 1e-9 && v <= l.hi + 1e-9))
+    }
+
+    /// Each joint on the turn (±2π) nearest `near` that lies within its limits; `Err`
+    /// names the first joint with none.
+    pub fn fit_limits(&self, q: &Q, near: &Q) -> Result<Q, usize> {
+        let mut out = *q;
+        for j in 0..6 {
+            let l = &self.links[j];
+            let base = near[j] + wrap(q[j] - near[j]);
+            let mut best: Option<f64> = None;
+            for k in -2..=2 {
+                let c = base + TAU * f64::from(k);
+                if c >= l.lo - 1e-9 && c <= l.hi + 1e-9 {
+                    let c = c.clamp(l.lo, l.hi);
+                    if best.is_none_or(|b| (c - near[j]).abs() < (b - near[j]).abs()) {
+                        best = Some(c);
+                    }
+                }
+            }
+            out[j] = best.ok_or(j)?;
+        }
+        Ok(out)
+    }
+
+    /// Closed-form inverse of a PUMA-type arm: joint values (each in (−π, π]) that put the
+    /// flange at `flange` (base frame) in configuration `c`. At the wrist singularity
+    /// (θ5 = 0 or π) θ4 is kept at `wrist` (the last value) and θ6 takes the rest.
+    pub fn inverse_closed(&self, flange: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+        let l = &self.links;
+        let (d1, a2, a3, d3, d4) = (l[0].d, l[1].a, l[2].a, l[2].d, l[3].d);
+        // Strip A6's fixed part: T' = T06 · (Tz(d6) Tx(a6) Rx(α6))⁻¹ = T05 · Rz(θ6).
+        let e = Frame {
+            r: {
+                let (sa, ca) = (l[5].sa, l[5].ca);
+                Matrix3::new(1.0, 0.0, 0.0, 0.0, ca, -sa, 0.0, sa, ca)
+            },
+            t: Vector3::new(l[5].a, 0.0, l[5].d),
+        };
+        let tp = flange.mul(&e.inverse());
+        let p = tp.t;
+        let r2 = p.x * p.x + p.y * p.y;
+        if r2 < d3 * d3 || r2 == 0.0 {
+            return Err(NoReach {
+                joint: 0,
+                why: format!(
+                    "the wrist centre is {:.3} from the waist axis, inside the shoulder offset {:.3}",
+                    r2.sqrt(),
+                    d3.abs()
+                ),
+            });
+        }
+        let xr = (r2 - d3 * d3).sqrt();
+        let x = if c.right { xr } else { -xr };
+        let t1 = p.y.atan2(p.x) + d3.atan2(x);
+        let y = p.z - d1;
+        let l3sq = a3 * a3 + d4 * d4;
+        let rr = (x * x + y * y).sqrt();
+        let cpsi = (a2 * a2 - l3sq + x * x + y * y) / (2.0 * a2 * rr);
+        if !cpsi.is_finite() || cpsi.abs() > 1.0 + 1e-12 {
+            let (lo, hi) = ((a2.abs() - l3sq.sqrt()).abs(), a2.abs() + l3sq.sqrt());
+            return Err(NoReach {
+                joint: 2,
+                why: format!(
+                    "the wrist centre is {rr:.3} from the shoulder; the elbow reaches {lo:.3} to {hi:.3}"
+                ),
+            });
+        }
+        let psi = cpsi.clamp(-1.0, 1.0).acos();
+        let n2 = if c.up == c.right { 1.0 } else { -1.0 };
+        let t2 = y.atan2(x) + n2 * psi;
+        let (s2, c2) = t2.sin_cos();
+        let phi = d4.atan2(a3);
+        let t3 = (y - a2 * s2).atan2(x - a2 * c2) - t2 - phi;
+        let th = [t1, t2, t3];
+        let mut r03: Matrix3<f64> = Matrix3::identity();
+        for (k, lk) in l.iter().take(3).enumerate() {
+            r03 *= lk.transform(th[k] - lk.offset).r;
+        }
+        let m: Matrix3<f64> = r03.transpose() * tp.r; // Rz(θ4) · Ry(−θ5) · Rz(θ6)
+        let sb = m[(0, 2)].hypot(m[(1, 2)]);
+        let (t4, b, t6);
+        if sb < 1e-10 {
+            let w = wrist + l[3].offset;
+            if m[(2, 2)] > 0.0 {
+                b = 0.0;
+                t4 = w;
+                t6 = m[(1, 0)].atan2(m[(0, 0)]) - w;
+            } else {
+                b = PI;
+                t4 = w;
+                t6 = w - (-m[(1, 0)]).atan2(-m[(0, 0)]);
+            }
+        } else {
+            let bb = sb.atan2(m[(2, 2)]);
+            let a4 = m[(1, 2)].atan2(m[(0, 2)]);
+            let a6 = m[(2, 1)].atan2(-m[(2, 0)]);
+            if c.flip {
+                b = -bb;
+                t4 = a4 + PI;
+                t6 = a6 + PI;
+            } else {
+                b = bb;
+                t4 = a4;
+                t6 = a6;
+            }
+        }
+        let t5 = -b;
+        let th = [t1, t2, t3, t4, t5, t6];
+        Ok(std::array::from_fn(|k| wrap(th[k] - l[k].offset)))
+    }
+
+    /// Damped-least-squares inverse from `seed`: joint values that put the flange at
+    /// `flange` (base frame) to 1e-12 (relative to the arm's size), or `None` when 500 steps do not get there.
+    pub fn inverse_dls(&self, flange: &Frame, seed: &Q) -> Option<Q> {
+        let s = self.scale.max(1e-9);
+        let mut q = *seed;
+        let mut best = f64::INFINITY;
+        for _ in 0..500 {
+            let frames = self.chain(&q);
+            let f6 = frames[6];
+            let ep = (flange.t - f6.t) / s;
+            let eo = rot_vec(&(flange.r * f6.r.transpose()));
+            let e = Vector6::new(ep.x, ep.y, ep.z, eo.x, eo.y, eo.z);
+            let en = e.norm();
+            if !en.is_finite() {
+                return None;
+            }
+            if en < 1e-14 || (en < 1e-12 && en >= best) {
+                return Some(q.map(wrap));
+            }
+            best = best.min(en);
+            let mut jm = Matrix6::zeros();
+            for i in 0..6 {
+                let z = frames[i].r.column(2).into_owned();
+                let v = z.cross(&(f6.t - frames[i].t)) / s;
+                for k in 0..3 {
+                    jm[(k, i)] = v[k];
+                    jm[(k + 3, i)] = z[k];
+                }
+            }
+            let lam2 = 1e-4 * en.min(1.0);
+            let a = jm * jm.transpose() + Matrix6::identity() * lam2;
+            let y = a.lu().solve(&e)?;
+            let mut dq = jm.transpose() * y;
+            // At most a quarter turn a step: far from the answer the linear model lies.
+            let big = dq.amax();
+            if big > 0.5 {
+                dq *= 0.5 / big;
+            }
+            for i in 0..6 {
+                q[i] += dq[i];
+            }
+        }
+        None
+    }
+
+    /// The frames `A_1 ⋯ A_i` for i = 0 … 6 (base frame).
+    pub fn chain(&self, q: &Q) -> [Frame; 7] {
+        let mut out = [Frame::identity(); 7];
+        for i in 0..6 {
+            out[i + 1] = out[i].mul(&self.links[i].transform(q[i]));
+        }
+        out
+    }
+
+    /// The configuration of joint values (closed-form arms only).
+    pub fn config_of(&self, q: &Q) -> Option<ConfigOf> {
+        if !self.closed_form {
+            return None;
+        }
+        let l = &self.links;
+        let th: [f64; 6] = std::array::from_fn(|k| q[k] + l[k].offset);
+        let frames = self.chain(q);
+        // The wrist centre: o3 + d4 · z3.
+        let p = frames[3].t + frames[3].r.column(2) * l[3].d;
+        let (s1, c1) = th[0].sin_cos();
+        let x = p.x * c1 + p.y * s1;
+        let y = p.z - l[0].d;
+        let eps = 1e-9 * self.scale.max(1.0);
+        let right = (x.abs() > eps).then_some(x > 0.0);
+        let dev = wrap(th[1] - y.atan2(x));
+        let up = match right {
+            Some(r) if dev.abs() > 1e-9 => Some((dev > 0.0) == r),
+            _ => None,
+        };
+        let t5 = wrap(th[4]);
+        let flip = (t5.sin().abs() > 1e-9).then_some(t5 > 0.0);
+        Some(ConfigOf { right, up, flip })
+    }
+}
+
+/// The rotation vector (axis × angle) of a rotation matrix.
+pub fn rot_vec(r: &Matrix3<f64>) -> Vector3<f64> {
+    let v = Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    );
+    let s = v.norm() / 2.0;
+    let c = (r.trace() - 1.0) / 2.0;
+    let angle = s.atan2(c);
+    if s > 1e-12 {
+        v * (angle / (2.0 * s))
+    } else if c > 0.0 {
+        v / 2.0
+    } else {
+        // Half a turn: the axis from the symmetric part.
+        let m = (r + Matrix3::identity()) / 2.0;
+        let k = (0..3)
+            .max_by(|&a, &b| m[(a, a)].total_cmp(&m[(b, b)]))
+            .unwrap_or(0);
+        let col = m.column(k).into_owned();
+        let n = col.norm();
+        if n > 0.0 {
+            col / n * PI
+        } else {
+            Vector3::zeros()
+        }
+    }
+}
+
+/// The angle between two rotations, radians.
+pub fn rot_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    rot_vec(&(a * b.transpose())).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_letters_round_trip() {
+        for c in Config::ALL {
+            assert_eq!(Config::parse(&c.letters()), Some(c));
+        }
+        assert_eq!(Config::parse("lu"), None);
+        assert_eq!(Config::parse("lrn"), None);
+        assert_eq!(
+            Config::parse("nul").map(|c| c.letters()),
+            Some("lun".into())
+        );
+    }
+
+    #[test]
+    fn wrap_is_half_open() {
+        assert_eq!(wrap(PI), PI);
+        assert_eq!(wrap(-PI), PI);
+        assert!((wrap(3.0 * PI + 0.1) - (-PI + 0.1)).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,363 @@
+//! From a path to joint values: each path point brought to the laser's focus with its
+//! approach direction along the beam, the free turn about the beam chosen for the
+//! smallest joint motion from the previous location; points resampled to equal spacing,
+//! each segment timed from its feed; every location within the joint limits, in one
+//! configuration, and no joint asked to turn faster than it can.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::arm::{Arm, Config, Frame, NoReach, Q};
+use crate::error::RobotError;
+
+/// A path point (part frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathPoint {
+    /// The point to bring to the focus.
+    pub tip: Vector3<f64>,
+    /// Unit direction from the point into the laser head (the approach reversed).
+    pub axis: Vector3<f64>,
+    /// Feed to this point, units per minute.
+    pub feed: f64,
+    /// Laser on during the move to this point.
+    pub deposit: bool,
+    /// Input line (0: not from a file).
+    pub line: usize,
+}
+
+/// A resampled location on the path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// The point (part frame).
+    pub tip: Vector3<f64>,
+    /// Unit axis (part frame).
+    pub axis: Vector3<f64>,
+    /// Laser on during the move to here.
+    pub deposit: bool,
+    /// Seconds allowed for the move to here (0 for the first).
+    pub dt: f64,
+    /// Input line of the point the segment ends at.
+    pub line: usize,
+}
+
+/// The most locations a path may become.
+pub const MAX_SAMPLES: f64 = 2_000_000.0;
+
+/// Largest turn of the axis between two locations, radians (1°).
+pub const MAX_TURN: f64 = std::f64::consts::PI / 180.0;
+
+/// Resample: each input segment cut into equal pieces no longer than `spacing` and
+/// turning the axis by at most 1° (the axis turned at constant rate on the great circle);
+/// every input point kept; a repeated point (same place and axis) dropped.
+pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotError> {
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(RobotError::Option(format!(
+            "spacing {spacing}: must be a positive number"
+        )));
+    }
+    let Some(first) = path.first() else {
+        return Err(RobotError::Option("the path has no points".into()));
+    };
+    let mut out = vec![Sample {
+        tip: first.tip,
+        axis: first.axis.normalize(),
+        deposit: first.deposit,
+        dt: 0.0,
+        line: first.line,
+    }];
+    let mut total = 1.0;
+    for w in path.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        let (ua, ub) = (a.axis.normalize(), b.axis.normalize());
+        let len = (b.tip - a.tip).norm();
+        let turn = ua.cross(&ub).norm().atan2(ua.dot(&ub));
+        if !(len.is_finite() && turn.is_finite()) {
+            return Err(RobotError::Option(format!(
+                "line {}: the segment's length is not a finite number",
+                b.line
+            )));
+        }
+        if len == 0.0 && turn < 1e-12 {
+            continue;
+        }
+        let n = (len / spacing)
+            .ceil()
+            .max((turn / MAX_TURN).ceil())
+            .max(1.0);
+        total += n;
+        if total > MAX_SAMPLES {
+            return Err(RobotError::Option(format!(
+                "the path would become more than {MAX_SAMPLES} locations at spacing {spacing}: give a larger --spacing"
+            )));
+        }
+        let n = n as usize;
+        let dt = len / n as f64 / b.feed * 60.0;
+        if !dt.is_finite() {
+            return Err(RobotError::Option(format!(
+                "line {}: the time for the segment at feed {} is not a finite number",
+                b.line, b.feed
+            )));
+        }
+        for k in 1..=n {
+            let f = k as f64 / n as f64;
+            let (tip, axis) = if k == n {
+                (b.tip, ub)
+            } else {
+                (a.tip + (b.tip - a.tip) * f, slerp(&ua, &ub, turn, f))
+            };
+            out.push(Sample {
+                tip,
+                axis,
+                deposit: b.deposit,
+                dt,
+                line: b.line,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The unit vector a fraction `f` of the way from `a` to `b` on the great circle.
+fn slerp(a: &Vector3<f64>, b: &Vector3<f64>, turn: f64, f: f64) -> Vector3<f64> {
+    if turn < 1e-9 {
+        return (a + (b - a) * f).normalize();
+    }
+    // A half turn has no single great circle: any perpendicular turns it.
+    let k = a.cross(b);
+    let k = if k.norm() > 1e-12 {
+        k.normalize()
+    } else {
+        perpendicular(a)
+    };
+    let ang = turn * f;
+    (a * ang.cos() + k.cross(a) * ang.sin() + k * k.dot(a) * (1.0 - ang.cos())).normalize()
+}
+
+/// A unit vector perpendicular to `a`.
+pub fn perpendicular(a: &Vector3<f64>) -> Vector3<f64> {
+    let m = a.abs();
+    let e = if m.x <= m.y && m.x <= m.z {
+        Vector3::x()
+    } else if m.y <= m.z {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    (e - a * a.dot(&e)).normalize()
+}
+
+/// A planned location.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Located {
+    /// Joint values, radians.
+    pub q: Q,
+    /// The part frame in the working frame.
+    pub part: Frame,
+    /// The chosen turn about the beam, radians (against the transported reference).
+    pub psi: f64,
+}
+
+/// The part frame in the working frame that puts `tip` at the focus with `axis` along
+/// +z, turned `psi` about the beam from the reference `u` (a unit vector ⟂ `axis`).
+pub fn part_in_work(tip: &Vector3<f64>, axis: &Vector3<f64>, u: &Vector3<f64>, psi: f64) -> Frame {
+    let v = axis.cross(u);
+    let m = Matrix3::from_rows(&[u.transpose(), v.transpose(), axis.transpose()]);
+    let r = Frame::rot_z(psi) * m;
+    Frame { r, t: -(r * tip) }
+}
+
+/// Plan every sample: joint values in configuration `cfg`, starting from the safe
+/// location. Errors name the input line and the joint.
+pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, RobotError> {
+    let mut out: Vec<Located> = Vec::with_capacity(samples.len());
+    let mut prev = arm.safe;
+    let mut psi_prev = 0.0;
+    let mut u = Vector3::zeros();
+    let mut a_prev = Vector3::zeros();
+    for (i, s) in samples.iter().enumerate() {
+        // The reference perpendicular, carried along the path by the smallest turn.
+        u = if i == 0 {
+            perpendicular(&s.axis)
+        } else {
+            let k = a_prev.cross(&s.axis);
+            let c = a_prev.dot(&s.axis);
+            let turned = if k.norm() > 1e-15 {
+                let ang = k.norm().atan2(c);
+                let k = k.normalize();
+                u * ang.cos() + k.cross(&u) * ang.sin() + k * k.dot(&u) * (1.0 - ang.cos())
+            } else {
+                u
+            };
+            let t = turned - s.axis * s.axis.dot(&turned);
+            if t.norm() > 1e-6 {
+                t.normalize()
+            } else {
+                perpendicular(&s.axis)
+            }
+        };
+        a_prev = s.axis;
+        let solve = |psi: f64, fresh: bool| -> Result<(Q, Frame), NoReach> {
+            let part = part_in_work(&s.tip, &s.axis, &u, psi);
+            let world = arm.head.mul(&part);
+            let flange = arm.flange_for(&world);
+            let raw = if arm.closed_form {
+                arm.inverse_closed(&flange, cfg, prev[3])?
+            } else {
+                // The first location (or one after a blocked turn) starts from the
+                // near-PUMA closed form in the asked configuration where there is one;
+                // then each location from the last.
+                let seed = match (&arm.approx, fresh) {
+                    (Some(ap), true) => ap
+                        .inverse_closed(&ap.flange_for(&world), cfg, prev[3])
+                        .ok()
+                        .and_then(|q| ap.fit_limits(&q, &prev).ok())
+                        .unwrap_or(prev),
+                    _ => prev,
+                };
+                arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
+                    joint: 2,
+                    why: "the numerical inverse does not converge (out of reach?)".into(),
+                })?
+            };
+            let q = arm.fit_limits(&raw, &prev).map_err(|j| NoReach {
+                joint: j,
+                why: format!(
+                    "{} would be {:.3}°, outside its limits [{:.1}°, {:.1}°]",
+                    arm.joint_name(j),
+                    raw[j].to_degrees(),
+                    arm.links[j].lo.to_degrees(),
+                    arm.links[j].hi.to_degrees()
+                ),
+            })?;
+            Ok((q, part))
+        };
+        let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
+        let eval = |psi: f64| solve(psi, i == 0).map(|(q, p)| (cost(&q), q, p));
+        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, p)| (cost(&q), q, p));
+        let mut best: Option<(f64, f64, Q, Frame)> = None; // (cost, psi, q, part)
+        if i > 0 {
+            if let Ok((c, q, p)) = eval(psi_prev) {
+                best = Some((c, psi_prev, q, p));
+            }
+        }
+        if best.is_none() {
+            // Scan the whole turn (the first point, or the last turn is blocked).
+            let mut fails: Vec<NoReach> = Vec::new();
+            for k in 0..72 {
+                let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / 72.0;
+                match eval_fresh(psi) {
+                    Ok((c, q, p)) => {
+                        if best.as_ref().is_none_or(|b| c < b.0) {
+                            best = Some((c, psi, q, p));
+                        }
+                    }
+                    Err(e) => fails.push(e),
+                }
+            }
+            if best.is_none() {
+                return Err(unreachable(arm, s, i, &fails));
+            }
+        }
+        // Refine: parabolic steps on the cost, shrinking.
+        if let Some(mut b) = best {
+            let mut h = 2f64.to_radians();
+            for _ in 0..4 {
+                let (Ok(lo), Ok(hi)) = (eval(b.1 - h), eval(b.1 + h)) else {
+                    h /= 4.0;
+                    continue;
+                };
+                let denom = lo.0 - 2.0 * b.0 + hi.0;
+                let mut cand = if lo.0 < b.0 {
+                    Some((lo, b.1 - h))
+                } else if hi.0 < b.0 {
+                    Some((hi, b.1 + h))
+                } else {
+                    None
+                };
+                if denom > 0.0 {
+                    let step = (-h * (hi.0 - lo.0) / (2.0 * denom)).clamp(-4.0 * h, 4.0 * h);
+                    if let Ok(p) = eval(b.1 + step) {
+                        if cand.as_ref().is_none_or(|c| p.0 < c.0 .0) {
+                            cand = Some((p, b.1 + step));
+                        }
+                    }
+                }
+                if let Some(((c, q, p), psi)) = cand {
+                    if c < b.0 {
+                        b = (c, psi, q, p);
+                    }
+                }
+                h /= 4.0;
+            }
+            best = Some(b);
+        }
+        let Some((_, psi, q, part)) = best else {
+            return Err(unreachable(arm, s, i, &[]));
+        };
+        if i > 0 {
+            check_speed(arm, s, &prev, &q)?;
+        }
+        out.push(Located { q, part, psi });
+        prev = q;
+        psi_prev = psi;
+    }
+    Ok(out)
+}
+
+/// The joint speeds of the move from `from` to `to` in `s.dt` seconds.
+pub fn check_speed(arm: &Arm, s: &Sample, from: &Q, to: &Q) -> Result<(), RobotError> {
+    for j in 0..6 {
+        let dq = (to[j] - from[j]).abs();
+        let max = arm.links[j].max_speed;
+        if dq > max * s.dt + 1e-9 {
+            let name = arm.joint_name(j);
+            let what = if s.dt > 0.0 {
+                format!(
+                    "the path point at line {}: {name} must turn {:.3}° in {:.4} s ({:.1}°/s) but turns at most {:.1}°/s: the approach turns faster than the arm can follow at this feed",
+                    s.line,
+                    dq.to_degrees(),
+                    s.dt,
+                    dq.to_degrees() / s.dt,
+                    max.to_degrees()
+                )
+            } else {
+                format!(
+                    "the path point at line {}: {name} must turn {:.3}° with no travel (the approach turns in place): the arm cannot follow at any feed",
+                    s.line,
+                    dq.to_degrees()
+                )
+            };
+            return Err(RobotError::TooFast {
+                line: s.line,
+                joint: name.to_string(),
+                what,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn unreachable(arm: &Arm, s: &Sample, i: usize, fails: &[NoReach]) -> RobotError {
+    // The joint that blocks most turns about the beam.
+    let mut count = [0usize; 6];
+    for f in fails {
+        count[f.joint.min(5)] += 1;
+    }
+    let j = (0..6).max_by_key(|&j| count[j]).unwrap_or(2);
+    let why = fails
+        .iter()
+        .find(|f| f.joint == j)
+        .map_or("no solution".to_string(), |f| f.why.clone());
+    let name = arm.joint_name(j).to_string();
+    RobotError::Unreachable {
+        line: s.line,
+        joint: name.clone(),
+        what: format!(
+            "the path point at line {} (location {}, at {:.3} {:.3} {:.3}) is beyond reach at every turn about the beam: {name} limits it ({why})",
+            s.line,
+            i + 1,
+            s.tip.x,
+            s.tip.y,
+            s.tip.z
+        ),
+    }
+}

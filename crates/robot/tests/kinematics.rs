@@ -1,0 +1,207 @@
+//! FK∘IK is the identity for every configuration of the PUMA closed form and for the
+//! numerical inverse; the configuration of joint values is the one they were solved in;
+//! arm files with degenerate or bad values are refused at their line.
+
+use lampost_robot::arm::{wrap, Arm, Config, Frame, Q};
+use lampost_robot::{ArmDef, RobotError};
+use proptest::prelude::*;
+
+fn puma() -> Arm {
+    Arm::builtin("puma-lens").unwrap_or_else(|| panic!("built-in puma-lens"))
+}
+
+fn close(a: &Frame, b: &Frame, tol: f64) -> bool {
+    (a.t - b.t).norm() < tol && (a.r - b.r).abs().max() < tol
+}
+
+fn joints() -> impl Strategy<Value = Q> {
+    // Within the PUMA 560's limits (degrees), kept 0.5° from singular wrist poses.
+    (
+        -160.0..160.0f64,
+        -45.0..225.0f64,
+        -225.0..45.0f64,
+        -110.0..170.0f64,
+        (0.5..100.0f64, any::<bool>()),
+        -266.0..266.0f64,
+    )
+        .prop_map(|(a, b, c, d, (e, neg), f)| {
+            [a, b, c, d, if neg { -e } else { e }, f].map(f64::to_radians)
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+    /// Every configuration that has a solution reaches the pose to 1e-9; the joints'
+    /// own configuration gives back the joints (mod 2π).
+    #[test]
+    fn fk_of_ik_is_identity(q in joints()) {
+        let arm = puma();
+        let t = arm.flange(&q);
+        let own = arm.config_of(&q).unwrap_or_else(|| panic!("closed form"));
+        let mut solved = 0;
+        for c in Config::ALL {
+            let Ok(s) = arm.inverse_closed(&t, c, 0.0) else { continue };
+            solved += 1;
+            let back = arm.flange(&s);
+            prop_assert!(close(&back, &t, 1e-9), "config {}: {:?} vs {:?}", c.letters(), back, t);
+            let co = arm.config_of(&s).unwrap_or_else(|| panic!("closed form"));
+            prop_assert!(co.fits(c), "config {} solved into {:?}", c.letters(), co);
+            if own.fits(c) && own.right.is_some() && own.up.is_some() && own.flip.is_some() {
+                for j in 0..6 {
+                    prop_assert!(wrap(s[j] - q[j]).abs() < 1e-7, "joint {j}: {} vs {}", s[j], q[j]);
+                }
+            }
+        }
+        // Away from singular poses the four arm solutions exist, each with two wrists.
+        prop_assert!(solved == 8 || solved == 0 || solved % 2 == 0);
+    }
+
+    /// The numerical inverse from a nearby seed reaches the pose to 1e-9.
+    #[test]
+    fn dls_reaches_the_pose(q in joints(), d in prop::array::uniform6(-0.2..0.2f64)) {
+        let arm = puma();
+        let t = arm.flange(&q);
+        let seed: Q = std::array::from_fn(|i| q[i] + d[i]);
+        if let Some(s) = arm.inverse_dls(&t, &seed) {
+            prop_assert!(close(&arm.flange(&s), &t, 1e-9));
+        } else {
+            // Only a seed across a singularity may fail; the wrist is kept 0.5° away.
+            prop_assert!(false, "no convergence from {:?} to {:?}", seed, q);
+        }
+    }
+}
+
+#[test]
+fn singular_wrist_keeps_the_last_wrist_angle() {
+    let arm = puma();
+    let q: Q = [0.3, 0.8, -1.2, 0.7, 0.0, -0.4].map(|x: f64| x);
+    let t = arm.flange(&q);
+    let s = arm
+        .inverse_closed(&t, Config::parse("lun").unwrap_or_else(|| panic!()), 1.1)
+        .or_else(|_| arm.inverse_closed(&t, Config::parse("rdn").unwrap_or_else(|| panic!()), 1.1));
+    let c = arm.config_of(&q).unwrap_or_else(|| panic!());
+    let cfg = Config {
+        right: c.right.unwrap_or(false),
+        up: c.up.unwrap_or(false),
+        flip: false,
+    };
+    let s2 = arm
+        .inverse_closed(&t, cfg, 1.1)
+        .unwrap_or_else(|e| panic!("{e:?}"));
+    assert!((s2[3] - 1.1).abs() < 1e-12, "J4 kept: {}", s2[3]);
+    assert!(close(&arm.flange(&s2), &t, 1e-9));
+    let _ = s;
+}
+
+#[test]
+fn a_pose_beyond_reach_names_the_elbow() {
+    let arm = puma();
+    let mut t = arm.flange(&[0.0, 0.5, -0.5, 0.0, -0.5, 0.0]);
+    t.t *= 10.0;
+    for c in Config::ALL {
+        let e = arm
+            .inverse_closed(&t, c, 0.0)
+            .err()
+            .unwrap_or_else(|| panic!("reached"));
+        assert_eq!(e.joint, 2, "{}", e.why);
+    }
+}
+
+#[test]
+fn a_non_puma_arm_uses_the_numerical_inverse() {
+    let text = lampost_robot::def::builtin_text("puma-lens")
+        .unwrap_or_default()
+        .replacen(
+            "d = 0.0\na = 0.0\nalpha = -90.0",
+            "d = 35.0\na = 12.0\nalpha = -90.0",
+            1,
+        );
+    let arm = Arm::from_toml(&text, "offset-wrist.toml").unwrap_or_else(|e| panic!("{e}"));
+    assert!(!arm.closed_form);
+    let q: Q = [0.2, 1.0, -1.4, 0.3, -0.6, 0.9];
+    let t = arm.flange(&q);
+    let s = arm
+        .inverse_dls(&t, &[0.25, 0.9, -1.3, 0.35, -0.5, 0.8])
+        .unwrap_or_else(|| panic!("no convergence"));
+    assert!(close(&arm.flange(&s), &t, 1e-9));
+}
+
+fn refusal(text: &str) -> (usize, String) {
+    match ArmDef::from_toml(text, "arm.toml") {
+        Err(RobotError::MachineFile { line, message, .. }) => (line, message),
+        other => panic!("not refused: {other:?}"),
+    }
+}
+
+fn line_of(text: &str, needle: &str, nth: usize) -> usize {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with(needle))
+        .nth(nth)
+        .map(|(i, _)| i + 1)
+        .unwrap_or_else(|| panic!("{needle}"))
+}
+
+#[test]
+fn bad_arm_files_are_refused_at_their_line() {
+    let base = lampost_robot::def::builtin_text("puma-lens").unwrap_or_default();
+    // A zero-length arm: every a and d zero.
+    let zero = base
+        .lines()
+        .map(|l| {
+            if l.starts_with("d = ") {
+                "d = 0.0".to_string()
+            } else if l.starts_with("a = ") {
+                "a = 0.0".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let (line, msg) = refusal(&zero);
+    assert!(msg.contains("no length"), "{msg}");
+    assert_eq!(line, line_of(&zero, "d = ", 0));
+    // NaN and infinity.
+    let nan = base.replacen("a = 431.8", "a = nan", 1);
+    let (line, msg) = refusal(&nan);
+    assert!(msg.contains("not a finite number"), "{msg}");
+    assert_eq!(line, line_of(&nan, "a = nan", 0));
+    let inf = base.replacen("d = 431.8", "d = inf", 1);
+    assert_eq!(refusal(&inf).0, line_of(&inf, "d = inf", 0));
+    // Limits reversed, and too wide.
+    let rev = base.replacen("limits = [-100.0, 100.0]", "limits = [100.0, -100.0]", 1);
+    let (line, msg) = refusal(&rev);
+    assert!(msg.contains("J5") && msg.contains("min < max"), "{msg}");
+    assert_eq!(line, line_of(&rev, "limits = [100.0, -100.0]", 0));
+    let wide = base.replacen("limits = [-266.0, 266.0]", "limits = [-400.0, 400.0]", 1);
+    assert_eq!(
+        refusal(&wide).0,
+        line_of(&wide, "limits = [-400.0, 400.0]", 0)
+    );
+    // Five joints.
+    let five = base.replacen("[[joint]]\nname = \"J6\"", "[unused]\nname = \"J6\"", 1);
+    assert!(ArmDef::from_toml(&five, "arm.toml").is_err());
+    // A non-positive speed; a safe location beyond the limits; a modified-DH file.
+    let slow = base.replacen("max_speed = 120.0", "max_speed = 0.0", 1);
+    assert_eq!(refusal(&slow).0, line_of(&slow, "max_speed = 0.0", 0));
+    let safe = base.replacen("safe = [0.0, 90.0", "safe = [170.0, 90.0", 1);
+    let (line, msg) = refusal(&safe);
+    assert!(msg.contains("J1"), "{msg}");
+    assert_eq!(line, line_of(&safe, "safe = ", 0));
+    let craig = base.replacen("convention = \"classic\"", "convention = \"modified\"", 1);
+    assert_eq!(refusal(&craig).0, line_of(&craig, "convention", 0));
+    let cfg = base.replacen("config = \"rdf\"", "config = \"lx\"", 1);
+    assert_eq!(refusal(&cfg).0, line_of(&cfg, "config", 0));
+    let par = base.replacen(
+        "z_axis = [0.0, 0.0, 1.0]\n\n[cell]",
+        "z_axis = [1.0, 0.0, 0.0]\n\n[cell]",
+        1,
+    );
+    let (_, msg) = refusal(&par);
+    assert!(msg.contains("[head]") && msg.contains("parallel"), "{msg}");
+    // An unknown key (a typo) is refused too.
+    let typo = base.replacen("max_speed = 60.0", "max_sped = 60.0", 1);
+    assert_eq!(refusal(&typo).0, line_of(&typo, "max_sped", 0));
+}
