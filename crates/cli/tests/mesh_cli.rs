@@ -239,3 +239,37 @@ fn refusals_exit_non_zero_and_write_nothing() {
     assert!(e.contains("nothing written"), "{e}");
     assert!(!out.exists());
 }
+
+#[test]
+fn three_mf_is_refused_with_the_reason_and_first_places_the_first_plane() {
+    let dir = tempdir("mesh-3mf");
+    let p = dir.join("part.3mf");
+    std::fs::write(&p, b"PK\x03\x04 not really").expect("write");
+    let o = lampost(&["mesh", "info", p.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("3MF files are not read yet"),
+        "{}",
+        stderr(&o)
+    );
+    // --first 0: the first plane at the bottom face, which counts as above it: no loop.
+    let b = dir.join("box.stl");
+    std::fs::write(
+        &b,
+        write_ascii_stl(&box_mesh(P3::zeros(), P3::new(2.0, 3.0, 4.0)), "b"),
+    )
+    .expect("write");
+    let v = json(&lampost(&[
+        "plan",
+        "slice",
+        b.to_str().expect("utf-8"),
+        "--layer",
+        "1",
+        "--first",
+        "0",
+        "--json",
+    ]));
+    assert_eq!(v["layers"], 4);
+    assert_eq!(v["slices"][0]["loops"].as_array().expect("loops").len(), 0);
+    assert!((f(&v["slices"][1]["area"]) - 6.0).abs() < 1e-12);
+}
