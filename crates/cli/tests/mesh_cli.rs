@@ -35,6 +35,12 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
     assert_eq!(v["file_units"], "in");
     assert!((f(&v["bounds"]["max"][2]) - 4.0 * 25.4).abs() < 1e-12);
     assert!((f(&v["volume"]) - 24.0 * 25.4f64.powi(3)).abs() < 1e-6);
+    // Standard input: the format from the content.
+    let v = json(&lampost_stdin(
+        &["mesh", "info", "-", "--json"],
+        obj.as_bytes(),
+    ));
+    assert_eq!(v["triangles"], 12);
     let text = lampost(&["mesh", "info", ps]);
     assert!(text.status.success());
     let t = String::from_utf8_lossy(&text.stdout);
