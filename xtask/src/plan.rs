@@ -86,6 +86,15 @@ pub fn bench(root: &Path) -> Result<(), String> {
     let mesh = mesh.scaled(scale);
     let layer = 0.1;
     println!(
+        "(load average {}: the cores are shared, so wall times vary; CPU time is what the work costs)",
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .split_whitespace()
+            .take(3)
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    println!(
         "== slicing {name} ({} triangles) scaled to 100 mm, {layer} mm layers along z, against trimesh section_multiplane, same run",
         mesh.triangles.len()
     );

@@ -56,9 +56,16 @@ fn located(path: &str, bytes: &[u8], e: &MeshError) -> CliError {
     }
 }
 
-/// Read a mesh file (format from the extension, else from the content), welded exactly.
+/// Read a mesh file (`-`: standard input; format from the extension, else from the
+/// content), welded exactly.
 pub fn read_mesh_file(path: &str) -> Result<Mesh, CliError> {
-    let bytes = std::fs::read(path).map_err(|e| {
+    let bytes = if path == "-" {
+        let mut b = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::stdin(), &mut b).map(|_| b)
+    } else {
+        std::fs::read(path)
+    }
+    .map_err(|e| {
         CliError::usage(format!(
             "error: cannot read {path}: {e}\n  = help: give a mesh file (STL, OBJ or OFF)\n"
         ))

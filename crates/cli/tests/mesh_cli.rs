@@ -35,6 +35,12 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
     assert_eq!(v["file_units"], "in");
     assert!((f(&v["bounds"]["max"][2]) - 4.0 * 25.4).abs() < 1e-12);
     assert!((f(&v["volume"]) - 24.0 * 25.4f64.powi(3)).abs() < 1e-6);
+    // Standard input: the format from the content.
+    let v = json(&lampost_stdin(
+        &["mesh", "info", "-", "--json"],
+        obj.as_bytes(),
+    ));
+    assert_eq!(v["triangles"], 12);
     let text = lampost(&["mesh", "info", ps]);
     assert!(text.status.success());
     let t = String::from_utf8_lossy(&text.stdout);
@@ -238,4 +244,38 @@ fn refusals_exit_non_zero_and_write_nothing() {
     assert!(e.contains("an open chain") && e.contains("layer "), "{e}");
     assert!(e.contains("nothing written"), "{e}");
     assert!(!out.exists());
+}
+
+#[test]
+fn three_mf_is_refused_with_the_reason_and_first_places_the_first_plane() {
+    let dir = tempdir("mesh-3mf");
+    let p = dir.join("part.3mf");
+    std::fs::write(&p, b"PK\x03\x04 not really").expect("write");
+    let o = lampost(&["mesh", "info", p.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("3MF files are not read yet"),
+        "{}",
+        stderr(&o)
+    );
+    // --first 0: the first plane at the bottom face, which counts as above it: no loop.
+    let b = dir.join("box.stl");
+    std::fs::write(
+        &b,
+        write_ascii_stl(&box_mesh(P3::zeros(), P3::new(2.0, 3.0, 4.0)), "b"),
+    )
+    .expect("write");
+    let v = json(&lampost(&[
+        "plan",
+        "slice",
+        b.to_str().expect("utf-8"),
+        "--layer",
+        "1",
+        "--first",
+        "0",
+        "--json",
+    ]));
+    assert_eq!(v["layers"], 4);
+    assert_eq!(v["slices"][0]["loops"].as_array().expect("loops").len(), 0);
+    assert!((f(&v["slices"][1]["area"]) - 6.0).abs() < 1e-12);
 }

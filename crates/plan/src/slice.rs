@@ -23,7 +23,8 @@
 //! and equals the upper vertex exactly when that vertex is in the plane.
 //!
 //! ## Loops
-//! Segments are chained through the edges they cross (topology, not coordinates), so a
+//! Segments are chained through the edges they cross (pairs of vertex indices: topology,
+//! not coordinates), so a
 //! closed manifold gives closed loops with no tolerance at all. For a closed mesh with
 //! outward triangles, outer boundaries run counter-clockwise about the build direction
 //! (right-hand rule) and holes clockwise; a closed mesh whose volume is negative (inside
@@ -42,11 +43,11 @@
 //!
 //! ## Speed
 //! Parallel planes: each triangle's range of layers is found once (its lowest and
-//! highest vertex against the plane heights); the triangles are copied, corners and edge
-//! ids together, into records ordered by their first layer, and a sweep keeps the
-//! records that cut the current layer in one compact list (no random access into the
-//! mesh per layer). Segments are chained through a small per-layer hash map of edge ids
-//! that stays in cache. Blocks of layers of about equal work run on `threads` threads,
+//! highest vertex against the plane heights); the triangles are ordered by their first
+//! layer, and a sweep keeps those that cut the current layer in one compact list, each
+//! copied with its corners when it enters (no random access into the mesh per layer).
+//! Segments are chained through a small per-layer hash map of edges that stays in
+//! cache. Blocks of layers of about equal work run on `threads` threads,
 //! each sweep starting at its block; the result does not depend on the thread count.
 //! Fans compute every vertex's height per layer and test every triangle.
 
@@ -185,91 +186,22 @@ pub const MAX_COORD: f64 = 1e12;
 /// Most layers a slicing may have.
 pub const MAX_LAYERS: usize = 1_000_000;
 
-/// The mesh's edges: each triangle's three edge ids.
-struct Topo {
-    /// `tri_edges[t][k]`: edge from corner `k` to corner `k + 1`.
-    tri_edges: Vec<[u32; 3]>,
-    /// Every edge in exactly two triangles.
-    closed: bool,
-}
-
 fn degenerate(t: &[u32; 3]) -> bool {
     t[0] == t[1] || t[1] == t[2] || t[0] == t[2]
 }
 
-fn topo(mesh: &Mesh) -> Topo {
-    let n = mesh.vertices.len();
-    // Compressed rows: each vertex's higher neighbours.
-    let mut off = vec![0u32; n + 1];
-    for t in mesh.triangles.iter().filter(|t| !degenerate(t)) {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            off[a.min(b) as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        off[i + 1] += off[i];
-    }
-    let mut fill = off.clone();
-    let mut his = vec![0u32; off[n] as usize];
-    for t in mesh.triangles.iter().filter(|t| !degenerate(t)) {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            let lo = a.min(b) as usize;
-            his[fill[lo] as usize] = a.max(b);
-            fill[lo] += 1;
-        }
-    }
-    // Unique neighbours per row, and each edge's use count.
-    let mut uoff = vec![0u32; n + 1];
-    let mut uhi: Vec<u32> = Vec::with_capacity(his.len() / 2 + 1);
-    let mut uses: Vec<u32> = Vec::with_capacity(his.len() / 2 + 1);
-    for v in 0..n {
-        let row = &mut his[off[v] as usize..off[v + 1] as usize];
-        row.sort_unstable();
-        let mut i = 0;
-        while i < row.len() {
-            let mut j = i + 1;
-            while j < row.len() && row[j] == row[i] {
-                j += 1;
-            }
-            uhi.push(row[i]);
-            uses.push(u32::try_from(j - i).unwrap_or(u32::MAX));
-            i = j;
-        }
-        uoff[v + 1] = u32::try_from(uhi.len()).unwrap_or(u32::MAX);
-    }
-    let find = |a: u32, b: u32| -> u32 {
-        let lo = a.min(b) as usize;
-        let hi = a.max(b);
-        let s = uoff[lo] as usize;
-        let row = &uhi[s..uoff[lo + 1] as usize];
-        let p = row.iter().position(|&h| h == hi).unwrap_or(0);
-        u32::try_from(s + p).unwrap_or(u32::MAX)
-    };
-    let tri_edges = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            if degenerate(t) {
-                [u32::MAX; 3]
-            } else {
-                [find(t[0], t[1]), find(t[1], t[2]), find(t[2], t[0])]
-            }
-        })
-        .collect();
-    let closed = uses.iter().all(|&u| u == 2)
-        && !uses.is_empty()
-        && mesh.triangles.iter().all(|t| !degenerate(t));
-    Topo { tri_edges, closed }
+/// An undirected edge's key: its two vertex indices, lower first.
+#[inline]
+fn edge_key(a: u32, b: u32) -> u64 {
+    (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
 }
 
 /// One cut triangle: the edges its segment starts and ends on, the triangle, and the
 /// two crossing points.
 #[derive(Clone, Copy)]
 struct Seg {
-    from: u32,
-    to: u32,
+    from: u64,
+    to: u64,
     face: u32,
     p: P3,
     q: P3,
@@ -279,14 +211,14 @@ struct Seg {
 /// the first-level cache, where a table over all edges would miss on every segment).
 #[derive(Default)]
 struct EdgeMap {
-    keys: Vec<u32>,
+    keys: Vec<u64>,
     vals: Vec<u32>,
     mask: usize,
     /// Second segments on an edge already taken (non-manifold edges).
-    extra: Vec<(u32, u32)>,
+    extra: Vec<(u64, u32)>,
 }
 
-const EMPTY: u32 = u32::MAX;
+const EMPTY: u64 = u64::MAX;
 
 impl EdgeMap {
     fn reset(&mut self, n: usize) {
@@ -301,12 +233,13 @@ impl EdgeMap {
     }
 
     #[inline]
-    fn slot(&self, e: u32) -> usize {
-        (e.wrapping_mul(0x9E37_79B1) as usize ^ (e as usize >> 7)) & self.mask
+    fn slot(&self, e: u64) -> usize {
+        let h = e.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        (h >> 32) as usize & self.mask
     }
 
     #[inline]
-    fn insert(&mut self, e: u32, s: u32) {
+    fn insert(&mut self, e: u64, s: u32) {
         let mut i = self.slot(e);
         loop {
             let k = self.keys[i];
@@ -325,7 +258,7 @@ impl EdgeMap {
 
     /// The segment on `e` that `ok` accepts.
     #[inline]
-    fn find(&self, e: u32, ok: impl Fn(u32) -> bool) -> Option<u32> {
+    fn find(&self, e: u64, ok: impl Fn(u32) -> bool) -> Option<u32> {
         let mut i = self.slot(e);
         loop {
             let k = self.keys[i];
@@ -361,7 +294,6 @@ struct Scratch {
 
 struct Ctx<'a> {
     mesh: &'a Mesh,
-    topo: &'a Topo,
     flip: bool,
     stitch: f64,
 }
@@ -393,12 +325,12 @@ fn cross(pa: &P3, ha: f64, pb: &P3, hb: f64, z: f64) -> P3 {
 }
 
 /// The segment of a triangle with corners `p` at heights `h` (some below `z`, some at or
-/// above it), edges `e`; `None` when the plane does not cut it.
+/// above it), vertex indices `v`; `None` when the plane does not cut it.
 #[inline]
 fn cut_triangle(
     p: &[P3; 3],
     h: [f64; 3],
-    e: &[u32; 3],
+    v: &[u32; 3],
     face: u32,
     z: f64,
     flip: bool,
@@ -419,8 +351,8 @@ fn cut_triangle(
     let (a, b) = if flip { (up, down) } else { (down, up) };
     let (an, bn) = ((a + 1) % 3, (b + 1) % 3);
     Some(Seg {
-        from: e[a],
-        to: e[b],
+        from: edge_key(v[a], v[an]),
+        to: edge_key(v[b], v[bn]),
         face,
         p: cross(&p[a], h[a], &p[an], h[an], z),
         q: cross(&p[b], h[b], &p[bn], h[bn], z),
@@ -680,14 +612,10 @@ pub fn slice(mesh: &Mesh, opts: &SliceOptions) -> Result<Slicing, PlanError> {
         }
         None => 1e-6 * diag,
     };
-    let topo = topo(mesh);
-    let flip = topo.closed && lampost_mesh::props::volume(mesh) < 0.0;
-    let ctx = Ctx {
-        mesh,
-        topo: &topo,
-        flip,
-        stitch,
-    };
+    // Inside out: a closed mesh with a negative volume (the report only when it is).
+    let flip =
+        lampost_mesh::props::volume(mesh) < 0.0 && lampost_mesh::manifold_report(mesh).closed();
+    let ctx = Ctx { mesh, flip, stitch };
     let threads = opts.threads.max(1);
     let (slices, degenerate) = match &opts.planes {
         Planes::Parallel { dir, layer, first } => parallel(&ctx, *dir, *layer, *first, threads)?,
@@ -810,11 +738,11 @@ where
     (slices, deg)
 }
 
-/// A triangle as the sweep keeps it: corners, edges, and its layers `k0..k1`.
+/// A triangle as the sweep keeps it: corners, vertex indices, and its layers `k0..k1`.
 #[derive(Clone, Copy)]
 struct Rec {
     p: [P3; 3],
-    e: [u32; 3],
+    v: [u32; 3],
     face: u32,
     k1: u32,
 }
@@ -880,13 +808,13 @@ fn parallel(
     let mut ranges: Vec<(u32, u32)> = Vec::with_capacity(mesh.triangles.len());
     let mut count = vec![0isize; n + 1];
     let mut starts = vec![0usize; n + 1];
-    for (t, e) in mesh.triangles.iter().zip(&ctx.topo.tri_edges) {
+    for t in &mesh.triangles {
         let a = h[t[0] as usize];
         let b = h[t[1] as usize];
         let c = h[t[2] as usize];
         let (mn, mx) = (a.min(b).min(c), a.max(b).max(c));
         let (k0, k1) = (first_above(mn), first_above(mx));
-        if k1 > k0 && e[0] != u32::MAX {
+        if k1 > k0 && !degenerate(t) {
             count[k0] += 1;
             count[k1] -= 1;
             starts[k0 + 1] += 1;
@@ -902,48 +830,42 @@ fn parallel(
         per[k] = run.unsigned_abs();
         starts[k + 1] += starts[k];
     }
+    // Triangle ids in order of first layer (counting sort, stable in triangle order).
     let mut fill = starts.clone();
-    let mut recs: Vec<Rec> = Vec::with_capacity(starts[n]);
-    // Placeholders, then each record at its place.
-    recs.resize(
-        starts[n],
-        Rec {
-            p: [P3::zeros(); 3],
-            e: [0; 3],
-            face: 0,
-            k1: 0,
-        },
-    );
+    let mut order = vec![0u32; starts[n]];
     for (t, &(k0, k1)) in ranges.iter().enumerate() {
         if k1 > k0 {
-            let tri = &mesh.triangles[t];
-            recs[fill[k0 as usize]] = Rec {
-                p: tri.map(|i| mesh.vertices[i as usize]),
-                e: ctx.topo.tri_edges[t],
-                face: t as u32,
-                k1,
-            };
+            order[fill[k0 as usize]] = t as u32;
             fill[k0 as usize] += 1;
         }
     }
-    drop(ranges);
+    drop(fill);
+    let rec = |t: u32| {
+        let tri = &mesh.triangles[t as usize];
+        Rec {
+            p: tri.map(|i| mesh.vertices[i as usize]),
+            v: *tri,
+            face: t,
+            k1: ranges[t as usize].1,
+        }
+    };
     let flip = ctx.flip;
     let out = run_blocks(n, &per, threads, |ka, kb, sc, out| {
-        // The sweep: the triangles cutting layer k, in record order (deterministic
+        // The sweep: the triangles cutting layer k, in first-layer order (the same
         // whatever the block's start).
-        let mut active: Vec<Rec> = recs[..starts[ka]]
+        let mut active: Vec<Rec> = order[..starts[ka]]
             .iter()
-            .filter(|r| r.k1 as usize > ka)
-            .copied()
+            .filter(|&&t| ranges[t as usize].1 as usize > ka)
+            .map(|&t| rec(t))
             .collect();
         let mut deg = 0;
         for (k, &z) in zs.iter().enumerate().take(kb).skip(ka) {
             active.retain(|r| r.k1 as usize > k);
-            active.extend_from_slice(&recs[starts[k]..starts[k + 1]]);
+            active.extend(order[starts[k]..starts[k + 1]].iter().map(|&t| rec(t)));
             sc.segs.clear();
             for r in &active {
                 let hh = [d.dot(&r.p[0]), d.dot(&r.p[1]), d.dot(&r.p[2])];
-                if let Some(seg) = cut_triangle(&r.p, hh, &r.e, r.face, z, flip) {
+                if let Some(seg) = cut_triangle(&r.p, hh, &r.v, r.face, z, flip) {
                     sc.segs.push(seg);
                 }
             }
@@ -1043,13 +965,13 @@ fn fan(
             h.clear();
             h.extend(mesh.vertices.iter().map(|v| b.dot(&(v - c))));
             sc.segs.clear();
-            for (t, (tri, e)) in mesh.triangles.iter().zip(&ctx.topo.tri_edges).enumerate() {
-                if e[0] == u32::MAX {
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                if degenerate(tri) {
                     continue;
                 }
                 let p = tri.map(|i| mesh.vertices[i as usize]);
                 let hh = tri.map(|i| sc.heights[i as usize]);
-                if let Some(seg) = cut_triangle(&p, hh, e, t as u32, 0.0, flip) {
+                if let Some(seg) = cut_triangle(&p, hh, tri, t as u32, 0.0, flip) {
                     sc.segs.push(seg);
                 }
             }
