@@ -5,8 +5,10 @@ mod common;
 use common::*;
 
 /// Every subcommand users type, as the completion scripts and pages must know them.
-const SUBCOMMANDS: [&str; 14] = [
+const SUBCOMMANDS: [&str; 16] = [
     "post",
+    "preview",
+    "inspect",
     "mesh",
     "plan",
     "verify",

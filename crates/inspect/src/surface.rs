@@ -138,13 +138,8 @@ pub fn simulate(
         let reading = match hit {
             None => Reading::None("none".into()),
             Some(h) => {
-                // The face under the hit point (the closest-point query names it).
-                let face = bvh
-                    .closest(h.point)
-                    .map_err(|e| InspectError::Input(e.to_string()))?
-                    .face;
                 let n: Vector3<f64> = normals
-                    .get(face as usize)
+                    .get(h.face as usize)
                     .copied()
                     .unwrap_or_else(Vector3::zeros);
                 let tilt = n.dot(&beam).abs().min(1.0).acos().to_degrees();

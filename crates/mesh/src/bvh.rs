@@ -111,10 +111,18 @@ impl MeshBvh {
         Ok(self
             .tri
             .cast_local_ray_and_get_normal(&ray, max_t, false)
-            .map(|h| RayHit {
-                t: h.time_of_impact,
-                point: origin + dir * h.time_of_impact,
-                face: h.feature.unwrap_face(),
+            .map(|h| {
+                let point = origin + dir * h.time_of_impact;
+                // The hit's feature names the triangle's own face (front or back), not
+                // which triangle: the triangle is the one under the hit point.
+                let (_, (face, _)) = self
+                    .tri
+                    .project_local_point_and_get_location(pv(&point), false);
+                RayHit {
+                    t: h.time_of_impact,
+                    point,
+                    face,
+                }
             }))
     }
 
@@ -142,5 +150,33 @@ impl MeshBvh {
         let proj = self.tri.project_local_point(pv(&p), false);
         let d = (p3(proj.point) - p).norm();
         Ok(if proj.is_inside { -d } else { d })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_ray_hit_names_the_triangle_it_hit() {
+        let m = crate::uv_sphere(crate::P3::new(0.0, 0.0, -10.0), 20.0, 24, 48);
+        let bvh = super::MeshBvh::new(&m).expect("bvh");
+        let normals = crate::props::face_normals(&m);
+        for dir in [
+            crate::P3::new(0.3, 0.2, 1.0),
+            crate::P3::new(-1.0, 0.1, 0.2),
+            crate::P3::new(0.0, -0.4, -1.0),
+        ] {
+            let d = dir.normalize();
+            let o = crate::P3::new(0.0, 0.0, -10.0) + d * 30.0;
+            let h = bvh.ray_cast(o, -d, 50.0).expect("query").expect("hit");
+            let t = m.triangles[h.face as usize].map(|i| m.vertices[i as usize]);
+            // The hit lies in that triangle's plane, which faces the ray.
+            let n = normals[h.face as usize];
+            assert!(
+                (h.point - t[0]).dot(&n).abs() < 1e-9,
+                "{dir:?}: face {}",
+                h.face
+            );
+            assert!(n.dot(&d) > 0.9, "{dir:?}: face {}", h.face);
+        }
     }
 }
