@@ -572,6 +572,8 @@ enum MeshCmd {
 enum PlanCmd {
     /// Slice a mesh into closed oriented loops: planes normal to a build direction, or a fan about an axis.
     Slice(mesh_cmds::SliceArgs),
+    /// The perimeters of every slice with their tool axes (paper 001's rule: the surface normal × the traversal, blended across face edges), as a per-point path `lampost post` reads.
+    Path(mesh_cmds::PathArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -1131,6 +1133,9 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Plan {
             cmd: PlanCmd::Slice(a),
         } => mesh_cmds::slice(&a),
+        Command::Plan {
+            cmd: PlanCmd::Path(a),
+        } => mesh_cmds::path(&a),
         Command::Machines { cmd: None } => kin_cmds::machines(None),
         Command::Machines {
             cmd: Some(MachinesCmd::Show { name }),

@@ -258,7 +258,8 @@ fn plan_error(path: &str, e: &PlanError) -> CliError {
 }
 
 /// `lampost plan slice`.
-pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
+/// Stage 1 of `plan slice` and `plan path`: the mesh read and sliced, the warnings said.
+fn sliced(a: &SliceArgs) -> Result<(Mesh, Slicing, lampost_mesh::ManifoldReport, usize), CliError> {
     let dir = vec3("--build-dir", &a.build_dir)?;
     let planes = match (&a.fan_axis, a.fan_step, a.layer) {
         (Some(axis), Some(step), None) => {
@@ -329,6 +330,11 @@ pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
             );
         }
     }
+    Ok((mesh, s, report, open))
+}
+
+pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
+    let (_, s, report, open) = sliced(a)?;
     if a.json {
         write_json(None, slicing_json(&a.file, &s, &report))?;
     } else if let Some(out) = &a.output {
@@ -419,4 +425,71 @@ fn csv(s: &Slicing) -> String {
         }
     }
     t
+}
+
+/// `plan path`: the options of `plan slice`, and how the perimeters are spaced and fed.
+#[derive(Debug, clap::Args)]
+pub struct PathArgs {
+    #[command(flatten)]
+    pub slice: SliceArgs,
+    /// Longest chord between two path points (mm).
+    #[arg(long, default_value_t = 1.0)]
+    pub spacing: f64,
+    /// Largest turn of the tool axis between two points (degrees).
+    #[arg(long, default_value_t = 2.0)]
+    pub max_turn: f64,
+    /// Feed written on every point (mm/min).
+    #[arg(long, default_value_t = 600.0)]
+    pub feed: f64,
+}
+
+/// `plan path`: the perimeters of every layer with their tool axes, as the per-point path
+/// `lampost post` reads (`x y z i j k feed laser`, mm).
+pub fn path(a: &PathArgs) -> Result<(), CliError> {
+    if !(a.feed.is_finite() && a.feed > 0.0) {
+        return Err(CliError::usage(format!(
+            "error: --feed {}: give a positive feed\n",
+            a.feed
+        )));
+    }
+    let (mesh, s, _, open) = sliced(&a.slice)?;
+    if open > 0 {
+        return Err(CliError::failed(format!(
+            "error: {}: {open} chains could not be closed into loops (see the warnings above); nothing written\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
+            a.slice.file
+        )));
+    }
+    let pts = lampost_plan::perimeters(
+        &mesh,
+        &s,
+        &lampost_plan::PerimeterOptions {
+            spacing: a.spacing,
+            max_turn_deg: a.max_turn,
+        },
+    )
+    .map_err(|e| plan_error(&a.slice.file, &e))?;
+    if pts.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {}: the slices hold no loop; nothing written\n",
+            a.slice.file
+        )));
+    }
+    let text = lampost_plan::perimeter::to_text(
+        &pts,
+        a.feed,
+        &format!(
+            "lampost plan path {}: {} layers, {} points; tool axis = surface normal x traversal (tip to head), mm",
+            a.slice.file,
+            s.slices.len(),
+            pts.len()
+        ),
+    );
+    write_out(a.slice.output.as_deref(), text.as_bytes())?;
+    eprintln!(
+        "planned {} points on {} layers of {}",
+        pts.len(),
+        s.slices.len(),
+        a.slice.file
+    );
+    Ok(())
 }

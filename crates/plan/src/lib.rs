@@ -10,7 +10,9 @@
 //! - `nalgebra`: `f64` vectors; `thiserror`: the typed [`PlanError`].
 
 pub mod error;
+pub mod perimeter;
 pub mod slice;
 
 pub use error::PlanError;
+pub use perimeter::{perimeters, PathPoint, PerimeterOptions};
 pub use slice::{slice, Gap, Loop, OpenChain, Planes, Slice, SliceOptions, Slicing};

@@ -1,0 +1,80 @@
+//! `lampost plan path` → `lampost post` → `lampost verify`: paper 001's perimeters of a
+//! solid, posted for the NRC cell with a tool axis per point, verified from the text.
+
+mod common;
+
+use common::*;
+
+#[test]
+fn a_sphere_is_planned_posted_and_verified() {
+    let dir = tempdir("plan-path");
+    let mesh = lampost_mesh::uv_sphere(lampost_mesh::P3::new(0.0, 0.0, 0.0), 20.0, 24, 48);
+    let stl = dir.join("sphere.stl");
+    std::fs::write(&stl, lampost_mesh::write_ascii_stl(&mesh, "sphere")).expect("stl");
+    let path = dir.join("sphere-path.csv");
+    let o = lampost(&[
+        "plan",
+        "path",
+        stl.to_str().expect("utf8"),
+        "--layer",
+        "4",
+        "--spacing",
+        "2",
+        "-o",
+        path.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&path).expect("path");
+    assert!(
+        text.lines().nth(1) == Some("x y z i j k feed laser"),
+        "{text}"
+    );
+    let rows = text.lines().skip(2).count();
+    assert!(rows > 200, "{rows}");
+    let out = dir.join("sphere.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("ok: "));
+    // Bad input: a layer taller than the part, an open mesh; nothing written.
+    let bad = dir.join("bad.csv");
+    let o = lampost(&[
+        "plan",
+        "path",
+        stl.to_str().expect("utf8"),
+        "--layer",
+        "100",
+        "-o",
+        bad.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success() && !bad.exists(), "{}", stderr(&o));
+    let mut open = mesh.clone();
+    open.triangles.truncate(open.triangles.len() - 3);
+    let ostl = dir.join("open.stl");
+    std::fs::write(&ostl, lampost_mesh::write_ascii_stl(&open, "open")).expect("stl");
+    let o = lampost(&[
+        "plan",
+        "path",
+        ostl.to_str().expect("utf8"),
+        "--layer",
+        "4",
+        "-o",
+        bad.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success() && !bad.exists(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("could not be closed"), "{}", stderr(&o));
+}

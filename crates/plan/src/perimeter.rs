@@ -1,0 +1,240 @@
+//! Perimeters with tool axes (paper 001's rule): at every point of a slice's loop the
+//! tool axis lies in the surface, across the traversal — the cross product of the
+//! surface normal and the traversal direction — so the laser meets the wall along the
+//! material already deposited. On a face the axis is that face's; where the loop crosses
+//! from one face to the next the two are blended (the mean of the two, made unit), so the
+//! axis turns gradually around the loop instead of jumping at every face edge. Points are
+//! then spaced to at most a chord length and a tool-axis turn.
+//!
+//! Sign: with outward normals and loops oriented as [`crate::slice`] orients them (outer
+//! boundaries counter-clockwise about the build direction, holes clockwise), `normal ×
+//! traversal` points along the build direction on a wall parallel to it: the tool axis
+//! (from the tip into the head) points up the build, the laser comes down onto the
+//! layer. The beam's direction (the approach, head to part) is its opposite.
+
+use lampost_mesh::{Mesh, P3};
+
+use crate::error::PlanError;
+use crate::slice::Slicing;
+
+/// One point of a planned path, part frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathPoint {
+    /// Tool tip.
+    pub p: P3,
+    /// Tool axis, unit, from the tip into the head.
+    pub axis: P3,
+    /// The laser is on while moving to this point.
+    pub laser: bool,
+    /// Layer index.
+    pub layer: usize,
+}
+
+/// How perimeter points are spaced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerimeterOptions {
+    /// Longest chord between two points.
+    pub spacing: f64,
+    /// Largest turn of the tool axis between two points, degrees.
+    pub max_turn_deg: f64,
+}
+
+/// The tool axis of each segment of a loop: `n × t` with the segment's face normal `n`
+/// and its direction `t`.
+fn segment_axes(mesh: &Mesh, points: &[P3], faces: &[u32]) -> Vec<Option<P3>> {
+    let k = points.len();
+    (0..k)
+        .map(|i| {
+            let t = points[(i + 1) % k] - points[i];
+            let f = mesh.triangles.get(*faces.get(i)? as usize)?;
+            let [a, b, c] = f.map(|v| mesh.vertices[v as usize]);
+            let n = (b - a).cross(&(c - a));
+            let ax = n.cross(&t);
+            let l = ax.norm();
+            (l > 0.0 && l.is_finite()).then(|| ax / l)
+        })
+        .collect()
+}
+
+/// Unit mean of two unit vectors (the first when they cancel).
+fn blend(a: P3, b: P3) -> P3 {
+    let m = a + b;
+    if m.norm() > 1e-12 {
+        m / m.norm()
+    } else {
+        a
+    }
+}
+
+/// Stage 1 and 2 for one loop: its points with blended axes (a vertex between two faces
+/// gets the mean of their axes), then spaced by `opts`. The first point is repeated at
+/// the end so the perimeter closes; the laser is off onto the first point.
+fn one_loop(
+    mesh: &Mesh,
+    points: &[P3],
+    faces: &[u32],
+    layer: usize,
+    opts: &PerimeterOptions,
+) -> Vec<PathPoint> {
+    let k = points.len();
+    let seg = segment_axes(mesh, points, faces);
+    // A segment without an axis (degenerate) takes its neighbour's.
+    let fallback = seg.iter().flatten().next().copied();
+    let Some(fallback) = fallback else {
+        return Vec::new();
+    };
+    let seg: Vec<P3> = seg.iter().map(|a| a.unwrap_or(fallback)).collect();
+    let at: Vec<P3> = (0..k)
+        .map(|i| blend(seg[(i + k - 1) % k], seg[i]))
+        .collect();
+    let mut out = Vec::with_capacity(k + 1);
+    out.push(PathPoint {
+        p: points[0],
+        axis: at[0],
+        laser: false,
+        layer,
+    });
+    let max_turn = opts.max_turn_deg.to_radians();
+    for i in 0..k {
+        let (p0, p1) = (points[i], points[(i + 1) % k]);
+        let (a0, a1) = (at[i], at[(i + 1) % k]);
+        let chord = (p1 - p0).norm();
+        let turn = a0.angle(&a1);
+        let n = ((chord / opts.spacing).ceil())
+            .max((turn / max_turn).ceil())
+            .clamp(1.0, 1e6) as usize;
+        for j in 1..=n {
+            let s = j as f64 / n as f64;
+            let axis = blend(a0 * (1.0 - s), a1 * s);
+            out.push(PathPoint {
+                p: p0 + (p1 - p0) * s,
+                axis: if j == n { a1 } else { axis },
+                laser: true,
+                layer,
+            });
+        }
+    }
+    out
+}
+
+/// The perimeters of every loop of `slicing`, layer by layer, in the slicing's order.
+pub fn perimeters(
+    mesh: &Mesh,
+    slicing: &Slicing,
+    opts: &PerimeterOptions,
+) -> Result<Vec<PathPoint>, PlanError> {
+    if !(opts.spacing.is_finite() && opts.spacing > 0.0) {
+        return Err(PlanError::Layer {
+            what: "point spacing",
+            value: opts.spacing,
+            why: "not a positive number".into(),
+        });
+    }
+    if !(opts.max_turn_deg.is_finite() && opts.max_turn_deg > 0.0) {
+        return Err(PlanError::Layer {
+            what: "largest tool-axis turn",
+            value: opts.max_turn_deg,
+            why: "not a positive number of degrees".into(),
+        });
+    }
+    let mut out = Vec::new();
+    for s in &slicing.slices {
+        for l in &s.loops {
+            out.extend(one_loop(mesh, &l.points, &l.faces, s.index, opts));
+        }
+    }
+    Ok(out)
+}
+
+/// The path as the per-point file `lampost post` reads: a comment, the header `x y z i j
+/// k feed laser`, a row per point.
+pub fn to_text(points: &[PathPoint], feed: f64, comment: &str) -> String {
+    let mut s = format!("# {}\nx y z i j k feed laser\n", comment.replace('\n', " "));
+    for q in points {
+        s.push_str(&format!(
+            "{:.6} {:.6} {:.6} {:.9} {:.9} {:.9} {} {}\n",
+            q.p.x + 0.0,
+            q.p.y + 0.0,
+            q.p.z + 0.0,
+            q.axis.x + 0.0,
+            q.axis.y + 0.0,
+            q.axis.z + 0.0,
+            feed,
+            u8::from(q.laser)
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::slice::{slice, Planes, SliceOptions};
+
+    fn sliced(mesh: &Mesh, layer: f64) -> Slicing {
+        slice(
+            mesh,
+            &SliceOptions {
+                planes: Planes::Parallel {
+                    dir: P3::z(),
+                    layer,
+                    first: None,
+                },
+                stitch: None,
+                threads: 1,
+            },
+        )
+        .expect("slices")
+    }
+
+    #[test]
+    fn walls_parallel_to_the_build_direction_get_it_as_the_tool_axis() {
+        let m = lampost_mesh::box_mesh(P3::new(0.0, 0.0, 0.0), P3::new(20.0, 10.0, 6.0));
+        let s = sliced(&m, 1.0);
+        let opts = PerimeterOptions {
+            spacing: 2.0,
+            max_turn_deg: 2.0,
+        };
+        let pts = perimeters(&m, &s, &opts).expect("perimeters");
+        assert_eq!(s.slices.len(), 6);
+        assert!(!pts.is_empty());
+        for q in &pts {
+            assert!((q.axis - P3::z()).norm() < 1e-12, "{q:?}");
+        }
+        // Spaced to the chord: no two consecutive points of a loop more than 2 apart.
+        for w in pts.windows(2) {
+            if w[1].laser {
+                assert!((w[1].p - w[0].p).norm() <= 2.0 + 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn on_a_sphere_the_axis_lies_in_the_surface_and_turns_gradually() {
+        let r = 20.0;
+        let m = lampost_mesh::uv_sphere(P3::zeros(), r, 48, 96);
+        let s = sliced(&m, 2.0);
+        let opts = PerimeterOptions {
+            spacing: 1.0,
+            max_turn_deg: 2.0,
+        };
+        let pts = perimeters(&m, &s, &opts).expect("perimeters");
+        // The facets of a 48 × 96 sphere are within 3.75° of the exact surface's normal.
+        let facet = (180.0f64 / 48.0).to_radians();
+        for (k, q) in pts.iter().enumerate() {
+            let radial = q.p / q.p.norm();
+            assert!(
+                q.axis.dot(&radial).abs() <= facet.sin() + 1e-9,
+                "point {k}: {q:?}"
+            );
+            assert!((q.axis.norm() - 1.0).abs() < 1e-12);
+            // Up the build on the upper half (the surface leans in), and never down
+            // into the layer below.
+            assert!(q.axis.z > 0.0, "point {k}: {q:?}");
+            if k > 0 && q.laser && pts[k - 1].layer == q.layer {
+                let turn = pts[k - 1].axis.angle(&q.axis).to_degrees();
+                assert!(turn <= 2.0 + 1e-9, "point {k}: turned {turn}°");
+            }
+        }
+    }
+}
