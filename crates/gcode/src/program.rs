@@ -1126,10 +1126,30 @@ mod tests {
         let (moves, diags) = run(text, Order::Execution);
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(moves.len(), 1);
-        // M99 with no O program open still ends the trace.
-        let (moves, diags) = run("G20 G0 X1\nM99\nG0 X2\n", Order::Execution);
+        // M99 with no O program open ends the trace after one pass, with a warning at
+        // the M99: the control would run the main program again without end.
+        let (moves, diags) = run("G20 G0 X1\nN5 M99\nG0 X2\n", Order::Execution);
         assert_eq!(moves.len(), 1);
-        assert!(matches!(diags[0].kind, ErrorKind::NotSimulated(_)));
+        assert_eq!(diags[0].kind, ErrorKind::MainProgramLoops("fadal"));
+        assert_eq!(diags[0].severity, Severity::Warning);
+        assert_eq!((diags[0].line, diags[0].column), (2, 4));
+        assert!(matches!(diags[1].kind, ErrorKind::NotSimulated(_)));
+        // Printer firmware has no M99: an error there.
+        let marlin = Options {
+            flavor: crate::Flavor::Marlin,
+            ..opts()
+        };
+        let r = ProgramReader::new(io::Cursor::new(&b"G20 G0 X1\nM99\n"[..]), Order::Execution);
+        let d: Vec<Diagnostic> = Stream::new(r, marlin, true)
+            .filter_map(|e| match e {
+                Ok(Event::Diagnostic(d)) => Some(d),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].kind, ErrorKind::ReturnOutsideSubprogram);
+        assert!(d[0].is_error());
+        assert_eq!((d[0].line, d[0].column), (2, 1));
     }
 
     #[test]
