@@ -66,9 +66,15 @@ impl Flavor {
         matches!(self, Flavor::Marlin | Flavor::RepRap)
     }
 
-    /// LinuxCNC parameters, expressions and O-words are evaluated.
+    /// Macros are evaluated: LinuxCNC parameters, expressions and O-words, or Fanuc
+    /// Macro B ([`Flavor::macro_b`]).
     pub fn evaluates(self) -> bool {
-        self == Flavor::LinuxCnc
+        self == Flavor::LinuxCnc || self.macro_b()
+    }
+
+    /// Fanuc Macro B is evaluated (see [`crate::macrob`]).
+    pub fn macro_b(self) -> bool {
+        matches!(self, Flavor::Fanuc | Flavor::Haas)
     }
 
     /// `opts` with this (resolved) flavour's reading: the flavour recorded, and E as

@@ -88,6 +88,8 @@ struct Frame {
     repeats_left: u32,
     /// A Haas `M97` call: `prog` indexes `locals`, the body runs to the first M99.
     local: bool,
+    /// A Fanuc `G65` macro call: its own level of local variables.
+    macro_call: bool,
 }
 
 /// What a line asks of the reader.
@@ -150,6 +152,10 @@ pub struct ProgramReader<R> {
     locals: Vec<(usize, u32)>,
     /// [`crate::ngc::MAX_BLOCKS`] (smaller in tests).
     max_blocks: u64,
+    /// Fanuc Macro B labels and loops (indexed at the first statement followed).
+    macrob: Option<Box<crate::macrob::Control>>,
+    /// `G65` macro levels left since the stream last asked (see `take_returns`).
+    macro_returns: u32,
 }
 
 fn may_matter(bytes: &[u8]) -> bool {
@@ -209,6 +215,8 @@ impl<R: Read + Seek> ProgramReader<R> {
             labels: None,
             locals: Vec::new(),
             max_blocks: crate::ngc::MAX_BLOCKS,
+            macrob: None,
+            macro_returns: 0,
         }
     }
 
@@ -269,9 +277,169 @@ impl<R: Read + Seek> ProgramReader<R> {
         Ok(c)
     }
 
+    /// Read the whole file once and note its Fanuc Macro B labels, loops and programs.
+    fn index_macrob(&mut self) -> io::Result<crate::macrob::Control> {
+        let mut c = crate::macrob::Control::new(self.max_blocks);
+        self.lines.seek_line(0, 1)?;
+        while let Some((line, end)) = self.lines.next_line_end()? {
+            let b = line.bytes;
+            let first = b.iter().position(|c| !matches!(c, b' ' | b'\t'));
+            let maybe = first.is_some_and(|i| {
+                matches!(
+                    b[i] | 0x20,
+                    b'o' | b'n' | b'/' | b'i' | b'w' | b'g' | b'd' | b'e'
+                )
+            });
+            if !maybe || b.len() > MAX_LINE_BYTES {
+                continue;
+            }
+            let Ok(text) = std::str::from_utf8(b) else {
+                continue;
+            };
+            let next = (end, line.number.saturating_add(1));
+            if !c.add(text, (line.offset, line.number), next) {
+                break;
+            }
+        }
+        Ok(c)
+    }
+
+    /// Follow the Fanuc Macro B statement `text` (see [`Self::control`]).
+    fn control_macrob(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &crate::expr::Params,
+    ) -> Result<(), Diagnostic> {
+        let at_err = |msg: String, s: usize, e: usize| {
+            Diagnostic::at(
+                Severity::Error,
+                ErrorKind::MacroB(msg),
+                number,
+                offset,
+                text.as_bytes(),
+                s,
+                e,
+            )
+        };
+        if self.macrob.is_none() {
+            let at = (self.pos, self.line);
+            let c = self
+                .index_macrob()
+                .map_err(|e| at_err(format!("cannot index the Macro B lines: {e}"), 0, text.len()))?;
+            self.macrob = Some(Box::new(c));
+            (self.pos, self.line) = at;
+        }
+        let Some(ctl) = self.macrob.as_mut() else {
+            return Ok(());
+        };
+        match ctl.step(text, offset, number, params) {
+            Ok(None) => Ok(()),
+            Ok(Some((pos, line))) => {
+                self.pos = pos;
+                self.line = line;
+                Ok(())
+            }
+            Err((msg, s, e)) => Err(at_err(msg, s, e)),
+        }
+    }
+
+    /// Run the Fanuc macro `O{number}` `repeats` times with `args` as its locals (a `G65`
+    /// call on line `line_no` at `offset`, just handed out); `None` when this reader does
+    /// not follow calls (file order).
+    pub fn macro_call(
+        &mut self,
+        call: (u32, u32, &[Option<f64>; crate::expr::FANUC_LOCALS]),
+        line_no: u32,
+        offset: usize,
+        text: &str,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        if self.order != Order::Execution {
+            return None;
+        }
+        let (number, repeats, args) = call;
+        let err = |kind: ErrorKind| {
+            Diagnostic::at(
+                Severity::Error,
+                kind,
+                line_no,
+                offset,
+                text.as_bytes(),
+                0,
+                text.len(),
+            )
+        };
+        if !self.indexed {
+            let at = (self.pos, self.line);
+            if let Err(e) = self.index() {
+                return Some(Err(err(ErrorKind::MacroB(format!(
+                    "cannot index the programs: {e}"
+                )))));
+            }
+            (self.pos, self.line) = at;
+        }
+        let from = self
+            .by_number
+            .partition_point(|&i| self.programs[i as usize].number < number);
+        let mut found = self.by_number[from..]
+            .iter()
+            .map(|&i| i as usize)
+            .take_while(|&i| self.programs[i].number == number);
+        let Some(prog) = found.next() else {
+            return Some(Err(err(ErrorKind::MacroB(format!(
+                "G65 P{number}: this file holds no program O{number}"
+            )))));
+        };
+        if found.next().is_some() || self.programs[prog].end.is_none() {
+            return Some(Err(err(ErrorKind::MacroB(format!(
+                "G65 P{number}: O{number} must be in this file once and end with M99"
+            )))));
+        }
+        if repeats == 0 {
+            return Some(Ok(()));
+        }
+        let depth = self.stack.iter().filter(|f| f.macro_call).count();
+        if depth >= crate::macrob::MAX_MACRO_DEPTH {
+            return Some(Err(err(ErrorKind::MacroB(format!(
+                "G65 macro calls nest more than {} deep (Fanuc's limit)",
+                crate::macrob::MAX_MACRO_DEPTH
+            )))));
+        }
+        if self.stack.len() >= MAX_NESTING {
+            return Some(Err(err(ErrorKind::CallsTooDeep(MAX_NESTING))));
+        }
+        if self.runs + u64::from(repeats) > self.max_runs {
+            return Some(Err(err(ErrorKind::TooManyCalls {
+                limit: self.max_runs,
+                what: "subprogram runs",
+            })));
+        }
+        self.runs += u64::from(repeats);
+        self.stack.push(Frame {
+            prog,
+            back: (self.pos, self.line),
+            repeats_left: repeats - 1,
+            local: false,
+            macro_call: true,
+        });
+        let p = self.programs[prog];
+        self.pos = p.start;
+        self.line = p.line;
+        params.enter_macro(*args);
+        Some(Ok(()))
+    }
+
+    /// The `G65` macro levels left (by their M99) since the last call.
+    pub fn take_returns(&mut self) -> u32 {
+        std::mem::take(&mut self.macro_returns)
+    }
+
     /// Follow the LinuxCNC O-word control line `text` (line `number` at `offset`, just
-    /// handed out) with `params`; `None` when this reader does not follow control lines
-    /// (file order).
+    /// handed out) with `params`, or with Macro B variables ([`crate::Params::macro_b`])
+    /// the Fanuc statement (`IF … GOTO`, `GOTO`, `WHILE … DOm`, `DOm`, `ENDm`); `None`
+    /// when this reader does not follow control lines (file order).
     pub fn control(
         &mut self,
         text: &str,
@@ -281,6 +449,9 @@ impl<R: Read + Seek> ProgramReader<R> {
     ) -> Option<Result<(), Diagnostic>> {
         if self.order != Order::Execution {
             return None;
+        }
+        if params.is_macro_b() {
+            return Some(self.control_macrob(text, number, offset, params));
         }
         if self.ngc.is_none() {
             let at = (self.pos, self.line);
@@ -497,6 +668,7 @@ impl<R: Read + Seek> ProgramReader<R> {
                     back: (self.pos, self.line),
                     repeats_left: repeats - 1,
                     local: false,
+                    macro_call: false,
                 });
                 let p = self.programs[prog];
                 self.pos = p.start;
@@ -556,6 +728,7 @@ impl<R: Read + Seek> ProgramReader<R> {
                         back: (self.pos, self.line),
                         repeats_left: repeats - 1,
                         local: true,
+                        macro_call: false,
                     });
                     (self.pos, self.line) = start;
                     None
@@ -586,6 +759,9 @@ impl<R: Read + Seek> ProgramReader<R> {
                 (self.pos, self.line) = f.back;
                 if f.local {
                     self.locals.pop();
+                }
+                if f.macro_call {
+                    self.macro_returns += 1;
                 }
                 self.stack.pop();
             }
@@ -769,6 +945,21 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
         params: &mut crate::expr::Params,
     ) -> Option<Result<(), Diagnostic>> {
         ProgramReader::control(self, text, number, offset, params)
+    }
+
+    fn macro_call(
+        &mut self,
+        call: (u32, u32, &[Option<f64>; crate::expr::FANUC_LOCALS]),
+        number: u32,
+        offset: usize,
+        text: &str,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        ProgramReader::macro_call(self, call, number, offset, text, params)
+    }
+
+    fn take_returns(&mut self) -> u32 {
+        ProgramReader::take_returns(self)
     }
 }
 
