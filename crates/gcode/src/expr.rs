@@ -53,6 +53,18 @@ pub(crate) struct FanucVars {
     pub(crate) common: Vec<Option<f64>>,
 }
 
+/// The Fanuc system variables a program may read, as the numbered parameters that hold
+/// them: `#5041`–`#5046` the position in the work system (after the last block, as
+/// LinuxCNC's `#5420`…), `#5061`–`#5066` the skip position of the last G31 (its end:
+/// no probe trips in a trace, as LinuxCNC's `#5061`…).
+fn fanuc_system(n: usize) -> Option<usize> {
+    match n {
+        5041..=5046 => Some(5420 + (n - 5041)),
+        5061..=5066 => Some(n),
+        _ => None,
+    }
+}
+
 /// Fanuc's local variables `#1`–`#33`.
 pub const FANUC_LOCALS: usize = 33;
 
@@ -365,11 +377,11 @@ impl<'t, 'p> Eval<'t, 'p> {
                 if let Some(f) = self.params.fanuc.as_deref() {
                     if (v - n).abs() > 1e-6
                         || !(0.0..=MAX_PARAM as f64).contains(&n)
-                        || f.get(n as usize).is_none()
+                        || f.get(n as usize).is_none() && fanuc_system(n as usize).is_none()
                     {
                         return Err((
                             format!(
-                                "#{}: Macro B variables are #0 (vacant), #1-#33 (local), #100-#199 and #500-#999 (common); system variables are not evaluated",
+                                "#{}: Macro B variables are #0 (vacant), #1-#33 (local), #100-#199 and #500-#999 (common), and the positions #5041-#5046 and #5061-#5066; other system variables are not evaluated",
                                 self.text(start, self.pos)
                             ),
                             start,
@@ -398,7 +410,10 @@ impl<'t, 'p> Eval<'t, 'p> {
         if let (Some(f), Param::Numbered(n)) = (self.params.fanuc.as_deref(), p) {
             // Vacant reads as 0 in arithmetic; `vacant` tells the callers that care
             // (a word's value, an assignment, EQ and NE).
-            let v = f.get(*n).flatten();
+            let v = match fanuc_system(*n) {
+                Some(k) => self.params.numbered.get(k).copied(),
+                None => f.get(*n).flatten(),
+            };
             self.vacant = v.is_none();
             return Ok(v.unwrap_or(0.0));
         }

@@ -271,6 +271,7 @@ pub fn eval_line<'a>(
             block.items.clear();
             Ok(Outcome::Control)
         }
+        None if block.kind == BlockKind::Percent => parsed.map(|()| Outcome::Words),
         None => {
             if block.kind == BlockKind::Words {
                 // A line the parser refused and that is no statement: its error stands.
@@ -356,6 +357,64 @@ pub fn call(
         repeats,
         args,
     })
+}
+
+/// An evaluated block's `M98 P… [L…]` (program, runs), whose P or L came from a
+/// variable; an `M97` with such values is refused (its label must be a number).
+pub fn sub_call(
+    block: &Block<'_>,
+    line: &[u8],
+    line_no: u32,
+    offset: usize,
+) -> Result<Option<(u32, u32)>, Diagnostic> {
+    let m = |code| {
+        block
+            .words()
+            .find(|w| w.letter == b'M' && w.register.is_none() && w.code() == Some(code))
+    };
+    let bad = |msg: String, sp: crate::ast::Span| {
+        located(
+            line,
+            line_no,
+            offset,
+            (
+                msg,
+                sp.start.saturating_sub(offset),
+                sp.end.saturating_sub(offset),
+            ),
+        )
+    };
+    if let Some(w) = m(970) {
+        return Err(bad(
+            "M97 with a value from a variable is not followed: write P and L as numbers".into(),
+            w.span,
+        ));
+    }
+    let Some(m98) = m(980) else {
+        return Ok(None);
+    };
+    let Some(p) = block.word(b'P') else {
+        return Err(bad("M98 needs the program number in P".into(), m98.span));
+    };
+    if !(p.value >= 0.0 && p.value <= 99_999_999.0 && p.value.fract() == 0.0) {
+        return Err(bad(
+            format!("{}: the program number P is a whole number", p.display()),
+            p.span,
+        ));
+    }
+    let repeats = match block.word(b'L') {
+        None => 1,
+        Some(l) if l.value >= 0.0 && l.value <= 10_000.0 && l.value.fract() == 0.0 => {
+            l.value as u32
+        }
+        Some(l) => {
+            return Err(bad(
+                format!("{}: the repeat count L is a whole number 0 to 10000", l.display()),
+                l.span,
+            ))
+        }
+    };
+    Ok(Some((p.value as u32, repeats)))
 }
 
 /// One indexed line of the file.

@@ -346,11 +346,12 @@ impl<R: Read + Seek> ProgramReader<R> {
     }
 
     /// Run the Fanuc macro `O{number}` `repeats` times with `args` as its locals (a `G65`
-    /// call on line `line_no` at `offset`, just handed out); `None` when this reader does
-    /// not follow calls (file order).
+    /// call on line `line_no` at `offset`, just handed out), or without `args` the
+    /// subprogram of an `M98` whose P or L came from a variable (a plain M98 is followed
+    /// as the line is read); `None` when this reader does not follow calls (file order).
     pub fn macro_call(
         &mut self,
-        call: (u32, u32, &[Option<f64>; crate::expr::FANUC_LOCALS]),
+        call: (u32, u32, Option<&[Option<f64>; crate::expr::FANUC_LOCALS]>),
         line_no: u32,
         offset: usize,
         text: &str,
@@ -360,6 +361,7 @@ impl<R: Read + Seek> ProgramReader<R> {
             return None;
         }
         let (number, repeats, args) = call;
+        let what = if args.is_some() { "G65" } else { "M98" };
         let err = |kind: ErrorKind| {
             Diagnostic::at(
                 Severity::Error,
@@ -389,19 +391,25 @@ impl<R: Read + Seek> ProgramReader<R> {
             .take_while(|&i| self.programs[i].number == number);
         let Some(prog) = found.next() else {
             return Some(Err(err(ErrorKind::MacroB(format!(
-                "G65 P{number}: this file holds no program O{number}"
+                "{what} P{number}: this file holds no program O{number}"
             )))));
         };
         if found.next().is_some() || self.programs[prog].end.is_none() {
             return Some(Err(err(ErrorKind::MacroB(format!(
-                "G65 P{number}: O{number} must be in this file once and end with M99"
+                "{what} P{number}: O{number} must be in this file once and end with M99"
             )))));
         }
         if repeats == 0 {
             return Some(Ok(()));
         }
         let depth = self.stack.iter().filter(|f| f.macro_call).count();
-        if depth >= crate::macrob::MAX_MACRO_DEPTH {
+        if args.is_none() && self.stack.iter().any(|f| !f.local && f.prog == prog) {
+            return Some(Err(err(ErrorKind::RecursiveCall {
+                number,
+                chain: format!("O{number} → O{number}"),
+            })));
+        }
+        if args.is_some() && depth >= crate::macrob::MAX_MACRO_DEPTH {
             return Some(Err(err(ErrorKind::MacroB(format!(
                 "G65 macro calls nest more than {} deep (Fanuc's limit)",
                 crate::macrob::MAX_MACRO_DEPTH
@@ -422,12 +430,14 @@ impl<R: Read + Seek> ProgramReader<R> {
             back: (self.pos, self.line),
             repeats_left: repeats - 1,
             local: false,
-            macro_call: true,
+            macro_call: args.is_some(),
         });
         let p = self.programs[prog];
         self.pos = p.start;
         self.line = p.line;
-        params.enter_macro(*args);
+        if let Some(args) = args {
+            params.enter_macro(*args);
+        }
         Some(Ok(()))
     }
 
@@ -949,7 +959,7 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
 
     fn macro_call(
         &mut self,
-        call: (u32, u32, &[Option<f64>; crate::expr::FANUC_LOCALS]),
+        call: (u32, u32, Option<&[Option<f64>; crate::expr::FANUC_LOCALS]>),
         number: u32,
         offset: usize,
         text: &str,

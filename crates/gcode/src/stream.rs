@@ -43,7 +43,7 @@ pub trait LineSource {
     /// out; `None` when this source does not follow calls.
     fn macro_call(
         &mut self,
-        _call: (u32, u32, &[Option<f64>; crate::expr::FANUC_LOCALS]),
+        _call: (u32, u32, Option<&[Option<f64>; crate::expr::FANUC_LOCALS]>),
         _number: u32,
         _offset: usize,
         _text: &str,
@@ -231,9 +231,13 @@ impl<S: LineSource> Iterator for Stream<S> {
                     MacroKind::LinuxCncOWord
                 };
                 let done = match call.take() {
-                    Some((n, runs, args)) if !failed => {
-                        self.src.macro_call((n, runs, &args), number, offset, &text, params)
-                    }
+                    Some((n, runs, args)) if !failed => self.src.macro_call(
+                        (n, runs, args.as_deref()),
+                        number,
+                        offset,
+                        &text,
+                        params,
+                    ),
                     Some(_) => Some(Ok(())),
                     None => self.src.control(&text, number, offset, params),
                 };
@@ -303,8 +307,9 @@ fn has_g65(b: &Block<'_>) -> bool {
         .any(|w| w.letter == b'G' && w.register.is_none() && w.code() == Some(650))
 }
 
-/// A `G65` call: program, runs, locals.
-type MacroCall = (u32, u32, Box<[Option<f64>; crate::expr::FANUC_LOCALS]>);
+/// A `G65` call (program, runs, locals), or an `M98` whose words came from variables
+/// (no locals).
+type MacroCall = (u32, u32, Option<Box<[Option<f64>; crate::expr::FANUC_LOCALS]>>);
 
 /// A line of a Macro B flavour (see [`crate::macrob`]): words for the interpreter, a
 /// statement noted in `control` for the source to follow, or a `G65` call noted in
@@ -319,8 +324,20 @@ fn evaluate_macro_b<'a>(
     call: &mut Option<MacroCall>,
 ) -> Result<(), Diagnostic> {
     let text = || String::from_utf8_lossy(line.bytes).into_owned();
+    let was_macro = matches!(block.kind, BlockKind::Macro(_));
     match crate::macrob::eval_line(line.bytes, line.number, line.offset, block, params, parsed)? {
-        crate::macrob::Outcome::Words => {}
+        crate::macrob::Outcome::Words => {
+            // The reader follows an M98 as it reads the line; one whose P or L is a
+            // variable is known only now.
+            if was_macro {
+                if let Some((number, repeats)) =
+                    crate::macrob::sub_call(block, line.bytes, line.number, line.offset)?
+                {
+                    *control = Some((text(), line.number, line.offset));
+                    *call = Some((number, repeats, None));
+                }
+            }
+        }
         crate::macrob::Outcome::Control => *control = Some((text(), line.number, line.offset)),
         crate::macrob::Outcome::Call {
             number,
@@ -328,7 +345,7 @@ fn evaluate_macro_b<'a>(
             args,
         } => {
             *control = Some((text(), line.number, line.offset));
-            *call = Some((number, repeats, args));
+            *call = Some((number, repeats, Some(args)));
         }
     }
     Ok(())
