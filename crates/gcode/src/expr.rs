@@ -557,6 +557,7 @@ impl<'t, 'p> Eval<'t, 'p> {
 
     /// An expression ended by `]` or, when `bare`, by the end of the line or a comment.
     fn expression_until(&mut self, bare: bool) -> Result<f64, EvalError> {
+        self.skip();
         let start = self.pos;
         let mb = self.macro_b();
         let first = self.value()?;

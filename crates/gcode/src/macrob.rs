@@ -241,8 +241,8 @@ pub fn eval_line<'a>(
                 return Ok(Outcome::Words);
             }
             // The statement after THEN, read as a line of its own (its columns kept).
-            let then = at + 4;
-            if !text[then..].trim_start().starts_with('#') {
+            let then = blanks(line, at + 4);
+            if !text[then..].starts_with('#') {
                 return Err(err((
                     "THEN takes an assignment `#i = …`".into(),
                     then,
