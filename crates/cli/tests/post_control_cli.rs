@@ -230,3 +230,54 @@ fn non_extruding_g1_moves_are_travel() {
     // The safe height is over the deposited work (Z 0.3), far below the lift.
     assert!(r["verify"]["max_position_error"].as_f64().is_some(), "{r}");
 }
+
+/// A Fanuc Macro B program (a G65 bolt-hole macro with a WHILE loop): `auto` decides
+/// Fanuc from the G65, trace follows it, and the post writes its expansion.
+#[test]
+fn a_macro_b_bolt_hole_circle_traces_and_posts() {
+    let dir = tempdir("post-control-macrob");
+    let input = root().join("fixtures/programs/bolt-holes-macro-b.nc");
+    let p = input.to_str().expect("utf-8");
+    let o = lampost(&["trace", "--json", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["flavor"]["flavor"], "fanuc");
+    let h = 5.0 * 3f64.sqrt();
+    let holes: Vec<(f64, f64)> = doc["moves"]
+        .as_array()
+        .expect("moves")
+        .iter()
+        .filter(|m| m["g"] == "G1")
+        .map(|m| (axis(&m["end"], "X"), axis(&m["end"], "Y")))
+        .collect();
+    let want = [
+        (60.0, 20.0),
+        (55.0, 20.0 + h),
+        (45.0, 20.0 + h),
+        (40.0, 20.0),
+        (45.0, 20.0 - h),
+        (55.0, 20.0 - h),
+    ];
+    assert_eq!(holes.len(), want.len(), "{holes:?}");
+    for ((x, y), (a, b)) in holes.iter().zip(want) {
+        assert!((x - a).abs() <= 1e-12 && (y - b).abs() <= 1e-12, "({x}, {y}) vs ({a}, {b})");
+    }
+    // Posted on the NRC (millimetres), machining: the six holes, no macro left.
+    let out = dir.join("bolt.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        "--process",
+        "machine",
+        p,
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    assert!(!posted.contains('#') && !posted.contains("G65") && !posted.contains("WHILE"));
+    assert_eq!(posted.matches("Z-3.").count(), 6, "{posted}");
+}
