@@ -36,7 +36,10 @@ fn post_iso(dir: &Path, input: &Path, extra: &[&str]) -> std::path::PathBuf {
 
 /// The feed moves (straight and arc) of rs274's canonical output.
 fn feeds(canon: &[Canon]) -> Vec<&Canon> {
-    canon.iter().filter(|c| c.kind != "STRAIGHT_TRAVERSE").collect()
+    canon
+        .iter()
+        .filter(|c| c.kind != "STRAIGHT_TRAVERSE")
+        .collect()
 }
 
 /// rs274 reads the posted program to the input's feed path: every feed of the input, in
@@ -66,7 +69,8 @@ fn same_feed_path(input: &[Canon], posted: &[Canon]) {
             let from = at.expect("an approach follows a feed or a rapid");
             assert_eq!(p.kind, "STRAIGHT_FEED", "posted {p:?} is not in the input");
             assert!(
-                (p.args[0] - from[0]).abs() <= RS274_TOL && (p.args[1] - from[1]).abs() <= RS274_TOL,
+                (p.args[0] - from[0]).abs() <= RS274_TOL
+                    && (p.args[1] - from[1]).abs() <= RS274_TOL,
                 "posted {p:?} is not in the input and not a vertical approach"
             );
         }
@@ -168,7 +172,10 @@ fn m99_in_a_main_program_is_refused_by_the_post_and_warned_by_trace() {
             "-o",
             out.to_str().expect("utf-8"),
         ]);
-        assert!(!o.status.success(), "{flavor}: posted one pass of an endless loop");
+        assert!(
+            !o.status.success(),
+            "{flavor}: posted one pass of an endless loop"
+        );
         let e = stderr(&o);
         assert!(
             e.contains(&format!("{p}:5:")) && e.contains("runs it again without end"),
@@ -224,7 +231,11 @@ fn non_extruding_g1_moves_are_travel() {
     // No feed goes to the lift's height or the dry travel's end with the laser on
     // (posted_deposition refuses rapids with the laser on; feeds are counted above), and
     // the lift is not written as a feed to Z200.
-    assert!(!nc.lines().any(|l| l.starts_with("G1") && l.contains("Z200")), "{nc}");
+    assert!(
+        !nc.lines()
+            .any(|l| l.starts_with("G1") && l.contains("Z200")),
+        "{nc}"
+    );
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).expect("report")).expect("json");
     // The safe height is over the deposited work (Z 0.3), far below the lift.
@@ -260,7 +271,10 @@ fn a_macro_b_bolt_hole_circle_traces_and_posts() {
     ];
     assert_eq!(holes.len(), want.len(), "{holes:?}");
     for ((x, y), (a, b)) in holes.iter().zip(want) {
-        assert!((x - a).abs() <= 1e-12 && (y - b).abs() <= 1e-12, "({x}, {y}) vs ({a}, {b})");
+        assert!(
+            (x - a).abs() <= 1e-12 && (y - b).abs() <= 1e-12,
+            "({x}, {y}) vs ({a}, {b})"
+        );
     }
     // Posted on the NRC (millimetres), machining: the six holes, no macro left.
     let out = dir.join("bolt.nc");

@@ -252,11 +252,12 @@ pub fn eval_line<'a>(
             let mut padded = vec![b' '; then];
             padded.extend_from_slice(&line[then..]);
             let mut scratch = Block::empty(line_no, offset);
-            crate::expr::eval_line(&padded, line_no, offset, &mut scratch, params)
-                .map_err(|d| {
+            crate::expr::eval_line(&padded, line_no, offset, &mut scratch, params).map_err(
+                |d| {
                     let (s, e) = (d.column.saturating_sub(1) as usize, line.len());
                     located(line, line_no, offset, (d.kind.to_string(), s.min(e), e))
-                })?;
+                },
+            )?;
             if scratch.words().next().is_some() {
                 return Err(err((
                     "THEN takes an assignment `#i = …`, not words".into(),
@@ -319,7 +320,10 @@ pub fn call(
             b'P' => {
                 if !(w.value >= 0.0 && w.value <= 99_999_999.0 && w.value.fract() == 0.0) {
                     return Err(bad(
-                        format!("{}: the macro's program number is a whole number", w.display()),
+                        format!(
+                            "{}: the macro's program number is a whole number",
+                            w.display()
+                        ),
                         w.span,
                     ));
                 }
@@ -328,7 +332,10 @@ pub fn call(
             b'L' => {
                 if !(w.value >= 0.0 && w.value <= 10_000.0 && w.value.fract() == 0.0) {
                     return Err(bad(
-                        format!("{}: the repeat count L is a whole number 0 to 10000", w.display()),
+                        format!(
+                            "{}: the repeat count L is a whole number 0 to 10000",
+                            w.display()
+                        ),
                         w.span,
                     ));
                 }
@@ -409,7 +416,10 @@ pub fn sub_call(
         }
         Some(l) => {
             return Err(bad(
-                format!("{}: the repeat count L is a whole number 0 to 10000", l.display()),
+                format!(
+                    "{}: the repeat count L is a whole number 0 to 10000",
+                    l.display()
+                ),
                 l.span,
             ))
         }
@@ -594,7 +604,9 @@ impl Control {
                 let (lo, _) = self.program_of(offset);
                 let open = self.entries[..i]
                     .iter()
-                    .rposition(|&(o, _, _, e)| o >= lo && matches!(e, Entry::Do { m: k, .. } if k == m))
+                    .rposition(|&(o, _, _, e)| {
+                        o >= lo && matches!(e, Entry::Do { m: k, .. } if k == m)
+                    })
                     .ok_or_else(|| (format!("END{m} without DO{m} before it"), 0, len))?;
                 // The loop this END closes must close here (not at an earlier END).
                 let end = self.matching_end(open, m, len)?;

@@ -325,9 +325,13 @@ impl<R: Read + Seek> ProgramReader<R> {
         };
         if self.macrob.is_none() {
             let at = (self.pos, self.line);
-            let c = self
-                .index_macrob()
-                .map_err(|e| at_err(format!("cannot index the Macro B lines: {e}"), 0, text.len()))?;
+            let c = self.index_macrob().map_err(|e| {
+                at_err(
+                    format!("cannot index the Macro B lines: {e}"),
+                    0,
+                    text.len(),
+                )
+            })?;
             self.macrob = Some(Box::new(c));
             (self.pos, self.line) = at;
         }

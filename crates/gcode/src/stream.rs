@@ -309,7 +309,11 @@ fn has_g65(b: &Block<'_>) -> bool {
 
 /// A `G65` call (program, runs, locals), or an `M98` whose words came from variables
 /// (no locals).
-type MacroCall = (u32, u32, Option<Box<[Option<f64>; crate::expr::FANUC_LOCALS]>>);
+type MacroCall = (
+    u32,
+    u32,
+    Option<Box<[Option<f64>; crate::expr::FANUC_LOCALS]>>,
+);
 
 /// A line of a Macro B flavour (see [`crate::macrob`]): words for the interpreter, a
 /// statement noted in `control` for the source to follow, or a `G65` call noted in

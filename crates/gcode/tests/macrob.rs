@@ -6,11 +6,7 @@ use std::io::Cursor;
 
 use lampost_gcode::{Diagnostic, Event, Flavor, Options, Order, ProgramReader, Stream};
 
-fn run_as(
-    flavor: Flavor,
-    text: &str,
-    max_blocks: Option<u64>,
-) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
+fn run_as(flavor: Flavor, text: &str, max_blocks: Option<u64>) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
     let mut r = ProgramReader::new(Cursor::new(text.as_bytes()), Order::Execution);
     if let Some(n) = max_blocks {
         r.set_max_blocks(n);
@@ -115,8 +111,8 @@ fn g65_arguments_are_the_locals_fanuc_names() {
     let m = clean(text);
     let got: Vec<f64> = m[1..].iter().map(|p| p[0]).collect();
     let want = [
-        1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 11.0, 13.0, 17.0, 18.0, 19.0, 20.0,
-        21.0, 22.0, 23.0, 24.0, 25.0, 26.0,
+        1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 11.0, 13.0, 17.0, 18.0, 19.0, 20.0, 21.0,
+        22.0, 23.0, 24.0, 25.0, 26.0,
     ];
     assert_eq!(got, want);
     assert!(m[1..].iter().all(|p| p[0] == p[1]), "{m:?}");
@@ -170,7 +166,8 @@ fn goto_if_and_while_follow_fanuc() {
         [0.0, 0.0, 1.0, 2.0, 40.0, 100.0, 101.0, 110.0, 111.0]
     );
     // A GOTO searches forward first, then from the top of its program.
-    let text = "G21 G90 G0 X0\n#1 = 0\nN5 #1 = #1 + 1\nIF [#1 GT 2] GOTO 7\nGOTO 5\nN7 G0 X#1\nM30\n";
+    let text =
+        "G21 G90 G0 X0\n#1 = 0\nN5 #1 = #1 + 1\nIF [#1 GT 2] GOTO 7\nGOTO 5\nN7 G0 X#1\nM30\n";
     assert_eq!(xs(&clean(text)), [0.0, 3.0]);
 }
 
@@ -249,8 +246,18 @@ fn bad_macro_b_is_located() {
     type Case = (&'static str, u32, u32, &'static str);
     let cases: &[Case] = &[
         ("G0 X0\nGOTO 50\nM30\n", 2, 6, "no block N50"),
-        ("G0 X0\nIF [1 EQ 1] GOTO 7\nM30\nO2\nN7 M99\n", 2, 18, "no block N7"),
-        ("G0 X0\n#1 = 0\nWHILE [#1 LT 3] DO1\n#1 = #1 + 1\nM30\n", 3, 1, "DO1 has no END1"),
+        (
+            "G0 X0\nIF [1 EQ 1] GOTO 7\nM30\nO2\nN7 M99\n",
+            2,
+            18,
+            "no block N7",
+        ),
+        (
+            "G0 X0\n#1 = 0\nWHILE [#1 LT 3] DO1\n#1 = #1 + 1\nM30\n",
+            3,
+            1,
+            "DO1 has no END1",
+        ),
         ("G0 X0\nEND1\nM30\n", 2, 1, "END1 without DO1"),
         (
             "G0 X0\nWHILE [1 EQ 1] DO1\nWHILE [1 EQ 1] DO1\nEND1\nEND1\nM30\n",
@@ -259,17 +266,52 @@ fn bad_macro_b_is_located() {
             "nested loops need different numbers",
         ),
         ("G0 X0\nDO4\nEND4\nM30\n", 2, 3, "DO and END take 1, 2 or 3"),
-        ("G0 X0\nWHILE [1 EQ 1] GOTO 3\nM30\n", 2, 16, "followed by DOm"),
-        ("G0 X0\nIF [1 EQ 1] X2\nM30\n", 2, 13, "followed by GOTO n or THEN"),
-        ("G0 X0\nIF [1 EQ 1] THEN G0 X2\nM30\n", 2, 18, "THEN takes an assignment"),
-        ("G0 X0\n#1 = #1000\nM30\n", 2, 7, "system variables are not evaluated"),
-        ("G0 X0\n#1 = #<a>\nM30\n", 2, 7, "Macro B variables are numbered"),
+        (
+            "G0 X0\nWHILE [1 EQ 1] GOTO 3\nM30\n",
+            2,
+            16,
+            "followed by DOm",
+        ),
+        (
+            "G0 X0\nIF [1 EQ 1] X2\nM30\n",
+            2,
+            13,
+            "followed by GOTO n or THEN",
+        ),
+        (
+            "G0 X0\nIF [1 EQ 1] THEN G0 X2\nM30\n",
+            2,
+            18,
+            "THEN takes an assignment",
+        ),
+        (
+            "G0 X0\n#1 = #1000\nM30\n",
+            2,
+            7,
+            "system variables are not evaluated",
+        ),
+        (
+            "G0 X0\n#1 = #<a>\nM30\n",
+            2,
+            7,
+            "Macro B variables are numbered",
+        ),
         ("G0 X0\n#1 = 1.5 AND 1\nM30\n", 2, 6, "whole numbers"),
         ("G0 X0\n#1 = 1 / 0\nM30\n", 2, 6, "division by zero"),
         ("G0 X0\nG65 P77 A1\nM30\n", 2, 1, "no program O77"),
-        ("G0 X0\nG65 A1\nM30\n", 2, 1, "needs the macro's program number"),
+        (
+            "G0 X0\nG65 A1\nM30\n",
+            2,
+            1,
+            "needs the macro's program number",
+        ),
         ("G0 X0\nG65 P1 G1\nM30\nO1\nM99\n", 2, 8, "not an argument"),
-        ("G0 X0\nG65 P1 N5 O3\nM30\nO1\nM99\n", 2, 11, "not an argument"),
+        (
+            "G0 X0\nG65 P1 N5 O3\nM30\nO1\nM99\n",
+            2,
+            11,
+            "not an argument",
+        ),
         ("G0 X0\n#1 = 3\nM98 P#1\nM30\n", 3, 1, "no program O3"),
         ("G0 X0\nM99\n", 2, 1, "M99 in the main program"),
     ];
@@ -296,7 +338,10 @@ fn loops_and_calls_are_bounded() {
         Some(10_000),
     );
     let e = d.iter().find(|d| d.is_error()).expect("an error");
-    assert!(e.kind.to_string().contains("more than 10000 blocks"), "{e:?}");
+    assert!(
+        e.kind.to_string().contains("more than 10000 blocks"),
+        "{e:?}"
+    );
     assert_eq!(e.line, 4);
     assert!(m.len() < 10_000);
     let (_, d) = run_as(
