@@ -446,8 +446,12 @@ pub(crate) type CtlError = (String, usize, usize);
 pub(crate) struct Control {
     /// (offset, line, next line (offset, number), what), in file order.
     entries: Vec<(usize, u32, (usize, u32), Entry)>,
-    /// (label, offset, line), in file order.
+    /// (label, offset, line), in file order; sorted by label then offset at the first
+    /// jump.
     labels: Vec<(u32, usize, u32)>,
+    labels_sorted: bool,
+    /// Offsets of the `O` lines, in file order.
+    programs: Vec<usize>,
     blocks: u64,
     pub(crate) max_blocks: u64,
 }
@@ -471,6 +475,7 @@ impl Control {
             && b.get(i + 1).is_some_and(u8::is_ascii_digit)
         {
             self.entries.push((at.0, at.1, next, Entry::Program));
+            self.programs.push(at.0);
         }
         let stmt = statement(text);
         if let Some((st, rest, label)) = stmt {
@@ -509,18 +514,9 @@ impl Control {
 
     /// The program (`O` line to the next one) holding `offset`: its byte range.
     fn program_of(&self, offset: usize) -> (usize, usize) {
-        let mut start = 0;
-        let mut end = usize::MAX;
-        for &(o, _, _, e) in &self.entries {
-            if let Entry::Program = e {
-                if o <= offset {
-                    start = o;
-                } else {
-                    end = o;
-                    break;
-                }
-            }
-        }
+        let k = self.programs.partition_point(|&o| o <= offset);
+        let start = if k == 0 { 0 } else { self.programs[k - 1] };
+        let end = self.programs.get(k).copied().unwrap_or(usize::MAX);
         (start, end)
     }
 
@@ -562,6 +558,13 @@ impl Control {
             Stmt::If => {
                 let (yes, at) = cond(rest)?;
                 let at = blanks(b, at);
+                if !keyword(b, at, "GOTO") {
+                    return Err((
+                        "IF [condition] is followed by GOTO n or THEN".into(),
+                        at.min(len),
+                        len,
+                    ));
+                }
                 if yes {
                     self.goto(text, at + 4, offset, number, params)
                 } else {
@@ -687,14 +690,19 @@ impl Control {
         }
         let n = n as u32;
         let (lo, hi) = self.program_of(offset);
-        let found = self
-            .labels
-            .iter()
-            .find(|&&(l, o, _)| l == n && o > offset && o < hi)
+        if !self.labels_sorted {
+            self.labels.sort_by_key(|&(l, o, _)| (l, o));
+            self.labels_sorted = true;
+        }
+        let first = self.labels.partition_point(|&(l, _, _)| l < n);
+        let same = &self.labels[first..];
+        let same = &same[..same.partition_point(|&(l, _, _)| l == n)];
+        let found = same
+            .get(same.partition_point(|&(_, o, _)| o <= offset))
+            .filter(|&&(_, o, _)| o < hi)
             .or_else(|| {
-                self.labels
-                    .iter()
-                    .find(|&&(l, o, _)| l == n && o >= lo && o <= offset)
+                same.get(same.partition_point(|&(_, o, _)| o < lo))
+                    .filter(|&&(_, o, _)| o <= offset)
             })
             .copied();
         let Some((_, o, line)) = found else {
