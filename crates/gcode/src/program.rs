@@ -13,6 +13,10 @@
 //!   program, and at each `M98 Pn Lk` line the body of `On` (its `O` line up to the
 //!   first M99 met, which returns) `k` times, calls inside it followed in turn.
 //!
+//! Calls made by evaluated lines come from the stream: LinuxCNC O-word lines and Fanuc
+//! Macro B statements through [`ProgramReader::control`], Fanuc `G65` macros (their own
+//! level of locals) and `M98` with variable words through [`ProgramReader::macro_call`].
+//!
 //! A *subprogram body* runs from an `O` line to the last M99 before the next `O` line (or
 //! the end of the file). The *main program* is every line outside the bodies, in file
 //! order; a file whose lines outside the bodies hold no words (a subprogram on its own)
@@ -156,6 +160,10 @@ pub struct ProgramReader<R> {
     macrob: Option<Box<crate::macrob::Control>>,
     /// `G65` macro levels left since the stream last asked (see `take_returns`).
     macro_returns: u32,
+    /// A control line failed: reading goes straight on from there (a loop whose
+    /// condition cannot be evaluated is not run again and again by a reader that does
+    /// not stop at errors).
+    control_failed: bool,
 }
 
 fn may_matter(bytes: &[u8]) -> bool {
@@ -217,6 +225,7 @@ impl<R: Read + Seek> ProgramReader<R> {
             max_blocks: crate::ngc::MAX_BLOCKS,
             macrob: None,
             macro_returns: 0,
+            control_failed: false,
         }
     }
 
@@ -464,9 +473,29 @@ impl<R: Read + Seek> ProgramReader<R> {
         if self.order != Order::Execution {
             return None;
         }
-        if params.is_macro_b() {
-            return Some(self.control_macrob(text, number, offset, params));
+        if self.control_failed {
+            return Some(Ok(()));
         }
+        let r = if params.is_macro_b() {
+            self.control_macrob(text, number, offset, params)
+        } else {
+            match self.control_ngc(text, number, offset, params) {
+                Some(r) => r,
+                None => return None,
+            }
+        };
+        self.control_failed = r.is_err();
+        Some(r)
+    }
+
+    /// Follow the LinuxCNC O-word line `text` (see [`Self::control`]).
+    fn control_ngc(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
         if self.ngc.is_none() {
             let at = (self.pos, self.line);
             match self.index_owords() {

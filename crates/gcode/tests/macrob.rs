@@ -371,3 +371,39 @@ fn plain_flavours_leave_macro_b_alone() {
     assert_eq!(m.len(), 1);
     assert!(d.iter().any(|d| d.line == 2 && !d.is_error()), "{d:?}");
 }
+
+/// A loop whose condition cannot be evaluated, read by a stream that does not stop at
+/// errors (`check`): one error, and reading goes straight on (not a million runs of the
+/// loop, each with its errors). LinuxCNC's O-word loops alike.
+#[test]
+fn a_failed_loop_condition_is_not_run_again() {
+    for (flavor, text) in [
+        (
+            Flavor::Fanuc,
+            "G21 G0 X0\nWHILE [#2000 LT 1] DO1\nG0 X#3000\nEND1\nG0 X5\nM30\n",
+        ),
+        (
+            Flavor::LinuxCnc,
+            "G21 G0 X0\no1 while [#<nope> LT 1]\nG0 X#<nada>\no1 endwhile\nG0 X5\nM30\n",
+        ),
+    ] {
+        let r = ProgramReader::new(Cursor::new(text.as_bytes()), Order::Execution);
+        let opts = flavor.options(Options::default(), None);
+        let events: Vec<Event> = Stream::new(r, opts, false)
+            .map(|e| e.expect("reads"))
+            .collect();
+        let errors: Vec<u32> = events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Diagnostic(d) if d.is_error() => Some(d.line),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(errors, [2, 3], "{flavor:?}: {events:?}");
+        let last = events.iter().rev().find_map(|e| match e {
+            Event::Move(m) => Some(m.end[0]),
+            Event::Diagnostic(_) => None,
+        });
+        assert_eq!(last, Some(5.0), "{flavor:?}");
+    }
+}
