@@ -160,10 +160,8 @@ pub struct ProgramReader<R> {
     macrob: Option<Box<crate::macrob::Control>>,
     /// `G65` macro levels left since the stream last asked (see `take_returns`).
     macro_returns: u32,
-    /// A control line failed: reading goes straight on from there (a loop whose
-    /// condition cannot be evaluated is not run again and again by a reader that does
-    /// not stop at errors).
-    control_failed: bool,
+    /// A line has failed (see `note_error`): loops are not run again from here.
+    after_error: bool,
 }
 
 fn may_matter(bytes: &[u8]) -> bool {
@@ -225,7 +223,7 @@ impl<R: Read + Seek> ProgramReader<R> {
             max_blocks: crate::ngc::MAX_BLOCKS,
             macrob: None,
             macro_returns: 0,
-            control_failed: false,
+            after_error: false,
         }
     }
 
@@ -473,9 +471,7 @@ impl<R: Read + Seek> ProgramReader<R> {
         if self.order != Order::Execution {
             return None;
         }
-        if self.control_failed {
-            return Some(Ok(()));
-        }
+        let before = (self.pos, self.line);
         let r = if params.is_macro_b() {
             self.control_macrob(text, number, offset, params)
         } else {
@@ -484,8 +480,18 @@ impl<R: Read + Seek> ProgramReader<R> {
                 None => return None,
             }
         };
-        self.control_failed = r.is_err();
+        if self.after_error && self.pos <= offset && !calls_or_returns(text, params) {
+            // After an error a stream that goes on (check) reads straight on: a loop
+            // whose condition or body fails is not run again and again.
+            (self.pos, self.line) = before;
+        }
         Some(r)
+    }
+
+    /// A line read through this reader has failed (a stream that does not stop at
+    /// errors tells it): from now on loops are not run again, jumps back are not taken.
+    pub fn note_error(&mut self) {
+        self.after_error = true;
     }
 
     /// Follow the LinuxCNC O-word line `text` (see [`Self::control`]).
@@ -1004,6 +1010,18 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
     fn take_returns(&mut self) -> u32 {
         ProgramReader::take_returns(self)
     }
+
+    fn note_error(&mut self) {
+        ProgramReader::note_error(self);
+    }
+}
+
+/// Whether a control line is a LinuxCNC call or return (its jump back is no loop).
+fn calls_or_returns(text: &str, params: &crate::expr::Params) -> bool {
+    use crate::ngc::Kw;
+    !params.is_macro_b()
+        && crate::ngc::parse_oword(text)
+            .is_some_and(|(_, kw, _)| matches!(kw, Kw::Call | Kw::Return | Kw::EndSub))
 }
 
 fn io_error(d: &Diagnostic) -> io::Error {

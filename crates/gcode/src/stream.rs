@@ -56,6 +56,9 @@ pub trait LineSource {
     fn take_returns(&mut self) -> u32 {
         0
     }
+
+    /// A line has failed and the stream goes on: the source should not run loops again.
+    fn note_error(&mut self) {}
 }
 
 impl LineSource for Lines<'_> {
@@ -274,6 +277,8 @@ impl<S: LineSource> Iterator for Stream<S> {
             }
             if failed && self.stop_on_error {
                 self.stopped = true;
+            } else if failed && self.params.is_some() {
+                self.src.note_error();
             }
         }
     }
