@@ -277,10 +277,10 @@ pub fn eval_line<'a>(
             if block.kind == BlockKind::Words {
                 // A line the parser refused and that is no statement: its error stands.
                 parsed?;
-                return call(block, params, line, line_no, offset);
+                return call(block, line, line_no, offset);
             }
             crate::expr::eval_line(line, line_no, offset, block, params)?;
-            call(block, params, line, line_no, offset)
+            call(block, line, line_no, offset)
         }
     }
 }
@@ -288,7 +288,6 @@ pub fn eval_line<'a>(
 /// A `G65 P… L…` block's call (its other words are the arguments), or plain words.
 pub fn call(
     block: &mut Block<'_>,
-    _params: &Params,
     line: &[u8],
     line_no: u32,
     offset: usize,
