@@ -475,10 +475,7 @@ impl<R: Read + Seek> ProgramReader<R> {
         let r = if params.is_macro_b() {
             self.control_macrob(text, number, offset, params)
         } else {
-            match self.control_ngc(text, number, offset, params) {
-                Some(r) => r,
-                None => return None,
-            }
+            self.control_ngc(text, number, offset, params)?
         };
         if self.after_error && self.pos <= offset && !calls_or_returns(text, params) {
             // After an error a stream that goes on (check) reads straight on: a loop
