@@ -60,9 +60,9 @@ pub enum FlavorArg {
     Auto,
     /// LinuxCNC: parameters, expressions and O-words evaluated.
     Linuxcnc,
-    /// Fanuc.
+    /// Fanuc: Macro B evaluated (variables, IF/GOTO/WHILE, G65 macros).
     Fanuc,
-    /// Haas.
+    /// Haas: Fanuc Macro B evaluated; M97 local subprograms.
     Haas,
     /// FADAL.
     Fadal,

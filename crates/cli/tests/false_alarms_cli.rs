@@ -42,8 +42,7 @@ fn post(name: &str, args: &[&str], src: &str) -> (bool, String) {
 #[test]
 fn path_changing_codes_warn_and_the_post_refuses_their_line() {
     let cases = [
-        ("G31 Z-1 F10", "G31"),           // Fanuc/Mach3 skip after a G0
-        ("G65 P9001 A.125 C.625", "G65"), // Fanuc macro call
+        ("G31 Z-1 F10", "G31"), // Fanuc/Mach3 skip after a G0
         ("G54.1 P1 G0 X2", "G54.1"),
         ("G154 P3", "G154"),
         ("G43.4 H1", "G43.4"),
@@ -67,6 +66,26 @@ fn path_changing_codes_warn_and_the_post_refuses_their_line() {
         let (ok, err) = post("path", &[], &src);
         assert!(!ok, "{line}: posted");
         assert!(err.contains("path.nc:4:"), "{line}: {err}");
+    }
+    // A Fanuc macro call: where macros are not evaluated (`--flavor fadal`) warned and
+    // refused by the post; under Macro B (`fanuc`, `haas`, and `auto`, which G65 decides)
+    // followed, so a call to a program the file does not hold is a located error.
+    let src = "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z1 F100\nG65 P9001 A.125 C.625\nG1 X10 F100\nM30\n";
+    let (ok, err) = check(&["--flavor", "fadal"], src);
+    assert!(
+        ok && err.contains("warning: G65 ") && err.contains("<stdin>:4:1"),
+        "{err}"
+    );
+    let (ok, err) = post("g65", &["--flavor", "fadal"], src);
+    assert!(!ok && err.contains("g65.nc:4:"), "{err}");
+    for flavor in ["auto", "fanuc", "haas"] {
+        let (ok, err) = check(&["--flavor", flavor], src);
+        assert!(!ok, "{flavor}: {err}");
+        assert!(
+            err.contains("G65 P9001: this file holds no program O9001")
+                && err.contains("<stdin>:4:1"),
+            "{flavor}: {err}"
+        );
     }
 }
 

@@ -58,7 +58,8 @@ fn a_feed_that_rounds_to_zero_is_refused() {
     let nc = write(
         &dir,
         "tiny.nc",
-        "G21 G90 G17\nG0 X1 Y1 Z5\nG1 Z0 F20.001e-300\nG1 X10\nG0 Z5\nM30\n",
+        // The deposit extrudes (a G1 without E is travel under --e-extrusion).
+        "G21 G90 G17\nG0 X1 Y1 Z5\nG1 Z0 F20.001e-300\nG1 X10 E1\nG0 Z5\nM30\n",
     );
     let csv = write(
         &dir,

@@ -150,6 +150,9 @@ pub enum MacroKind {
     LinuxCncExpression,
     /// A LinuxCNC O-word control line (`o100 sub`, `o<name> call`).
     LinuxCncOWord,
+    /// A Fanuc Macro B statement (`IF […] GOTO n`, `WHILE […] DO1`, `END1`, `GOTO n`) or
+    /// `G65` call, where no reader follows it.
+    FanucMacroB,
 }
 
 impl MacroKind {
@@ -160,6 +163,7 @@ impl MacroKind {
             MacroKind::FadalRegisterWords => "FADAL block with register (R) values",
             MacroKind::LinuxCncExpression => "LinuxCNC parameter expression",
             MacroKind::LinuxCncOWord => "LinuxCNC O-word control line",
+            MacroKind::FanucMacroB => "Fanuc Macro B statement",
         }
     }
 }

@@ -175,6 +175,16 @@ pub enum ErrorKind {
     /// limit of loops and subroutines reached.
     #[error("{0}")]
     Control(String),
+    /// M99 in the main program (no `O` program open): the control starts the program
+    /// again (from its top, or from the block `N…` that P names), without end.
+    #[error("M99 in the main program: a {0} control runs the program again from its start (or the N block P names), without end; the trace shows one pass")]
+    MainProgramLoops(&'static str),
+    /// M99 where the flavour has no main-program loop and no subprogram is running.
+    #[error("M99 outside a subprogram: there is no call to return from")]
+    ReturnOutsideSubprogram,
+    /// A Fanuc Macro B statement or `G65` call that cannot be followed.
+    #[error("{0}")]
+    MacroB(String),
     /// More `O` programs in one file than lampost indexes.
     #[error("more than {0} programs (O numbers) in one file")]
     TooManyPrograms(usize),
@@ -243,6 +253,9 @@ impl ErrorKind {
             ErrorKind::CallsTooDeep(_) => "flatten the calls: lampost follows calls 8 deep",
             ErrorKind::TooManyCalls { .. } => "check the L repeats of nested calls; split the program",
             ErrorKind::TooManyPrograms(_) => "split the file",
+            ErrorKind::MacroB(_) => "check the Macro B structure: each WHILE [..] DOm closed by its ENDm (nested loops numbered apart), each GOTO n to a block Nn of the same program, each G65 P.. to a program of this file that ends in M99",
+            ErrorKind::MainProgramLoops(_) => "end the program with M30; to run its body several times, make it a subprogram and call it with M98 P… L…",
+            ErrorKind::ReturnOutsideSubprogram => "end the program with M30 (M99 returns from a subprogram called with M98)",
             ErrorKind::Expression(_) => "check the expression and that every parameter it reads is set before (RS274NGC: parameters are set after the line's words are read)",
             ErrorKind::Control(_) => "check the O-word structure: each sub, if, while, do and repeat is closed with the same O number, and loops end",
             ErrorKind::EmptyProgram => "give a file that holds a program",

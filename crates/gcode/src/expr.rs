@@ -41,6 +41,71 @@ pub struct Params {
     locals: Vec<HashMap<String, f64>>,
     /// `#1`–`#30` of each caller, saved at a call.
     saved: Vec<[f64; SUB_PARAMS]>,
+    /// Fanuc Macro B variables (see [`crate::macrob`]), when the flavour reads them.
+    pub(crate) fanuc: Option<Box<FanucVars>>,
+}
+
+/// Fanuc Macro B variables: `#1`–`#33` local to each macro level (the main program's,
+/// then one per `G65` call), common `#100`–`#199` and `#500`–`#999`; each vacant until set.
+#[derive(Debug, Clone)]
+pub(crate) struct FanucVars {
+    pub(crate) locals: Vec<[Option<f64>; FANUC_LOCALS]>,
+    pub(crate) common: Vec<Option<f64>>,
+}
+
+/// The Fanuc system variables a program may read, as the numbered parameters that hold
+/// them: `#5041`–`#5046` the position in the work system (after the last block, as
+/// LinuxCNC's `#5420`…), `#5061`–`#5066` the skip position of the last G31 (its end:
+/// no probe trips in a trace, as LinuxCNC's `#5061`…).
+fn fanuc_system(n: usize) -> Option<usize> {
+    match n {
+        5041..=5046 => Some(5420 + (n - 5041)),
+        5061..=5066 => Some(n),
+        _ => None,
+    }
+}
+
+/// Fanuc's local variables `#1`–`#33`.
+pub const FANUC_LOCALS: usize = 33;
+
+impl FanucVars {
+    fn new() -> Self {
+        FanucVars {
+            locals: vec![[None; FANUC_LOCALS]],
+            common: vec![None; 1000],
+        }
+    }
+
+    /// The variable `#n`: `None` for a number Macro B does not give programs
+    /// (system variables, #34–#99, #200–#499), `Some(None)` for a vacant one.
+    pub(crate) fn get(&self, n: usize) -> Option<Option<f64>> {
+        match n {
+            0 => Some(None),
+            1..=FANUC_LOCALS => self.locals.last().map(|l| l[n - 1]),
+            100..=199 | 500..=999 => self.common.get(n).copied(),
+            _ => None,
+        }
+    }
+
+    fn set(&mut self, n: usize, v: Option<f64>) -> bool {
+        match n {
+            1..=FANUC_LOCALS => match self.locals.last_mut() {
+                Some(l) => {
+                    l[n - 1] = v;
+                    true
+                }
+                None => false,
+            },
+            100..=199 | 500..=999 => match self.common.get_mut(n) {
+                Some(slot) => {
+                    *slot = v;
+                    true
+                }
+                None => false,
+            },
+            _ => false,
+        }
+    }
 }
 
 impl Default for Params {
@@ -50,6 +115,7 @@ impl Default for Params {
             globals: HashMap::new(),
             locals: vec![HashMap::new()],
             saved: Vec::new(),
+            fanuc: None,
         }
     }
 }
@@ -62,6 +128,41 @@ enum Param {
 }
 
 impl Params {
+    /// The parameters of a Fanuc Macro B program (see [`crate::macrob`]): `#` numbers are
+    /// Fanuc's variables, vacant until set.
+    pub fn macro_b() -> Self {
+        Params {
+            fanuc: Some(Box::new(FanucVars::new())),
+            ..Params::default()
+        }
+    }
+
+    /// Whether these are Fanuc Macro B variables.
+    pub fn is_macro_b(&self) -> bool {
+        self.fanuc.is_some()
+    }
+
+    /// A Fanuc variable (`None`: vacant, or not a variable programs have).
+    pub fn fanuc_var(&self, n: usize) -> Option<f64> {
+        self.fanuc.as_ref().and_then(|f| f.get(n)).flatten()
+    }
+
+    /// Enter a `G65` macro: a new level of locals `#1`–`#33` holding `args`.
+    pub(crate) fn enter_macro(&mut self, args: [Option<f64>; FANUC_LOCALS]) {
+        if let Some(f) = self.fanuc.as_mut() {
+            f.locals.push(args);
+        }
+    }
+
+    /// Leave a `G65` macro: the caller's locals come back.
+    pub(crate) fn leave_macro(&mut self) {
+        if let Some(f) = self.fanuc.as_mut() {
+            if f.locals.len() > 1 {
+                f.locals.pop();
+            }
+        }
+    }
+
     /// A numbered parameter.
     pub fn get(&self, n: usize) -> Option<f64> {
         self.numbered.get(n).copied()
@@ -91,7 +192,13 @@ impl Params {
         }
     }
 
-    fn set(&mut self, p: &Param, v: f64) {
+    /// Set a parameter; `None` makes a Fanuc variable vacant.
+    fn set_value(&mut self, p: &Param, v: Option<f64>) {
+        if let (Some(f), Param::Numbered(n)) = (self.fanuc.as_mut(), p) {
+            f.set(*n, v);
+            return;
+        }
+        let Some(v) = v else { return };
         match p {
             Param::Numbered(n) => {
                 if let Some(slot) = self.numbered.get_mut(*n) {
@@ -156,6 +263,8 @@ pub struct Eval<'t, 'p> {
     pub pos: usize,
     params: &'p Params,
     depth: usize,
+    /// The value just read is a vacant Fanuc variable, alone (`#1`, `-#1`, `[#1]`).
+    pub vacant: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -178,11 +287,15 @@ enum Op {
 }
 
 impl Op {
-    fn precedence(self) -> u8 {
+    /// RS274NGC's precedence, or Fanuc's (`macro_b`: AND with the products, OR and XOR
+    /// with the sums, comparisons last).
+    fn precedence(self, macro_b: bool) -> u8 {
         match self {
             Op::Pow => 6,
             Op::Mul | Op::Div | Op::Mod => 5,
+            Op::And if macro_b => 5,
             Op::Add | Op::Sub => 4,
+            Op::Or | Op::Xor if macro_b => 4,
             Op::Eq | Op::Ne | Op::Gt | Op::Ge | Op::Lt | Op::Le => 3,
             Op::And | Op::Or | Op::Xor => 2,
         }
@@ -205,16 +318,21 @@ impl<'t, 'p> Eval<'t, 'p> {
             pos,
             params,
             depth: 0,
+            vacant: false,
         }
     }
 
-    fn skip(&mut self) {
+    fn macro_b(&self) -> bool {
+        self.params.fanuc.is_some()
+    }
+
+    pub(crate) fn skip(&mut self) {
         while self.pos < self.b.len() && matches!(self.b[self.pos], b' ' | b'\t') {
             self.pos += 1;
         }
     }
 
-    fn peek(&mut self) -> Option<u8> {
+    pub(crate) fn peek(&mut self) -> Option<u8> {
         self.skip();
         self.b.get(self.pos).copied()
     }
@@ -233,6 +351,11 @@ impl<'t, 'p> Eval<'t, 'p> {
         let start = self.pos;
         self.skip();
         match self.b.get(self.pos) {
+            Some(b'<') if self.macro_b() => Err((
+                "`#<name>` is LinuxCNC's; Macro B variables are numbered".into(),
+                start,
+                self.pos + 1,
+            )),
             Some(b'<') => {
                 let close = memchr::memchr(b'>', &self.b[self.pos..])
                     .ok_or_else(|| ("`#<` has no closing `>`".to_string(), start, self.b.len()))?;
@@ -251,6 +374,23 @@ impl<'t, 'p> Eval<'t, 'p> {
             _ => {
                 let v = self.value()?;
                 let n = crate::emit::round_half_away(v);
+                if let Some(f) = self.params.fanuc.as_deref() {
+                    if (v - n).abs() > 1e-6
+                        || !(0.0..=MAX_PARAM as f64).contains(&n)
+                        || f.get(n as usize).is_none() && fanuc_system(n as usize).is_none()
+                    {
+                        return Err((
+                            format!(
+                                "#{}: Macro B variables are #0 (vacant), #1-#33 (local), #100-#199 and #500-#999 (common), and the positions #5041-#5046 and #5061-#5066; other system variables are not evaluated",
+                                self.text(start, self.pos)
+                            ),
+                            start,
+                            self.pos,
+                        ));
+                    }
+                    self.vacant = false;
+                    return Ok(Param::Numbered(n as usize));
+                }
                 if (v - n).abs() > 1e-6 || !(0.0..=MAX_PARAM as f64).contains(&n) {
                     return Err((
                         format!(
@@ -266,7 +406,17 @@ impl<'t, 'p> Eval<'t, 'p> {
         }
     }
 
-    fn read_param(&self, p: &Param, s: usize, e: usize) -> Result<f64, EvalError> {
+    fn read_param(&mut self, p: &Param, s: usize, e: usize) -> Result<f64, EvalError> {
+        if let (Some(f), Param::Numbered(n)) = (self.params.fanuc.as_deref(), p) {
+            // Vacant reads as 0 in arithmetic; `vacant` tells the callers that care
+            // (a word's value, an assignment, EQ and NE).
+            let v = match fanuc_system(*n) {
+                Some(k) => self.params.numbered.get(k).copied(),
+                None => f.get(*n).flatten(),
+            };
+            self.vacant = v.is_none();
+            return Ok(v.unwrap_or(0.0));
+        }
         match p {
             Param::Numbered(n) => Ok(self.params.get(*n).unwrap_or(0.0)),
             Param::Named(name) => self
@@ -283,9 +433,16 @@ impl<'t, 'p> Eval<'t, 'p> {
         if self.depth > MAX_DEPTH {
             return Err(("expressions nest too deep".into(), self.pos, self.b.len()));
         }
+        self.vacant = false;
         let r = self.value_inner();
         self.depth -= 1;
         r
+    }
+
+    /// An expression to the end of the line (or a comment), without brackets: the
+    /// right-hand side of a Fanuc assignment (`#1 = #1 + 1`).
+    pub fn bare_expression(&mut self) -> Result<f64, EvalError> {
+        self.expression_until(true)
     }
 
     fn value_inner(&mut self) -> Result<f64, EvalError> {
@@ -296,6 +453,7 @@ impl<'t, 'p> Eval<'t, 'p> {
         match self.b.get(self.pos).copied() {
             Some(b'-') => {
                 self.pos += 1;
+                // `-#1` of a vacant #1 stays vacant (`vacant` is left as read).
                 Ok(-self.value()?)
             }
             Some(b'+') => {
@@ -394,12 +552,21 @@ impl<'t, 'p> Eval<'t, 'p> {
     /// An expression inside brackets (without them): operators by precedence, each
     /// left to right (RS274NGC).
     fn expression(&mut self) -> Result<f64, EvalError> {
+        self.expression_until(false)
+    }
+
+    /// An expression ended by `]` or, when `bare`, by the end of the line or a comment.
+    fn expression_until(&mut self, bare: bool) -> Result<f64, EvalError> {
+        self.skip();
         let start = self.pos;
-        let mut values: Vec<f64> = vec![self.value()?];
+        let mb = self.macro_b();
+        let first = self.value()?;
+        let mut vacant = vec![self.vacant];
+        let mut values: Vec<f64> = vec![first];
         let mut ops: Vec<Op> = Vec::new();
         loop {
             let at = self.pos;
-            if self.peek() == Some(b']') {
+            if self.peek() == Some(b']') || bare && !self.peek_value() {
                 break;
             }
             let Some(op) = self.op() else {
@@ -414,24 +581,28 @@ impl<'t, 'p> Eval<'t, 'p> {
                 });
             };
             while let Some(&top) = ops.last() {
-                if top.precedence() >= op.precedence() {
+                if top.precedence(mb) >= op.precedence(mb) {
                     ops.pop();
-                    let r = values.pop().unwrap_or(0.0);
-                    let l = values.pop().unwrap_or(0.0);
-                    values.push(apply(top, l, r, start, at)?);
+                    let (r, rv) = (values.pop().unwrap_or(0.0), vacant.pop().unwrap_or(false));
+                    let (l, lv) = (values.pop().unwrap_or(0.0), vacant.pop().unwrap_or(false));
+                    values.push(apply(top, (l, lv), (r, rv), mb, start, at)?);
+                    vacant.push(false);
                 } else {
                     break;
                 }
             }
             ops.push(op);
             values.push(self.value()?);
+            vacant.push(self.vacant);
         }
         let end = self.pos;
         while let Some(top) = ops.pop() {
-            let r = values.pop().unwrap_or(0.0);
-            let l = values.pop().unwrap_or(0.0);
-            values.push(apply(top, l, r, start, end)?);
+            let (r, rv) = (values.pop().unwrap_or(0.0), vacant.pop().unwrap_or(false));
+            let (l, lv) = (values.pop().unwrap_or(0.0), vacant.pop().unwrap_or(false));
+            values.push(apply(top, (l, lv), (r, rv), mb, start, end)?);
+            vacant.push(false);
         }
+        self.vacant = vacant.pop().unwrap_or(false);
         Ok(values.pop().unwrap_or(0.0))
     }
 
@@ -495,6 +666,10 @@ impl<'t, 'p> Eval<'t, 'p> {
                 domain((-1.0..=1.0).contains(&a))?;
                 a.asin().to_degrees()
             }
+            "ATAN" if self.macro_b() && self.peek() != Some(b'/') => {
+                // Fanuc's one-argument ATAN[a] (degrees, -90 to 90).
+                a.atan().to_degrees()
+            }
             "ATAN" => {
                 if self.peek() != Some(b'/') {
                     return Err(("ATAN takes two values: ATAN[y]/[x]".into(), start, self.pos));
@@ -510,6 +685,17 @@ impl<'t, 'p> Eval<'t, 'p> {
             "SIN" => a.to_radians().sin(),
             "TAN" => a.to_radians().tan(),
             "EXP" => a.exp(),
+            // Fanuc: FIX drops the fraction, FUP raises it to 1, both away from 0's
+            // side as written (FIX[-1.2] = -1, FUP[-1.2] = -2).
+            "FIX" if self.macro_b() => a.trunc(),
+            "FUP" if self.macro_b() => {
+                if a.fract() == 0.0 {
+                    a
+                } else {
+                    a.trunc() + a.signum()
+                }
+            }
+            "BIN" | "BCD" if self.macro_b() => bcd(&name, a, start, end)?,
             "FIX" => a.floor(),
             "FUP" => a.ceil(),
             "ROUND" => crate::emit::round_half_away(a),
@@ -527,8 +713,42 @@ impl<'t, 'p> Eval<'t, 'p> {
     }
 }
 
-fn apply(op: Op, l: f64, r: f64, s: usize, e: usize) -> Result<f64, EvalError> {
+fn apply(
+    op: Op,
+    (l, lv): (f64, bool),
+    (r, rv): (f64, bool),
+    macro_b: bool,
+    s: usize,
+    e: usize,
+) -> Result<f64, EvalError> {
     let b = |x: bool| if x { 1.0 } else { 0.0 };
+    if macro_b {
+        // Fanuc: EQ and NE tell a vacant variable from 0 and compare exactly; AND, OR and
+        // XOR work bit by bit on whole numbers.
+        match op {
+            Op::Eq | Op::Ne => {
+                let same = if lv || rv { lv && rv } else { l == r };
+                return Ok(b(same == (op == Op::Eq)));
+            }
+            Op::And | Op::Or | Op::Xor => {
+                let whole = |x: f64| x.fract() == 0.0 && x.abs() <= 2f64.powi(31);
+                if !(whole(l) && whole(r)) {
+                    return Err((
+                        "AND, OR and XOR take whole numbers (bit by bit)".into(),
+                        s,
+                        e,
+                    ));
+                }
+                let (a, c) = (l as i64, r as i64);
+                return Ok(match op {
+                    Op::And => a & c,
+                    Op::Or => a | c,
+                    _ => a ^ c,
+                } as f64);
+            }
+            _ => {}
+        }
+    }
     let v = match op {
         Op::Pow => l.powf(r),
         Op::Mul => l * r,
@@ -562,6 +782,40 @@ fn apply(op: Op, l: f64, r: f64, s: usize, e: usize) -> Result<f64, EvalError> {
         Op::Xor => b((l != 0.0) != (r != 0.0)),
     };
     finite(v, "the expression", s, e)
+}
+
+/// Fanuc's BIN (binary-coded decimal to binary) and BCD (binary to BCD), on whole
+/// numbers 0 to 99,999,999.
+fn bcd(name: &str, a: f64, s: usize, e: usize) -> Result<f64, EvalError> {
+    if !(a >= 0.0 && a.fract() == 0.0 && a <= 99_999_999.0) {
+        return Err((
+            format!("{name}[{a}]: takes a whole number 0 to 99999999"),
+            s,
+            e,
+        ));
+    }
+    let mut n = a as u64;
+    let mut out = 0u64;
+    let mut shift = 0u32;
+    if name == "BCD" {
+        while n > 0 {
+            out |= (n % 10) << shift;
+            n /= 10;
+            shift += 4;
+        }
+    } else {
+        let mut place = 1u64;
+        while n > 0 {
+            let digit = n & 0xF;
+            if digit > 9 {
+                return Err((format!("BIN[{a}]: not binary-coded decimal"), s, e));
+            }
+            out += digit * place;
+            place *= 10;
+            n >>= 4;
+        }
+    }
+    Ok(out as f64)
 }
 
 /// Whether a macro line that is not evaluated sets the feed rate from a macro value
@@ -627,7 +881,8 @@ pub fn eval_line<'a>(
     }
     let text = std::str::from_utf8(line).map_err(|_| err(("not UTF-8".into(), 0, 1)))?;
     let bytes = line;
-    let mut sets: Vec<(Param, f64)> = Vec::new();
+    let macro_b = params.is_macro_b();
+    let mut sets: Vec<(Param, Option<f64>)> = Vec::new();
     let mut seen: u32 = 0;
     let mut i = 0;
     while i < bytes.len() && matches!(bytes[i], b' ' | b'\t') {
@@ -683,9 +938,15 @@ pub fn eval_line<'a>(
                     )));
                 }
                 ev.pos += 1;
-                let v = ev.value().map_err(err)?;
+                // Fanuc writes the right-hand side without brackets (`#1 = #1 + 1`), and
+                // a vacant variable alone copies its vacancy (`#2 = #1`).
+                let v = if macro_b {
+                    ev.bare_expression().map_err(err)?
+                } else {
+                    ev.value().map_err(err)?
+                };
                 i = ev.pos;
-                sets.push((p, v));
+                sets.push((p, (!ev.vacant).then_some(v)));
             }
             b'a'..=b'z' | b'A'..=b'Z' => {
                 let letter = c.to_ascii_uppercase();
@@ -694,6 +955,11 @@ pub fn eval_line<'a>(
                 let vstart = ev.pos;
                 let v = ev.value().map_err(err)?;
                 let end = ev.pos;
+                if ev.vacant {
+                    // Fanuc: a word whose value is a vacant variable is left out.
+                    i = end;
+                    continue;
+                }
                 if letter != b'G' && letter != b'M' {
                     let bit = 1u32 << (letter - b'A');
                     if seen & bit != 0 {
@@ -733,7 +999,7 @@ pub fn eval_line<'a>(
         }
     }
     for (p, v) in sets {
-        params.set(&p, v);
+        params.set_value(&p, v);
     }
     Ok(())
 }

@@ -6,8 +6,9 @@
 //! - `marlin`, `reprap`: E is the extruder (slicer reading, number exponents);
 //! - `linuxcnc`: parameters, `[…]` expressions and O-word control lines are evaluated
 //!   (see [`crate::expr`]);
-//! - `fanuc`, `haas`, `mach3`, `fadal`: macros stay verbatim; Haas `M97 P…` calls a local
-//!   subprogram by its N label (followed by [`crate::ProgramReader`] in every flavour).
+//! - `fanuc`, `haas`: Fanuc Macro B is evaluated (see [`crate::macrob`]);
+//! - `mach3`, `fadal`: macros stay verbatim; Haas `M97 P…` calls a local subprogram by its
+//!   N label (followed by [`crate::ProgramReader`] in every flavour).
 
 use serde::Serialize;
 
@@ -25,9 +26,9 @@ pub enum Flavor {
     /// LinuxCNC (RS274NGC): parameters, expressions and O-words evaluated.
     #[serde(rename = "linuxcnc")]
     LinuxCnc,
-    /// Fanuc (Macro B left verbatim).
+    /// Fanuc (Macro B evaluated).
     Fanuc,
-    /// Haas (Fanuc-like; `M97` local subprograms).
+    /// Haas (Fanuc-like, Macro B evaluated; `M97` local subprograms).
     Haas,
     /// FADAL (macros and register words left verbatim). What lampost reads without a flavour.
     #[default]
@@ -66,9 +67,15 @@ impl Flavor {
         matches!(self, Flavor::Marlin | Flavor::RepRap)
     }
 
-    /// LinuxCNC parameters, expressions and O-words are evaluated.
+    /// Macros are evaluated: LinuxCNC parameters, expressions and O-words, or Fanuc
+    /// Macro B ([`Flavor::macro_b`]).
     pub fn evaluates(self) -> bool {
-        self == Flavor::LinuxCnc
+        self == Flavor::LinuxCnc || self.macro_b()
+    }
+
+    /// Fanuc Macro B is evaluated (see [`crate::macrob`]).
+    pub fn macro_b(self) -> bool {
+        matches!(self, Flavor::Fanuc | Flavor::Haas)
     }
 
     /// `opts` with this (resolved) flavour's reading: the flavour recorded, and E as

@@ -255,6 +255,16 @@ pub const MAX_PECKS: u32 = 10_000;
 /// Number of [`GGroup`] variants.
 const GROUPS: usize = 19;
 
+/// The runs of a Haas `M97 P… L…` call (L, default 1; the reader refuses a bad L).
+#[cold]
+#[inline(never)]
+fn m97_runs(w: &Words<'_, '_>) -> u32 {
+    match w.get(b'L') {
+        Some(l) if l >= 0.0 && l.fract() == 0.0 => l.min(10_000.0) as u32,
+        _ => 1,
+    }
+}
+
 fn diag(
     b: &Block<'_>,
     sev: Severity,
@@ -819,9 +829,9 @@ impl Interpreter {
                 820 => self.e_relative = false,
                 830 => self.e_relative = true,
                 // Haas M97: the reader runs the labelled block to its M99, which then
-                // returns like a subprogram's.
+                // returns like a subprogram's, once for each of the L runs.
                 970 if self.calls == Calls::Followed => {
-                    self.open_programs = self.open_programs.saturating_add(1);
+                    self.open_programs = self.open_programs.saturating_add(m97_runs(w));
                 }
                 970 | 980 if self.calls == Calls::NotFollowed => {
                     let mut what = mw.display_code();
@@ -1148,11 +1158,37 @@ impl Interpreter {
                 // order the next program follows; in execution order, the caller.
                 self.open_programs -= 1;
             } else {
-                // M99 with no `O` program open: a subprogram traced on its own returns;
-                // the rest is not reached from here.
-                self.ended = true;
+                self.main_program_m99(b, w, out)?;
             }
         }
+        Ok(())
+    }
+
+    /// M99 with no `O` program open: the main program's M99. Controls with M98/M99
+    /// subprograms start the main program again (Fanuc, Haas, FADAL, Mach3, LinuxCNC):
+    /// one pass is traced, with a warning; printer firmware has no such M99 (an error).
+    /// The rest is not reached from here.
+    #[cold]
+    #[inline(never)]
+    fn main_program_m99(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        self.ended = true;
+        let f = self.opts.flavor;
+        let (sev, kind) = if f.is_slicer() {
+            (Severity::Error, ErrorKind::ReturnOutsideSubprogram)
+        } else {
+            (Severity::Warning, ErrorKind::MainProgramLoops(f.name()))
+        };
+        let span = w.ms.iter().find(|&&(_, c)| c == 990).map(|&(m, _)| m.span);
+        let d = diag(b, sev, kind, span);
+        if sev == Severity::Error {
+            return Err(d);
+        }
+        out(Event::Diagnostic(d));
         Ok(())
     }
 

@@ -29,6 +29,7 @@ pub mod flavor;
 pub mod generate;
 pub mod interp;
 pub mod lines;
+pub mod macrob;
 pub mod modal;
 pub mod ngc;
 pub mod parse;

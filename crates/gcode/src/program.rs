@@ -13,6 +13,10 @@
 //!   program, and at each `M98 Pn Lk` line the body of `On` (its `O` line up to the
 //!   first M99 met, which returns) `k` times, calls inside it followed in turn.
 //!
+//! Calls made by evaluated lines come from the stream: LinuxCNC O-word lines and Fanuc
+//! Macro B statements through [`ProgramReader::control`], Fanuc `G65` macros (their own
+//! level of locals) and `M98` with variable words through [`ProgramReader::macro_call`].
+//!
 //! A *subprogram body* runs from an `O` line to the last M99 before the next `O` line (or
 //! the end of the file). The *main program* is every line outside the bodies, in file
 //! order; a file whose lines outside the bodies hold no words (a subprogram on its own)
@@ -88,6 +92,8 @@ struct Frame {
     repeats_left: u32,
     /// A Haas `M97` call: `prog` indexes `locals`, the body runs to the first M99.
     local: bool,
+    /// A Fanuc `G65` macro call: its own level of local variables.
+    macro_call: bool,
 }
 
 /// What a line asks of the reader.
@@ -150,6 +156,12 @@ pub struct ProgramReader<R> {
     locals: Vec<(usize, u32)>,
     /// [`crate::ngc::MAX_BLOCKS`] (smaller in tests).
     max_blocks: u64,
+    /// Fanuc Macro B labels and loops (indexed at the first statement followed).
+    macrob: Option<Box<crate::macrob::Control>>,
+    /// `G65` macro levels left since the stream last asked (see `take_returns`).
+    macro_returns: u32,
+    /// A line has failed (see `note_error`): loops are not run again from here.
+    after_error: bool,
 }
 
 fn may_matter(bytes: &[u8]) -> bool {
@@ -209,6 +221,9 @@ impl<R: Read + Seek> ProgramReader<R> {
             labels: None,
             locals: Vec::new(),
             max_blocks: crate::ngc::MAX_BLOCKS,
+            macrob: None,
+            macro_returns: 0,
+            after_error: false,
         }
     }
 
@@ -269,9 +284,183 @@ impl<R: Read + Seek> ProgramReader<R> {
         Ok(c)
     }
 
+    /// Read the whole file once and note its Fanuc Macro B labels, loops and programs.
+    fn index_macrob(&mut self) -> io::Result<crate::macrob::Control> {
+        let mut c = crate::macrob::Control::new(self.max_blocks);
+        self.lines.seek_line(0, 1)?;
+        while let Some((line, end)) = self.lines.next_line_end()? {
+            let b = line.bytes;
+            let first = b.iter().position(|c| !matches!(c, b' ' | b'\t'));
+            let maybe = first.is_some_and(|i| {
+                matches!(
+                    b[i] | 0x20,
+                    b'o' | b'n' | b'/' | b'i' | b'w' | b'g' | b'd' | b'e'
+                )
+            });
+            if !maybe || b.len() > MAX_LINE_BYTES {
+                continue;
+            }
+            let Ok(text) = std::str::from_utf8(b) else {
+                continue;
+            };
+            let next = (end, line.number.saturating_add(1));
+            if !c.add(text, (line.offset, line.number), next) {
+                break;
+            }
+        }
+        Ok(c)
+    }
+
+    /// Follow the Fanuc Macro B statement `text` (see [`Self::control`]).
+    fn control_macrob(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &crate::expr::Params,
+    ) -> Result<(), Diagnostic> {
+        let at_err = |msg: String, s: usize, e: usize| {
+            Diagnostic::at(
+                Severity::Error,
+                ErrorKind::MacroB(msg),
+                number,
+                offset,
+                text.as_bytes(),
+                s,
+                e,
+            )
+        };
+        if self.macrob.is_none() {
+            let at = (self.pos, self.line);
+            let c = self.index_macrob().map_err(|e| {
+                at_err(
+                    format!("cannot index the Macro B lines: {e}"),
+                    0,
+                    text.len(),
+                )
+            })?;
+            self.macrob = Some(Box::new(c));
+            (self.pos, self.line) = at;
+        }
+        let Some(ctl) = self.macrob.as_mut() else {
+            return Ok(());
+        };
+        match ctl.step(text, offset, number, params) {
+            Ok(None) => Ok(()),
+            Ok(Some((pos, line))) => {
+                self.pos = pos;
+                self.line = line;
+                Ok(())
+            }
+            Err((msg, s, e)) => Err(at_err(msg, s, e)),
+        }
+    }
+
+    /// Run the Fanuc macro `O{number}` `repeats` times with `args` as its locals (a `G65`
+    /// call on line `line_no` at `offset`, just handed out), or without `args` the
+    /// subprogram of an `M98` whose P or L came from a variable (a plain M98 is followed
+    /// as the line is read); `None` when this reader does not follow calls (file order).
+    pub fn macro_call(
+        &mut self,
+        call: (u32, u32, Option<&[Option<f64>; crate::expr::FANUC_LOCALS]>),
+        line_no: u32,
+        offset: usize,
+        text: &str,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        if self.order != Order::Execution {
+            return None;
+        }
+        let (number, repeats, args) = call;
+        let what = if args.is_some() { "G65" } else { "M98" };
+        let err = |kind: ErrorKind| {
+            Diagnostic::at(
+                Severity::Error,
+                kind,
+                line_no,
+                offset,
+                text.as_bytes(),
+                0,
+                text.len(),
+            )
+        };
+        if !self.indexed {
+            let at = (self.pos, self.line);
+            if let Err(e) = self.index() {
+                return Some(Err(err(ErrorKind::MacroB(format!(
+                    "cannot index the programs: {e}"
+                )))));
+            }
+            (self.pos, self.line) = at;
+        }
+        let from = self
+            .by_number
+            .partition_point(|&i| self.programs[i as usize].number < number);
+        let mut found = self.by_number[from..]
+            .iter()
+            .map(|&i| i as usize)
+            .take_while(|&i| self.programs[i].number == number);
+        let Some(prog) = found.next() else {
+            return Some(Err(err(ErrorKind::MacroB(format!(
+                "{what} P{number}: this file holds no program O{number}"
+            )))));
+        };
+        if found.next().is_some() || self.programs[prog].end.is_none() {
+            return Some(Err(err(ErrorKind::MacroB(format!(
+                "{what} P{number}: O{number} must be in this file once and end with M99"
+            )))));
+        }
+        if repeats == 0 {
+            return Some(Ok(()));
+        }
+        let depth = self.stack.iter().filter(|f| f.macro_call).count();
+        if args.is_none() && self.stack.iter().any(|f| !f.local && f.prog == prog) {
+            return Some(Err(err(ErrorKind::RecursiveCall {
+                number,
+                chain: format!("O{number} → O{number}"),
+            })));
+        }
+        if args.is_some() && depth >= crate::macrob::MAX_MACRO_DEPTH {
+            return Some(Err(err(ErrorKind::MacroB(format!(
+                "G65 macro calls nest more than {} deep (Fanuc's limit)",
+                crate::macrob::MAX_MACRO_DEPTH
+            )))));
+        }
+        if self.stack.len() >= MAX_NESTING {
+            return Some(Err(err(ErrorKind::CallsTooDeep(MAX_NESTING))));
+        }
+        if self.runs + u64::from(repeats) > self.max_runs {
+            return Some(Err(err(ErrorKind::TooManyCalls {
+                limit: self.max_runs,
+                what: "subprogram runs",
+            })));
+        }
+        self.runs += u64::from(repeats);
+        self.stack.push(Frame {
+            prog,
+            back: (self.pos, self.line),
+            repeats_left: repeats - 1,
+            local: false,
+            macro_call: args.is_some(),
+        });
+        let p = self.programs[prog];
+        self.pos = p.start;
+        self.line = p.line;
+        if let Some(args) = args {
+            params.enter_macro(*args);
+        }
+        Some(Ok(()))
+    }
+
+    /// The `G65` macro levels left (by their M99) since the last call.
+    pub fn take_returns(&mut self) -> u32 {
+        std::mem::take(&mut self.macro_returns)
+    }
+
     /// Follow the LinuxCNC O-word control line `text` (line `number` at `offset`, just
-    /// handed out) with `params`; `None` when this reader does not follow control lines
-    /// (file order).
+    /// handed out) with `params`, or with Macro B variables ([`crate::Params::macro_b`])
+    /// the Fanuc statement (`IF … GOTO`, `GOTO`, `WHILE … DOm`, `DOm`, `ENDm`); `None`
+    /// when this reader does not follow control lines (file order).
     pub fn control(
         &mut self,
         text: &str,
@@ -282,6 +471,34 @@ impl<R: Read + Seek> ProgramReader<R> {
         if self.order != Order::Execution {
             return None;
         }
+        let before = (self.pos, self.line);
+        let r = if params.is_macro_b() {
+            self.control_macrob(text, number, offset, params)
+        } else {
+            self.control_ngc(text, number, offset, params)?
+        };
+        if self.after_error && self.pos <= offset && !calls_or_returns(text, params) {
+            // After an error a stream that goes on (check) reads straight on: a loop
+            // whose condition or body fails is not run again and again.
+            (self.pos, self.line) = before;
+        }
+        Some(r)
+    }
+
+    /// A line read through this reader has failed (a stream that does not stop at
+    /// errors tells it): from now on loops are not run again, jumps back are not taken.
+    pub fn note_error(&mut self) {
+        self.after_error = true;
+    }
+
+    /// Follow the LinuxCNC O-word line `text` (see [`Self::control`]).
+    fn control_ngc(
+        &mut self,
+        text: &str,
+        number: u32,
+        offset: usize,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
         if self.ngc.is_none() {
             let at = (self.pos, self.line);
             match self.index_owords() {
@@ -497,6 +714,7 @@ impl<R: Read + Seek> ProgramReader<R> {
                     back: (self.pos, self.line),
                     repeats_left: repeats - 1,
                     local: false,
+                    macro_call: false,
                 });
                 let p = self.programs[prog];
                 self.pos = p.start;
@@ -556,6 +774,7 @@ impl<R: Read + Seek> ProgramReader<R> {
                         back: (self.pos, self.line),
                         repeats_left: repeats - 1,
                         local: true,
+                        macro_call: false,
                     });
                     (self.pos, self.line) = start;
                     None
@@ -586,6 +805,9 @@ impl<R: Read + Seek> ProgramReader<R> {
                 (self.pos, self.line) = f.back;
                 if f.local {
                     self.locals.pop();
+                }
+                if f.macro_call {
+                    self.macro_returns += 1;
                 }
                 self.stack.pop();
             }
@@ -770,6 +992,33 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
     ) -> Option<Result<(), Diagnostic>> {
         ProgramReader::control(self, text, number, offset, params)
     }
+
+    fn macro_call(
+        &mut self,
+        call: (u32, u32, Option<&[Option<f64>; crate::expr::FANUC_LOCALS]>),
+        number: u32,
+        offset: usize,
+        text: &str,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        ProgramReader::macro_call(self, call, number, offset, text, params)
+    }
+
+    fn take_returns(&mut self) -> u32 {
+        ProgramReader::take_returns(self)
+    }
+
+    fn note_error(&mut self) {
+        ProgramReader::note_error(self);
+    }
+}
+
+/// Whether a control line is a LinuxCNC call or return (its jump back is no loop).
+fn calls_or_returns(text: &str, params: &crate::expr::Params) -> bool {
+    use crate::ngc::Kw;
+    !params.is_macro_b()
+        && crate::ngc::parse_oword(text)
+            .is_some_and(|(_, kw, _)| matches!(kw, Kw::Call | Kw::Return | Kw::EndSub))
 }
 
 fn io_error(d: &Diagnostic) -> io::Error {
@@ -1126,10 +1375,30 @@ mod tests {
         let (moves, diags) = run(text, Order::Execution);
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(moves.len(), 1);
-        // M99 with no O program open still ends the trace.
-        let (moves, diags) = run("G20 G0 X1\nM99\nG0 X2\n", Order::Execution);
+        // M99 with no O program open ends the trace after one pass, with a warning at
+        // the M99: the control would run the main program again without end.
+        let (moves, diags) = run("G20 G0 X1\nN5 M99\nG0 X2\n", Order::Execution);
         assert_eq!(moves.len(), 1);
-        assert!(matches!(diags[0].kind, ErrorKind::NotSimulated(_)));
+        assert_eq!(diags[0].kind, ErrorKind::MainProgramLoops("fadal"));
+        assert_eq!(diags[0].severity, Severity::Warning);
+        assert_eq!((diags[0].line, diags[0].column), (2, 4));
+        assert!(matches!(diags[1].kind, ErrorKind::NotSimulated(_)));
+        // Printer firmware has no M99: an error there.
+        let marlin = Options {
+            flavor: crate::Flavor::Marlin,
+            ..opts()
+        };
+        let r = ProgramReader::new(io::Cursor::new(&b"G20 G0 X1\nM99\n"[..]), Order::Execution);
+        let d: Vec<Diagnostic> = Stream::new(r, marlin, true)
+            .filter_map(|e| match e {
+                Ok(Event::Diagnostic(d)) => Some(d),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].kind, ErrorKind::ReturnOutsideSubprogram);
+        assert!(d[0].is_error());
+        assert_eq!((d[0].line, d[0].column), (2, 1));
     }
 
     #[test]

@@ -38,6 +38,27 @@ pub trait LineSource {
     ) -> Option<Result<(), Diagnostic>> {
         None
     }
+
+    /// Run a Fanuc `G65` macro call (program, runs, locals) made by the line just handed
+    /// out; `None` when this source does not follow calls.
+    fn macro_call(
+        &mut self,
+        _call: (u32, u32, Option<&[Option<f64>; crate::expr::FANUC_LOCALS]>),
+        _number: u32,
+        _offset: usize,
+        _text: &str,
+        _params: &mut Params,
+    ) -> Option<Result<(), Diagnostic>> {
+        None
+    }
+
+    /// The `G65` macro levels the source has left (at their M99) since the last call.
+    fn take_returns(&mut self) -> u32 {
+        0
+    }
+
+    /// A line has failed and the stream goes on: the source should not run loops again.
+    fn note_error(&mut self) {}
 }
 
 impl LineSource for Lines<'_> {
@@ -84,7 +105,11 @@ impl<S: LineSource> Stream<S> {
             finished: false,
             any_content: false,
             exponents: opts.e_word == EWord::Extrusion,
-            params: opts.flavor.evaluates().then(Box::default),
+            params: if opts.flavor.macro_b() {
+                Some(Box::new(Params::macro_b()))
+            } else {
+                opts.flavor.evaluates().then(Box::default)
+            },
         }
     }
 
@@ -158,10 +183,23 @@ impl<S: LineSource> Iterator for Stream<S> {
                     self.exponents,
                 ),
             };
-            // Macro lines only: the flavour's evaluation (plain lines never come here).
+            // Macro lines only: the flavour's evaluation (plain lines never come here;
+            // under Macro B also lines the parser refuses and G65 blocks).
             let mut control = None;
-            if block.kind != BlockKind::Words && parsed.is_ok() {
-                if let Some(params) = self.params.as_deref_mut() {
+            let mut call = None;
+            if let Some(params) = self.params.as_deref_mut() {
+                if params.is_macro_b() {
+                    if block.kind != BlockKind::Words || parsed.is_err() || has_g65(&block) {
+                        parsed = evaluate_macro_b(
+                            &line,
+                            &mut block,
+                            params,
+                            parsed,
+                            &mut control,
+                            &mut call,
+                        );
+                    }
+                } else if block.kind != BlockKind::Words && parsed.is_ok() {
                     parsed = evaluate(&line, &mut block, params, &mut control);
                 }
             }
@@ -190,7 +228,23 @@ impl<S: LineSource> Iterator for Stream<S> {
             if let (Some((text, number, offset)), Some(params)) =
                 (control, self.params.as_deref_mut())
             {
-                match self.src.control(&text, number, offset, params) {
+                let kind = if params.is_macro_b() {
+                    MacroKind::FanucMacroB
+                } else {
+                    MacroKind::LinuxCncOWord
+                };
+                let done = match call.take() {
+                    Some((n, runs, args)) if !failed => self.src.macro_call(
+                        (n, runs, args.as_deref()),
+                        number,
+                        offset,
+                        &text,
+                        params,
+                    ),
+                    Some(_) => Some(Ok(())),
+                    None => self.src.control(&text, number, offset, params),
+                };
+                match done {
                     Some(Ok(())) => {}
                     Some(Err(d)) => {
                         failed = true;
@@ -200,7 +254,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                         let len = text.len();
                         self.queue.push_back(Event::Diagnostic(Diagnostic::at(
                             Severity::Warning,
-                            ErrorKind::MacroNotEvaluated(MacroKind::LinuxCncOWord.describe()),
+                            ErrorKind::MacroNotEvaluated(kind.describe()),
                             number,
                             offset,
                             text.as_bytes(),
@@ -210,12 +264,21 @@ impl<S: LineSource> Iterator for Stream<S> {
                     }
                 }
             }
+            if let Some(params) = self.params.as_deref_mut() {
+                if params.is_macro_b() {
+                    for _ in 0..self.src.take_returns() {
+                        params.leave_macro();
+                    }
+                }
+            }
             while let Some(d) = self.src.take_diagnostic() {
                 failed |= d.is_error();
                 self.queue.push_back(Event::Diagnostic(d));
             }
             if failed && self.stop_on_error {
                 self.stopped = true;
+            } else if failed && self.params.is_some() {
+                self.src.note_error();
             }
         }
     }
@@ -241,6 +304,60 @@ fn evaluate<'a>(
         }
         _ => Ok(()),
     }
+}
+
+/// A block with a `G65` macro call.
+fn has_g65(b: &Block<'_>) -> bool {
+    b.words()
+        .any(|w| w.letter == b'G' && w.register.is_none() && w.code() == Some(650))
+}
+
+/// A `G65` call (program, runs, locals), or an `M98` whose words came from variables
+/// (no locals).
+type MacroCall = (
+    u32,
+    u32,
+    Option<Box<[Option<f64>; crate::expr::FANUC_LOCALS]>>,
+);
+
+/// A line of a Macro B flavour (see [`crate::macrob`]): words for the interpreter, a
+/// statement noted in `control` for the source to follow, or a `G65` call noted in
+/// `call` (with the line in `control`).
+#[inline(never)]
+fn evaluate_macro_b<'a>(
+    line: &Line<'a>,
+    block: &mut Block<'a>,
+    params: &mut Params,
+    parsed: Result<(), Diagnostic>,
+    control: &mut Option<(String, u32, usize)>,
+    call: &mut Option<MacroCall>,
+) -> Result<(), Diagnostic> {
+    let text = || String::from_utf8_lossy(line.bytes).into_owned();
+    let was_macro = matches!(block.kind, BlockKind::Macro(_));
+    match crate::macrob::eval_line(line.bytes, line.number, line.offset, block, params, parsed)? {
+        crate::macrob::Outcome::Words => {
+            // The reader follows an M98 as it reads the line; one whose P or L is a
+            // variable is known only now.
+            if was_macro {
+                if let Some((number, repeats)) =
+                    crate::macrob::sub_call(block, line.bytes, line.number, line.offset)?
+                {
+                    *control = Some((text(), line.number, line.offset));
+                    *call = Some((number, repeats, None));
+                }
+            }
+        }
+        crate::macrob::Outcome::Control => *control = Some((text(), line.number, line.offset)),
+        crate::macrob::Outcome::Call {
+            number,
+            repeats,
+            args,
+        } => {
+            *control = Some((text(), line.number, line.offset));
+            *call = Some((number, repeats, Some(args)));
+        }
+    }
+    Ok(())
 }
 
 /// The system parameters after a block's moves (see [`Params::after_moves`]).

@@ -267,6 +267,14 @@ fn haas_m97_calls_a_local_subprogram_by_its_n_label() {
             [5.0, 3.0, -1.0],
         ]
     );
+    // Without an `O` line, each of the L runs returns at its M99 and the main program
+    // goes on after the call (not ended at the second M99).
+    let (m, d) = haas(
+        "G20 G90 G0 X0 Y0\nM97 P100 L2\nG0 X5\nM30\nN100 G91 G0 Y1\nG90\nM99\n",
+        Order::Execution,
+    );
+    assert_eq!(m.last(), Some(&[5.0, 2.0, 0.0]), "{d:?}");
+    assert!(d.iter().all(|d| d.line == 5), "{d:?}");
     // A missing label, and recursion, are located errors; check reads in file order.
     for (text, line, col, what) in [
         (

@@ -1,11 +1,12 @@
 //! The intended path: each input move placed on the part, with the tool axis it should
 //! have. The post turns it into joint moves; `verify` compares a posted program with it.
 
-use std::io::BufRead;
+use std::io::{Read, Seek};
 use std::path::PathBuf;
 
 use lampost_gcode::{
-    EWord, ErrorKind, Event, LineReader, MoveKind, Options, Origin, Severity, Stream, Units,
+    EWord, ErrorKind, Event, MoveKind, Options, Order, Origin, ProgramReader, Severity, Stream,
+    Units,
 };
 use lampost_kinematics::{Machine, Units as MUnits};
 use nalgebra::Vector3;
@@ -43,14 +44,21 @@ pub enum Source {
     Bytes(Vec<u8>),
 }
 
+/// A program the post reads: out of order, as calls and loops jump (see
+/// [`ProgramReader`]).
+pub(crate) trait ReadSeek: Read + Seek {}
+impl<T: Read + Seek> ReadSeek for T {}
+
+/// A section's program as the post reads it.
+type Input = Stream<ProgramReader<Box<dyn ReadSeek>>>;
+
 impl Source {
-    fn open(&self) -> Result<Box<dyn BufRead>, PostError> {
+    fn open(&self) -> Result<Box<dyn ReadSeek>, PostError> {
         Ok(match self {
-            Source::Path(p) => Box::new(std::io::BufReader::with_capacity(
-                1 << 16,
+            Source::Path(p) => Box::new(
                 std::fs::File::open(p)
                     .map_err(|e| PostError::Io(format!("cannot open {}: {e}", p.display())))?,
-            )),
+            ),
             Source::Bytes(b) => Box::new(std::io::Cursor::new(b.clone())),
         })
     }
@@ -168,8 +176,8 @@ pub struct IntendedOptions {
     pub convert_units: bool,
     /// E words are slicer extrusion (deposit only while E grows).
     pub e_extrusion: bool,
-    /// The control the programs were written for (resolved; LinuxCNC expressions are
-    /// evaluated, O-word control lines refused as macros).
+    /// The control the programs were written for (resolved; LinuxCNC parameters,
+    /// expressions and O-word control flow are evaluated, as `trace` does).
     pub flavor: lampost_gcode::Flavor,
     /// Units of a program that does not say (no G20/G21 before its numbers); `None`: the
     /// machine's.
@@ -182,7 +190,7 @@ pub struct Intended<'a> {
     sections: &'a [Section],
     opts: IntendedOptions,
     idx: usize,
-    stream: Option<Stream<LineReader<Box<dyn BufRead>>>>,
+    stream: Option<Input>,
     layer: usize,
     layer_z: Option<f64>,
     moves_in_section: usize,
@@ -285,7 +293,11 @@ impl<'a> Intended<'a> {
                     flavor: self.opts.flavor,
                     ..Options::default()
                 };
-                self.stream = Some(Stream::from_reader(sec.source.open()?, opts, true));
+                // In execution order, as `trace` reads it: subprogram calls (M98, M97,
+                // LinuxCNC O-word calls) and loops are followed by the one reader, and
+                // the flavour's parameters evaluated by the stream.
+                let src = ProgramReader::new(sec.source.open()?, Order::Execution);
+                self.stream = Some(Stream::new(src, opts, true));
                 self.layer = 0;
                 self.layer_z = None;
                 self.moves_in_section = 0;
@@ -337,6 +349,9 @@ impl<'a> Intended<'a> {
                             "{what}: macros would need evaluating to know the path"
                         )),
                         ErrorKind::NotSimulated(what) if what.contains("after M2") => None,
+                        ErrorKind::MainProgramLoops(control) => Some(format!(
+                            "M99 in the main program: a {control} control runs it again without end, and the post writes one pass; end the program with M30"
+                        )),
                         ErrorKind::NotSimulated(what) => Some(format!(
                             "{what} changes the path; the post cannot follow it"
                         )),
@@ -387,7 +402,13 @@ impl<'a> Intended<'a> {
             self.moves_in_section += 1;
             let p = |a: &[f64; 9]| Vector3::new(a[0], a[1], a[2]) * scale;
             let (start, end) = (p(&m.start), p(&m.end));
-            let is_feed = !matches!(m.kind, MoveKind::Rapid);
+            // With E as extrusion, a G1 (or arc) along which E does not grow is travel:
+            // the head moves with the laser off (a slicer's travel written as G1, its
+            // wipes, the lift off the finished part), and its tips are not work.
+            let dry = self.opts.e_extrusion
+                && matches!(m.kind, MoveKind::Linear | MoveKind::Arc { .. })
+                && !m.extruded.is_some_and(|grown| grown > 0.0);
+            let is_feed = !matches!(m.kind, MoveKind::Rapid) && !dry;
             // Layers: a feed move ending at a new Z level starts a new layer.
             if is_feed && sec.layers.is_some() {
                 match self.layer_z {
@@ -402,12 +423,10 @@ impl<'a> Intended<'a> {
             let frame = self.frame(sec, self.layer);
             // A feed deposits exactly when E grows along it (absolute or relative E, the
             // interpreter gives the growth); E-only and F-only blocks are no moves.
-            let deposit = is_feed
-                && match m.extruded {
-                    Some(grown) if self.opts.e_extrusion => grown > 0.0,
-                    _ => true,
-                };
+            let deposit =
+                is_feed && (!self.opts.e_extrusion || m.extruded.is_some_and(|g| g > 0.0));
             let kind = match m.kind {
+                _ if dry => StepKind::Rapid,
                 MoveKind::Rapid => StepKind::Rapid,
                 MoveKind::Linear | MoveKind::Probe => StepKind::Feed,
                 MoveKind::Arc {
