@@ -935,7 +935,11 @@ impl Machine {
             return None;
         }
         let g = st.g2.max(0.0).sqrt();
-        let s1 = st.rv2 < SINGULAR * SINGULAR;
+        // Singular for the inner axis: the tool axis along it, or so nearly that g and β
+        // both vanish while v still leans off it by a rounding's worth (g² is 1 minus
+        // a number that rounds to 1): the inner angle's formula would divide 0 by 0 there
+        // (found posting a sphere's perimeters: NaN linear axes at a tilt of 7.8e-9).
+        let s1 = st.rv2 < SINGULAR * SINGULAR || (g * g + st.beta * st.beta) * st.rv2 == 0.0;
         let s2 = ch.outer_singular;
         let count = if g < 1e-12 { 1 } else { 2 };
         let mut out = [Orientation {

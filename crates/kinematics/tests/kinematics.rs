@@ -348,3 +348,21 @@ proptest! {
         }
     }
 }
+
+/// A tool axis leaning off the inner rotary axis by a rounding's worth (7.8e-9 rad: g²
+/// rounds to 0 while the lean does not) is the singular case, not a division of 0 by 0:
+/// found posting a sphere's perimeters, where the inverse gave NaN linear axes.
+#[test]
+fn an_axis_a_rounding_off_the_inner_axis_is_singular_not_nan() {
+    let m = Machine::builtin("nrc-lc", &[]).expect("machine");
+    let h = m.head("laser").expect("head");
+    let axis = Vector3::new(7.768902632321328e-9, 5.092008047852259e-10, 1.0);
+    let tip = Vector3::new(19.783922505361378, 1.296706918200612, 0.0);
+    let sols = m.inverse(&tip, &axis, h, &[0.0, 41.25]).expect("solves");
+    for s in sols.as_slice() {
+        assert!(s.joints.values().iter().all(|x| x.is_finite()), "{s:?}");
+        assert!(s.within_limits && s.singular, "{s:?}");
+        let p = m.forward(&s.joints, h);
+        assert!((p.tip - tip).norm() < 1e-9, "{s:?}");
+    }
+}
