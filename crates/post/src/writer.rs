@@ -17,7 +17,7 @@ use crate::intended::Step;
 use crate::pipeline::HeightUsed;
 use crate::post::{
     axis_letters, check_height, code_words, emitter, index_maps, linear_scale, program_units,
-    write_header, PostConfig, PostReport, Process,
+    write_header, written_rotary, PostConfig, PostReport, Process,
 };
 use crate::safety::SafeHeights;
 
@@ -152,12 +152,16 @@ impl<'m, W: Write> Writer<'m, W> {
         y
     }
 
-    /// A height on the machine's Z grid, at or above `z`.
+    /// A height on the machine's Z grid and the output's resolution, at or above `z`: a
+    /// retract rounds toward safety, never below the height it must reach.
     fn up_on_grid(&self, z: f64) -> f64 {
-        match self.lin_snap[2] {
+        let z = match self.lin_snap[2] {
             Some(r) => (z / r).ceil() * r,
             None => z,
-        }
+        };
+        // Written as round_half_away(z·scale): a whole number of steps is written as it
+        // stands, so the ceiling of it is what the text says.
+        (z * self.scale).ceil() / self.scale
     }
 
     /// Rotaries on the machine's rotary grid.
@@ -262,15 +266,14 @@ impl<'m, W: Write> Writer<'m, W> {
         self.per_minute()?;
         let split = self.offset();
         self.report.split_points.push(split);
-        let from = self.rot.unwrap_or(near);
-        let over = self.heights.over_move(&from, &rot);
-        let at = self.heights.at(&rot);
-        self.heights_used.push(HeightUsed {
-            from,
-            to: rot,
-            over,
-            at,
-        });
+        // The heights over the table positions as written (0.001°), which is where the
+        // table goes and what `verify` checks: at a long reach the rounding of an angle
+        // moves the work's top by more than the output's step.
+        let from = written_rotary(&self.rot.unwrap_or(near)).0;
+        let to = written_rotary(&rot).0;
+        let over = self.heights.over_move(&from, &to);
+        let at = self.heights.at(&to);
+        self.heights_used.push(HeightUsed { from, to, over, at });
         self.safe = over;
         check_height(&self.heights, self.safe, file, line, &rot)?;
         self.lift(file, line)?;
@@ -351,6 +354,13 @@ impl<'m, W: Write> Writer<'m, W> {
         let rot = self.rot_on_grid(&[j[3], j[4]]);
         let j = &[x[0], x[1], x[2], rot[0], rot[1]];
         self.check(file, line, &x, &rot)?;
+        // An inverse-time feed of a move lasting years (a tiny per-point feed) would be
+        // written as F0: refused at its line.
+        feed_writable(per_min.unwrap_or(feed)).map_err(|e| PostError::OutOfRange {
+            file: file.to_string(),
+            line,
+            what: e.to_string(),
+        })?;
         let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
         match per_min {
             Some(f) => {
@@ -381,7 +391,7 @@ impl<'m, W: Write> Writer<'m, W> {
         if self.rot != Some(rot) {
             // The table turned under the head: the safe height to lift to (at the end, or
             // before a re-index) is the one at this table position.
-            self.safe = self.heights.at(&rot);
+            self.safe = self.heights.at(&written_rotary(&rot).0);
         }
         self.rot = Some(rot);
         self.pos = Some(x);
