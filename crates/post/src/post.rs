@@ -325,10 +325,15 @@ pub(crate) fn arc_way(
             ccw: ccw_machine == (handed > 0.0),
         }
     } else {
-        let r = (step.start - center).norm().max(1e-12);
-        let seg_angle = 2.0 * (1.0 - (tolerance / r).min(1.0)).acos();
-        ArcWay::Chords(((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize).clamp(1, 100_000))
+        ArcWay::Chords(chord_count(step, center, sweep, tolerance))
     }
+}
+
+/// Chords for an arc of `sweep` radians about `center` within the chord `tolerance`.
+pub(crate) fn chord_count(step: &Step, center: &Vector3<f64>, sweep: f64, tolerance: f64) -> usize {
+    let r = (step.start - center).norm().max(1e-12);
+    let seg_angle = 2.0 * (1.0 - (tolerance / r).min(1.0)).acos();
+    ((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize).clamp(1, 100_000)
 }
 
 /// How far a written point lands from the intended path (its check, see
@@ -362,6 +367,7 @@ pub(crate) fn post_steps<W: Write>(
     let mut need_approach = true;
     let mut retract_noted: Option<u32> = None;
     let mut arc_warned: Option<usize> = None;
+    let mut round_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     let mut count = 0usize;
     for batch in batches {
@@ -459,17 +465,39 @@ pub(crate) fn post_steps<W: Write>(
                         sweep,
                         cfg.tolerance,
                     );
-                    if let ArcWay::Kept { ccw } = way {
-                        w.arc(&step, &start, &end, &joints(&jm, &center), ccw, sweep, file)?;
-                    } else {
-                        if arc_warned != Some(step.section) {
-                            arc_warned = Some(step.section);
-                            w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                    let center_j = joints(&jm, &center);
+                    // An arc kept must read back as itself: one whose end rounds onto its
+                    // start (or past it) at the output resolution would read as a full
+                    // circle, or nearly one. It is written as chords instead.
+                    let n = match way {
+                        ArcWay::Kept { ccw }
+                            if w.arc_reads_back(
+                                &start,
+                                &end,
+                                &center_j,
+                                ccw,
+                                &joints(&jm, &step.at(0.5)),
+                            ) =>
+                        {
+                            w.arc(&step, &start, &end, &center_j, ccw, sweep, file)?;
+                            None
                         }
-                        let n = match way {
-                            ArcWay::Chords(n) => n,
-                            ArcWay::Kept { .. } => 1,
-                        };
+                        ArcWay::Kept { .. } => {
+                            if round_warned != Some(step.section) {
+                                round_warned = Some(step.section);
+                                w.report.warnings.push(format!("{file}:{}: an arc whose end rounds onto or past its start at the output resolution (it would read as a full circle, or nearly one) is written as chords", step.line));
+                            }
+                            Some(chord_count(&step, &center, sweep, cfg.tolerance))
+                        }
+                        ArcWay::Chords(n) => {
+                            if arc_warned != Some(step.section) {
+                                arc_warned = Some(step.section);
+                                w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                            }
+                            Some(n)
+                        }
+                    };
+                    if let Some(n) = n {
                         // Planned on the reading thread (same table position), or solved
                         // here.
                         let chords = planned

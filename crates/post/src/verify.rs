@@ -65,6 +65,17 @@ pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
                 .iter()
                 .map(|&t| (p - step.at(t)).norm())
                 .fold(f64::INFINITY, f64::min);
+            // A helix: also the point at p's height along the normal. On a short, steep
+            // helix a point beside the path by the output's rounding can lie at an angle
+            // just outside the sweep, which names an end, while its height names the
+            // middle. (Every candidate is a point of the path: the distance is never
+            // understated.)
+            let near = if rise.abs() > 1e-12 * (1.0 + rel.norm()) {
+                let t_n = (n.dot(&(p - step.start)) / rise).clamp(0.0, 1.0);
+                near.min((p - step.at(t_n)).norm())
+            } else {
+                near
+            };
             // A helix of more than one turn passes p's angle once a turn: each of those.
             let turns = (sweep.abs() / tau).ceil() as u32;
             (1..turns.min(10_001))

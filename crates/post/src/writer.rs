@@ -403,6 +403,53 @@ impl<'m, W: Write> Writer<'m, W> {
         self.within_size(file, line)
     }
 
+    /// Whether `G2`/`G3` (counter-clockwise in joint X/Y when `ccw`) from joints `start`
+    /// to `end` about `c`, as [`Writer::arc`] would write it, reads back as the intended
+    /// arc whose midpoint is at joints `mid`. A controller (and `verify`) starts the arc
+    /// where the head is as written, puts the centre at that plus the written I and J,
+    /// and reads a full circle when the written ends meet: an arc whose end rounds onto
+    /// its start, or past it, would read as a full circle or nearly one. The midpoint of
+    /// the arc as read must be within the check's tolerance of `mid`.
+    pub(crate) fn arc_reads_back(
+        &self,
+        start: &[f64; 3],
+        end: &[f64; 3],
+        c: &[f64; 3],
+        ccw: bool,
+        mid: &[f64; 3],
+    ) -> bool {
+        let (Some(sx), Some(sy)) = (self.written[0], self.written[1]) else {
+            return false;
+        };
+        let (end, c) = (self.on_grid(end), self.on_grid(c));
+        // In output steps, as the text gives them.
+        let q = |v: f64| round_half_away(v * self.scale);
+        let s = [sx as f64, sy as f64];
+        let e = [q(end[0]), q(end[1])];
+        let cc = [s[0] + q(c[0] - start[0]), s[1] + q(c[1] - start[1])];
+        let tau = std::f64::consts::TAU;
+        let a0 = (s[1] - cc[1]).atan2(s[0] - cc[0]);
+        let a1 = (e[1] - cc[1]).atan2(e[0] - cc[0]);
+        let read = if s == e {
+            tau
+        } else if ccw {
+            (a1 - a0).rem_euclid(tau)
+        } else {
+            (a0 - a1).rem_euclid(tau)
+        };
+        let r = (s[0] - cc[0]).hypot(s[1] - cc[1]);
+        let am = if ccw {
+            a0 + read / 2.0
+        } else {
+            a0 - read / 2.0
+        };
+        let (mx, my) = (
+            (cc[0] + r * am.cos()) / self.scale,
+            (cc[1] + r * am.sin()) / self.scale,
+        );
+        (mx - mid[0]).hypot(my - mid[1]) <= self.feed_check.tol
+    }
+
     /// An arc kept as an arc (its plane is the machine's XY plane): `G2`/`G3` from joints
     /// `start` to `end` about `c`, its X/Y extremes within travel, its midpoint and end
     /// checked as written.
