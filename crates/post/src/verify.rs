@@ -225,6 +225,8 @@ pub fn verify<R: BufRead>(
         )
     });
     let mut current: Option<Step> = None;
+    // The angle the current move (an arc) has swept so far, along its sweep.
+    let mut swept = 0.0f64;
     let mut rep = VerifyReport::default();
     let intended_axis = |s: &Step| match s.orient(sections) {
         Orient::ToolAxis => s.program_z(sections).normalize(),
@@ -284,10 +286,37 @@ pub fn verify<R: BufRead>(
         }
         if current.is_none() {
             *current = intended.next().transpose()?;
+            swept = 0.0;
         }
         let Some(step) = *current else {
             return Err(PostError::Verify(format!("posted line {line} feeds to ({:.5}, {:.5}, {:.5}) after the intended path has ended", p.x, p.y, p.z)));
         };
+        // An arc of more than one turn passes its end once a turn: a point there ends the
+        // move only on its last turn. The angle swept so far is followed from point to
+        // point (chords of such an arc turn by at most half a turn each).
+        let mut last_turn = true;
+        if let StepKind::Arc {
+            center,
+            normal,
+            sweep,
+        } = step.kind
+        {
+            if sweep.abs() > std::f64::consts::TAU + 1e-9 {
+                let tau = std::f64::consts::TAU;
+                let rel = step.start - center;
+                let q = p - center;
+                let ang = normal
+                    .dot(&rel.cross(&q))
+                    .atan2(rel.dot(&q) - normal.dot(&rel) * normal.dot(&q));
+                let done = swept.rem_euclid(tau);
+                let mut d = (sweep.signum() * ang - done).rem_euclid(tau);
+                if d > std::f64::consts::PI + 1e-6 {
+                    d -= tau;
+                }
+                swept += d;
+                last_turn = swept >= sweep.abs() - std::f64::consts::PI;
+            }
+        }
         let d_end = (p - step.end).norm();
         if entering && (p - step.start).norm() > tolerance {
             return Err(PostError::Verify(format!(
@@ -295,7 +324,7 @@ pub fn verify<R: BufRead>(
                 p.x, p.y, p.z, step.line
             )));
         }
-        let err = if is_end && !entering && d_end <= tolerance {
+        let err = if is_end && !entering && d_end <= tolerance && last_turn {
             *current = None;
             d_end
         } else {
