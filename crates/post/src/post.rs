@@ -498,6 +498,22 @@ pub(crate) fn post_steps<W: Write>(
                         }
                     };
                     if let Some(n) = n {
+                        // Chords follow the circle of the start's radius, and the last
+                        // one goes to the end: an end off that radius (LinuxCNC reads an
+                        // arc whose radii differ by up to 0.0028 in as a spiral) would
+                        // bend the last chord off the path by as much.
+                        let radial = |p: &Vector3<f64>| {
+                            let v = p - center;
+                            (v - normal * normal.dot(&v)).norm()
+                        };
+                        let off = (radial(&step.end) - radial(&step.start)).abs();
+                        if off > cfg.tolerance {
+                            return Err(PostError::Unsupported {
+                                file: file.to_string(),
+                                line: step.line,
+                                what: format!("the arc's end is {off:.6} off the radius of its start, more than the chord tolerance {}: linearised at this table position, its chords would leave the path (write the arc's end on its circle, or post with a larger --tolerance)", cfg.tolerance),
+                            });
+                        }
                         // Planned on the reading thread (same table position), or solved
                         // here.
                         let chords = planned
