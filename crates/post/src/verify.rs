@@ -76,14 +76,31 @@ pub(crate) fn dist_to(step: &Step, p: &Vector3<f64>) -> f64 {
             } else {
                 near
             };
-            // A helix of more than one turn passes p's angle once a turn: each of those.
-            let turns = (sweep.abs() / tau).ceil() as u32;
-            (1..turns.min(10_001))
-                .map(|k| {
-                    let t = ((ang + f64::from(k) * tau * sweep.signum()) / sweep).clamp(0.0, 1.0);
-                    (p - step.at(t)).norm()
-                })
-                .fold(near, f64::min)
+            // A helix of more than one turn passes p's angle once a turn: the passes at
+            // and beside p's height (the nearest of them is there; every turn's pass is
+            // a point of the path, so fewer of them never understate the distance).
+            // A constant number per point, however many turns: chord points of a long
+            // helix are checked in linear time.
+            let turns = (sweep.abs() / tau).ceil();
+            if turns < 2.0 {
+                return near;
+            }
+            let k_mid = if rise.abs() > 1e-12 * (1.0 + rel.norm()) {
+                let t_h = n.dot(&(p - step.start)) / rise;
+                ((t_h * sweep - ang) / (tau * sweep.signum())).round()
+            } else {
+                // A flat arc of many turns: every turn is the same circle.
+                1.0
+            };
+            let mut best = near;
+            for dk in [-1.0, 0.0, 1.0] {
+                let k = k_mid + dk;
+                if k >= 1.0 && k < turns {
+                    let t = ((ang + k * tau * sweep.signum()) / sweep).clamp(0.0, 1.0);
+                    best = best.min((p - step.at(t)).norm());
+                }
+            }
+            best
         }
         _ => {
             let d = step.end - step.start;
