@@ -841,6 +841,76 @@ pub(crate) mod tests {
         }
     }
 
+    /// The distance from `p` to `step`'s path by dense sampling.
+    fn sampled(step: &Step, p: &Vector3<f64>, samples: usize) -> f64 {
+        (0..=samples)
+            .map(|i| (p - step.at(i as f64 / samples as f64)).norm())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// A short, steep helix (0.0007 rad of a 0.3 radius, rising 0.01; input 16 of the
+    /// post fuzz target's seed 1, input 135984): a point beside its middle by the output's
+    /// rounding lies at an angle just behind the start, which names an end (0.005 away),
+    /// while the path passes within 1e-4. `dist_to` finds that, and never less than the
+    /// sampled distance.
+    #[test]
+    fn a_short_steep_helix_is_measured_at_the_points_height() {
+        let step = arc(
+            Vector3::new(0.66, 0.43, 0.05),
+            Vector3::z(),
+            0.3,
+            -0.5,
+            7e-4,
+            0.01,
+        );
+        let mid = step.at(0.5);
+        let c = Vector3::new(0.66, 0.43, mid.z);
+        let radial = (mid - c).normalize();
+        let along = Vector3::z().cross(&radial);
+        for (dr, da) in [(1e-4, -3e-4), (-1e-4, -4e-4), (0.0, 5e-4), (5e-5, 0.0)] {
+            let p = mid + radial * dr + along * da;
+            let want = sampled(&step, &p, 100_000);
+            let got = dist_to(&step, &p);
+            assert!(got >= want - 1e-9, "{got} under the sampled {want}");
+            assert!(got <= want + 1e-6, "{got} over the sampled {want}");
+            assert!(got < 1e-3, "{got}");
+        }
+    }
+
+    /// A helix of 300 turns: the distance taken at the passes beside the point's height
+    /// is the distance to the whole path (sampled), for points near any turn.
+    #[test]
+    fn a_many_turn_helix_is_measured_at_the_nearest_turn() {
+        let tau = std::f64::consts::TAU;
+        for sweep in [300.0 * tau + 0.4, -(300.0 * tau) - 0.4] {
+            let step = arc(
+                Vector3::new(1.0, -2.0, 0.0),
+                Vector3::new(0.2, 0.1, 1.0),
+                0.8,
+                0.3,
+                sweep,
+                1.5,
+            );
+            for k in 0..12 {
+                let t = (k as f64 + 0.37) / 12.0;
+                let off = Vector3::new((k as f64).sin(), (k as f64 * 1.7).cos(), 0.3) * 3e-4;
+                let p = step.at(t) + off;
+                let got = dist_to(&step, &p);
+                // Sampled finely around t (the nearest pass is on t's own turn: the offset
+                // is a tenth of the pitch).
+                let window = 0.1 / 300.0;
+                let want = (0..=8_000)
+                    .map(|i| (t - window + 2.0 * window * i as f64 / 8_000.0).clamp(0.0, 1.0))
+                    .map(|u| (p - step.at(u)).norm())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    got >= want - 2e-5 && got <= want + 2e-5,
+                    "t {t}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(3000))]
         /// The chord-point helpers give exactly what `Step::at` and `dist_to` give, for

@@ -811,3 +811,94 @@ fn feed_writable(f: f64) -> Result<(), PostError> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::intended::IntendedOptions;
+    use crate::post::PostDialect;
+    use crate::safety::WorkBounds;
+    use nalgebra::Vector3;
+
+    fn cfg() -> PostConfig {
+        PostConfig {
+            head: 0,
+            process: Process::Deposit { power: 100.0 },
+            dialect: PostDialect::Iso,
+            renumber: None,
+            tolerance: 0.0005,
+            intended: IntendedOptions {
+                convert_units: false,
+                e_extrusion: false,
+                flavor: lampost_gcode::Flavor::Fadal,
+                units: None,
+            },
+            near: [0.0, 0.0],
+            program_number: 1000,
+            header: vec!["t".into()],
+            verify_tolerance: 0.001,
+            work: None,
+            part: None,
+            max_output_bytes: None,
+        }
+    }
+
+    /// A retract goes to a height at or above the safe one as written: Z rounds up to
+    /// the output step (class (c) of the post fuzz target: retracts one step low).
+    #[test]
+    fn a_retract_rounds_up_to_the_output_step() {
+        let text = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../fixtures/machines/xyzac-trt.toml"),
+        )
+        .expect("machine file");
+        let def =
+            lampost_kinematics::MachineDef::from_toml(&text, "xyzac-trt.toml").expect("reads");
+        let m = Machine::new(def, &[]).expect("machine");
+        let c = cfg();
+        let heights = SafeHeights::new(&m, 0, WorkBounds::empty()).expect("heights");
+        let mut w = Writer::new(&m, &c, heights, Vec::new()).expect("writer");
+        let step = 1.0 / w.scale;
+        for safe in [30.0004, 30.00001, 30.000_000_001, 30.0] {
+            w.safe = safe;
+            w.pos = Some([1.0, 2.0, 0.0]);
+            w.written = [Some(1000), Some(2000), Some(0)];
+            w.lift("t", 1).expect("lift");
+            let z = w.pos.expect("lifted")[2];
+            let written = w.written[2].expect("written") as f64 * step;
+            assert!(written >= safe - 1e-12, "safe {safe}: written {written}");
+            assert!(written < safe + step, "safe {safe}: written {written}");
+            assert_eq!(
+                round_half_away(z * w.scale) as i64,
+                w.written[2].expect("z")
+            );
+        }
+    }
+
+    /// The safe heights of an index are those of the table positions as written (0.001°):
+    /// at a long reach the unwritten digits of an angle move the work's top by more than
+    /// an output step (class (c): a sweep checked by `verify` 1e-4 too low).
+    #[test]
+    fn index_heights_are_those_of_the_written_table_positions() {
+        let m = Machine::builtin("fadal-lamp", &[]).expect("machine");
+        let mut work = WorkBounds::empty();
+        work.add_points([Vector3::new(20.0, 3.0, 0.5), Vector3::new(-5.0, 18.0, 0.2)]);
+        let heights = SafeHeights::new(&m, 0, work.clone()).expect("heights");
+        let check = SafeHeights::new(&m, 0, work).expect("heights");
+        let c = cfg();
+        let mut w = Writer::new(&m, &c, heights, Vec::new()).expect("writer");
+        w.rot = Some([-67.885_37, 25.361_64]);
+        w.index([105.000_4, -24.999_6], [0.0, 0.0], "t", 1)
+            .expect("index");
+        let used = w.heights_used.last().expect("a height used");
+        assert_eq!(used.from, [-67.885, 25.362]);
+        assert_eq!(used.to, [105.0, -25.0]);
+        assert_eq!(
+            used.over.to_bits(),
+            check
+                .over_move(&[-67.885, 25.362], &[105.0, -25.0])
+                .to_bits()
+        );
+        assert_eq!(w.safe.to_bits(), check.at(&[105.0, -25.0]).to_bits());
+    }
+}
