@@ -270,3 +270,33 @@ fn a_spiral_arc_beyond_the_chord_tolerance_is_refused_when_linearised() {
     )
     .expect("kept as an arc");
 }
+
+/// `post` target, seed 7, input 71727: a kept arc's feed of 1e-300 (here 1e-9) was written as `F0`
+/// (the arc's words skipped the check straight moves have), and `verify` read a feed move
+/// with no feed. Refused at its line, as a straight move's is.
+#[test]
+fn a_kept_arcs_feed_that_rounds_to_zero_is_refused_at_its_line() {
+    let program = "G20 G90 G17\nG0 X0.5 Y0 Z0.1\nG1 Z0 F20.\nG3 X0.5 Y0 I-0.5 J0 F0.000000001\nG0 Z0.1\nM30\n";
+    let err = post_then_verify("fuzz-arc-f0", program, &[], "0.0005").expect_err("refused");
+    assert!(
+        err.contains("in.nc:4:") && err.contains("would be written as F0"),
+        "{err}"
+    );
+}
+
+/// `post` target, seed 7, input 250680 (and the open finding of a 3000-turn helix at a
+/// tilted index): an arc needing more chords than the bound (100,000) was written with
+/// 100,000, each longer than the chord tolerance allows, so the path between chord points
+/// left it (2.2e-3 in for a tolerance of 1e-3). Refused at its line now; with a coarser
+/// tolerance the same 3000-turn helix posts and verifies.
+#[test]
+fn an_arc_needing_more_chords_than_the_bound_is_refused_at_its_line() {
+    let program =
+        "G20 G90 G17\nG0 X1 Y0 Z0.1\nG1 Z0 F20\nG2 X1 Y0 Z-0.3 I-0.5 J0 P3000\nG0 Z0.5\nM30\n";
+    let err = post_then_verify("fuzz-chords", program, &["--index", "A=0,B=30"], "0.0005")
+        .expect_err("refused");
+    assert!(err.contains("in.nc:4:") && err.contains("chords"), "{err}");
+    let text = post_then_verify("fuzz-chords-ok", program, &["--index", "A=0,B=30"], "0.005")
+        .expect("posts");
+    assert!(text.lines().count() > 60_000, "{}", text.lines().count());
+}

@@ -329,11 +329,23 @@ pub(crate) fn arc_way(
     }
 }
 
-/// Chords for an arc of `sweep` radians about `center` within the chord `tolerance`.
+/// The most chords one arc is written with. An arc that needs more within the chord
+/// tolerance (a helix of thousands of turns at a tilted index) is refused at its line:
+/// fewer chords would leave the path between their points.
+pub(crate) const MAX_CHORDS: usize = 100_000;
+
+/// Chords for an arc of `sweep` radians about `center` within the chord `tolerance`, at
+/// most [`MAX_CHORDS`] (see [`chords_needed`]).
 pub(crate) fn chord_count(step: &Step, center: &Vector3<f64>, sweep: f64, tolerance: f64) -> usize {
+    (chords_needed(step, center, sweep, tolerance).ceil() as usize).clamp(1, MAX_CHORDS)
+}
+
+/// How many chords keep an arc of `sweep` radians about `center` within the chord
+/// `tolerance` (not rounded up, not bounded).
+pub(crate) fn chords_needed(step: &Step, center: &Vector3<f64>, sweep: f64, tolerance: f64) -> f64 {
     let r = (step.start - center).norm().max(1e-12);
     let seg_angle = 2.0 * (1.0 - (tolerance / r).min(1.0)).acos();
-    ((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize).clamp(1, 100_000)
+    sweep.abs() / seg_angle.max(1e-6)
 }
 
 /// How far a written point lands from the intended path (its check, see
@@ -506,6 +518,14 @@ pub(crate) fn post_steps<W: Write>(
                             let v = p - center;
                             (v - normal * normal.dot(&v)).norm()
                         };
+                        let needed = chords_needed(&step, &center, sweep, cfg.tolerance);
+                        if needed > MAX_CHORDS as f64 {
+                            return Err(PostError::Unsupported {
+                                file: file.to_string(),
+                                line: step.line,
+                                what: format!("the arc needs {needed:.0} chords to stay within the chord tolerance {} at this table position, more than {MAX_CHORDS} (fewer would leave the path between them): split it, keep it in the index's plane, or post with a larger --tolerance", cfg.tolerance),
+                            });
+                        }
                         let off = (radial(&step.end) - radial(&step.start)).abs();
                         if off > cfg.tolerance {
                             return Err(PostError::Unsupported {

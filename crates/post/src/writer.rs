@@ -356,11 +356,7 @@ impl<'m, W: Write> Writer<'m, W> {
         self.check(file, line, &x, &rot)?;
         // An inverse-time feed of a move lasting years (a tiny per-point feed) would be
         // written as F0: refused at its line.
-        feed_writable(per_min.unwrap_or(feed)).map_err(|e| PostError::OutOfRange {
-            file: file.to_string(),
-            line,
-            what: e.to_string(),
-        })?;
+        located_feed(per_min.unwrap_or(feed), file, line)?;
         let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
         match per_min {
             Some(f) => {
@@ -466,6 +462,7 @@ impl<'m, W: Write> Writer<'m, W> {
     ) -> Result<(), PostError> {
         let g = if ccw { 3.0 } else { 2.0 };
         let (end, c) = (&self.on_grid(end), &self.on_grid(c));
+        located_feed(step.feed, file, step.line)?;
         let rot_now = self.rot.unwrap_or([0.0; 2]);
         self.check(file, step.line, end, &rot_now)?;
         // Travel limits along the arc: its extreme points in X and Y.
@@ -726,6 +723,9 @@ impl<'m, W: Write> Writer<'m, W> {
             self.pos = Some(*x);
             return Ok(());
         }
+        if let Some(f) = feed {
+            located_feed(f, file, line)?;
+        }
         if n == 0 && g == 1.0 {
             // A feed to where the head is (as written): keep one axis so the block moves
             // (after the feed word, as posts have always written it).
@@ -734,9 +734,6 @@ impl<'m, W: Write> Writer<'m, W> {
             v.push((self.letters[0], x[0]));
             self.move_words(&v, file, line)?;
         } else {
-            if let Some(f) = feed {
-                feed_writable(f)?;
-            }
             self.em
                 .motion(g, &w[..n], self.scale, feed)
                 .map_err(|e| at_line(e, file, line))?;
@@ -797,6 +794,15 @@ fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
     } else {
         Err(bad())
     }
+}
+
+/// [`feed_writable`] for a feed of a move from input line `line`: refused at that line.
+fn located_feed(f: f64, file: &str, line: u32) -> Result<(), PostError> {
+    feed_writable(f).map_err(|e| PostError::OutOfRange {
+        file: file.to_string(),
+        line,
+        what: e.to_string(),
+    })
 }
 
 /// A feed is written with 5 decimals: one that rounds to `F0` (a feed of 1e-300 in the
