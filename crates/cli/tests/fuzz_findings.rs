@@ -179,11 +179,22 @@ fn post_then_verify(
     extra: &[&str],
     tol: &str,
 ) -> Result<String, String> {
+    post_then_verify_on("fadal-lamp", name, program, extra, tol)
+}
+
+/// [`post_then_verify`] on `machine`.
+fn post_then_verify_on(
+    machine: &str,
+    name: &str,
+    program: &str,
+    extra: &[&str],
+    tol: &str,
+) -> Result<String, String> {
     let dir = tempdir(name);
     let nc = write(&dir, "in.nc", program);
     let out = dir.join("out.nc");
     let out_s = out.to_string_lossy().into_owned();
-    let mut a = vec!["post", "--machine", "fadal-lamp"];
+    let mut a = vec!["post", "--machine", machine];
     a.extend_from_slice(extra);
     a.extend(["--tolerance", tol, nc.as_str(), "-o", out_s.as_str()]);
     let o = lampost(&a);
@@ -192,10 +203,10 @@ fn post_then_verify(
         return Err(stderr(&o));
     }
     let text = std::fs::read_to_string(&out).expect("posted");
-    let mut v = vec!["verify", "--machine", "fadal-lamp"];
+    let mut v = vec!["verify", "--machine", machine];
     let index: Vec<&str> = extra
         .windows(2)
-        .filter(|w| w[0] == "--index")
+        .filter(|w| w[0] == "--index" || w[0] == "--origin")
         .flatten()
         .copied()
         .collect();
@@ -299,4 +310,28 @@ fn an_arc_needing_more_chords_than_the_bound_is_refused_at_its_line() {
     let text = post_then_verify("fuzz-chords-ok", program, &["--index", "A=0,B=30"], "0.005")
         .expect("posts");
     assert!(text.lines().count() > 60_000, "{}", text.lines().count());
+}
+
+/// `post` target, seed 11, input 661052: an arc whose radii differ by 0.0280 mm, just
+/// within LinuxCNC's 0.0283 mm, was kept as G2/G3; its end rounded to 0.001 mm made them
+/// differ by 0.0283 mm, and the control (and `verify`) refused the posted arc. A kept arc
+/// must now pass the control's arc tolerances as written; this one is linearised instead,
+/// where its end off the start's radius is refused at its line beyond the chord
+/// tolerance and posts within a coarser one.
+#[test]
+fn a_kept_arc_must_pass_the_controls_arc_tolerance_as_written() {
+    let program = "G21 G90 G17\nG0 X16.8367 Y21.7817 Z3\nG1 Z0.5 F500\nG3 X14.34429496729689 Y21.31 I-2.5789 J7.2651\nG0 Z5\nM30\n";
+    let origin = [
+        "--origin",
+        "-7.7646213962028785,22.431100057270243,11.248639265496811",
+    ];
+    let err = post_then_verify_on("nrc-lc", "fuzz-arc-radii", program, &origin, "0.0127")
+        .expect_err("refused");
+    assert!(
+        err.contains("in.nc:4:") && err.contains("off the radius of its start"),
+        "{err}"
+    );
+    let text = post_then_verify_on("nrc-lc", "fuzz-arc-radii-ok", program, &origin, "0.05")
+        .expect("posts as chords");
+    assert!(!text.contains("G3") && !text.contains("G2 "), "{text}");
 }

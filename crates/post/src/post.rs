@@ -497,7 +497,7 @@ pub(crate) fn post_steps<W: Write>(
                         ArcWay::Kept { .. } => {
                             if round_warned != Some(step.section) {
                                 round_warned = Some(step.section);
-                                w.report.warnings.push(format!("{file}:{}: an arc whose end rounds onto or past its start at the output resolution (it would read as a full circle, or nearly one) is written as chords", step.line));
+                                w.report.warnings.push(format!("{file}:{}: an arc that would not read back as itself at the output resolution (its end rounding onto or past its start reads as a full circle, or nearly one; or its radii as written beyond the control's arc tolerance) is written as chords", step.line));
                             }
                             Some(chord_count(&step, &center, sweep, cfg.tolerance))
                         }

@@ -7,6 +7,7 @@
 use std::io::Write;
 
 use lampost_gcode::emit::round_half_away;
+use lampost_gcode::interp::{ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE};
 use lampost_gcode::Emitter;
 use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Affine, Machine};
@@ -434,6 +435,23 @@ impl<'m, W: Write> Writer<'m, W> {
             (a0 - a1).rem_euclid(tau)
         };
         let r = (s[0] - cc[0]).hypot(s[1] - cc[1]);
+        // The control must accept it: the written radii within its arc tolerances
+        // (LinuxCNC's, which lampost's interpreter and `verify` apply). An arc at the
+        // edge of them in the input can pass them by the rounding of its end.
+        let r_end = (e[0] - cc[0]).hypot(e[1] - cc[1]);
+        let (spiral, zero) = match program_units(self.m) {
+            lampost_gcode::Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
+            lampost_gcode::Units::Mm => (ARC_SPIRAL_TOLERANCE.1, ARC_RADIUS_TOLERANCE.1),
+        };
+        let (r1, r2) = (r / self.scale, r_end / self.scale);
+        let diff = (r1 - r2).abs();
+        if r1 < zero
+            || r2 < zero
+            || diff > 100.0 * spiral
+            || (diff / r1.max(r2) > ARC_SPIRAL_RELATIVE && diff > spiral)
+        {
+            return false;
+        }
         let am = if ccw {
             a0 + read / 2.0
         } else {
