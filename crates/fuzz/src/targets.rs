@@ -629,6 +629,16 @@ impl Ctx {
             });
         }
         let split = r.one_in(3).then(|| 256 + r.below(8192));
+        // The programs of the later sections (the first is the saved input), so a
+        // finding can be run outside the fuzzer.
+        let later: String = sections
+            .iter()
+            .skip(1)
+            .map(|s| match &s.source {
+                Source::Bytes(b) => format!("\n--- {} ---\n{}", s.name, String::from_utf8_lossy(b)),
+                _ => String::new(),
+            })
+            .collect();
         *note = format!(
             "machine {}, head {head}, {:?}, {dialect:?}, renumber {renumber:?}, tolerance {tolerance}, work {}, intended {:?}, split {split:?}, sections {:?}",
             m.name,
@@ -639,7 +649,7 @@ impl Ctx {
                 .iter()
                 .map(|s| (s.name.clone(), s.frame, s.orient, s.layers))
                 .collect::<Vec<_>>()
-        );
+        ) + &later;
         self.made(input, note);
         let mut out = Vec::new();
         let Ok(report) = lampost_post::post(m, &sections, &cfg, &mut out, |_| {}) else {

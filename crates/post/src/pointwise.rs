@@ -335,6 +335,112 @@ pub fn post_points<W: Write>(
     w.finish(cfg).map(|(report, _)| report)
 }
 
+/// Whether the tool at `tip`, `axis` is on the path from point `a` to point `b` as the
+/// post interpolates it: some fraction `t` in [0, 1] puts the tip within `tolerance` of
+/// `a + (b − a)·t` and the axis within ten times [`AXIS_TOLERANCE_DEG`] of the axes'
+/// slerp at `t`. Both conditions hold on an interval of `t` (the tip's: a quadratic in
+/// `t`; the axis's: an arc of the great circle), solved exactly, so a segment whose tip
+/// barely moves while its axis turns is judged by its axis and the other way round. The
+/// tip error and axis angle (degrees) at the fraction used, or `None` off the path.
+pub fn on_segment(
+    a: &PathPoint,
+    b: &PathPoint,
+    tip: &Vector3<f64>,
+    axis: &Vector3<f64>,
+    tolerance: f64,
+) -> Option<(f64, f64)> {
+    let d = b.tip - a.tip;
+    let rel = tip - a.tip;
+    let len2 = d.norm_squared();
+    // The tip: |rel − d·t|² ≤ tol², i.e. len2·t² − 2·(rel·d)·t + |rel|² − tol² ≤ 0.
+    let mid = rel.dot(&d) / len2;
+    let (mut lo, mut hi) = if len2 > 0.0 && mid.is_finite() {
+        let off2 = (rel - d * mid).norm_squared();
+        let room2 = tolerance * tolerance - off2;
+        if room2.is_nan() || room2 < 0.0 {
+            return None;
+        }
+        let half = (room2 / len2).sqrt();
+        ((mid - half).max(0.0), (mid + half).min(1.0))
+    } else if rel.norm() <= tolerance {
+        // The tip stands still (or moves by less than f64 can divide by).
+        (0.0, 1.0)
+    } else {
+        return None;
+    };
+    if lo.is_nan() || hi.is_nan() || lo > hi {
+        return None;
+    }
+    // The axis: the interpolated axis is cos(θt)·u + sin(θt)·w (u = a's axis, w the
+    // unit normal to u towards b's, θ the turn); its angle to `axis` is within α where
+    // ρ·cos(θt − φ) ≥ cos α (ρ, φ: `axis` in the (u, w) plane).
+    let alpha = (10.0 * AXIS_TOLERANCE_DEG).to_radians();
+    let u = a.axis.normalize();
+    let p = axis.normalize();
+    let theta = angle(&a.axis, &b.axis).to_radians();
+    let w = b.axis - u * u.dot(&b.axis);
+    if theta > 1e-12 && w.norm() > 1e-15 {
+        let w = w.normalize();
+        let (pu, pw) = (p.dot(&u), p.dot(&w));
+        let rho = pu.hypot(pw);
+        let c = alpha.cos() / rho;
+        if c > 1.0 {
+            return None;
+        }
+        let phi = pw.atan2(pu);
+        let spread = c.clamp(-1.0, 1.0).acos();
+        lo = lo.max((phi - spread) / theta);
+        hi = hi.min((phi + spread) / theta);
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            return None;
+        }
+    }
+    // The fraction in both intervals nearest the tip's own projection.
+    let t = if mid.is_finite() {
+        mid.clamp(lo, hi)
+    } else {
+        lo
+    };
+    let err = (rel - d * t).norm();
+    let ang = angle(axis, &slerp(&a.axis, &b.axis, t));
+    // The closed forms above and the measured values can differ by rounding at the
+    // interval's ends: the measured ones decide.
+    (err <= tolerance * (1.0 + 1e-9) && ang <= 10.0 * AXIS_TOLERANCE_DEG * (1.0 + 1e-9))
+        .then_some((err, ang))
+}
+
+/// The most readings of a per-point program [`verify_points`] follows at once (each a
+/// count of points reached; more than one when a move is within the tolerance of a point
+/// and also on the way to it).
+const MAX_READINGS: usize = 64;
+
+fn keep_best(best: &mut Option<(f64, f64)>, e: (f64, f64)) {
+    if best.is_none_or(|b| e.0 < b.0) {
+        *best = Some(e);
+    }
+}
+
+/// For a message: the tip's distance from the segment `a`–`b` and the axis's angle from
+/// the interpolated axis at the tip's own fraction.
+fn nearest_miss(
+    a: &PathPoint,
+    b: &PathPoint,
+    tip: &Vector3<f64>,
+    axis: &Vector3<f64>,
+) -> (f64, f64) {
+    let d = b.tip - a.tip;
+    let len2 = d.norm_squared();
+    let t = if len2 > 0.0 {
+        ((tip - a.tip).dot(&d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (
+        (tip - (a.tip + d * t)).norm(),
+        angle(axis, &slerp(&a.axis, &b.axis, t)),
+    )
+}
+
 /// Replay a posted program and compare every feed point with the path of `points`
 /// (placed by `frame`): tip on the current segment (or at its end), tool axis on the
 /// interpolated axis.
@@ -368,8 +474,9 @@ pub fn verify_points<R: BufRead>(
     let ix: Vec<usize> = names.iter().map(|n| idx(n)).collect();
     let mut rep = VerifyReport::default();
     // Segment k runs from placed[k-1] to placed[k]; before the first point is reached,
-    // the feeds are the approach onto it.
-    let mut k = 0usize;
+    // the feeds are the approach onto it. `live`: the readings still possible (the next
+    // point to reach), ascending.
+    let mut live: Vec<usize> = vec![0];
     let mut stream = Stream::from_reader(
         posted,
         Options {
@@ -408,57 +515,79 @@ pub fn verify_points<R: BufRead>(
                     rotary: [m.end[ix[3]], m.end[ix[4]]],
                 };
                 let pose = machine.forward(&j, head);
-                if k >= placed.len() {
-                    return Err(PostError::Verify(format!(
-                        "posted line {} feeds on after the last point",
-                        m.line
-                    )));
+                // Each live reading of the program so far (the next point to reach)
+                // takes this move: reaching that point moves it on; a move on the way to
+                // it (or the approach onto the first) keeps it. A point may be reached
+                // by more than one move (a piece of a segment within the tolerance of
+                // its end, then the end itself; repeated points), so every reading is
+                // kept until a move rules it out.
+                let mut next: Vec<usize> = Vec::with_capacity(live.len() + 1);
+                let mut best: Option<(f64, f64)> = None;
+                let mut miss: Option<String> = None;
+                for &k in live.iter().rev() {
+                    let Some(target) = placed.get(k) else {
+                        miss.get_or_insert_with(|| {
+                            format!("posted line {} feeds on after the last point", m.line)
+                        });
+                        continue;
+                    };
+                    let (d_tip, d_ax) = (
+                        (pose.tip - target.tip).norm(),
+                        angle(&pose.axis, &target.axis),
+                    );
+                    // Reached: the tip there and the axis too (a path may turn the axis
+                    // about a standing tip).
+                    let reached = d_tip <= tolerance && d_ax <= AXIS_TOLERANCE_DEG;
+                    if reached {
+                        next.push(k + 1);
+                        keep_best(&mut best, (d_tip, d_ax));
+                    }
+                    if k == 0 {
+                        // The approach onto the first point: straight down to it (it
+                        // ends once the point is reached).
+                        if !reached {
+                            next.push(0);
+                        }
+                        continue;
+                    }
+                    let a = &placed[k - 1];
+                    match on_segment(a, target, &pose.tip, &pose.axis, tolerance) {
+                        Some(e) => {
+                            next.push(k);
+                            keep_best(&mut best, e);
+                        }
+                        None if !reached => {
+                            miss.get_or_insert_with(|| {
+                                let (err, ang) = nearest_miss(a, target, &pose.tip, &pose.axis);
+                                format!("posted line {}: the tool is {err:.3e} and {ang:.3}° off the path between points on lines {} and {}", m.line, a.line, target.line)
+                            });
+                        }
+                        None => {}
+                    }
                 }
-                let target = &placed[k];
-                // A point is reached when the tip is there and the axis too (a path may
-                // turn the axis about a standing tip).
-                if (pose.tip - target.tip).norm() <= tolerance
-                    && angle(&pose.axis, &target.axis) <= AXIS_TOLERANCE_DEG
-                {
-                    let ang = angle(&pose.axis, &target.axis);
+                next.sort_unstable();
+                next.dedup();
+                if next.is_empty() {
+                    return Err(PostError::Verify(miss.unwrap_or_default()));
+                }
+                // Bounded work per move: the readings that have come furthest.
+                if next.len() > MAX_READINGS {
+                    next.drain(..next.len() - MAX_READINGS);
+                }
+                live = next;
+                if let Some((err, ang)) = best {
                     rep.compared += 1;
-                    rep.max_position_error =
-                        rep.max_position_error.max((pose.tip - target.tip).norm());
+                    if err > rep.max_position_error {
+                        rep.max_position_error = err;
+                        rep.worst_line = m.line;
+                    }
                     rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
-                    k += 1;
-                    continue;
                 }
-                if k == 0 {
-                    // The approach onto the first point: straight down to it.
-                    continue;
-                }
-                let a = &placed[k - 1];
-                let d = target.tip - a.tip;
-                let len2 = d.norm_squared();
-                let turn = angle(&a.axis, &target.axis);
-                let t = if len2 > 0.0 {
-                    ((pose.tip - a.tip).dot(&d) / len2).clamp(0.0, 1.0)
-                } else if turn > 0.0 {
-                    // The tip stands still: how far the axis has turned.
-                    (angle(&a.axis, &pose.axis) / turn).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                let err = (pose.tip - (a.tip + d * t)).norm();
-                let ang = angle(&pose.axis, &slerp(&a.axis, &target.axis, t));
-                if err > tolerance || ang > 10.0 * AXIS_TOLERANCE_DEG {
-                    return Err(PostError::Verify(format!("posted line {}: the tool is {err:.3e} and {ang:.3}° off the path between points on lines {} and {}", m.line, a.line, target.line)));
-                }
-                rep.compared += 1;
-                if err > rep.max_position_error {
-                    rep.max_position_error = err;
-                    rep.worst_line = m.line;
-                }
-                rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
             }
         }
     }
-    if k < placed.len() {
+    if !live.contains(&placed.len()) {
+        let k = live.last().copied().unwrap_or(0).min(placed.len() - 1);
         return Err(PostError::Verify(format!(
             "the posted program ends before the point on line {}",
             placed[k].line

@@ -379,10 +379,27 @@ pub(crate) fn arc_way(
             ccw: ccw_machine == (handed > 0.0),
         }
     } else {
-        let r = (step.start - center).norm().max(1e-12);
-        let seg_angle = 2.0 * (1.0 - (tolerance / r).min(1.0)).acos();
-        ArcWay::Chords(((sweep.abs() / seg_angle.max(1e-6)).ceil() as usize).clamp(1, 100_000))
+        ArcWay::Chords(chord_count(step, center, sweep, tolerance))
     }
+}
+
+/// The most chords one arc is written with. An arc that needs more within the chord
+/// tolerance (a helix of thousands of turns at a tilted index) is refused at its line:
+/// fewer chords would leave the path between their points.
+pub(crate) const MAX_CHORDS: usize = 100_000;
+
+/// Chords for an arc of `sweep` radians about `center` within the chord `tolerance`, at
+/// most [`MAX_CHORDS`] (see [`chords_needed`]).
+pub(crate) fn chord_count(step: &Step, center: &Vector3<f64>, sweep: f64, tolerance: f64) -> usize {
+    (chords_needed(step, center, sweep, tolerance).ceil() as usize).clamp(1, MAX_CHORDS)
+}
+
+/// How many chords keep an arc of `sweep` radians about `center` within the chord
+/// `tolerance` (not rounded up, not bounded).
+pub(crate) fn chords_needed(step: &Step, center: &Vector3<f64>, sweep: f64, tolerance: f64) -> f64 {
+    let r = (step.start - center).norm().max(1e-12);
+    let seg_angle = 2.0 * (1.0 - (tolerance / r).min(1.0)).acos();
+    sweep.abs() / seg_angle.max(1e-6)
 }
 
 /// How far a written point lands from the intended path (its check, see
@@ -416,6 +433,7 @@ pub(crate) fn post_steps<W: Write>(
     let mut need_approach = true;
     let mut retract_noted: Option<u32> = None;
     let mut arc_warned: Option<usize> = None;
+    let mut round_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     let mut count = 0usize;
     for batch in batches {
@@ -513,17 +531,63 @@ pub(crate) fn post_steps<W: Write>(
                         sweep,
                         cfg.tolerance,
                     );
-                    if let ArcWay::Kept { ccw } = way {
-                        w.arc(&step, &start, &end, &joints(&jm, &center), ccw, sweep, file)?;
-                    } else {
-                        if arc_warned != Some(step.section) {
-                            arc_warned = Some(step.section);
-                            w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                    let center_j = joints(&jm, &center);
+                    // An arc kept must read back as itself: one whose end rounds onto its
+                    // start (or past it) at the output resolution would read as a full
+                    // circle, or nearly one. It is written as chords instead.
+                    let n = match way {
+                        ArcWay::Kept { ccw }
+                            if w.arc_reads_back(
+                                &start,
+                                &end,
+                                &center_j,
+                                ccw,
+                                &joints(&jm, &step.at(0.5)),
+                            ) =>
+                        {
+                            w.arc(&step, &start, &end, &center_j, ccw, sweep, file)?;
+                            None
                         }
-                        let n = match way {
-                            ArcWay::Chords(n) => n,
-                            ArcWay::Kept { .. } => 1,
+                        ArcWay::Kept { .. } => {
+                            if round_warned != Some(step.section) {
+                                round_warned = Some(step.section);
+                                w.report.warnings.push(format!("{file}:{}: an arc that would not read back as itself at the output resolution (its end rounding onto or past its start reads as a full circle, or nearly one; or its radii as written beyond the control's arc tolerance) is written as chords", step.line));
+                            }
+                            Some(chord_count(&step, &center, sweep, cfg.tolerance))
+                        }
+                        ArcWay::Chords(n) => {
+                            if arc_warned != Some(step.section) {
+                                arc_warned = Some(step.section);
+                                w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                            }
+                            Some(n)
+                        }
+                    };
+                    if let Some(n) = n {
+                        // Chords follow the circle of the start's radius, and the last
+                        // one goes to the end: an end off that radius (LinuxCNC reads an
+                        // arc whose radii differ by up to 0.0028 in as a spiral) would
+                        // bend the last chord off the path by as much.
+                        let radial = |p: &Vector3<f64>| {
+                            let v = p - center;
+                            (v - normal * normal.dot(&v)).norm()
                         };
+                        let needed = chords_needed(&step, &center, sweep, cfg.tolerance);
+                        if needed > MAX_CHORDS as f64 {
+                            return Err(PostError::Unsupported {
+                                file: file.to_string(),
+                                line: step.line,
+                                what: format!("the arc needs {needed:.0} chords to stay within the chord tolerance {} at this table position, more than {MAX_CHORDS} (fewer would leave the path between them): split it, keep it in the index's plane, or post with a larger --tolerance", cfg.tolerance),
+                            });
+                        }
+                        let off = (radial(&step.end) - radial(&step.start)).abs();
+                        if off > cfg.tolerance {
+                            return Err(PostError::Unsupported {
+                                file: file.to_string(),
+                                line: step.line,
+                                what: format!("the arc's end is {off:.6} off the radius of its start, more than the chord tolerance {}: linearised at this table position, its chords would leave the path (write the arc's end on its circle, or post with a larger --tolerance)", cfg.tolerance),
+                            });
+                        }
                         // Planned on the reading thread (same table position), or solved
                         // here.
                         let chords = planned

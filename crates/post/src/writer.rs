@@ -7,6 +7,7 @@
 use std::io::Write;
 
 use lampost_gcode::emit::round_half_away;
+use lampost_gcode::interp::{ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE};
 use lampost_gcode::Emitter;
 use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Affine, Machine};
@@ -17,7 +18,7 @@ use crate::intended::Step;
 use crate::pipeline::HeightUsed;
 use crate::post::{
     axis_letters, check_height, code_words, emitter, index_maps, linear_scale, program_units,
-    write_header, PostConfig, PostReport, Process,
+    write_header, written_rotary, PostConfig, PostReport, Process,
 };
 use crate::safety::SafeHeights;
 
@@ -152,12 +153,16 @@ impl<'m, W: Write> Writer<'m, W> {
         y
     }
 
-    /// A height on the machine's Z grid, at or above `z`.
+    /// A height on the machine's Z grid and the output's resolution, at or above `z`: a
+    /// retract rounds toward safety, never below the height it must reach.
     fn up_on_grid(&self, z: f64) -> f64 {
-        match self.lin_snap[2] {
+        let z = match self.lin_snap[2] {
             Some(r) => (z / r).ceil() * r,
             None => z,
-        }
+        };
+        // Written as round_half_away(z·scale): a whole number of steps is written as it
+        // stands, so the ceiling of it is what the text says.
+        (z * self.scale).ceil() / self.scale
     }
 
     /// Rotaries on the machine's rotary grid.
@@ -262,15 +267,14 @@ impl<'m, W: Write> Writer<'m, W> {
         self.per_minute()?;
         let split = self.offset();
         self.report.split_points.push(split);
-        let from = self.rot.unwrap_or(near);
-        let over = self.heights.over_move(&from, &rot);
-        let at = self.heights.at(&rot);
-        self.heights_used.push(HeightUsed {
-            from,
-            to: rot,
-            over,
-            at,
-        });
+        // The heights over the table positions as written (0.001°), which is where the
+        // table goes and what `verify` checks: at a long reach the rounding of an angle
+        // moves the work's top by more than the output's step.
+        let from = written_rotary(&self.rot.unwrap_or(near)).0;
+        let to = written_rotary(&rot).0;
+        let over = self.heights.over_move(&from, &to);
+        let at = self.heights.at(&to);
+        self.heights_used.push(HeightUsed { from, to, over, at });
         self.safe = over;
         check_height(&self.heights, self.safe, file, line, &rot)?;
         self.lift(file, line)?;
@@ -351,6 +355,9 @@ impl<'m, W: Write> Writer<'m, W> {
         let rot = self.rot_on_grid(&[j[3], j[4]]);
         let j = &[x[0], x[1], x[2], rot[0], rot[1]];
         self.check(file, line, &x, &rot)?;
+        // An inverse-time feed of a move lasting years (a tiny per-point feed) would be
+        // written as F0: refused at its line.
+        located_feed(per_min.unwrap_or(feed), file, line)?;
         let mut w: Vec<(u8, f64)> = Vec::with_capacity(8);
         match per_min {
             Some(f) => {
@@ -381,7 +388,7 @@ impl<'m, W: Write> Writer<'m, W> {
         if self.rot != Some(rot) {
             // The table turned under the head: the safe height to lift to (at the end, or
             // before a re-index) is the one at this table position.
-            self.safe = self.heights.at(&rot);
+            self.safe = self.heights.at(&written_rotary(&rot).0);
         }
         self.rot = Some(rot);
         self.pos = Some(x);
@@ -391,6 +398,70 @@ impl<'m, W: Write> Writer<'m, W> {
         self.report.moves += 1;
         self.in_run = true;
         self.within_size(file, line)
+    }
+
+    /// Whether `G2`/`G3` (counter-clockwise in joint X/Y when `ccw`) from joints `start`
+    /// to `end` about `c`, as [`Writer::arc`] would write it, reads back as the intended
+    /// arc whose midpoint is at joints `mid`. A controller (and `verify`) starts the arc
+    /// where the head is as written, puts the centre at that plus the written I and J,
+    /// and reads a full circle when the written ends meet: an arc whose end rounds onto
+    /// its start, or past it, would read as a full circle or nearly one. The midpoint of
+    /// the arc as read must be within the check's tolerance of `mid`.
+    pub(crate) fn arc_reads_back(
+        &self,
+        start: &[f64; 3],
+        end: &[f64; 3],
+        c: &[f64; 3],
+        ccw: bool,
+        mid: &[f64; 3],
+    ) -> bool {
+        let (Some(sx), Some(sy)) = (self.written[0], self.written[1]) else {
+            return false;
+        };
+        let (end, c) = (self.on_grid(end), self.on_grid(c));
+        // In output steps, as the text gives them.
+        let q = |v: f64| round_half_away(v * self.scale);
+        let s = [sx as f64, sy as f64];
+        let e = [q(end[0]), q(end[1])];
+        let cc = [s[0] + q(c[0] - start[0]), s[1] + q(c[1] - start[1])];
+        let tau = std::f64::consts::TAU;
+        let a0 = (s[1] - cc[1]).atan2(s[0] - cc[0]);
+        let a1 = (e[1] - cc[1]).atan2(e[0] - cc[0]);
+        let read = if s == e {
+            tau
+        } else if ccw {
+            (a1 - a0).rem_euclid(tau)
+        } else {
+            (a0 - a1).rem_euclid(tau)
+        };
+        let r = (s[0] - cc[0]).hypot(s[1] - cc[1]);
+        // The control must accept it: the written radii within its arc tolerances
+        // (LinuxCNC's, which lampost's interpreter and `verify` apply). An arc at the
+        // edge of them in the input can pass them by the rounding of its end.
+        let r_end = (e[0] - cc[0]).hypot(e[1] - cc[1]);
+        let (spiral, zero) = match program_units(self.m) {
+            lampost_gcode::Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
+            lampost_gcode::Units::Mm => (ARC_SPIRAL_TOLERANCE.1, ARC_RADIUS_TOLERANCE.1),
+        };
+        let (r1, r2) = (r / self.scale, r_end / self.scale);
+        let diff = (r1 - r2).abs();
+        if r1 < zero
+            || r2 < zero
+            || diff > 100.0 * spiral
+            || (diff / r1.max(r2) > ARC_SPIRAL_RELATIVE && diff > spiral)
+        {
+            return false;
+        }
+        let am = if ccw {
+            a0 + read / 2.0
+        } else {
+            a0 - read / 2.0
+        };
+        let (mx, my) = (
+            (cc[0] + r * am.cos()) / self.scale,
+            (cc[1] + r * am.sin()) / self.scale,
+        );
+        (mx - mid[0]).hypot(my - mid[1]) <= self.feed_check.tol
     }
 
     /// An arc kept as an arc (its plane is the machine's XY plane): `G2`/`G3` from joints
@@ -409,6 +480,7 @@ impl<'m, W: Write> Writer<'m, W> {
     ) -> Result<(), PostError> {
         let g = if ccw { 3.0 } else { 2.0 };
         let (end, c) = (&self.on_grid(end), &self.on_grid(c));
+        located_feed(step.feed, file, step.line)?;
         let rot_now = self.rot.unwrap_or([0.0; 2]);
         self.check(file, step.line, end, &rot_now)?;
         // Travel limits along the arc: its extreme points in X and Y.
@@ -669,6 +741,9 @@ impl<'m, W: Write> Writer<'m, W> {
             self.pos = Some(*x);
             return Ok(());
         }
+        if let Some(f) = feed {
+            located_feed(f, file, line)?;
+        }
         if n == 0 && g == 1.0 {
             // A feed to where the head is (as written): keep one axis so the block moves
             // (after the feed word, as posts have always written it).
@@ -677,9 +752,6 @@ impl<'m, W: Write> Writer<'m, W> {
             v.push((self.letters[0], x[0]));
             self.move_words(&v, file, line)?;
         } else {
-            if let Some(f) = feed {
-                feed_writable(f)?;
-            }
             self.em
                 .motion(g, &w[..n], self.scale, feed)
                 .map_err(|e| at_line(e, file, line))?;
@@ -742,6 +814,15 @@ fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
     }
 }
 
+/// [`feed_writable`] for a feed of a move from input line `line`: refused at that line.
+fn located_feed(f: f64, file: &str, line: u32) -> Result<(), PostError> {
+    feed_writable(f).map_err(|e| PostError::OutOfRange {
+        file: file.to_string(),
+        line,
+        what: e.to_string(),
+    })
+}
+
 /// A feed is written with 5 decimals: one that rounds to `F0` (a feed of 1e-300 in the
 /// input, or an inverse-time feed of a move lasting years) would be a program the
 /// controller refuses or runs at no feed, and `verify` refuses it (found by `cargo xtask
@@ -753,4 +834,95 @@ fn feed_writable(f: f64) -> Result<(), PostError> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::intended::IntendedOptions;
+    use crate::post::PostDialect;
+    use crate::safety::WorkBounds;
+    use nalgebra::Vector3;
+
+    fn cfg() -> PostConfig {
+        PostConfig {
+            head: 0,
+            process: Process::Deposit { power: 100.0 },
+            dialect: PostDialect::Iso,
+            renumber: None,
+            tolerance: 0.0005,
+            intended: IntendedOptions {
+                convert_units: false,
+                e_extrusion: false,
+                flavor: lampost_gcode::Flavor::Fadal,
+                units: None,
+            },
+            near: [0.0, 0.0],
+            program_number: 1000,
+            header: vec!["t".into()],
+            verify_tolerance: 0.001,
+            work: None,
+            part: None,
+            max_output_bytes: None,
+        }
+    }
+
+    /// A retract goes to a height at or above the safe one as written: Z rounds up to
+    /// the output step (class (c) of the post fuzz target: retracts one step low).
+    #[test]
+    fn a_retract_rounds_up_to_the_output_step() {
+        let text = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../fixtures/machines/xyzac-trt.toml"),
+        )
+        .expect("machine file");
+        let def =
+            lampost_kinematics::MachineDef::from_toml(&text, "xyzac-trt.toml").expect("reads");
+        let m = Machine::new(def, &[]).expect("machine");
+        let c = cfg();
+        let heights = SafeHeights::new(&m, 0, WorkBounds::empty()).expect("heights");
+        let mut w = Writer::new(&m, &c, heights, Vec::new()).expect("writer");
+        let step = 1.0 / w.scale;
+        for safe in [30.0004, 30.00001, 30.000_000_001, 30.0] {
+            w.safe = safe;
+            w.pos = Some([1.0, 2.0, 0.0]);
+            w.written = [Some(1000), Some(2000), Some(0)];
+            w.lift("t", 1).expect("lift");
+            let z = w.pos.expect("lifted")[2];
+            let written = w.written[2].expect("written") as f64 * step;
+            assert!(written >= safe - 1e-12, "safe {safe}: written {written}");
+            assert!(written < safe + step, "safe {safe}: written {written}");
+            assert_eq!(
+                round_half_away(z * w.scale) as i64,
+                w.written[2].expect("z")
+            );
+        }
+    }
+
+    /// The safe heights of an index are those of the table positions as written (0.001°):
+    /// at a long reach the unwritten digits of an angle move the work's top by more than
+    /// an output step (class (c): a sweep checked by `verify` 1e-4 too low).
+    #[test]
+    fn index_heights_are_those_of_the_written_table_positions() {
+        let m = Machine::builtin("fadal-lamp", &[]).expect("machine");
+        let mut work = WorkBounds::empty();
+        work.add_points([Vector3::new(20.0, 3.0, 0.5), Vector3::new(-5.0, 18.0, 0.2)]);
+        let heights = SafeHeights::new(&m, 0, work.clone()).expect("heights");
+        let check = SafeHeights::new(&m, 0, work).expect("heights");
+        let c = cfg();
+        let mut w = Writer::new(&m, &c, heights, Vec::new()).expect("writer");
+        w.rot = Some([-67.885_37, 25.361_64]);
+        w.index([105.000_4, -24.999_6], [0.0, 0.0], "t", 1)
+            .expect("index");
+        let used = w.heights_used.last().expect("a height used");
+        assert_eq!(used.from, [-67.885, 25.362]);
+        assert_eq!(used.to, [105.0, -25.0]);
+        assert_eq!(
+            used.over.to_bits(),
+            check
+                .over_move(&[-67.885, 25.362], &[105.0, -25.0])
+                .to_bits()
+        );
+        assert_eq!(w.safe.to_bits(), check.at(&[105.0, -25.0]).to_bits());
+    }
 }
