@@ -13,7 +13,7 @@
 //! Only lines that are not plain words come here (the parser's macro lines, and lines it
 //! refuses, which `IF`, `WHILE`, `GOTO`, `DO` and `END` lines are), plus blocks with G65:
 //! a program without macros keeps the parser's fast path. Jumps are followed by
-//! [`crate::ProgramReader`] (see [`Control`]): the file's `N` labels, `WHILE`/`DO`/`END`
+//! [`crate::ProgramReader`] (see `Control`): the file's `N` labels, `WHILE`/`DO`/`END`
 //! lines and `O` lines are indexed once, offsets only, at the first control line.
 //!
 //! Bounds: `G65` calls nest at most [`MAX_MACRO_DEPTH`] deep (Fanuc's four levels);

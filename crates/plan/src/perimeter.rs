@@ -6,7 +6,7 @@
 //! axis turns gradually around the loop instead of jumping at every face edge. Points are
 //! then spaced to at most a chord length and a tool-axis turn.
 //!
-//! Sign: with outward normals and loops oriented as [`crate::slice`] orients them (outer
+//! Sign: with outward normals and loops oriented as [`crate::slice()`] orients them (outer
 //! boundaries counter-clockwise about the build direction, holes clockwise), `normal ×
 //! traversal` points along the build direction on a wall parallel to it: the tool axis
 //! (from the tip into the head) points up the build, the laser comes down onto the
