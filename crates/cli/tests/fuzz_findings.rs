@@ -336,3 +336,31 @@ fn a_kept_arc_must_pass_the_controls_arc_tolerance_as_written() {
         .expect("posts as chords");
     assert!(!text.contains("G3") && !text.contains("G2 "), "{text}");
 }
+
+/// An arm file whose shoulder-to-elbow length is 0 (PUMA twists, no closed form even
+/// with its small offsets zeroed) built its approximating arm from itself for ever: a
+/// stack overflow (found by `cargo xtask fuzz`, seed 2027). Now it posts or refuses, with
+/// a message, never an abort.
+#[test]
+fn an_arm_with_no_upper_arm_is_refused_not_a_stack_overflow() {
+    let dir = tempdir("arm-a0");
+    let text = std::fs::read_to_string(root().join("fixtures/machines/puma-lens.toml"))
+        .expect("puma-lens");
+    assert!(text.contains("a = 431.8"));
+    let arm = dir.join("arm.toml");
+    std::fs::write(&arm, text.replacen("a = 431.8", "a = 0", 1)).expect("write");
+    let path = root().join("fixtures/post/tilted-arc.csv");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        arm.to_str().expect("utf8"),
+        path.to_str().expect("utf8"),
+        "-o",
+        dir.join("out").to_str().expect("utf8"),
+    ]);
+    assert!(o.status.code().is_some(), "killed by a signal: {o:?}");
+    assert!(matches!(o.status.code(), Some(0..=2)), "{}", stderr(&o));
+    if !o.status.success() {
+        assert!(stderr(&o).contains("error:"), "{}", stderr(&o));
+    }
+}

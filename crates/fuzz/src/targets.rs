@@ -1433,10 +1433,12 @@ fn numeric(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Re
                     return Ok(());
                 }
             };
-            // A design that cannot fix R reports its condition as infinite (the CLI
-            // prints "n/a"): a documented sentinel, not a number gone wrong.
+            // A singular design reports its condition as infinite (the CLI prints "n/a",
+            // JSON null): a documented sentinel, not a number gone wrong — also under
+            // Method I, whose sphere can fix R where Method III's design is singular
+            // (found by the long run, seed 2027).
             let shown = res.clone().map(|mut p| {
-                if p.r.is_none() && p.condition == f64::INFINITY {
+                if p.condition == f64::INFINITY {
                     p.condition = 0.0;
                 }
                 p

@@ -303,7 +303,12 @@ impl Arm {
         let scale = links.iter().map(|l| l.a.abs() + l.d.abs()).sum::<f64>();
         let puma_twists =
             deg[0] == 90.0 && deg[1] == 0.0 && deg[2] == -90.0 && deg[3] == 90.0 && deg[4] == -90.0;
-        let approx = (!closed_form && puma_twists)
+        // The nearest closed-form arm (the small offsets zeroed) seeds the numerical
+        // solver; it exists only when the lengths the closed form needs are there (else
+        // zeroing would give the same arm again, and building it would recurse for ever:
+        // found by `cargo xtask fuzz` on an arm file with a = 0).
+        let zeroed_closes = links[1].a != 0.0 && links[2].a.hypot(links[3].d) > 0.0;
+        let approx = (!closed_form && puma_twists && zeroed_closes)
             .then(|| {
                 let mut d = def.clone();
                 d.joint[0].a = 0.0;
