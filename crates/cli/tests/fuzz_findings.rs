@@ -364,3 +364,18 @@ fn an_arm_with_no_upper_arm_is_refused_not_a_stack_overflow() {
         assert!(stderr(&o).contains("error:"), "{}", stderr(&o));
     }
 }
+
+/// `fmt --renumber` put an N word before a grbl console line (`N1 $ …`), which does not
+/// read back (found by the long fuzz run, seed 2027): console lines stay unnumbered.
+#[test]
+fn renumbering_leaves_console_lines_unnumbered() {
+    let o = lampost_stdin(
+        &["fmt", "-", "--renumber", "10,10"],
+        b"$H\nG0 X1 Y2\n$ (call) G59.3\nG1 X3 F100\n",
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(out, "$H\nN10 G0 X1 Y2\n$ (call) G59.3\nN20 G1 X3 F100\n");
+    let back = lampost_stdin(&["check", "-"], out.as_bytes());
+    assert!(back.status.success(), "{}", stderr(&back));
+}

@@ -830,7 +830,14 @@ impl<W: Write> Emitter<W> {
         if b.block_delete {
             self.line.push(b'/');
         }
-        let numbered = self.opts.renumber.is_some() && b.has_words() && b.word(b'O').is_none();
+        // A grbl console line (`$H`, `$$`, `?`) is the line's own start: no N before it
+        // (`N1 $…` does not read back; found by the long fuzz run, seed 2027).
+        let console = matches!(
+            b.items.first(),
+            Some(crate::ast::Item::Text(t)) if t.text.starts_with(['$', '?'])
+        );
+        let numbered =
+            self.opts.renumber.is_some() && b.has_words() && b.word(b'O').is_none() && !console;
         if numbered {
             if let Err(next) = self.push_number() {
                 let kind = self.renumber_error(next);
