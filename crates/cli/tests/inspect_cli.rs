@@ -11,22 +11,31 @@ const R: f64 = 20.0;
 const C: [f64; 3] = [0.0, 0.0, -10.0];
 const H: f64 = 150.0;
 
-fn dome(dir: &std::path::Path) -> std::path::PathBuf {
+/// Points on a sphere cap (centre `c`, radius `r`) with their outward normals, at the
+/// polar angles `tilts` (degrees) and `per_ring` azimuths each (one at the pole), as a
+/// point file `x y z i j k` in `dir`.
+fn cap(
+    dir: &std::path::Path,
+    c: [f64; 3],
+    r: f64,
+    tilts: &[i32],
+    per_ring: i32,
+) -> std::path::PathBuf {
     let mut s = String::from("x y z i j k\n");
-    for t in (0..=60).step_by(15) {
+    for &t in tilts {
         let az: Vec<i32> = if t == 0 {
             vec![0]
         } else {
-            (0..360).step_by(60).collect()
+            (0..per_ring).map(|k| k * 360 / per_ring).collect()
         };
         for a in az {
             let (th, ph) = (f64::from(t).to_radians(), f64::from(a).to_radians());
             let n = [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()];
             s.push_str(&format!(
                 "{} {} {} {} {} {}\n",
-                C[0] + R * n[0],
-                C[1] + R * n[1],
-                C[2] + R * n[2],
+                c[0] + r * n[0],
+                c[1] + r * n[1],
+                c[2] + r * n[2],
                 n[0],
                 n[1],
                 n[2]
@@ -36,6 +45,11 @@ fn dome(dir: &std::path::Path) -> std::path::PathBuf {
     let p = dir.join("dome.txt");
     std::fs::write(&p, s).expect("write");
     p
+}
+
+/// The NRC dome: 25 points, polar angles 0–60° by 15°, six azimuths a ring.
+fn dome(dir: &std::path::Path) -> std::path::PathBuf {
+    cap(dir, C, R, &[0, 15, 30, 45, 60], 6)
 }
 
 fn ok(o: &std::process::Output) -> String {
@@ -407,29 +421,7 @@ fn touch_probe_inspection_on_the_fadal() {
     let (r0, c0) = (1.0, [0.0, 0.0, 0.5]);
     let stylus = 0.0625;
     let dir = tempdir("inspect-fadal");
-    let mut s = String::from("x y z i j k\n");
-    for t in [0, 30, 60] {
-        let az: Vec<i32> = if t == 0 {
-            vec![0]
-        } else {
-            vec![0, 90, 180, 270]
-        };
-        for a in az {
-            let (th, ph) = (f64::from(t).to_radians(), f64::from(a).to_radians());
-            let n = [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()];
-            s.push_str(&format!(
-                "{} {} {} {} {} {}\n",
-                c0[0] + r0 * n[0],
-                c0[1] + r0 * n[1],
-                c0[2] + r0 * n[2],
-                n[0],
-                n[1],
-                n[2]
-            ));
-        }
-    }
-    let pts = dir.join("dome.txt");
-    std::fs::write(&pts, s).expect("w");
+    let pts = cap(&dir, c0, r0, &[0, 30, 60], 4);
     let (plan, prog) = (dir.join("dome.plan"), dir.join("dome.nc"));
     ok(&lampost(&[
         "inspect",
