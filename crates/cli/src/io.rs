@@ -32,37 +32,35 @@ fn cannot_open(path: &str, e: &io::Error) -> CliError {
 }
 
 /// Open `path` for reading and seeking (programs with subprograms are read out of
-/// order). Standard input (`-`), or a pipe given by name, is first copied to a temporary
-/// file that has no name (removed as soon as it is open), so memory stays flat.
+/// order). Standard input (`-`), or a pipe given by name, is first copied by [`spool`]
+/// to a temporary file that is removed as soon as it is open, so memory stays flat.
 pub fn open_seekable(path: &str) -> Result<Box<dyn ReadSeek>, CliError> {
-    let mut source: Box<dyn Read> = if path == "-" {
-        Box::new(io::stdin().lock())
-    } else {
+    if path != "-" {
         let f = File::open(path).map_err(|e| cannot_open(path, &e))?;
         if f.metadata().is_ok_and(|m| m.is_file()) {
             return Ok(Box::new(f));
         }
-        Box::new(f)
+    }
+    let temp = spool(path)?;
+    let f = File::open(temp.path())
+        .map_err(|e| CliError::usage(format!("error: cannot read {}: {e}", display_name(path))))?;
+    Ok(Box::new(f)) // `temp` is dropped: the file loses its name, the handle stays
+}
+
+/// Copy standard input (`-`) or a pipe given by name to a temporary file that lives as
+/// long as the returned value, for readers that open their input more than once (the
+/// post reads a program, then verifies it). Memory stays flat at any size.
+pub fn spool(path: &str) -> Result<TempFile, CliError> {
+    let mut source: Box<dyn Read> = if path == "-" {
+        Box::new(io::stdin().lock())
+    } else {
+        Box::new(File::open(path).map_err(|e| cannot_open(path, &e))?)
     };
-    let mut spool = || -> io::Result<File> {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let name =
-            std::env::temp_dir().join(format!(".lampost-stdin-{}-{nanos}.tmp", std::process::id()));
-        let mut f = fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create_new(true)
-            .open(&name)?;
-        let _ = fs::remove_file(&name);
-        copy_text(&mut source, &mut f)?;
-        f.seek(SeekFrom::Start(0))?;
-        Ok(f)
-    };
-    spool()
-        .map(|f| Box::new(f) as Box<dyn ReadSeek>)
-        .map_err(|e| CliError::usage(format!("error: cannot read {}: {e}", display_name(path))))
+    let (temp, mut f) = TempFile::in_temp_dir("stdin")?;
+    copy_text(&mut source, &mut f)
+        .and_then(|_| f.flush())
+        .map_err(|e| CliError::usage(format!("error: cannot read {}: {e}", display_name(path))))?;
+    Ok(temp)
 }
 
 /// Copy `from` to `to`, stopping with an error at [`MAX_NUL_RUN`] NUL bytes in a row:
@@ -262,6 +260,15 @@ impl TempFile {
         let name = target
             .and_then(|t| Path::new(t).file_name())
             .map_or_else(|| "stdout".into(), |n| n.to_string_lossy().into_owned());
+        Self::create(&dir, &name)
+    }
+
+    /// A new, empty temporary file in the temporary folder, its name made from `name`.
+    pub fn in_temp_dir(name: &str) -> Result<(TempFile, File), CliError> {
+        Self::create(&std::env::temp_dir(), name)
+    }
+
+    fn create(dir: &Path, name: &str) -> Result<(TempFile, File), CliError> {
         let mut k = 0u32;
         loop {
             let path = dir.join(format!(".{name}.{}.{k}.tmp", std::process::id()));

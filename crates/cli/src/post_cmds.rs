@@ -10,7 +10,7 @@ use lampost_post::{
     Section, Source,
 };
 
-use crate::io::display_name;
+use crate::io::{display_name, TempFile};
 use crate::json::{self, obj, Obj};
 use crate::kin_cmds::{load_machine, vector};
 use crate::report::CliError;
@@ -278,20 +278,21 @@ fn setup_frame(path: &str) -> Result<Frame, CliError> {
     lampost_post::read_setup(&text, path).map_err(post_error)
 }
 
-fn source(input: &str) -> Result<Source, CliError> {
-    if input == "-" {
-        let mut b = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::stdin(), &mut b)
-            .map_err(|e| CliError::usage(format!("error: cannot read standard input: {e}\n")))?;
-        Ok(Source::Bytes(b))
-    } else {
-        if !Path::new(input).is_file() {
-            return Err(CliError::usage(format!(
-                "error: cannot open {input}\n  = help: check the path; use - for standard input\n"
-            )));
-        }
-        Ok(Source::Path(PathBuf::from(input)))
+/// The program INPUT names. Standard input (`-`) or a pipe is spooled to a temporary
+/// file, returned beside it, that must live while the post reads (it reads the program
+/// again to verify), so memory stays flat at any size.
+fn source(input: &str) -> Result<(Source, Option<TempFile>), CliError> {
+    let path = Path::new(input);
+    if input == "-" || crate::io::is_special(path) {
+        let temp = crate::io::spool(input)?;
+        return Ok((Source::Path(temp.path().to_path_buf()), Some(temp)));
     }
+    if !path.is_file() {
+        return Err(CliError::usage(format!(
+            "error: cannot open {input}\n  = help: check the path; use - for standard input\n"
+        )));
+    }
+    Ok((Source::Path(PathBuf::from(input)), None))
 }
 
 /// The flavour of the sections' programs: given, or for `auto` decided from the first
@@ -330,12 +331,14 @@ fn intended_options(pl: &Placement, secs: &[Section]) -> Result<IntendedOptions,
     })
 }
 
-/// Build the sections from the placement options and INPUT.
+/// Build the sections from the placement options and INPUT, with the temporary file
+/// that holds INPUT when it is standard input or a pipe (keep it while the sections
+/// are read).
 pub fn sections(
     m: &Machine,
     pl: &Placement,
     input: Option<&str>,
-) -> Result<Vec<Section>, CliError> {
+) -> Result<(Vec<Section>, Option<TempFile>), CliError> {
     let chosen = [pl.index.is_some(), pl.setup.is_some(), pl.job.is_some()]
         .iter()
         .filter(|x| **x)
@@ -438,7 +441,7 @@ pub fn sections(
                 "error: {job} has no [[section]]\n"
             )));
         }
-        return Ok(out);
+        return Ok((out, None));
     }
     let input = input
         .ok_or_else(|| CliError::usage("error: give the INPUT program (or --job)\n".to_string()))?;
@@ -447,13 +450,15 @@ pub fn sections(
         (None, Some(st)) => (setup_frame(st)?, Orient::ToolAxis),
         _ => (Frame::translation(origin), Orient::ToolAxis),
     };
-    Ok(vec![Section {
+    let (source, spool) = source(input)?;
+    let section = Section {
         name: display_name(input),
-        source: source(input)?,
+        source,
         frame,
         orient,
         layers,
-    }])
+    };
+    Ok((vec![section], spool))
 }
 
 /// Options of `lampost post`.
@@ -733,7 +738,7 @@ pub fn post(
         .map_err(post_error)?;
         (report, cfg)
     } else {
-        let secs = sections(&m, &a.place, input)?;
+        let (secs, _spool) = sections(&m, &a.place, input)?;
         let cfg = config(&m, a, &secs)?;
         let bar = crate::progress::Progress::counting("posting", "moves", a.place.quiet);
         // The post verifies every written feed point in-process (FK of the values as
@@ -981,7 +986,7 @@ pub fn verify(
         )
         .map_err(located)?
     } else {
-        let secs = sections(&m, place, input)?;
+        let (secs, _spool) = sections(&m, place, input)?;
         let opts = intended_options(place, &secs)?;
         let work = extra_work(place, part.as_deref())?;
         lampost_post::verify(&m, &secs, h, opts, f, tol, work.as_ref(), part.as_deref())

@@ -216,3 +216,43 @@ fn renumbering_refuses_to_pass_the_largest_n() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("N99995 X3.000"));
 }
+
+#[test]
+fn post_and_verify_spool_a_program_from_a_pipe_instead_of_holding_it() {
+    // 150 MB through a pipe under 100 MB of address space: the post reads its input
+    // twice (posting, then verifying what it wrote), so standard input goes to a
+    // temporary file, never into memory (it was read whole: "out of memory").
+    let dir = tempdir("spool-stdin");
+    let out = dir.join("o.nc");
+    let tmp = dir.join("tmp");
+    std::fs::create_dir_all(&tmp).unwrap();
+    let gen = "{ printf 'G21 G90\\nG0 X0 Y0 Z5\\nG1 Z0 F500\\nG1 X10\\nG1 Y10\\nM30\\n'; yes '(a comment line that pads the program to many megabytes)' | head -n 2600000; }";
+    let o = limited(
+        &format!(
+            "{gen} | TMPDIR={} timeout $TIMEOUT \"$LAMPOST\" post --machine nrc-lc --index B=30,C=45 - -o {}",
+            tmp.display(),
+            out.display()
+        ),
+        100_000,
+        60,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        posted.contains("B30.") && posted.contains("C45."),
+        "{posted}"
+    );
+    let o = limited(
+        &format!(
+            "{gen} | TMPDIR={} timeout $TIMEOUT \"$LAMPOST\" verify --machine nrc-lc --index B=30,C=45 - {}",
+            tmp.display(),
+            out.display()
+        ),
+        100_000,
+        60,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // The spooled copy is gone once the command ends.
+    let left: Vec<_> = std::fs::read_dir(&tmp).unwrap().flatten().collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
