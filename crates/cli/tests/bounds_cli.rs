@@ -225,7 +225,7 @@ fn post_and_verify_spool_a_program_from_a_pipe_instead_of_holding_it() {
     let dir = tempdir("spool-stdin");
     let out = dir.join("o.nc");
     let tmp = dir.join("tmp");
-    std::fs::create_dir_all(&tmp).unwrap();
+    std::fs::create_dir_all(&tmp).expect("temp dir");
     let gen = "{ printf 'G21 G90\\nG0 X0 Y0 Z5\\nG1 Z0 F500\\nG1 X10\\nG1 Y10\\nM30\\n'; yes '(a comment line that pads the program to many megabytes)' | head -n 2600000; }";
     let o = limited(
         &format!(
@@ -237,7 +237,7 @@ fn post_and_verify_spool_a_program_from_a_pipe_instead_of_holding_it() {
         60,
     );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let posted = std::fs::read_to_string(&out).unwrap();
+    let posted = std::fs::read_to_string(&out).expect("posted");
     assert!(
         posted.contains("B30.") && posted.contains("C45."),
         "{posted}"
@@ -253,6 +253,6 @@ fn post_and_verify_spool_a_program_from_a_pipe_instead_of_holding_it() {
     );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // The spooled copy is gone once the command ends.
-    let left: Vec<_> = std::fs::read_dir(&tmp).unwrap().flatten().collect();
+    let left: Vec<_> = std::fs::read_dir(&tmp).expect("temp dir").flatten().collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
