@@ -665,6 +665,14 @@ enum Command {
         /// Write JSON.
         #[arg(long)]
         json: bool,
+        /// Also draw the posted path as SVG, each feed coloured by its deviation from
+        /// the intended path (green 0, red at the tolerance). Written also when the
+        /// check fails, up to where it stopped.
+        #[arg(long, value_name = "FILE.svg")]
+        preview: Option<String>,
+        /// The preview's view: top (part XY) or iso.
+        #[arg(long, default_value = "top")]
+        view: String,
     },
     /// Calibrate the rotary centre (R), the axis lines, and the laser offset (L).
     Calibrate {
@@ -914,8 +922,16 @@ fn run(cli: Cli) -> Result<(), CliError> {
             tolerance,
             input,
             json,
+            preview,
+            view,
         } => {
             if let Some(arm) = robot_cmds::arm_for(&machine)? {
+                if preview.is_some() {
+                    return Err(CliError::usage(format!(
+                        "error: --preview draws table machines' programs; {} is an arm\n",
+                        arm.name
+                    )));
+                }
                 if !set.is_empty() || head.is_some() {
                     return Err(CliError::usage(format!(
                         "error: --set and --head are for table machines; {} is an arm (its settings are in its file)\n",
@@ -959,6 +975,8 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 &posted,
                 tolerance,
                 json,
+                preview.as_deref(),
+                &view,
             )
         }
         Command::Calibrate {

@@ -886,7 +886,42 @@ fn preview_files(
     let p = lampost_post::preview::replay(m, head, f)
         .map_err(|e| post_error(crate::posted::locate(posted, e)))?;
     let title = format!("{} on {}", posted.join(", "), m.def.name);
-    let text = lampost_post::preview::svg(m, head, &p, view, &title, deposit);
+    let text = lampost_post::preview::svg(
+        m,
+        head,
+        &p,
+        view,
+        &title,
+        deposit,
+        lampost_post::preview::Colouring::Position,
+    );
+    let mut o = crate::io::Output::create(Some(out))?;
+    o.writer().write_all(text.as_bytes()).map_err(werr)?;
+    o.commit()
+}
+
+/// `verify --preview`: the posted files drawn with each feed coloured by its deviation.
+#[allow(clippy::too_many_arguments)]
+fn deviation_preview(
+    m: &Machine,
+    head: usize,
+    posted: &[String],
+    out: &str,
+    deposit: bool,
+    view: lampost_post::preview::View,
+    errors: &std::collections::HashMap<u32, f64>,
+    tolerance: f64,
+) -> Result<(), CliError> {
+    let f = crate::posted::open(posted)?;
+    let p = lampost_post::preview::replay(m, head, f)
+        .map_err(|e| post_error(crate::posted::locate(posted, e)))?;
+    let title = format!(
+        "{} on {}: deviation from the intended path",
+        posted.join(", "),
+        m.def.name
+    );
+    let colouring = lampost_post::preview::Colouring::Deviation { errors, tolerance };
+    let text = lampost_post::preview::svg(m, head, &p, view, &title, deposit, colouring);
     let mut o = crate::io::Output::create(Some(out))?;
     o.writer().write_all(text.as_bytes()).map_err(werr)?;
     o.commit()
@@ -958,8 +993,11 @@ pub fn verify(
     posted: &[String],
     tolerance: Option<f64>,
     json: bool,
+    preview: Option<&str>,
+    view: &str,
 ) -> Result<(), CliError> {
     let t0 = std::time::Instant::now();
+    let view = view_arg(view)?;
     let m = load_machine(machine, sets)?;
     let head_name = default_head(&m, process, head);
     let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
@@ -972,10 +1010,18 @@ pub fn verify(
     let located = |e| post_error(crate::posted::locate(posted, e));
     let part = part_mesh(place, &m)?;
     let bar = crate::progress::Progress::working("verifying", place.quiet);
-    let v = if is_per_point(place, input) {
+    // Posted line → the largest deviation of a point it wrote, for `--preview`.
+    let mut errors: std::collections::HashMap<u32, f64> = std::collections::HashMap::new();
+    let mut record = |line: u32, e: f64| {
+        if preview.is_some() {
+            let v = errors.entry(line).or_insert(0.0);
+            *v = v.max(e);
+        }
+    };
+    let checked = if is_per_point(place, input) {
         let (frame, mut pts, name) = per_point_input(place, input.unwrap_or("-"))?;
         per_point_units(&m, place, &name, &mut pts)?;
-        lampost_post::pointwise::verify_points(
+        lampost_post::pointwise::verify_points_traced(
             &m,
             &pts,
             &frame,
@@ -983,15 +1029,38 @@ pub fn verify(
             f,
             tol,
             extra_work(place, None)?.as_ref(),
+            &mut record,
         )
-        .map_err(located)?
     } else {
         let (secs, _spool) = sections(&m, place, input)?;
         let opts = intended_options(place, &secs)?;
         let work = extra_work(place, part.as_deref())?;
-        lampost_post::verify(&m, &secs, h, opts, f, tol, work.as_ref(), part.as_deref())
-            .map_err(located)?
+        lampost_post::verify_traced(
+            &m,
+            &secs,
+            h,
+            opts,
+            f,
+            tol,
+            work.as_ref(),
+            part.as_deref(),
+            &mut record,
+        )
     };
+    if let Some(svg) = preview {
+        // Drawn whether or not the check passed: a failed check's picture shows how far
+        // it got and how close the path was until then.
+        let drawn = deviation_preview(&m, h, posted, svg, process == "deposit", view, &errors, tol);
+        match (&checked, drawn) {
+            (_, Ok(())) if !place.quiet => eprintln!("preview: {svg}"),
+            (Ok(_), Err(e)) => return Err(e),
+            (Err(_), Err(e)) if !place.quiet => {
+                eprint!("{}", e.message);
+            }
+            _ => {}
+        }
+    }
+    let v = checked.map_err(located)?;
     drop(bar);
     let s = if json {
         format!(

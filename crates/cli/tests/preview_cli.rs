@@ -157,3 +157,152 @@ fn a_preview_that_cannot_be_written_leaves_the_program() {
     let o = seat(&dir, &["--preview", "y.svg", "--view", "side"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+const PATCH: &str = "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG1 X1.\nG1 Y0.5\nG2 X0.5 Y1. I-0.5 J0\nG1 X0\nG1 Y0\nG0 Z0.2\nM30\n";
+const PLACE: [&str; 6] = [
+    "--machine",
+    "fadal-lamp",
+    "--index",
+    "A=0,B=-20",
+    "--origin",
+    "0,0,1",
+];
+
+fn posted_patch(dir: &std::path::Path) -> (String, String) {
+    let input = dir.join("patch.nc");
+    std::fs::write(&input, PATCH).expect("input");
+    let out = dir.join("patch.out.nc");
+    let mut args = vec!["post"];
+    args.extend_from_slice(&PLACE);
+    let (i, o) = (
+        input.to_str().expect("utf8").to_string(),
+        out.to_str().expect("utf8").to_string(),
+    );
+    args.extend_from_slice(&[&i, "-o", &o]);
+    let r = lampost(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    (i, o)
+}
+
+/// The deviation lines of a `verify --preview` picture: (posted line, error).
+fn deviations(svg: &str) -> Vec<(u32, Option<f64>, String)> {
+    let doc = roxmltree::Document::parse(svg).expect("well-formed SVG");
+    doc.descendants()
+        .filter(|n| {
+            n.has_tag_name("line")
+                && n.attribute("class")
+                    .is_some_and(|c| c.split(' ').any(|w| w == "deviation"))
+        })
+        .map(|n| {
+            (
+                n.attribute("data-line").expect("line").parse().expect("n"),
+                n.attribute("data-error").expect("error").parse().ok(),
+                n.attribute("stroke").expect("stroke").to_string(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn verify_preview_colours_the_path_by_its_deviation() {
+    let dir = tempdir("verify-preview");
+    let (input, out) = posted_patch(&dir);
+    let svg = dir.join("dev.svg");
+    let mut args = vec!["verify"];
+    args.extend_from_slice(&PLACE);
+    let s = svg.to_str().expect("utf8").to_string();
+    args.extend_from_slice(&[&input, &out, "--preview", &s]);
+    let r = lampost(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let text = std::fs::read_to_string(&svg).expect("svg");
+    let devs = deviations(&text);
+    assert!(devs.len() > 30, "{}", devs.len());
+    // Every compared point is within the tolerance (0.001 in), and its colour is on the
+    // ramp: red channel 26 at 0 to 254 at half the tolerance, then 254 down to 215 at it.
+    for (line, e, stroke) in &devs {
+        if let Some(e) = e {
+            assert!(*e <= 0.001, "line {line}: {e}");
+            let red = f64::from(u8::from_str_radix(&stroke[1..3], 16).expect("hex"));
+            let t = e / 0.001;
+            let want = if t < 0.5 {
+                26.0 + 228.0 * 2.0 * t
+            } else {
+                254.0 - 39.0 * (2.0 * t - 1.0)
+            };
+            assert!((red - want).abs() <= 1.0, "{line}: {stroke} for {e}");
+        }
+    }
+    assert!(text.contains("deviation-legend"));
+
+    // One coordinate of a feed moved by 0.01 in: verify fails at that line, and the
+    // picture still written shows it red.
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = posted.lines().collect();
+    // The tenth block after the powder goes on (M73): a deposition feed with an X word.
+    let on = lines.iter().position(|l| *l == "M73").expect("M73");
+    let k = on + 10;
+    assert!(lines[k].starts_with('X'), "{}", lines[k]);
+    let bad_line = lines[k]
+        .split_whitespace()
+        .map(|w| {
+            w.strip_prefix('X')
+                .and_then(|v| v.parse::<f64>().ok())
+                .map_or(w.to_string(), |v| format!("X{:.4}", v + 0.01))
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut tampered: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+    tampered[k] = bad_line;
+    let bad = dir.join("bad.nc");
+    std::fs::write(&bad, tampered.join("\n") + "\n").expect("bad");
+    let svg2 = dir.join("bad.svg");
+    let b = bad.to_str().expect("utf8").to_string();
+    let s2 = svg2.to_str().expect("utf8").to_string();
+    let mut args = vec!["verify"];
+    args.extend_from_slice(&PLACE);
+    args.extend_from_slice(&[&input, &b, "--preview", &s2]);
+    let r = lampost(&args);
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    let text = std::fs::read_to_string(&svg2).expect("the picture of a failed check");
+    let worst = deviations(&text)
+        .into_iter()
+        .filter_map(|(l, e, s)| e.map(|e| (l, e, s)))
+        .fold(
+            (0, 0.0, String::new()),
+            |a, b| if b.1 > a.1 { b } else { a },
+        );
+    assert_eq!(worst.0 as usize, k + 1, "the moved line is the worst");
+    assert!(worst.1 > 0.001, "{worst:?}");
+    assert_eq!(worst.2, "#d73027", "beyond the tolerance: red");
+}
+
+#[test]
+fn feeds_with_the_laser_off_are_not_drawn_as_deposition() {
+    let dir = tempdir("preview-laser");
+    let (_, out) = posted_patch(&dir);
+    let svg = dir.join("p.svg");
+    let r = lampost(&[
+        "preview",
+        &out,
+        "--machine",
+        "fadal-lamp",
+        "-o",
+        svg.to_str().expect("utf8"),
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let text = std::fs::read_to_string(&svg).expect("svg");
+    let doc = roxmltree::Document::parse(&text).expect("well-formed SVG");
+    let class_of = |c: &str| {
+        doc.descendants()
+            .filter(|n| n.has_tag_name("polyline") && n.attribute("class") == Some(c))
+            .count()
+    };
+    // The plunge onto the start (G1 Z0 before the laser is on) is a feed with the laser
+    // off; the patch's perimeter is one run of deposition.
+    assert_eq!(class_of("feed-off"), 1, "{text}");
+    assert_eq!(class_of("deposit"), 1, "{text}");
+    // Which posted lines switch the laser: the deposition run starts after the first
+    // laser-on line and ends at or before the laser-off.
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    assert!(posted.lines().any(|l| l.contains("M71")), "{posted}");
+}

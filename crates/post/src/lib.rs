@@ -45,4 +45,4 @@ pub use frame::{read_setup, Frame};
 pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
 pub use pipeline::{post, Rewind};
 pub use post::{default_head, PostConfig, PostDialect, PostReport, Process};
-pub use verify::{verify, VerifyReport};
+pub use verify::{verify, verify_traced, VerifyReport};

@@ -22,6 +22,15 @@ use crate::writer::Writer;
 /// an inverse-time feed.
 pub const ROTARY_FEED_DEG_PER_MIN: f64 = 3600.0;
 
+/// At a singular pose, an inner-axis turn larger than this (degrees) to the next point
+/// is made in place, the tip standing (see [`post_points`]); a smaller one is split
+/// along the move like any other.
+pub const IN_PLACE_TURN_DEG: f64 = 1.0;
+
+/// A laser-off move whose rotaries turn by more than this (degrees) is a linking move:
+/// retract, index, approach (see [`post_points`]).
+pub const RELINK_TURN_DEG: f64 = 1.0;
+
 /// One point of a path with its own tool axis (part frame once placed).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PathPoint {
@@ -226,6 +235,40 @@ impl Ctx<'_> {
         ))
     }
 
+    /// Whether the tool axis at `j` lies along the inner rotary axis: turning that axis
+    /// leaves the tool axis where it is, so its angle is free (a singular pose).
+    fn singular(&self, j: &[f64; 5]) -> bool {
+        let mut turned = *j;
+        turned[3 + self.m.inner] += 90.0;
+        angle(&self.fk(j).1, &self.fk(&turned).1) <= 1e-7
+    }
+
+    /// At a singular pose `j0` (tip `a`), turn the inner rotary to `c` with the tip and
+    /// the tool axis standing: the linear axes follow the table round, split until
+    /// straight joint interpolation keeps the tip within the tolerance.
+    #[allow(clippy::too_many_arguments)]
+    fn turn_in_place(
+        &self,
+        a: &PathPoint,
+        j0: [f64; 5],
+        j1: [f64; 5],
+        branch: i8,
+        depth: u32,
+        out: &mut Vec<[f64; 5]>,
+    ) -> Result<(), PostError> {
+        let mut jm = [0.0; 5];
+        for k in 0..5 {
+            jm[k] = (j0[k] + j1[k]) / 2.0;
+        }
+        if depth >= 24 || (self.fk(&jm).0 - a.tip).norm() <= self.tol {
+            out.push(j1);
+            return Ok(());
+        }
+        let (js, _, _) = self.solve(&a.tip, &a.axis, &[jm[3], jm[4]], Some(branch), a.line)?;
+        self.turn_in_place(a, j0, js, branch, depth + 1, out)?;
+        self.turn_in_place(a, js, j1, branch, depth + 1, out)
+    }
+
     /// Split (t0, j0)–(t1, j1) until straight joint interpolation stays on the segment.
     #[allow(clippy::too_many_arguments)]
     fn split(
@@ -312,8 +355,52 @@ pub fn post_points<W: Write>(
             prev = Some(*q);
             continue;
         }
-        let (j0, _) = cur.unwrap_or((j, branch));
+        let (mut j0, _) = cur.unwrap_or((j, branch));
         let a = prev.unwrap_or(*q);
+        let turn = (j[3] - j0[3]).abs().max((j[4] - j0[4]).abs());
+        if !q.deposit && turn > RELINK_TURN_DEG {
+            // Travel that turns the table: a linking move, as CAM writes one. Off the
+            // run, up to the height safe over the rotary move, index, approach: never a
+            // five-axis sweep near the work with the process off.
+            w.index([j[3], j[4]], cfg.near, name, line)?;
+            w.approach(&[j[0], j[1], j[2]], q.feed, name, line)?;
+            cur = Some((j, branch));
+            prev = Some(*q);
+            continue;
+        }
+        if ctx.singular(&j0) {
+            // The axis stood along the inner rotary axis, whose angle was free there: turn
+            // it in place to the angle the next point needs (process off: the tip stands),
+            // so the move itself does not sweep the table half a turn.
+            let ci = 3 + machine.inner;
+            let mut near = [j0[3], j0[4]];
+            near[machine.inner] = j[ci];
+            let (jt, _, _) = ctx.solve(&a.tip, &a.axis, &near, Some(branch), a.line)?;
+            if (jt[ci] - j0[ci]).abs() > IN_PLACE_TURN_DEG {
+                let axis = &machine.rotary[machine.inner].name;
+                w.report.warnings.push(format!(
+                    "{name}:{}: the tool axis leaves the {axis} axis here; {axis} turns {:.3}° in place with the process off",
+                    q.line,
+                    (jt[ci] - j0[ci]).abs()
+                ));
+                let mut steps = Vec::new();
+                ctx.turn_in_place(&a, j0, jt, branch, 0, &mut steps)?;
+                w.process_for(cfg, false)?;
+                let mut j_prev = j0;
+                for js in steps {
+                    let dr = (js[3] - j_prev[3]).abs().max((js[4] - j_prev[4]).abs());
+                    w.move5(
+                        &js,
+                        q.feed,
+                        Some(ROTARY_FEED_DEG_PER_MIN / dr.max(1e-9)),
+                        name,
+                        line,
+                    )?;
+                    j_prev = js;
+                }
+                j0 = jt;
+            }
+        }
         let mut pieces = Vec::new();
         ctx.split(&a, q, 0.0, j0, 1.0, j, branch, 0, &mut pieces)?;
         w.process_for(cfg, q.deposit)?;
@@ -453,6 +540,31 @@ pub fn verify_points<R: BufRead>(
     tolerance: f64,
     work_extra: Option<&WorkBounds>,
 ) -> Result<VerifyReport, PostError> {
+    verify_points_traced(
+        machine,
+        points,
+        frame,
+        head,
+        posted,
+        tolerance,
+        work_extra,
+        &mut |_, _| {},
+    )
+}
+
+/// [`verify_points`], telling `on_point` the posted line and tip deviation of every
+/// move it compares (for `verify --preview`).
+#[allow(clippy::too_many_arguments)]
+pub fn verify_points_traced<R: BufRead>(
+    machine: &Machine,
+    points: &[PathPoint],
+    frame: &Frame,
+    head: usize,
+    posted: R,
+    tolerance: f64,
+    work_extra: Option<&WorkBounds>,
+    on_point: &mut dyn FnMut(u32, f64),
+) -> Result<VerifyReport, PostError> {
     crate::verify::check_tolerance(tolerance)?;
     let units = program_units(machine);
     let placed = place(points, frame);
@@ -576,6 +688,7 @@ pub fn verify_points<R: BufRead>(
                 }
                 live = next;
                 if let Some((err, ang)) = best {
+                    on_point(m.line, err);
                     rep.compared += 1;
                     if err > rep.max_position_error {
                         rep.max_position_error = err;

@@ -20,12 +20,19 @@ use crate::error::PostError;
 /// A run of moves of one kind at one table position, in the part frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Run {
-    /// Rapid (travel) or not (a process move).
+    /// Rapid (travel) or not (a feed).
     pub rapid: bool,
+    /// For a feed: whether the machine's laser was on (its `laser_on` code written and
+    /// not yet its `laser_off`). Feeds with the laser off are travel at feed, not
+    /// deposition. Always false for rapids.
+    pub laser: bool,
     /// Index into [`Preview::positions`].
     pub position: usize,
     /// Tool tips, part frame.
     pub points: Vec<[f64; 3]>,
+    /// The posted line of the move that reaches each point (the first point: the line
+    /// of the run's first move).
+    pub lines: Vec<u32>,
 }
 
 /// A posted program's toolpath in the part frame.
@@ -42,8 +49,50 @@ pub struct Preview {
 /// How far apart the points of an arc are drawn, in degrees of its sweep.
 const ARC_STEP_DEG: f64 = 5.0;
 
+/// The posted lines that switch the machine's laser on or off, in order: (line, on).
+/// A line switches it on when it holds every word of the machine's `laser_on` code, off
+/// when it holds every word of `laser_off`.
+fn laser_switches(machine: &Machine, text: &[u8]) -> Result<Vec<(u32, bool)>, PostError> {
+    let on = crate::post::code_words(&machine.def.process.laser_on)?;
+    let off = crate::post::code_words(&machine.def.process.laser_off)?;
+    let holds = |words: &[(u8, f64)], code: &[(u8, f64)]| {
+        !code.is_empty() && code.iter().all(|c| words.contains(c))
+    };
+    let mut out = Vec::new();
+    for (k, line) in text.split(|&c| c == b'\n').enumerate() {
+        // Only lines with an M word can hold a process code; others are not parsed.
+        if !line.iter().any(|&c| c == b'M' || c == b'm') {
+            continue;
+        }
+        let n = u32::try_from(k + 1).unwrap_or(u32::MAX);
+        let Ok(b) = lampost_gcode::parse_line(line, n, 0) else {
+            continue;
+        };
+        let words: Vec<(u8, f64)> = b.words().map(|w| (w.letter, w.value)).collect();
+        if holds(&words, &off) {
+            out.push((n, false));
+        } else if holds(&words, &on) {
+            out.push((n, true));
+        }
+    }
+    Ok(out)
+}
+
 /// Stage 1: replay `posted` into runs in the part frame, with `head`'s tool point.
-pub fn replay<R: BufRead>(machine: &Machine, head: usize, posted: R) -> Result<Preview, PostError> {
+pub fn replay<R: BufRead>(
+    machine: &Machine,
+    head: usize,
+    mut posted: R,
+) -> Result<Preview, PostError> {
+    // A picture holds every point anyway: the text is read whole, once for the laser
+    // switches and once through the interpreter.
+    let mut text = Vec::new();
+    posted
+        .read_to_end(&mut text)
+        .map_err(|e| PostError::Io(format!("cannot read the posted program: {e}")))?;
+    let switches = laser_switches(machine, &text)?;
+    let mut next_switch = 0;
+    let mut laser = false;
     let units = match machine.units {
         MUnits::Inch => Units::Inch,
         MUnits::Mm => Units::Mm,
@@ -66,7 +115,7 @@ pub fn replay<R: BufRead>(machine: &Machine, head: usize, posted: R) -> Result<P
     };
     let mut out = Preview::default();
     let stream = Stream::from_reader(
-        posted,
+        text.as_slice(),
         Options {
             units,
             ..Options::default()
@@ -93,16 +142,28 @@ pub fn replay<R: BufRead>(machine: &Machine, head: usize, posted: R) -> Result<P
                 out.positions.len() - 1
             }
         };
+        // The switches up to this move's line are in force (a code precedes the motion
+        // of its own block).
+        while let Some(&(n, on)) = switches.get(next_switch) {
+            if n > m.line {
+                break;
+            }
+            laser = on;
+            next_switch += 1;
+        }
         let rapid = matches!(m.kind, MoveKind::Rapid);
+        let lit = !rapid && laser;
         let same = out
             .runs
             .last()
-            .is_some_and(|l| l.rapid == rapid && l.position == position);
+            .is_some_and(|l| l.rapid == rapid && l.laser == lit && l.position == position);
         if !same {
             out.runs.push(Run {
                 rapid,
+                laser: lit,
                 position,
                 points: vec![tip(&m.start)],
+                lines: vec![m.line],
             });
         }
         let run = out
@@ -149,9 +210,11 @@ pub fn replay<R: BufRead>(machine: &Machine, head: usize, posted: R) -> Result<P
                 p[b] = center[b] + r * ang.sin();
                 p[n] = m.start[n] + (m.end[n] - m.start[n]) * t;
                 run.points.push(tip(&p));
+                run.lines.push(m.line);
             }
         }
         run.points.push(tip(&m.end));
+        run.lines.push(m.line);
     }
     Ok(out)
 }
@@ -237,8 +300,41 @@ fn esc(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
+/// How the feeds are coloured.
+#[derive(Debug, Clone, Copy)]
+pub enum Colouring<'a> {
+    /// One colour per table position (section or layer).
+    Position,
+    /// By each point's deviation from the intended path as `verify` measured it (posted
+    /// line → distance): green at 0, yellow at half the tolerance, red at the tolerance;
+    /// grey where nothing was compared.
+    Deviation {
+        /// Posted line → largest deviation of a point it wrote.
+        errors: &'a std::collections::HashMap<u32, f64>,
+        /// The tolerance verify used.
+        tolerance: f64,
+    },
+}
+
+/// Green (0) through yellow (0.5) to red (1 and beyond).
+fn ramp(t: f64) -> String {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let (a, b, u) = if t < 0.5 {
+        ([26.0, 152.0, 80.0], [254.0, 224.0, 139.0], t * 2.0)
+    } else {
+        ([254.0, 224.0, 139.0], [215.0, 48.0, 39.0], t * 2.0 - 1.0)
+    };
+    let c = |k: usize| (a[k] + (b[k] - a[k]) * u).round() as u8;
+    format!("#{:02x}{:02x}{:02x}", c(0), c(1), c(2))
+}
+
 /// Stage 2: the picture. `title` goes in the SVG's `<title>` and heading; `deposit` says
-/// whether process moves deposit (a laser head) or cut.
+/// whether process moves deposit (a laser head: feeds with the laser off are drawn
+/// dotted, as travel) or cut.
 pub fn svg(
     machine: &Machine,
     head: usize,
@@ -246,6 +342,7 @@ pub fn svg(
     view: View,
     title: &str,
     deposit: bool,
+    colouring: Colouring<'_>,
 ) -> String {
     let envelopes: Vec<Vec<[[f64; 3]; 2]>> = preview
         .positions
@@ -276,7 +373,7 @@ pub fn svg(
     let (w, h) = (hi[0] - lo[0] + 2.0 * margin, hi[1] - lo[1] + 2.0 * margin);
     let px = 800.0 / w.max(h);
     let (width, height) = (w * px, h * px);
-    let legend_h = 22.0 * (preview.positions.len() as f64 + 3.0);
+    let legend_h = 22.0 * (preview.positions.len() as f64 + 4.0);
     let to = |p: &[f64; 3]| {
         let q = view.project(p);
         ((q[0] - x0) * px, (y0 + h - q[1]) * px)
@@ -322,6 +419,36 @@ pub fn svg(
     let kind = if deposit { "deposit" } else { "cut" };
     let process_width = if deposit { 1.6 } else { 2.6 };
     for run in &preview.runs {
+        let (class, style) = if run.rapid {
+            (
+                "rapid",
+                r#"stroke-width="0.8" stroke-dasharray="6 4""#.to_string(),
+            )
+        } else if deposit && !run.laser {
+            (
+                "feed-off",
+                r#"stroke-width="1" stroke-dasharray="1 3""#.to_string(),
+            )
+        } else {
+            (kind, format!(r#"stroke-width="{process_width}""#))
+        };
+        if let (Colouring::Deviation { errors, tolerance }, false) = (colouring, run.rapid) {
+            // One segment per move piece, coloured by the deviation of the point it
+            // reaches.
+            for (k, pair) in run.points.windows(2).enumerate() {
+                let line = run.lines.get(k + 1).copied().unwrap_or(0);
+                let err = errors.get(&line).copied();
+                let stroke = err.map_or_else(|| "#9e9e9e".to_string(), |e| ramp(e / tolerance));
+                let (ax, ay) = to(&pair[0]);
+                let (bx, by) = to(&pair[1]);
+                let _ = writeln!(
+                    s,
+                    r#"<line class="{class} deviation" data-line="{line}" data-error="{}" x1="{ax:.2}" y1="{ay:.2}" x2="{bx:.2}" y2="{by:.2}" stroke="{stroke}" {style}/>"#,
+                    err.map_or_else(|| "none".to_string(), |e| format!("{e:.3e}"))
+                );
+            }
+            continue;
+        }
         let pts: Vec<String> = run
             .points
             .iter()
@@ -330,19 +457,14 @@ pub fn svg(
                 format!("{x:.2},{y:.2}")
             })
             .collect();
-        let (class, style) = if run.rapid {
-            (
-                "rapid",
-                r#"stroke-width="0.8" stroke-dasharray="6 4""#.to_string(),
-            )
-        } else {
-            (kind, format!(r#"stroke-width="{process_width}""#))
+        let stroke = match colouring {
+            Colouring::Position => colour(run.position),
+            Colouring::Deviation { .. } => "#9e9e9e".to_string(),
         };
         let _ = writeln!(
             s,
-            r#"<polyline class="{class}" data-position="{}" fill="none" stroke="{}" {style} points="{}"/>"#,
+            r#"<polyline class="{class}" data-position="{}" fill="none" stroke="{stroke}" {style} points="{}"/>"#,
             run.position,
-            colour(run.position),
             pts.join(" ")
         );
     }
@@ -385,9 +507,29 @@ pub fn svg(
     y += 20.0;
     let _ = writeln!(
         s,
-        r#"<text class="key" x="8" y="{y:.1}">solid: {}; dashed: rapids; dotted: the machine's travel at each index</text>"#,
-        if deposit { "deposition" } else { "cutting" }
+        r#"<text class="key" x="8" y="{y:.1}">solid: {}; dashed: rapids; dotted: {}the machine's travel at each index</text>"#,
+        if deposit { "deposition" } else { "cutting" },
+        if deposit {
+            "feeds with the laser off (thin), "
+        } else {
+            ""
+        }
     );
+    if let Colouring::Deviation { tolerance, .. } = colouring {
+        y += 20.0;
+        let _ = writeln!(
+            s,
+            r#"<g class="deviation-legend"><rect x="8" y="{:.1}" width="14" height="10" fill="{}"/><text x="26" y="{y:.1}">0</text><rect x="60" y="{:.1}" width="14" height="10" fill="{}"/><text x="78" y="{y:.1}">{:.2e}</text><rect x="160" y="{:.1}" width="14" height="10" fill="{}"/><text x="178" y="{y:.1}">{:.2e} {unit} (the tolerance) and beyond; grey: not compared</text></g>"#,
+            y - 10.0,
+            ramp(0.0),
+            y - 10.0,
+            ramp(0.5),
+            tolerance / 2.0,
+            y - 10.0,
+            ramp(1.0),
+            tolerance
+        );
+    }
     for (k, r) in preview.positions.iter().enumerate() {
         y += 20.0;
         let _ = writeln!(

@@ -211,6 +211,33 @@ pub fn verify<R: BufRead>(
     work: Option<&WorkBounds>,
     part: Option<&crate::collide::PartMesh>,
 ) -> Result<VerifyReport, PostError> {
+    verify_traced(
+        machine,
+        sections,
+        head,
+        opts,
+        posted,
+        tolerance,
+        work,
+        part,
+        &mut |_, _| {},
+    )
+}
+
+/// [`verify`], telling `on_point` the posted line and deviation of every feed point it
+/// compares (for a picture of the deviations: `verify --preview`).
+#[allow(clippy::too_many_arguments)]
+pub fn verify_traced<R: BufRead>(
+    machine: &Machine,
+    sections: &[Section],
+    head: usize,
+    opts: IntendedOptions,
+    posted: R,
+    tolerance: f64,
+    work: Option<&WorkBounds>,
+    part: Option<&crate::collide::PartMesh>,
+    on_point: &mut dyn FnMut(u32, f64),
+) -> Result<VerifyReport, PostError> {
     check_tolerance(tolerance)?;
     // The work the rapids must clear: the input's feed tips (a pass of its own) and the
     // part or stock given.
@@ -347,6 +374,7 @@ pub fn verify<R: BufRead>(
         } else {
             let d = dist_to(&step, &p);
             if d > tolerance {
+                on_point(line, d);
                 return Err(PostError::Verify(format!(
                     "posted line {line}: the tool tip ({:.5}, {:.5}, {:.5}) is {d:.3e} from the intended path of input line {} (tolerance {tolerance:.1e})",
                     p.x, p.y, p.z, step.line
@@ -354,6 +382,7 @@ pub fn verify<R: BufRead>(
             }
             d
         };
+        on_point(line, err);
         let want = intended_axis(&step);
         let ang = a.cross(&want).norm().atan2(a.dot(&want)).to_degrees();
         rep.compared += 1;
