@@ -8,7 +8,7 @@ use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
-use crate::parse::parse_line_with;
+use crate::parse::{parse_line_with, parse_str_with};
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
@@ -175,13 +175,18 @@ impl<S: LineSource> Iterator for Stream<S> {
             let mut block = Block::empty(line.number, line.offset);
             let mut parsed = match line.too_long() {
                 Some(d) => Err(d),
-                None => parse_line_with(
-                    line.bytes,
-                    line.number,
-                    line.offset,
-                    &mut block,
-                    self.exponents,
-                ),
+                None => match line.text {
+                    Some(text) => {
+                        parse_str_with(text, line.number, line.offset, &mut block, self.exponents)
+                    }
+                    None => parse_line_with(
+                        line.bytes,
+                        line.number,
+                        line.offset,
+                        &mut block,
+                        self.exponents,
+                    ),
+                },
             };
             // Macro lines only: the flavour's evaluation (plain lines never come here;
             // under Macro B also lines the parser refuses and G65 blocks).
