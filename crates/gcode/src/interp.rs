@@ -334,6 +334,12 @@ impl Interpreter {
         &self.pos
     }
 
+    /// The position now in the work system in force (program coordinates, as moves
+    /// report them); [`Interpreter::position`] is in the machine frame as traced.
+    pub fn program_position(&self) -> Position {
+        self.to_program(self.pos)
+    }
+
     /// True after M2/M30 (or an M99 outside any `O` program).
     pub fn ended(&self) -> bool {
         self.ended

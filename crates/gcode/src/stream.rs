@@ -96,6 +96,14 @@ impl<S: LineSource> Stream<S> {
     pub fn new(src: S, opts: Options, stop_on_error: bool) -> Self {
         let mut interp = Interpreter::new(opts);
         interp.set_calls(src.calls());
+        let mut params = if opts.flavor.macro_b() {
+            Some(Box::new(Params::macro_b()))
+        } else {
+            opts.flavor.evaluates().then(Box::default)
+        };
+        if let Some(p) = params.as_deref_mut() {
+            p.after_block(&interp);
+        }
         Stream {
             src,
             interp,
@@ -105,11 +113,7 @@ impl<S: LineSource> Stream<S> {
             finished: false,
             any_content: false,
             exponents: opts.e_word == EWord::Extrusion,
-            params: if opts.flavor.macro_b() {
-                Some(Box::new(Params::macro_b()))
-            } else {
-                opts.flavor.evaluates().then(Box::default)
-            },
+            params,
         }
     }
 
@@ -215,6 +219,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                             // The queue held nothing before this block: its events are
                             // exactly the block's.
                             after_moves(params, queue);
+                            params.after_block(&self.interp);
                         }
                         false
                     }
@@ -273,6 +278,9 @@ impl<S: LineSource> Iterator for Stream<S> {
                 if params.is_macro_b() {
                     for _ in 0..self.src.take_returns() {
                         params.leave_macro();
+                    }
+                    for d in params.take_stops() {
+                        self.queue.push_back(Event::Diagnostic(d));
                     }
                 }
             }
