@@ -357,10 +357,11 @@ fn refuse_dry(secs: &[Section], opts: &IntendedOptions, given: bool) -> Result<(
                 Ok(Event::Diagnostic(_)) => continue,
                 Err(_) => return Ok(()),
             };
-            if m.extruded.is_some_and(|grown| grown > 0.0) {
+            // As the post deposits: a feed along which E grows (a rapid never deposits).
+            let feed = !matches!(m.kind, MoveKind::Rapid);
+            if feed && m.extruded.is_some_and(|grown| grown > 0.0) {
                 return Ok(());
             }
-            let feed = matches!(m.kind, MoveKind::Linear | MoveKind::Arc { .. });
             if first.is_none_or(|(_, _, f)| !f && feed) {
                 first = Some((k, m.line, feed));
             }
