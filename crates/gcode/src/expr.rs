@@ -79,10 +79,20 @@ struct FanucState {
 /// F, `#4111` H, `#4119` S, `#4120` T); `#5001`–`#5006` the end of the last block in the
 /// work system, `#5021`–`#5026` in the machine frame as traced (X Y Z A B C).
 fn fanuc_state_var(n: usize, st: &FanucState) -> Option<Result<f64, &'static str>> {
+    Some(match n {
+        4001..=4120 => fanuc_modal_var(n, st),
+        5001..=5006 => Ok(st.end[n - 5001]),
+        5021..=5026 => Ok(st.machine[n - 5021]),
+        _ => return None,
+    })
+}
+
+/// The modal information `#4001`–`#4120` of [`fanuc_state_var`].
+fn fanuc_modal_var(n: usize, st: &FanucState) -> Result<f64, &'static str> {
     use crate::modal::{CutterComp, Distance, FeedMode, Motion, Plane, Retract, Units, WorkOffset};
     let m = &st.modal;
     let g = |code: u32| Ok(f64::from(code));
-    Some(match n {
+    match n {
         4001 => match m.motion {
             Motion::Rapid => g(0),
             Motion::Linear => g(1),
@@ -139,11 +149,8 @@ fn fanuc_state_var(n: usize, st: &FanucState) -> Option<Result<f64, &'static str
         },
         4119 => Ok(m.speed),
         4120 => g(m.selected_tool),
-        4001..=4120 => Err("this modal information is not traced"),
-        5001..=5006 => Ok(st.end[n - 5001]),
-        5021..=5026 => Ok(st.machine[n - 5021]),
-        _ => return None,
-    })
+        _ => Err("this modal information is not traced"),
+    }
 }
 
 /// Fanuc's alarm (`#3000`) and stop-with-message (`#3006`) variables: written, never read.
