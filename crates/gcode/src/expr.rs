@@ -259,8 +259,9 @@ impl Params {
         self.fanuc.as_ref().and_then(|f| f.get(n)).flatten()
     }
 
-    /// Note the interpreter's state after a block, for Fanuc's system variables (`#4001`…,
-    /// `#5001`…, `#5021`…); nothing for other flavours.
+    /// Note the interpreter's state, for Fanuc's system variables (`#4001`…, `#5001`…,
+    /// `#5021`…): the stream calls it before it evaluates a Macro B line (so plain lines
+    /// pay nothing); nothing for other flavours.
     pub fn after_block(&mut self, interp: &crate::interp::Interpreter) {
         if let Some(f) = self.fanuc.as_mut() {
             f.state = FanucState {

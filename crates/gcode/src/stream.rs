@@ -96,14 +96,11 @@ impl<S: LineSource> Stream<S> {
     pub fn new(src: S, opts: Options, stop_on_error: bool) -> Self {
         let mut interp = Interpreter::new(opts);
         interp.set_calls(src.calls());
-        let mut params = if opts.flavor.macro_b() {
+        let params = if opts.flavor.macro_b() {
             Some(Box::new(Params::macro_b()))
         } else {
             opts.flavor.evaluates().then(Box::default)
         };
-        if let Some(p) = params.as_deref_mut() {
-            p.after_block(&interp);
-        }
         Stream {
             src,
             interp,
@@ -199,6 +196,8 @@ impl<S: LineSource> Iterator for Stream<S> {
             if let Some(params) = self.params.as_deref_mut() {
                 if params.is_macro_b() {
                     if block.kind != BlockKind::Words || parsed.is_err() || has_g65(&block) {
+                        // The system variables read the state after the block before.
+                        params.after_block(&self.interp);
                         parsed = evaluate_macro_b(
                             &line,
                             &mut block,
@@ -219,7 +218,6 @@ impl<S: LineSource> Iterator for Stream<S> {
                             // The queue held nothing before this block: its events are
                             // exactly the block's.
                             after_moves(params, queue);
-                            params.after_block(&self.interp);
                         }
                         false
                     }
@@ -239,6 +237,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 (control, self.params.as_deref_mut())
             {
                 let kind = if params.is_macro_b() {
+                    params.after_block(&self.interp);
                     MacroKind::FanucMacroB
                 } else {
                     MacroKind::LinuxCncOWord

@@ -282,6 +282,9 @@ fn system_variables_read_the_traced_state() {
             [3181.0, 0.0, 10.0],
         ]
     );
+    // Read by a loop's condition, evaluated again at each END.
+    let text = "G21 G90 G0 X0\nWHILE [#5001 LT 3] DO1\nG91 G0 X1\nEND1\nG90 M30\n";
+    assert_eq!(xs(&clean(text)), [0.0, 1.0, 2.0, 3.0]);
     // #5001 after an incremental move.
     let text = "G21 G90 G0 X5 Y0\nG91 G1 X1 F100\nG90\n#1 = #5001\nG0 Y#1\nM30\n";
     assert_eq!(clean(text).last(), Some(&[6.0, 6.0, 0.0]));
