@@ -91,6 +91,12 @@ pub fn parse_number(text: &str) -> Option<f64> {
 /// text is anything else, which then goes to the nom grammar `number`; the two agree
 /// wherever this one answers (property-tested).
 pub fn fast_number(b: &[u8]) -> Option<(usize, f64)> {
+    scan_number(b)
+}
+
+/// [`fast_number`], inlined where the parser's fast path reads every word's number.
+#[inline(always)]
+fn scan_number(b: &[u8]) -> Option<(usize, f64)> {
     const POW10: [f64; 16] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
     ];
@@ -394,7 +400,7 @@ fn simple_words<'a>(
                 {
                     return false;
                 }
-                let Some((len, value)) = fast_number(&bytes[i + 1..]) else {
+                let Some((len, value)) = scan_number(&bytes[i + 1..]) else {
                     return false;
                 };
                 let end = i + 1 + len;
