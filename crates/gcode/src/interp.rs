@@ -738,12 +738,29 @@ impl Interpreter {
         out(Event::Diagnostic(diag(b, Severity::Warning, kind, span)));
     }
 
-    fn set_units(&mut self, units: Units) {
+    /// Change units, scaling every length held; `false` (nothing changed) when a length
+    /// would not fit in the new units (1e308 inches is beyond the largest `f64` in mm).
+    fn set_units(&mut self, units: Units) -> bool {
         self.units_given = true;
         if units == self.modal.units {
-            return;
+            return true;
         }
         let f = self.modal.units.mm() / units.mm();
+        let fits = |p: &Position| {
+            p.iter()
+                .enumerate()
+                .all(|(a, v)| is_rotary(a) || (v * f).is_finite())
+        };
+        let canned = [self.canned.z, self.canned.r, self.canned.q];
+        if !(fits(&self.pos)
+            && self.g5x.iter().chain(self.fixture.iter()).all(fits)
+            && [self.g92, self.g52, self.home28, self.home30]
+                .iter()
+                .all(fits)
+            && canned.into_iter().flatten().all(|v| (v * f).is_finite()))
+        {
+            return false;
+        }
         let scale = |p: &mut Position| {
             for (a, v) in p.iter_mut().enumerate() {
                 if !is_rotary(a) {
@@ -766,6 +783,7 @@ impl Interpreter {
             *v *= f;
         }
         self.modal.units = units;
+        true
     }
 
     fn execute(
@@ -929,7 +947,7 @@ impl Interpreter {
         // Plane, units, cutter comp, coordinate system, distance, retract and the codes
         // not simulated: only a block with a G-code besides motion has any.
         if !w.gs.iter().all(|g| g.2 == GGroup::Motion) {
-            self.modal_groups(b, w, out);
+            self.modal_groups(b, w, out)?;
         }
         // Motion mode change: the block's motion code other than G80 (at most one: see
         // `collect`), else its G80.
@@ -1105,7 +1123,12 @@ impl Interpreter {
 
     /// The modal groups of a block's G-codes other than motion, feed mode and tool
     /// length (see [`Interpreter::execute`]).
-    fn modal_groups(&mut self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) {
+    fn modal_groups(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
         let m = &mut self.modal;
         if let Some((_, c)) = w.g_in(GGroup::Plane) {
             m.plane = match c {
@@ -1114,12 +1137,23 @@ impl Interpreter {
                 _ => Plane::XY,
             };
         }
-        if let Some((_, c)) = w.g_in(GGroup::Units) {
-            self.set_units(if c == 200 || c == 700 {
+        if let Some((gw, c)) = w.g_in(GGroup::Units) {
+            let units = if c == 200 || c == 700 {
                 Units::Inch
             } else {
                 Units::Mm
-            });
+            };
+            if !self.set_units(units) {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: gw.display_code(),
+                        why: "a position or offset held is too large to hold in the new units",
+                    },
+                    Some(gw.span),
+                ));
+            }
         }
         let m = &mut self.modal;
         if let Some((gw, c)) = w.g_in(GGroup::CutterComp) {
@@ -1192,6 +1226,7 @@ impl Interpreter {
                 }
             }
         }
+        Ok(())
     }
 
     /// M99 with no `O` program open: the main program's M99. Controls with M98/M99
@@ -1935,5 +1970,25 @@ mod tests {
             .map(|m| m.end[Z])
             .collect();
         assert_eq!(feeds, [0.5 - 0.1, 0.5 - 0.1 - 0.1, 0.2]);
+    }
+
+    #[test]
+    fn units_that_would_overflow_a_position_are_refused() {
+        // Found by `cargo xtask fuzz` (seed 4242): Z 1e308 inches is beyond the largest
+        // f64 in millimetres; G21 used to make it infinite. Refused at G21, and no move
+        // after it (the stream reads on) carries a number that is not finite.
+        let big = format!("1{}", "0".repeat(308));
+        let text = format!("G20 G90\nG0 X0 Y0 Z{big}\nG21\nG0 X1\n");
+        let (moves, diags) = run(&text);
+        let e = diags.iter().find(|d| d.is_error()).expect("refused");
+        assert_eq!((e.line, e.column), (3, 1), "{}", e.kind);
+        assert!(e.kind.to_string().contains("too large"), "{}", e.kind);
+        for m in &moves {
+            assert!(m.start.iter().chain(&m.end).all(|v| v.is_finite()), "{m:?}");
+        }
+        // Converting a position that fits stays exact.
+        let (moves, diags) = run("G20 G90\nG0 X1 Y0 Z0\nG21\nG0 Y1\n");
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(moves[1].start[X], 25.4);
     }
 }
