@@ -85,7 +85,10 @@ fn bench_gcode() -> Result<(), String> {
     let input = dir.join("planar-1m.nc");
     let text = lampost_gcode::generate::planar_program(1_000_000, 42);
     std::fs::write(&input, &text).map_err(|e| e.to_string())?;
-    let bin = root().join("target/release/lampost");
+    // Where `cargo build` put it (CARGO_TARGET_DIR honoured, as in `bench robot`).
+    let bin = std::env::var_os("CARGO_TARGET_DIR")
+        .map_or_else(|| root().join("target"), PathBuf::from)
+        .join("release/lampost");
     for extra in [&[][..], &["--dialect", "fadal"][..]] {
         let out = dir.join("planar-1m.out.nc");
         let mut cmd = Command::new(&bin);

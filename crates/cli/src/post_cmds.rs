@@ -320,6 +320,81 @@ pub fn section_flavor(
     Ok(lampost_gcode::Resolved::new(pl.flavor.flavor(), &head))
 }
 
+/// With E read as extrusion (`--e-extrusion`, or a slicer flavour), programs none of
+/// whose moves extrudes would be posted as travel alone: refused, located at the first
+/// feed move (or the first move) of the first such section. The programs are read as the
+/// post reads them, up to the first extruding move (the start of a slicer program); a
+/// program that fails to read, or has no moves, is left to the post to report.
+fn refuse_dry(secs: &[Section], opts: &IntendedOptions, given: bool) -> Result<(), CliError> {
+    use lampost_gcode::{
+        Diagnostic, EWord, ErrorKind, Event, LineReader, MoveKind, Options, Order, ProgramReader,
+        Severity, Stream, Units,
+    };
+    if !opts.e_extrusion {
+        return Ok(());
+    }
+    fn open(sec: &Section) -> Result<Box<dyn crate::io::ReadSeek + '_>, CliError> {
+        Ok(match &sec.source {
+            Source::Path(p) => Box::new(std::fs::File::open(p).map_err(|e| {
+                CliError::usage(format!("error: cannot open {}: {e}\n", p.display()))
+            })?),
+            Source::Bytes(b) => Box::new(std::io::Cursor::new(b.as_slice())),
+        })
+    }
+    // (section, line, whether a feed move) of the first feed move, else the first move.
+    let mut first: Option<(usize, u32, bool)> = None;
+    for (k, sec) in secs.iter().enumerate() {
+        let o = Options {
+            units: opts.units.unwrap_or(Units::Mm),
+            e_word: EWord::Extrusion,
+            flavor: opts.flavor,
+            ..Options::default()
+        };
+        let src = ProgramReader::new(open(sec)?, Order::Execution);
+        for ev in Stream::new(src, o, true) {
+            let m = match ev {
+                Ok(Event::Move(m)) => m,
+                Ok(Event::Diagnostic(d)) if d.severity == Severity::Error => return Ok(()),
+                Ok(Event::Diagnostic(_)) => continue,
+                Err(_) => return Ok(()),
+            };
+            // As the post deposits: a feed along which E grows (a rapid never deposits).
+            let feed = !matches!(m.kind, MoveKind::Rapid);
+            if feed && m.extruded.is_some_and(|grown| grown > 0.0) {
+                return Ok(());
+            }
+            if first.is_none_or(|(_, _, f)| !f && feed) {
+                first = Some((k, m.line, feed));
+            }
+        }
+    }
+    let Some((k, line, _)) = first else {
+        return Ok(());
+    };
+    let sec = &secs[k];
+    let mut lines = LineReader::new(BufReader::new(open(sec)?));
+    while let Ok(Some(l)) = lines.next_line() {
+        if l.number == line {
+            let why = if given {
+                "--e-extrusion"
+            } else {
+                "implied by the slicer flavour"
+            };
+            let d = Diagnostic::at(
+                Severity::Error,
+                ErrorKind::NoExtrusion(why),
+                line,
+                l.offset,
+                l.bytes,
+                0,
+                l.bytes.len(),
+            );
+            return Err(CliError::failed(crate::report::render(&sec.name, &d)));
+        }
+    }
+    Ok(())
+}
+
 /// How the sections' programs are read.
 fn intended_options(pl: &Placement, secs: &[Section]) -> Result<IntendedOptions, CliError> {
     let flavor = section_flavor(pl, secs)?.flavor;
@@ -740,6 +815,7 @@ pub fn post(
     } else {
         let (secs, _spool) = sections(&m, &a.place, input)?;
         let cfg = config(&m, a, &secs)?;
+        refuse_dry(&secs, &cfg.intended, a.place.e_extrusion)?;
         let bar = crate::progress::Progress::counting("posting", "moves", a.place.quiet);
         // The post verifies every written feed point in-process (FK of the values as
         // written) and every rapid against the safe height; nothing reaches the user's

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::PathBuf;
 
-use common::{extruding_runs, lampost, posted_deposition, shared, tempdir};
+use common::{extruding_runs, lampost, posted_deposition, shared, stderr, tempdir};
 
 /// The corpus programs, or `None` (with a note) where `../shared` is absent.
 fn corpus() -> Option<Vec<PathBuf>> {
@@ -127,6 +127,45 @@ fn relative_extrusion_deposits_every_segment() {
     let (ons, deposited) = posted_deposition(&nc);
     assert_eq!(ons, 2, "{nc}");
     assert!((deposited - 40.0).abs() <= 40.0 * 1e-9, "{deposited}\n{nc}");
+}
+
+#[test]
+fn e_extrusion_without_any_extruding_move_is_refused() {
+    // E words only on a G0, a retract and an unretract, a G92 reset: no move extrudes, so
+    // the post would write travel alone. Refused at the first feed move (line 5), nothing
+    // written.
+    let src = "G21\nG90\nG0 X0 Y0 Z1 E2\nG92 E0\nG1 Z0.2 F600\nG1 X10 F1200\nG1 E-.8\n\
+               G1 E0\nG1 X20 Y5 E0\n";
+    let dir = tempdir("slicer-dry");
+    let inp = dir.join("dry.gcode");
+    std::fs::write(&inp, src).expect("writes");
+    let out_path = dir.join("dry.nc");
+    let post = |extra: &[&str]| {
+        let mut args = vec!["post", "--machine", "nrc-lc"];
+        args.extend_from_slice(extra);
+        args.extend([
+            inp.to_str().expect("utf-8"),
+            "-o",
+            out_path.to_str().expect("utf-8"),
+        ]);
+        lampost(&args)
+    };
+    for extra in [&["--e-extrusion"][..], &["--flavor", "marlin"][..]] {
+        let out = post(extra);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(err.contains("no move of the program extrudes"), "{err}");
+        assert!(err.contains("dry.gcode:5:1"), "{err}");
+        assert!(err.contains("5 | G1 Z0.2 F600"), "{err}");
+        assert!(err.contains("= help: post without --e-extrusion"), "{err}");
+        assert!(!out_path.exists(), "{extra:?}: nothing is written");
+    }
+    // One extruding move is enough.
+    let one = src.replace("G1 X10 F1200", "G1 X10 E0.4 F1200");
+    std::fs::write(&inp, one).expect("writes");
+    let out = post(&["--e-extrusion"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out_path.exists());
 }
 
 #[test]

@@ -46,7 +46,7 @@ fn report(name: &str, bytes: usize, runs: usize, text: &str) {
     let (t_theirs, n_theirs) = best_of(runs, || theirs(text));
     let mbs = |t: Duration| bytes as f64 / 1e6 / t.as_secs_f64();
     println!(
-        "{name}: {:.1} MB, lampost parse+interpret {:.0} MB/s ({} moves, {:.1} ms); gcode crate parse {:.0} MB/s ({} blocks, {:.1} ms); ratio {:.2}x",
+        "{name}: {:.1} MB, parse + interpret with --flavor auto {:.0} MB/s ({} moves, {:.1} ms); gcode crate parse {:.0} MB/s ({} blocks, {:.1} ms); ratio {:.2}x",
         bytes as f64 / 1e6,
         mbs(t_ours),
         n_ours,

@@ -69,6 +69,17 @@ impl Word<'_> {
     /// [`Word::code`] of a value.
     pub fn code_of(value: f64) -> Option<u16> {
         let tenths = value * 10.0;
+        // A whole number of tenths (`G1`, `G38.2`) is its own rounding.
+        if (0.0..=65535.0).contains(&tenths) && f64::from(tenths as u16) == tenths {
+            return Some(tenths as u16);
+        }
+        Self::code_rounded(value)
+    }
+
+    /// [`Word::code_of`] by rounding to tenths (within 1e-6 of a tenth), the reference
+    /// the whole-tenths shortcut agrees with.
+    fn code_rounded(value: f64) -> Option<u16> {
+        let tenths = value * 10.0;
         let rounded = crate::emit::round_half_away(tenths);
         if (tenths - rounded).abs() < 1e-6 && (0.0..=65535.0).contains(&rounded) {
             Some(rounded as u16)
@@ -273,5 +284,41 @@ impl<'a> Block<'a> {
                     (Item::Text(x), Item::Text(y)) => x.text == y.text,
                     _ => false,
                 })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Word;
+
+    proptest::proptest! {
+        #[test]
+        fn code_shortcut_agrees_with_rounding(
+            whole in 0u32..70_000,
+            tenth in 0u32..10,
+            wiggle in proptest::prop_oneof![proptest::strategy::Just(0.0), -1e-6..1e-6f64],
+            negative in proptest::bool::ANY,
+        ) {
+            let v = f64::from(whole) + f64::from(tenth) / 10.0 + wiggle;
+            let v = if negative { -v } else { v };
+            proptest::prop_assert_eq!(Word::code_of(v), Word::code_rounded(v));
+        }
+    }
+
+    #[test]
+    fn code_shortcut_edges() {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            38.2,
+            6553.5,
+            6553.6,
+            -0.1,
+            f64::NAN,
+            f64::INFINITY,
+        ] {
+            assert_eq!(Word::code_of(v), Word::code_rounded(v), "{v}");
+        }
     }
 }

@@ -214,6 +214,23 @@ pub enum ErrorKind {
     /// A line far longer than any controller accepts.
     #[error("the line is {0} bytes long")]
     LineTooLong(usize),
+    /// A Fanuc Macro B alarm (`#3000 = n (MESSAGE)`): the control stops with alarm
+    /// 3000 + n.
+    #[error("the program raises alarm {number} (#3000){}: the control stops here", if .message.is_empty() { String::new() } else { format!(" `{}`", .message) })]
+    MacroAlarm {
+        /// The alarm's number (3000 + n).
+        number: u32,
+        /// Its message (the comment after the assignment).
+        message: String,
+    },
+    /// A Fanuc Macro B stop with a message (`#3006 = n (MESSAGE)`): the control stops
+    /// until cycle start.
+    #[error("the program stops here with the message `{0}` (#3006) until cycle start; the trace goes on")]
+    MacroStop(String),
+    /// E is read as extrusion, but no move of the program extrudes: posted, it would be
+    /// travel alone (reported at its first feed move, or its first move).
+    #[error("E is read as extrusion ({0}), but no move of the program extrudes: E never grows along a move, so the post would write travel alone")]
+    NoExtrusion(&'static str),
 }
 
 impl ErrorKind {
@@ -262,6 +279,9 @@ impl ErrorKind {
             ErrorKind::OutOfRange { .. } => "correct the value; the controller refuses a number it cannot hold, and lampost never writes a cut-off one",
             ErrorKind::RenumberOverflow { .. } => "renumber with a smaller start or step, or split the program",
             ErrorKind::LineTooLong(_) => "split the line; controllers take lines of a few hundred characters",
+            ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
+            ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
+            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin or reprap) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83)",
         }
     }
 }

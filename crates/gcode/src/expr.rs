@@ -51,6 +51,111 @@ pub struct Params {
 pub(crate) struct FanucVars {
     pub(crate) locals: Vec<[Option<f64>; FANUC_LOCALS]>,
     pub(crate) common: Vec<Option<f64>>,
+    /// The interpreter's state after the last block, for the system variables.
+    state: FanucState,
+    /// `#3006` stops met on lines evaluated since they were last taken (warnings).
+    stops: Vec<Diagnostic>,
+}
+
+/// What the interpreter knows after a block, read through the Fanuc system variables
+/// (see [`fanuc_state_var`]).
+#[derive(Debug, Clone, Copy)]
+struct FanucState {
+    modal: crate::modal::Modal,
+    /// Whether the program has said its units (G20/G21): before, `#4006` is the
+    /// control's power-on setting, unknown here.
+    units_given: bool,
+    /// Where the last block ended: in the work system in force, and in the machine frame
+    /// as the trace knows it (offsets the program sets; those held in the control are 0).
+    end: crate::modal::Position,
+    machine: crate::modal::Position,
+}
+
+/// The Fanuc system variables of the interpreter's state: `Some(Ok(value))`, or
+/// `Some(Err(why))` for one the trace cannot know; `None` for a number that is not one of
+/// them. `#4001`–`#4120`: the modal state after the last block (`#4001` G00–G03/G33,
+/// `#4002` G17–G19, `#4003` G90/G91, `#4005` G93–G95, `#4006` G20/G21, `#4007` G40–G42,
+/// `#4008` G49, `#4009` G80 or the canned cycle, `#4010` G98/G99, `#4014` G54–G59; `#4109`
+/// F, `#4111` H, `#4119` S, `#4120` T); `#5001`–`#5006` the end of the last block in the
+/// work system, `#5021`–`#5026` in the machine frame as traced (X Y Z A B C).
+fn fanuc_state_var(n: usize, st: &FanucState) -> Option<Result<f64, &'static str>> {
+    Some(match n {
+        4001..=4120 => fanuc_modal_var(n, st),
+        5001..=5006 => Ok(st.end[n - 5001]),
+        5021..=5026 => Ok(st.machine[n - 5021]),
+        _ => return None,
+    })
+}
+
+/// The modal information `#4001`–`#4120` of [`fanuc_state_var`].
+fn fanuc_modal_var(n: usize, st: &FanucState) -> Result<f64, &'static str> {
+    use crate::modal::{CutterComp, Distance, FeedMode, Motion, Plane, Retract, Units, WorkOffset};
+    let m = &st.modal;
+    let g = |code: u32| Ok(f64::from(code));
+    match n {
+        4001 => match m.motion {
+            Motion::Rapid => g(0),
+            Motion::Linear => g(1),
+            Motion::ArcCw => g(2),
+            Motion::ArcCcw => g(3),
+            Motion::Thread => g(33),
+            _ => Err("the group 1 code under a canned cycle, G80 or a probing move is not traced"),
+        },
+        4002 => g(match m.plane {
+            Plane::XY => 17,
+            Plane::XZ => 18,
+            Plane::YZ => 19,
+        }),
+        4003 => g(if m.distance == Distance::Absolute {
+            90
+        } else {
+            91
+        }),
+        4005 => g(match m.feed_mode {
+            FeedMode::InverseTime => 93,
+            FeedMode::PerMinute => 94,
+            FeedMode::PerRevolution => 95,
+        }),
+        4006 if !st.units_given => {
+            Err("the program has not said G20 or G21 yet: the control's power-on units are unknown")
+        }
+        4006 => g(if m.units == Units::Inch { 20 } else { 21 }),
+        4007 => g(match m.cutter_comp {
+            CutterComp::Off => 40,
+            CutterComp::Left => 41,
+            CutterComp::Right => 42,
+        }),
+        4008 => match m.tool_length {
+            None => g(49),
+            Some(_) => Err("a tool length offset is on; the trace does not tell G43 from G44"),
+        },
+        4009 => match m.motion {
+            Motion::Canned(c) => Ok(f64::from(c) / 10.0),
+            _ => g(80),
+        },
+        4010 => g(if m.retract == Retract::InitialZ {
+            98
+        } else {
+            99
+        }),
+        4014 => match m.work_offset {
+            WorkOffset::G5x(i @ 1..=6) => g(53 + u32::from(i)),
+            _ => Err("the work system in force is no G54-G59"),
+        },
+        4109 => Ok(m.feed),
+        4111 => match m.tool_length {
+            Some(h) => g(h),
+            None => Err("no tool length offset is on: the last H is not traced"),
+        },
+        4119 => Ok(m.speed),
+        4120 => g(m.selected_tool),
+        _ => Err("this modal information is not traced"),
+    }
+}
+
+/// Fanuc's alarm (`#3000`) and stop-with-message (`#3006`) variables: written, never read.
+fn fanuc_message_var(n: usize) -> bool {
+    matches!(n, 3000 | 3006)
 }
 
 /// The Fanuc system variables a program may read, as the numbered parameters that hold
@@ -73,6 +178,13 @@ impl FanucVars {
         FanucVars {
             locals: vec![[None; FANUC_LOCALS]],
             common: vec![None; 1000],
+            state: FanucState {
+                modal: crate::modal::Modal::new(crate::modal::Units::Mm),
+                units_given: false,
+                end: [0.0; 9],
+                machine: [0.0; 9],
+            },
+            stops: Vec::new(),
         }
     }
 
@@ -145,6 +257,28 @@ impl Params {
     /// A Fanuc variable (`None`: vacant, or not a variable programs have).
     pub fn fanuc_var(&self, n: usize) -> Option<f64> {
         self.fanuc.as_ref().and_then(|f| f.get(n)).flatten()
+    }
+
+    /// Note the interpreter's state, for Fanuc's system variables (`#4001`…, `#5001`…,
+    /// `#5021`…): the stream calls it before it evaluates a Macro B line (so plain lines
+    /// pay nothing); nothing for other flavours.
+    pub fn after_block(&mut self, interp: &crate::interp::Interpreter) {
+        if let Some(f) = self.fanuc.as_mut() {
+            f.state = FanucState {
+                modal: *interp.modal(),
+                units_given: interp.units_given(),
+                end: interp.program_position(),
+                machine: *interp.position(),
+            };
+        }
+    }
+
+    /// The `#3006` stops (warnings) of the lines evaluated since the last call.
+    pub fn take_stops(&mut self) -> Vec<Diagnostic> {
+        self.fanuc
+            .as_mut()
+            .map(|f| std::mem::take(&mut f.stops))
+            .unwrap_or_default()
     }
 
     /// Enter a `G65` macro: a new level of locals `#1`–`#33` holding `args`.
@@ -310,6 +444,17 @@ fn finite(v: f64, what: &str, s: usize, e: usize) -> Result<f64, EvalError> {
     }
 }
 
+/// An angle from `atan2` (degrees, −180 to 180) in Fanuc's range, 0 to 360 (360 itself,
+/// from a tiny negative angle, is 0).
+fn fanuc_angle(deg: f64) -> f64 {
+    let d = if deg < 0.0 { deg + 360.0 } else { deg + 0.0 };
+    if d >= 360.0 {
+        0.0
+    } else {
+        d
+    }
+}
+
 impl<'t, 'p> Eval<'t, 'p> {
     /// A reader of `text` from byte `pos`, reading `params`.
     pub fn new(text: &'t str, pos: usize, params: &'p Params) -> Self {
@@ -377,11 +522,14 @@ impl<'t, 'p> Eval<'t, 'p> {
                 if let Some(f) = self.params.fanuc.as_deref() {
                     if (v - n).abs() > 1e-6
                         || !(0.0..=MAX_PARAM as f64).contains(&n)
-                        || f.get(n as usize).is_none() && fanuc_system(n as usize).is_none()
+                        || f.get(n as usize).is_none()
+                            && fanuc_system(n as usize).is_none()
+                            && fanuc_state_var(n as usize, &f.state).is_none()
+                            && !fanuc_message_var(n as usize)
                     {
                         return Err((
                             format!(
-                                "#{}: Macro B variables are #0 (vacant), #1-#33 (local), #100-#199 and #500-#999 (common), and the positions #5041-#5046 and #5061-#5066; other system variables are not evaluated",
+                                "#{}: Macro B variables are #0 (vacant), #1-#33 (local), #100-#199 and #500-#999 (common), the alarm and stop #3000 and #3006, the modal information #4001-#4120, and the positions #5001-#5006, #5021-#5026, #5041-#5046 and #5061-#5066; other system variables are not evaluated",
                                 self.text(start, self.pos)
                             ),
                             start,
@@ -410,9 +558,19 @@ impl<'t, 'p> Eval<'t, 'p> {
         if let (Some(f), Param::Numbered(n)) = (self.params.fanuc.as_deref(), p) {
             // Vacant reads as 0 in arithmetic; `vacant` tells the callers that care
             // (a word's value, an assignment, EQ and NE).
-            let v = match fanuc_system(*n) {
-                Some(k) => self.params.numbered.get(k).copied(),
-                None => f.get(*n).flatten(),
+            let v = match (fanuc_system(*n), fanuc_state_var(*n, &f.state)) {
+                (Some(k), _) => self.params.numbered.get(k).copied(),
+                (None, Some(known)) => {
+                    Some(known.map_err(|why| (format!("#{n} is not known here: {why}"), s, e))?)
+                }
+                (None, None) if fanuc_message_var(*n) => {
+                    return Err((
+                        format!("#{n} is written (`#{n} = n (MESSAGE)`), not read"),
+                        s,
+                        e,
+                    ))
+                }
+                (None, None) => f.get(*n).flatten(),
             };
             self.vacant = v.is_none();
             return Ok(v.unwrap_or(0.0));
@@ -442,7 +600,7 @@ impl<'t, 'p> Eval<'t, 'p> {
     /// An expression to the end of the line (or a comment), without brackets: the
     /// right-hand side of a Fanuc assignment (`#1 = #1 + 1`).
     pub fn bare_expression(&mut self) -> Result<f64, EvalError> {
-        self.expression_until(true)
+        self.expression_until(true, false)
     }
 
     fn value_inner(&mut self) -> Result<f64, EvalError> {
@@ -552,11 +710,13 @@ impl<'t, 'p> Eval<'t, 'p> {
     /// An expression inside brackets (without them): operators by precedence, each
     /// left to right (RS274NGC).
     fn expression(&mut self) -> Result<f64, EvalError> {
-        self.expression_until(false)
+        self.expression_until(false, false)
     }
 
     /// An expression ended by `]` or, when `bare`, by the end of the line or a comment.
-    fn expression_until(&mut self, bare: bool) -> Result<f64, EvalError> {
+    /// An expression to `]` (with `bare`, to the end of the line or a comment; with
+    /// `comma`, also to a `,`: the first value of Fanuc's `ATAN[a,b]`).
+    fn expression_until(&mut self, bare: bool, comma: bool) -> Result<f64, EvalError> {
         self.skip();
         let start = self.pos;
         let mb = self.macro_b();
@@ -566,7 +726,10 @@ impl<'t, 'p> Eval<'t, 'p> {
         let mut ops: Vec<Op> = Vec::new();
         loop {
             let at = self.pos;
-            if self.peek() == Some(b']') || bare && !self.peek_value() {
+            if self.peek() == Some(b']')
+                || bare && !self.peek_value()
+                || comma && self.peek() == Some(b',')
+            {
                 break;
             }
             let Some(op) = self.op() else {
@@ -606,6 +769,52 @@ impl<'t, 'p> Eval<'t, 'p> {
         Ok(values.pop().unwrap_or(0.0))
     }
 
+    /// Fanuc's `ATAN` (at its `[`; `start` at its name): `ATAN[a]` (degrees, −90 to 90),
+    /// and the two-argument `ATAN[a]/[b]` and `ATAN[a,b]`, the angle of the point (b, a)
+    /// in degrees from 0 to 360 (Fanuc's convention: `ATAN[-1]/[-1]` is 225); `[0]/[0]`
+    /// has no angle and is an error.
+    fn fanuc_atan(&mut self, start: usize) -> Result<f64, EvalError> {
+        let open = self.pos;
+        self.pos += 1;
+        let a = self.expression_until(false, true)?;
+        let b = if self.peek() == Some(b',') {
+            self.pos += 1;
+            Some(self.expression()?)
+        } else {
+            None
+        };
+        if self.peek() != Some(b']') {
+            return Err((
+                "`[` is not closed by `]`".into(),
+                open,
+                self.pos.max(open + 1),
+            ));
+        }
+        self.pos += 1;
+        let b = match b {
+            Some(b) => Some(b),
+            None if self.peek() == Some(b'/') => {
+                self.pos += 1;
+                if self.peek() != Some(b'[') {
+                    return Err(("ATAN[a]/ takes [b]: ATAN[a]/[b]".into(), start, self.pos));
+                }
+                Some(self.bracket()?)
+            }
+            None => None,
+        };
+        let Some(b) = b else {
+            return Ok(a.atan().to_degrees());
+        };
+        if a == 0.0 && b == 0.0 {
+            return Err((
+                "ATAN of the point (0, 0) has no angle".into(),
+                start,
+                self.pos,
+            ));
+        }
+        Ok(fanuc_angle(a.atan2(b).to_degrees()))
+    }
+
     fn function(&mut self) -> Result<f64, EvalError> {
         let start = self.pos;
         let len = self.b[self.pos..]
@@ -643,6 +852,9 @@ impl<'t, 'p> Eval<'t, 'p> {
                 Param::Numbered(_) => 1.0,
             });
         }
+        if name == "ATAN" && self.macro_b() {
+            return self.fanuc_atan(start);
+        }
         let a = self.bracket()?;
         let end = self.pos;
         let domain = |ok: bool| {
@@ -665,10 +877,6 @@ impl<'t, 'p> Eval<'t, 'p> {
             "ASIN" => {
                 domain((-1.0..=1.0).contains(&a))?;
                 a.asin().to_degrees()
-            }
-            "ATAN" if self.macro_b() && self.peek() != Some(b'/') => {
-                // Fanuc's one-argument ATAN[a] (degrees, -90 to 90).
-                a.atan().to_degrees()
             }
             "ATAN" => {
                 if self.peek() != Some(b'/') {
@@ -946,7 +1154,22 @@ pub fn eval_line<'a>(
                     ev.value().map_err(err)?
                 };
                 i = ev.pos;
-                sets.push((p, (!ev.vacant).then_some(v)));
+                let vacant = ev.vacant;
+                if let (true, Param::Numbered(n)) = (macro_b, &p) {
+                    let n = *n;
+                    if fanuc_message_var(n) {
+                        message_var(text, line_no, offset, params, (n, v), (start, i))?;
+                        continue;
+                    }
+                    if params.fanuc.as_deref().and_then(|f| f.get(n)).is_none() {
+                        return Err(err((
+                            format!("#{n} is a system variable: read only"),
+                            start,
+                            i,
+                        )));
+                    }
+                }
+                sets.push((p, (!vacant).then_some(v)));
             }
             b'a'..=b'z' | b'A'..=b'Z' => {
                 let letter = c.to_ascii_uppercase();
@@ -1000,6 +1223,54 @@ pub fn eval_line<'a>(
     }
     for (p, v) in sets {
         params.set_value(&p, v);
+    }
+    Ok(())
+}
+
+/// A Fanuc `#3000 = n (MESSAGE)` (an alarm: the control stops, a located error) or
+/// `#3006 = n (MESSAGE)` (a stop with a message, which cycle start resumes: a warning, held
+/// in `params` for the stream), the assignment at `span` of `text`.
+fn message_var(
+    text: &str,
+    line_no: u32,
+    offset: usize,
+    params: &mut Params,
+    (n, v): (usize, f64),
+    (start, end): (usize, usize),
+) -> Result<(), Diagnostic> {
+    let bytes = text.as_bytes();
+    let mut k = end;
+    while k < bytes.len() && matches!(bytes[k], b' ' | b'\t') {
+        k += 1;
+    }
+    let message = match bytes.get(k) {
+        Some(b'(') => memchr::memchr(b')', &bytes[k + 1..])
+            .map_or(&text[k + 1..], |r| &text[k + 1..k + 1 + r])
+            .trim(),
+        _ => "",
+    };
+    let number = crate::emit::round_half_away(v);
+    let at = |severity, kind| Diagnostic::at(severity, kind, line_no, offset, bytes, start, end);
+    if n == 3000 {
+        if !(0.0..=999.0).contains(&number) || (v - number).abs() > 1e-6 {
+            return Err(at(
+                Severity::Error,
+                ErrorKind::Expression(format!(
+                    "#3000 = {v}: an alarm number is a whole number 0 to 999"
+                )),
+            ));
+        }
+        return Err(at(
+            Severity::Error,
+            ErrorKind::MacroAlarm {
+                number: 3000 + number as u32,
+                message: message.to_string(),
+            },
+        ));
+    }
+    let d = at(Severity::Warning, ErrorKind::MacroStop(message.to_string()));
+    if let Some(f) = params.fanuc.as_mut() {
+        f.stops.push(d);
     }
     Ok(())
 }

@@ -211,10 +211,14 @@ struct Words<'b, 'a> {
     by_letter: [Option<&'b Word<'a>>; 26],
     registers: [Option<&'b Word<'a>>; 10],
     gs: smallvec::SmallVec<[(&'b Word<'a>, u16, GGroup); 4]>,
-    by_group: [u8; GROUPS],
+    /// Per group, 1 + the index in `gs` of its code (0: none); a line of 64 KiB holds
+    /// fewer than 65,535 G words.
+    by_group: [u16; GROUPS],
     ms: smallvec::SmallVec<[(&'b Word<'a>, u16); 4]>,
     /// Axes named by bare letters (`G28 X`), bit `i` for `AXES[i]`.
     bare: u16,
+    /// Axes with a word (`by_letter`), bit `i` for `AXES[i]`.
+    axes: u16,
     /// The first verbatim text of the block, if any.
     first_text: Option<&'b crate::ast::Text<'a>>,
     /// A verbatim text that is not bare axis letters.
@@ -238,10 +242,20 @@ impl<'b, 'a> Words<'b, 'a> {
         }
     }
     fn has_axes(&self) -> bool {
-        AXES.iter()
-            .any(|&a| self.by_letter[usize::from(a - b'A')].is_some())
+        self.axes != 0
     }
 }
+
+/// Bit `i` for the letter `AXES[i]`, by letter (`A` first); 0 for the other letters.
+const AXIS_BITS: [u16; 26] = {
+    let mut bits = [0u16; 26];
+    let mut i = 0;
+    while i < AXES.len() {
+        bits[(AXES[i] - b'A') as usize] = 1 << i;
+        i += 1;
+    }
+    bits
+};
 
 type Res<T> = Result<T, Diagnostic>;
 
@@ -332,6 +346,12 @@ impl Interpreter {
     /// The position now.
     pub fn position(&self) -> &Position {
         &self.pos
+    }
+
+    /// The position now in the work system in force (program coordinates, as moves
+    /// report them); [`Interpreter::position`] is in the machine frame as traced.
+    pub fn program_position(&self) -> Position {
+        self.to_program(self.pos)
     }
 
     /// True after M2/M30 (or an M99 outside any `O` program).
@@ -426,6 +446,7 @@ impl Interpreter {
             by_group: [0; GROUPS],
             ms: smallvec::SmallVec::new(),
             bare: 0,
+            axes: 0,
             first_text: None,
             odd_text: false,
         };
@@ -460,12 +481,7 @@ impl Interpreter {
         }
         self.block_axes = 0;
         if !settings {
-            for (i, &l) in AXES.iter().enumerate() {
-                if w.word(l).is_some() {
-                    self.block_axes |= 1 << i;
-                }
-            }
-            self.block_axes |= w.bare;
+            self.block_axes = w.axes | w.bare;
         }
         self.axes_named |= self.block_axes;
         if w.g_in(GGroup::Motion).is_some() {
@@ -669,7 +685,7 @@ impl Interpreter {
                     w.gs.push((word, code, group));
                     let slot = &mut w.by_group[group as usize];
                     if *slot == 0 || (group == GGroup::Motion && code != 800) {
-                        *slot = u8::try_from(w.gs.len()).unwrap_or(u8::MAX);
+                        *slot = u16::try_from(w.gs.len()).unwrap_or(u16::MAX);
                     }
                 }
                 b'M' => {
@@ -701,7 +717,11 @@ impl Interpreter {
                 }
                 l => match word.register {
                     Some(r) => w.registers[usize::from(r)] = Some(word),
-                    None => w.by_letter[usize::from(l - b'A')] = Some(word),
+                    None => {
+                        let i = usize::from(l - b'A');
+                        w.by_letter[i] = Some(word);
+                        w.axes |= AXIS_BITS[i];
+                    }
                 },
             }
         }
@@ -718,12 +738,29 @@ impl Interpreter {
         out(Event::Diagnostic(diag(b, Severity::Warning, kind, span)));
     }
 
-    fn set_units(&mut self, units: Units) {
+    /// Change units, scaling every length held; `false` (nothing changed) when a length
+    /// would not fit in the new units (1e308 inches is beyond the largest `f64` in mm).
+    fn set_units(&mut self, units: Units) -> bool {
         self.units_given = true;
         if units == self.modal.units {
-            return;
+            return true;
         }
         let f = self.modal.units.mm() / units.mm();
+        let fits = |p: &Position| {
+            p.iter()
+                .enumerate()
+                .all(|(a, v)| is_rotary(a) || (v * f).is_finite())
+        };
+        let canned = [self.canned.z, self.canned.r, self.canned.q];
+        if !(fits(&self.pos)
+            && self.g5x.iter().chain(self.fixture.iter()).all(fits)
+            && [self.g92, self.g52, self.home28, self.home30]
+                .iter()
+                .all(fits)
+            && canned.into_iter().flatten().all(|v| (v * f).is_finite()))
+        {
+            return false;
+        }
         let scale = |p: &mut Position| {
             for (a, v) in p.iter_mut().enumerate() {
                 if !is_rotary(a) {
@@ -746,6 +783,7 @@ impl Interpreter {
             *v *= f;
         }
         self.modal.units = units;
+        true
     }
 
     fn execute(
@@ -892,42 +930,6 @@ impl Interpreter {
             }
         }
         let m = &mut self.modal;
-        // Plane, units, cutter comp, tool length, coordinate system, distance, retract.
-        if let Some((_, c)) = w.g_in(GGroup::Plane) {
-            m.plane = match c {
-                180 => Plane::XZ,
-                190 => Plane::YZ,
-                _ => Plane::XY,
-            };
-        }
-        if let Some((_, c)) = w.g_in(GGroup::Units) {
-            self.set_units(if c == 200 || c == 700 {
-                Units::Inch
-            } else {
-                Units::Mm
-            });
-        }
-        let m = &mut self.modal;
-        if let Some((gw, c)) = w.g_in(GGroup::CutterComp) {
-            let before = m.cutter_comp;
-            m.cutter_comp = match c {
-                410 | 411 => CutterComp::Left,
-                420 | 421 => CutterComp::Right,
-                _ => CutterComp::Off,
-            };
-            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off {
-                self.warn(
-                    b,
-                    out,
-                    ErrorKind::NotSimulated(format!(
-                        "cutter radius compensation {}",
-                        gw.display_code()
-                    )),
-                    Some(gw.span),
-                );
-            }
-        }
-        let m = &mut self.modal;
         if let Some((_, c)) = w.g_in(GGroup::ToolLength) {
             m.tool_length = if c == 490 {
                 None
@@ -942,64 +944,14 @@ impl Interpreter {
                 Some(h.max(0.0) as u32)
             };
         }
-        if let Some((_, c)) = w.g_in(GGroup::CoordSystem) {
-            m.work_offset = WorkOffset::G5x(match c {
-                591 => 7,
-                592 => 8,
-                593 => 9,
-                c => ((c - 530) / 10) as u8,
-            });
+        // Plane, units, cutter comp, coordinate system, distance, retract and the codes
+        // not simulated: only a block with a G-code besides motion has any.
+        if !w.gs.iter().all(|g| g.2 == GGroup::Motion) {
+            self.modal_groups(b, w, out)?;
         }
-        if let Some((_, c)) = w.g_in(GGroup::Distance) {
-            m.distance = if c == 910 {
-                Distance::Incremental
-            } else {
-                Distance::Absolute
-            };
-        }
-        if let Some((_, c)) = w.g_in(GGroup::ArcDistance) {
-            m.arc_distance = if c == 911 {
-                Distance::Incremental
-            } else {
-                Distance::Absolute
-            };
-        }
-        if let Some((_, c)) = w.g_in(GGroup::Retract) {
-            m.retract = if c == 990 {
-                Retract::RPlane
-            } else {
-                Retract::InitialZ
-            };
-        }
-        for group in [
-            GGroup::Polar,
-            GGroup::Scaling,
-            GGroup::Mirror,
-            GGroup::Rotation,
-        ] {
-            if let Some((gw, c)) = w.g_in(group) {
-                if !matches!(c, 150 | 500 | 501 | 690) {
-                    self.warn(
-                        b,
-                        out,
-                        ErrorKind::NotSimulated(format!(
-                            "{} ({})",
-                            gw.display_code(),
-                            group.name()
-                        )),
-                        Some(gw.span),
-                    );
-                }
-            }
-        }
-        // Motion mode change.
-        if let Some((gw, c)) =
-            w.gs.iter()
-                .filter(|g| g.2 == GGroup::Motion)
-                .map(|g| (g.0, g.1))
-                .find(|g| g.1 != 800)
-                .or_else(|| w.g_in(GGroup::Motion))
-        {
+        // Motion mode change: the block's motion code other than G80 (at most one: see
+        // `collect`), else its G80.
+        if let Some((gw, c)) = w.g_in(GGroup::Motion) {
             let m = &mut self.modal;
             m.motion = match c {
                 0 => Motion::Rapid,
@@ -1051,7 +1003,12 @@ impl Interpreter {
         let g53 = w.has_g(530);
         // Non-modal codes.
         let mut axes_used = false;
-        for &(gw, c, g) in &w.gs {
+        let non_modal = if w.by_group[GGroup::NonModal as usize] == 0 {
+            &[][..]
+        } else {
+            &w.gs[..]
+        };
+        for &(gw, c, g) in non_modal {
             if g != GGroup::NonModal {
                 continue;
             }
@@ -1137,7 +1094,7 @@ impl Interpreter {
         }
         // An explicit motion code with no axis words still runs its motion, to where
         // the tool already is (as LinuxCNC does: `G0` alone is a zero-length rapid).
-        let explicit_motion = w.gs.iter().any(|g| g.2 == GGroup::Motion && g.1 != 800);
+        let explicit_motion = w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 800);
         if offsets_may_change {
             self.refresh_offset();
         }
@@ -1159,6 +1116,114 @@ impl Interpreter {
                 self.open_programs -= 1;
             } else {
                 self.main_program_m99(b, w, out)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The modal groups of a block's G-codes other than motion, feed mode and tool
+    /// length (see [`Interpreter::execute`]).
+    fn modal_groups(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        let m = &mut self.modal;
+        if let Some((_, c)) = w.g_in(GGroup::Plane) {
+            m.plane = match c {
+                180 => Plane::XZ,
+                190 => Plane::YZ,
+                _ => Plane::XY,
+            };
+        }
+        if let Some((gw, c)) = w.g_in(GGroup::Units) {
+            let units = if c == 200 || c == 700 {
+                Units::Inch
+            } else {
+                Units::Mm
+            };
+            if !self.set_units(units) {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: gw.display_code(),
+                        why: "a position or offset held is too large to hold in the new units",
+                    },
+                    Some(gw.span),
+                ));
+            }
+        }
+        let m = &mut self.modal;
+        if let Some((gw, c)) = w.g_in(GGroup::CutterComp) {
+            let before = m.cutter_comp;
+            m.cutter_comp = match c {
+                410 | 411 => CutterComp::Left,
+                420 | 421 => CutterComp::Right,
+                _ => CutterComp::Off,
+            };
+            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off {
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "cutter radius compensation {}",
+                        gw.display_code()
+                    )),
+                    Some(gw.span),
+                );
+            }
+        }
+        let m = &mut self.modal;
+        if let Some((_, c)) = w.g_in(GGroup::CoordSystem) {
+            m.work_offset = WorkOffset::G5x(match c {
+                591 => 7,
+                592 => 8,
+                593 => 9,
+                c => ((c - 530) / 10) as u8,
+            });
+        }
+        if let Some((_, c)) = w.g_in(GGroup::Distance) {
+            m.distance = if c == 910 {
+                Distance::Incremental
+            } else {
+                Distance::Absolute
+            };
+        }
+        if let Some((_, c)) = w.g_in(GGroup::ArcDistance) {
+            m.arc_distance = if c == 911 {
+                Distance::Incremental
+            } else {
+                Distance::Absolute
+            };
+        }
+        if let Some((_, c)) = w.g_in(GGroup::Retract) {
+            m.retract = if c == 990 {
+                Retract::RPlane
+            } else {
+                Retract::InitialZ
+            };
+        }
+        for group in [
+            GGroup::Polar,
+            GGroup::Scaling,
+            GGroup::Mirror,
+            GGroup::Rotation,
+        ] {
+            if let Some((gw, c)) = w.g_in(group) {
+                if !matches!(c, 150 | 500 | 501 | 690) {
+                    self.warn(
+                        b,
+                        out,
+                        ErrorKind::NotSimulated(format!(
+                            "{} ({})",
+                            gw.display_code(),
+                            group.name()
+                        )),
+                        Some(gw.span),
+                    );
+                }
             }
         }
         Ok(())
@@ -1905,5 +1970,25 @@ mod tests {
             .map(|m| m.end[Z])
             .collect();
         assert_eq!(feeds, [0.5 - 0.1, 0.5 - 0.1 - 0.1, 0.2]);
+    }
+
+    #[test]
+    fn units_that_would_overflow_a_position_are_refused() {
+        // Found by `cargo xtask fuzz` (seed 4242): Z 1e308 inches is beyond the largest
+        // f64 in millimetres; G21 used to make it infinite. Refused at G21, and no move
+        // after it (the stream reads on) carries a number that is not finite.
+        let big = format!("1{}", "0".repeat(308));
+        let text = format!("G20 G90\nG0 X0 Y0 Z{big}\nG21\nG0 X1\n");
+        let (moves, diags) = run(&text);
+        let e = diags.iter().find(|d| d.is_error()).expect("refused");
+        assert_eq!((e.line, e.column), (3, 1), "{}", e.kind);
+        assert!(e.kind.to_string().contains("too large"), "{}", e.kind);
+        for m in &moves {
+            assert!(m.start.iter().chain(&m.end).all(|v| v.is_finite()), "{m:?}");
+        }
+        // Converting a position that fits stays exact.
+        let (moves, diags) = run("G20 G90\nG0 X1 Y0 Z0\nG21\nG0 Y1\n");
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(moves[1].start[X], 25.4);
     }
 }

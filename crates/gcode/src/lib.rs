@@ -44,6 +44,6 @@ pub use flavor::{Flavor, Resolved};
 pub use interp::{Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin};
 pub use lines::{Line, LineReader, Lines};
 pub use modal::{Modal, Plane, Position, Units, AXES};
-pub use parse::{parse_line, parse_line_into, parse_line_with};
+pub use parse::{parse_line, parse_line_into, parse_line_with, parse_str_with};
 pub use program::{Order, ProgramReader};
 pub use stream::{check, LineSource, Stream};

@@ -28,7 +28,15 @@ pub struct Line<'a> {
     /// The whole line's length without its ending: more than `bytes.len()` for a
     /// streamed line over [`MAX_LINE_BYTES`], whose rest was read past unheld.
     pub len: usize,
+    /// The bytes as text, when the source has already found them to be UTF-8 (in-memory
+    /// input, checked [`CHECKED_CHUNK`] bytes at a time); `None` when it has not (the
+    /// parser checks them: see [`crate::parse::parse_str_with`]).
+    pub text: Option<&'a str>,
 }
+
+/// How many bytes of in-memory input [`Lines`] finds to be UTF-8 at a time (whole lines;
+/// a longer line alone).
+pub const CHECKED_CHUNK: usize = 64 * 1024;
 
 impl Line<'_> {
     /// The error for a line over [`MAX_LINE_BYTES`] (with its whole length), if it is
@@ -64,6 +72,11 @@ pub struct Lines<'a> {
     input: &'a [u8],
     pos: usize,
     number: u32,
+    /// The input from `checked_start` to `checked_end`, whole lines, checked for UTF-8
+    /// in one go: the text when it is UTF-8 (`None`: its lines are left to the parser).
+    checked: Option<&'a str>,
+    checked_start: usize,
+    checked_end: usize,
 }
 
 impl<'a> Lines<'a> {
@@ -73,7 +86,34 @@ impl<'a> Lines<'a> {
             input,
             pos: 0,
             number: 0,
+            checked: None,
+            checked_start: 0,
+            checked_end: 0,
         }
+    }
+
+    /// The text of the line at `start..end` (its ending excluded), checking the next
+    /// whole lines of up to [`CHECKED_CHUNK`] bytes from `start` (a line that starts a
+    /// chunk) once its line is past the last checked.
+    fn text(&mut self, start: usize, end: usize) -> Option<&'a str> {
+        if end - start > MAX_LINE_BYTES {
+            // Refused unread.
+            return None;
+        }
+        if end > self.checked_end || start < self.checked_start {
+            let limit = start.saturating_add(CHECKED_CHUNK).min(self.input.len());
+            let chunk_end = if limit == self.input.len() {
+                limit
+            } else {
+                memchr::memrchr(b'\n', &self.input[start..limit]).map_or(end, |i| start + i + 1)
+            }
+            .max(end);
+            self.checked = std::str::from_utf8(&self.input[start..chunk_end]).ok();
+            self.checked_start = start;
+            self.checked_end = chunk_end;
+        }
+        self.checked?
+            .get(start - self.checked_start..end - self.checked_start)
     }
 }
 
@@ -90,11 +130,13 @@ impl<'a> Iterator for Lines<'a> {
         self.pos += len;
         self.number = self.number.saturating_add(1);
         let bytes = strip_eol(&rest[..len]);
+        let text = self.text(offset, offset + bytes.len());
         Some(Line {
             number: self.number,
             offset,
             bytes,
             len: bytes.len(),
+            text,
         })
     }
 }
@@ -223,6 +265,7 @@ impl<R: BufRead> LineReader<R> {
             offset: self.start,
             bytes: &self.buf[..held],
             len: self.len,
+            text: None,
         }
     }
 
@@ -350,5 +393,37 @@ mod tests {
         // An endless source stops after the run limit.
         let mut r = LineReader::new(BufReader::new(io::repeat(0)));
         assert!(r.next_line().is_err());
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn checked_text_is_the_lines_text(
+            lines in proptest::collection::vec(
+                (0usize..90_000, proptest::prop_oneof![
+                    proptest::strategy::Just(b"G1 X1\n".to_vec()),
+                    proptest::strategy::Just("(é)\r\n".as_bytes().to_vec()),
+                    proptest::strategy::Just(b"\xff\n".to_vec()),
+                    proptest::strategy::Just(b"\n".to_vec()),
+                    proptest::strategy::Just(b"".to_vec()),
+                ]),
+                0..12,
+            ),
+        ) {
+            let mut input = Vec::new();
+            for (pad, end) in &lines {
+                input.extend(std::iter::repeat_n(b'X', *pad));
+                input.extend_from_slice(end);
+            }
+            let valid = std::str::from_utf8(&input).is_ok();
+            for l in Lines::new(&input) {
+                let own = std::str::from_utf8(l.bytes).ok();
+                match l.text {
+                    Some(t) => proptest::prop_assert_eq!(Some(t), own),
+                    // Lines of a chunk with an invalid byte are left to the parser, as
+                    // are lines too long to read.
+                    None => proptest::prop_assert!(!valid || l.bytes.len() > MAX_LINE_BYTES),
+                }
+            }
+        }
     }
 }

@@ -91,6 +91,12 @@ pub fn parse_number(text: &str) -> Option<f64> {
 /// text is anything else, which then goes to the nom grammar `number`; the two agree
 /// wherever this one answers (property-tested).
 pub fn fast_number(b: &[u8]) -> Option<(usize, f64)> {
+    scan_number(b)
+}
+
+/// [`fast_number`], inlined where the parser's fast path reads every word's number.
+#[inline(always)]
+fn scan_number(b: &[u8]) -> Option<(usize, f64)> {
     const POW10: [f64; 16] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
     ];
@@ -284,31 +290,193 @@ pub fn parse_line_with<'a>(
     block: &mut Block<'a>,
     exponents: bool,
 ) -> Result<(), Diagnostic> {
-    let err = |kind: ErrorKind, start: usize, end: usize| {
-        Diagnostic::at(Severity::Error, kind, line_no, offset, line, start, end)
-    };
-    block.line = line_no;
-    block.span = Span::new(offset, offset + line.len());
-    block.kind = BlockKind::Words;
-    block.block_delete = false;
-    block.items.clear();
-    block.raw = "";
+    reset(block, line_no, offset, line.len());
     if line.len() > MAX_LINE_BYTES {
-        return Err(err(ErrorKind::LineTooLong(line.len()), 0, 1));
+        return Err(too_long(line, line_no, offset));
     }
     let text = match std::str::from_utf8(line) {
         Ok(t) => t,
         Err(e) => {
             let at = e.valid_up_to();
-            return Err(err(
+            return Err(Diagnostic::at(
+                Severity::Error,
                 ErrorKind::InvalidUtf8,
+                line_no,
+                offset,
+                line,
                 at,
                 at + e.error_len().unwrap_or(1),
             ));
         }
     };
+    parse_text(text, line_no, offset, block, exponents)
+}
+
+/// [`parse_line_with`] of a line its source has already found to be UTF-8 (see
+/// [`crate::Line::text`]): the same block or error, without checking the text again.
+pub fn parse_str_with<'a>(
+    text: &'a str,
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    exponents: bool,
+) -> Result<(), Diagnostic> {
+    reset(block, line_no, offset, text.len());
+    if text.len() > MAX_LINE_BYTES {
+        return Err(too_long(text.as_bytes(), line_no, offset));
+    }
+    parse_text(text, line_no, offset, block, exponents)
+}
+
+/// The block of an empty line at `line_no`, spanning `len` bytes from `offset`.
+fn reset(block: &mut Block<'_>, line_no: u32, offset: usize, len: usize) {
+    block.line = line_no;
+    block.span = Span::new(offset, offset + len);
+    block.kind = BlockKind::Words;
+    block.block_delete = false;
+    block.items.clear();
+    block.raw = "";
+}
+
+#[cold]
+fn too_long(line: &[u8], line_no: u32, offset: usize) -> Diagnostic {
+    Diagnostic::at(
+        Severity::Error,
+        ErrorKind::LineTooLong(line.len()),
+        line_no,
+        offset,
+        line,
+        0,
+        1,
+    )
+}
+
+/// A line of text (not over [`MAX_LINE_BYTES`]) into `block` (reset): the common line
+/// by [`simple_words`], any other by [`words_reference`].
+fn parse_text<'a>(
+    text: &'a str,
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    exponents: bool,
+) -> Result<(), Diagnostic> {
     block.raw = text;
+    if simple_words(text, offset, exponents, &mut block.items) {
+        return Ok(());
+    }
+    block.items.clear();
+    words_reference(text, line_no, offset, block, exponents)
+}
+
+/// The fast path of the parser, for the lines programs are mostly made of: words whose
+/// number follows the letter directly in its common spelling (see [`fast_number`]), each
+/// letter once (G and M may repeat), blanks, and comments. Their items are pushed to
+/// `items` and `true` returned; `false` (items partly pushed) for anything else, from
+/// block delete, macros and O-words to a G or M code that makes the rest of the block a
+/// firmware code's own (homing, bed levelling, an M-code lampost does not act on, a
+/// message) or a T word: [`words_reference`] reads those. Where this answers, the two
+/// give the same items (property-tested).
+fn simple_words<'a>(
+    text: &'a str,
+    offset: usize,
+    exponents: bool,
+    items: &mut smallvec::SmallVec<[Item<'a>; 8]>,
+) -> bool {
     let bytes = text.as_bytes();
+    let mut seen: u32 = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        let c = bytes[i];
+        match c {
+            b' ' | b'\t' => i += 1,
+            b'a'..=b'z' | b'A'..=b'Z' => {
+                let letter = c.to_ascii_uppercase();
+                // O-word lines and FADAL program numbers, FADAL R registers (`R1+1.`) and
+                // T words (the rest of the block may be the firmware's) go the long way.
+                if matches!(letter, b'O' | b'T')
+                    || letter == b'R'
+                        && bytes.get(i + 1).is_some_and(u8::is_ascii_digit)
+                        && matches!(bytes.get(i + 2), Some(b'+' | b'-'))
+                {
+                    return false;
+                }
+                let Some((len, value)) = scan_number(&bytes[i + 1..]) else {
+                    return false;
+                };
+                let end = i + 1 + len;
+                if exponents && bytes.get(end) == Some(&b'e') {
+                    return false;
+                }
+                match letter {
+                    b'G' => {
+                        if Word::code_of(value)
+                            .is_none_or(|c| matches!(c, 280 | 290 | 300 | 1610 | 1620))
+                        {
+                            return false;
+                        }
+                    }
+                    b'M' => {
+                        if Word::m_code_of(value).is_none_or(|c| !crate::modal::m_known(c)) {
+                            return false;
+                        }
+                    }
+                    _ => {
+                        let bit = 1u32 << (letter - b'A');
+                        if seen & bit != 0 {
+                            return false;
+                        }
+                        seen |= bit;
+                    }
+                }
+                items.push(Item::Word(Word {
+                    letter,
+                    register: None,
+                    value,
+                    text: &text[i + 1..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
+            }
+            b'(' => match memchr::memchr(b')', &bytes[i + 1..]) {
+                Some(rel) => {
+                    let end = i + 1 + rel;
+                    items.push(Item::Comment(Comment {
+                        text: &text[i + 1..end],
+                        style: CommentStyle::Paren,
+                        span: Span::new(offset + i, offset + end + 1),
+                    }));
+                    i = end + 1;
+                }
+                None => return false,
+            },
+            b';' => {
+                items.push(Item::Comment(Comment {
+                    text: &text[i + 1..],
+                    style: CommentStyle::Semicolon,
+                    span: Span::new(offset + i, offset + bytes.len()),
+                }));
+                return true;
+            }
+            _ => return false,
+        }
+    }
+    true
+}
+
+/// The parser's reference path: every line [`simple_words`] does not take (and, in the
+/// tests, every line), into `block` (reset, with its text).
+fn words_reference<'a>(
+    text: &'a str,
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    exponents: bool,
+) -> Result<(), Diagnostic> {
+    let line = text.as_bytes();
+    let err = |kind: ErrorKind, start: usize, end: usize| {
+        Diagnostic::at(Severity::Error, kind, line_no, offset, line, start, end)
+    };
+    let bytes = line;
     let mut i = 0;
     while i < bytes.len() && (bytes[i] == b' ' || bytes[i] == b'\t') {
         i += 1;
@@ -675,6 +843,85 @@ mod tests {
                 proptest::prop_assert_eq!(s.len() - rest.len(), len);
                 proptest::prop_assert_eq!(parse_number(text), Some(v));
             }
+        }
+    }
+
+    /// A token of a random line for the fast-path property: words in every spelling,
+    /// comments, macro and firmware forms, and junk.
+    fn token() -> impl proptest::strategy::Strategy<Value = String> {
+        use proptest::prelude::*;
+        prop_oneof![
+            4 => ("[A-Za-z]", "[+-]?[0-9]{0,6}(\\.[0-9]{0,4})?").prop_map(|(l, n)| format!("{l}{n}")),
+            2 => ("[GgMm]", prop_oneof![
+                Just("0"), Just("1"), Just("2"), Just("3"), Just("28"), Just("29"), Just("30"),
+                Just("161"), Just("38.2"), Just("3"), Just("104"), Just("117"), Just("118"),
+                Just("1.05"), Just("99999"), Just("98"), Just("-1"), Just("6553.6"),
+            ]).prop_map(|(l, n)| format!("{l}{n}")),
+            1 => "[XYZ][0-9]{16,18}",
+            1 => "[XYZEF]-?[0-9]\\.[0-9]e[+-]?[0-9]",
+            1 => "[XR][0-9][+-][0-9]\\.",
+            1 => prop_oneof![
+                Just("(c)"), Just("("), Just(";c"), Just("'c"), Just("/"), Just("#1"),
+                Just("[1]"), Just("%"), Just("$H"), Just("$0"), Just("O100 sub"), Just("o<x> call"),
+                Just("T1"), Just("X"), Just("\"s\""), Just("@"), Just("."), Just("-1"), Just("X#1"),
+                Just("XR1"), Just("X R1"), Just("X 1"), Just("\t"), Just("é"),
+            ].prop_map(str::to_string),
+        ]
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn simple_words_agree_with_the_reference(
+            tokens in proptest::collection::vec(token(), 0..8),
+            joins in proptest::collection::vec(proptest::prop_oneof![
+                proptest::strategy::Just(""), proptest::strategy::Just(" "), proptest::strategy::Just("  ")
+            ], 8),
+            exponents in proptest::bool::ANY,
+        ) {
+            let mut line = String::new();
+            for (t, j) in tokens.iter().zip(&joins) {
+                line.push_str(t);
+                line.push_str(j);
+            }
+            let mut fast = smallvec::SmallVec::new();
+            if simple_words(&line, 7, exponents, &mut fast) {
+                let mut reference = Block::empty(1, 7);
+                reset(&mut reference, 1, 7, line.len());
+                reference.raw = &line;
+                let r = words_reference(&line, 1, 7, &mut reference, exponents);
+                proptest::prop_assert!(r.is_ok(), "{line:?}: {r:?}");
+                proptest::prop_assert_eq!(reference.kind, BlockKind::Words);
+                proptest::prop_assert!(!reference.block_delete);
+                proptest::prop_assert_eq!(&fast[..], &reference.items[..], "{:?}", line);
+            }
+        }
+    }
+
+    #[test]
+    fn simple_words_take_the_common_lines() {
+        let mut items = smallvec::SmallVec::new();
+        for s in [
+            "G1 X-2.958 Y7.109 F1200.",
+            "G2X1.Y2I.5J0 (arc) ; end",
+            "",
+            "M3 S1000",
+        ] {
+            items.clear();
+            assert!(simple_words(s, 0, false, &mut items), "{s}");
+        }
+        for s in [
+            "T1 M6",
+            "G28 X",
+            "M104 S200",
+            "X1 X2",
+            "R1+1.",
+            "/G1 X1",
+            "G1 X1e-5",
+            "o100 sub",
+        ] {
+            items.clear();
+            let exponents = s.contains('e');
+            assert!(!simple_words(s, 0, exponents, &mut items), "{s}");
         }
     }
 

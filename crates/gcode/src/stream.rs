@@ -8,7 +8,7 @@ use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
-use crate::parse::parse_line_with;
+use crate::parse::{parse_line_with, parse_str_with};
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
@@ -96,6 +96,11 @@ impl<S: LineSource> Stream<S> {
     pub fn new(src: S, opts: Options, stop_on_error: bool) -> Self {
         let mut interp = Interpreter::new(opts);
         interp.set_calls(src.calls());
+        let params = if opts.flavor.macro_b() {
+            Some(Box::new(Params::macro_b()))
+        } else {
+            opts.flavor.evaluates().then(Box::default)
+        };
         Stream {
             src,
             interp,
@@ -105,11 +110,7 @@ impl<S: LineSource> Stream<S> {
             finished: false,
             any_content: false,
             exponents: opts.e_word == EWord::Extrusion,
-            params: if opts.flavor.macro_b() {
-                Some(Box::new(Params::macro_b()))
-            } else {
-                opts.flavor.evaluates().then(Box::default)
-            },
+            params,
         }
     }
 
@@ -175,13 +176,18 @@ impl<S: LineSource> Iterator for Stream<S> {
             let mut block = Block::empty(line.number, line.offset);
             let mut parsed = match line.too_long() {
                 Some(d) => Err(d),
-                None => parse_line_with(
-                    line.bytes,
-                    line.number,
-                    line.offset,
-                    &mut block,
-                    self.exponents,
-                ),
+                None => match line.text {
+                    Some(text) => {
+                        parse_str_with(text, line.number, line.offset, &mut block, self.exponents)
+                    }
+                    None => parse_line_with(
+                        line.bytes,
+                        line.number,
+                        line.offset,
+                        &mut block,
+                        self.exponents,
+                    ),
+                },
             };
             // Macro lines only: the flavour's evaluation (plain lines never come here;
             // under Macro B also lines the parser refuses and G65 blocks).
@@ -190,6 +196,8 @@ impl<S: LineSource> Iterator for Stream<S> {
             if let Some(params) = self.params.as_deref_mut() {
                 if params.is_macro_b() {
                     if block.kind != BlockKind::Words || parsed.is_err() || has_g65(&block) {
+                        // The system variables read the state after the block before.
+                        params.after_block(&self.interp);
                         parsed = evaluate_macro_b(
                             &line,
                             &mut block,
@@ -229,6 +237,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 (control, self.params.as_deref_mut())
             {
                 let kind = if params.is_macro_b() {
+                    params.after_block(&self.interp);
                     MacroKind::FanucMacroB
                 } else {
                     MacroKind::LinuxCncOWord
@@ -268,6 +277,9 @@ impl<S: LineSource> Iterator for Stream<S> {
                 if params.is_macro_b() {
                     for _ in 0..self.src.take_returns() {
                         params.leave_macro();
+                    }
+                    for d in params.take_stops() {
+                        self.queue.push_back(Event::Diagnostic(d));
                     }
                 }
             }

@@ -210,6 +210,145 @@ fn fanuc_functions_and_operators() {
 }
 
 #[test]
+fn two_argument_atan_is_fanucs_0_to_360() {
+    // Each worked by hand: the angle of the point (b, a), 0 ≤ θ < 360.
+    let cases: &[(&str, f64)] = &[
+        ("[ATAN[1]/[1]]", 45.0),
+        ("[ATAN[1,1]]", 45.0),
+        ("[ATAN[1]/[-1]]", 135.0),
+        ("[ATAN[-1]/[-1]]", 225.0),
+        ("[ATAN[-1,-1]]", 225.0),
+        ("[ATAN[-1]/[1]]", 315.0),
+        ("[ATAN[-1, 1]]", 315.0),
+        ("[ATAN[0]/[1]]", 0.0),
+        ("[ATAN[-0]/[1]]", 0.0),
+        ("[ATAN[0]/[-1]]", 180.0),
+        ("[ATAN[-0]/[-1]]", 180.0),
+        ("[ATAN[1]/[0]]", 90.0),
+        ("[ATAN[-1]/[0]]", 270.0),
+        ("[ATAN[-2]]", -63.43494882292201),
+        // Expressions in either place: the point (-3, 3) at 135°, (3, -3) at 315°.
+        ("[ATAN[3, 2 * -1.5]]", 135.0),
+        ("[ATAN[[1 + 2] * -1]/[3]]", 315.0),
+    ];
+    for (e, want) in cases {
+        let text = format!("G21 G90 G0 X0\n#100 = {e}\nG0 X#100\nM30\n");
+        let m = clean(&text);
+        assert_eq!(m[1][0], *want, "{e}");
+        assert!(m[1][0].is_sign_positive() || *want < 0.0, "{e}: -0");
+    }
+    for (e, col, what) in [
+        ("[ATAN[0]/[0]]", 7, "has no angle"),
+        ("[ATAN[0,0]]", 7, "has no angle"),
+        ("[ATAN[1,2,3]]", 15, "found `,`"),
+        ("[ATAN[1]/2]", 7, "ATAN[a]/ takes [b]"),
+    ] {
+        let text = format!("G0 X0\n#1 = {e}\nM30\n");
+        let (_, d) = run(&text);
+        let e0 = d.iter().find(|d| d.is_error()).expect("an error");
+        assert!(e0.kind.to_string().contains(what), "{e}: {}", e0.kind);
+        assert_eq!((e0.line, e0.column), (2, col), "{e}: {}", e0.kind);
+    }
+}
+
+#[test]
+fn system_variables_read_the_traced_state() {
+    // Modal information after the block before, the end of the last block (work system)
+    // and in the machine frame as traced (G92 shifts the work system by -10 in X here).
+    let text = "G21 G90 G17 G94 G40 G49 G54 G98\n\
+        G1 X10. Y20. Z-1. F250. S1200 T7\n\
+        #100 = #4001\n#101 = #4002\n#102 = #4003\n#103 = #4005\n#104 = #4006\n\
+        #105 = #4007\n#106 = #4008\n#107 = #4009\n#108 = #4010\n#109 = #4014\n\
+        #110 = #4109\n#111 = #4119\n#112 = #4120\n\
+        #113 = #5001\n#114 = #5002\n#115 = #5003\n\
+        G92 X0\n\
+        #116 = #5001\n#117 = #5021\n\
+        G91 G18 G3 X1. Z1. R1.\n\
+        #118 = #4001 * 1000 + #4002 * 10 + [#4003 - 90]\n\
+        G90 G0 X#100 Y#101 Z#102\nG0 X#103 Y#104 Z#105\nG0 X#106 Y#107 Z#108\n\
+        G0 X#109 Y#110 Z#111\nG0 X#112 Y#113 Z#114\nG0 X#115 Y#116 Z#117\nG0 X#118\n\
+        M30\n";
+    let m = clean(text);
+    let n = m.len();
+    assert_eq!(
+        &m[n - 7..],
+        &[
+            [1.0, 17.0, 90.0],
+            [94.0, 21.0, 40.0],
+            [49.0, 80.0, 98.0],
+            [54.0, 250.0, 1200.0],
+            [7.0, 10.0, 20.0],
+            [-1.0, 0.0, 10.0],
+            [3181.0, 0.0, 10.0],
+        ]
+    );
+    // Read by a loop's condition, evaluated again at each END.
+    let text = "G21 G90 G0 X0\nWHILE [#5001 LT 3] DO1\nG91 G0 X1\nEND1\nG90 M30\n";
+    assert_eq!(xs(&clean(text)), [0.0, 1.0, 2.0, 3.0]);
+    // #5001 after an incremental move.
+    let text = "G21 G90 G0 X5 Y0\nG91 G1 X1 F100\nG90\n#1 = #5001\nG0 Y#1\nM30\n";
+    assert_eq!(clean(text).last(), Some(&[6.0, 6.0, 0.0]));
+}
+
+#[test]
+fn alarms_stop_and_unknown_state_are_located() {
+    // #3000: the control's alarm 3000 + n with the comment as its message.
+    let text = "G21 G0 X0\n#1 = 2\nIF [#1 NE 1] GOTO 10\nM30\nN10 #3000 = 12 (PART NOT CLAMPED)\nG0 X5\nM30\n";
+    let (m, d) = run(text);
+    assert_eq!(m.len(), 1, "nothing after the alarm");
+    let e = d.iter().find(|d| d.is_error()).expect("the alarm");
+    assert_eq!((e.line, e.column), (5, 5));
+    let msg = e.kind.to_string();
+    assert!(
+        msg.contains("alarm 3012") && msg.contains("`PART NOT CLAMPED`"),
+        "{msg}"
+    );
+    // #3006: a stop with a message is a warning; the trace goes on.
+    let text = "G21 G0 X0\n#3006 = 1 (TURN PART OVER)\nG0 X5\nM30\n";
+    let (m, d) = run(text);
+    assert_eq!(m.len(), 2);
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert!(!d[0].is_error());
+    assert_eq!((d[0].line, d[0].column), (2, 1));
+    assert!(
+        d[0].kind.to_string().contains("`TURN PART OVER`"),
+        "{}",
+        d[0].kind
+    );
+    // State the trace does not know, writes to read-only variables, reading #3000.
+    for (text, line, col, what) in [
+        ("G0 X0\n#1 = #4006\nM30\n", 2, 6, "power-on units"),
+        (
+            "G21 G0 X0\nG81 X1 Z-1 R1 F10\n#1 = #4001\nM30\n",
+            3,
+            6,
+            "canned cycle",
+        ),
+        (
+            "G21 G0 X0\nG43 H2 Z5\n#1 = #4008\nM30\n",
+            3,
+            6,
+            "G43 from G44",
+        ),
+        ("G21 G0 X0\n#1 = #4111\nM30\n", 2, 6, "last H"),
+        ("G21 G0 X0\n#1 = #4113\nM30\n", 2, 6, "not traced"),
+        ("G21 G0 X0\n#5001 = 3\nM30\n", 2, 1, "read only"),
+        ("G21 G0 X0\n#4001 = 1\nM30\n", 2, 1, "read only"),
+        ("G21 G0 X0\n#1 = #3000\nM30\n", 2, 6, "not read"),
+        ("G21 G0 X0\n#3000 = 1.5\nM30\n", 2, 1, "whole number"),
+        ("G21 G0 X0\n#1 = #5007\nM30\n", 2, 7, "not evaluated"),
+    ] {
+        let (_, d) = run(text);
+        let e = d
+            .iter()
+            .find(|d| d.is_error())
+            .unwrap_or_else(|| panic!("{text}: {d:?}"));
+        assert!(e.kind.to_string().contains(what), "{text}: {}", e.kind);
+        assert_eq!((e.line, e.column), (line, col), "{text}: {}", e.kind);
+    }
+}
+
+#[test]
 fn vacant_variables_follow_fanuc_rules() {
     // A word whose value is a vacant variable is left out; in arithmetic vacant is 0;
     // EQ and NE tell vacant from 0; an assignment copies vacancy.
