@@ -27,6 +27,7 @@
 
 pub mod compare;
 pub mod error;
+pub mod map;
 pub mod plan;
 pub mod program;
 pub mod reduce;
