@@ -753,3 +753,151 @@ pub fn compare_cmd(measured: &str, a: &CompareArgs) -> Result<(), CliError> {
     }
     write_file(None, &out)
 }
+
+/// `inspect deposits`: where the measured part is out of tolerance, the layers and lines
+/// of the posted program that deposited there.
+#[allow(clippy::too_many_arguments)]
+pub fn deposits_cmd(
+    machine: &str,
+    sets: &[String],
+    head: Option<&str>,
+    posted: &str,
+    measured: &str,
+    tol: f64,
+    radius: f64,
+    output: Option<&str>,
+    json_out: bool,
+) -> Result<(), CliError> {
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(CliError::usage(format!(
+            "error: --tol {tol}: give a positive tolerance\n"
+        )));
+    }
+    let m = load_machine(machine, sets)?;
+    let h = match head {
+        Some(n) => m.head(n).map_err(kin_error)?,
+        None => m.head("laser").unwrap_or(0),
+    };
+    let (name, text) = read(measured)?;
+    let (rows, flagged) = read_measured(&name, &text)?;
+    let (pname, ptext) = read(posted)?;
+    let dep = lampost_inspect::deposits::replay(&m, h, ptext.as_bytes(), radius)
+        .map_err(|e| error(&pname, &ptext, e))?;
+    if dep.segments.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {pname} deposits nothing on {} (no feed move with the laser on, `{}` … `{}`)\n  = help: give the posted deposition program the part was built with\n",
+            m.def.name, m.def.process.laser_on, m.def.process.laser_off
+        )));
+    }
+    // Out of tolerance: missing (below −tol) or in excess (above +tol), each looked up
+    // at its nominal point (where the material should be).
+    struct Found<'a> {
+        row: &'a Row,
+        kind: &'static str,
+        near: Option<lampost_inspect::deposits::Near>,
+    }
+    let found: Vec<Found> = rows
+        .iter()
+        .filter(|r| r.deviation.abs() > tol)
+        .map(|r| Found {
+            row: r,
+            kind: if r.deviation < 0.0 {
+                "missing"
+            } else {
+                "excess"
+            },
+            near: dep.nearest(r.nominal),
+        })
+        .collect();
+    let mut per_layer = vec![(0usize, 0usize); dep.layers.len()];
+    for f in &found {
+        if let Some(n) = &f.near {
+            let e = &mut per_layer[n.layer - 1];
+            if f.kind == "missing" {
+                e.0 += 1;
+            } else {
+                e.1 += 1;
+            }
+        }
+    }
+    let unplaced = found.iter().filter(|f| f.near.is_none()).count();
+    let text = if json_out {
+        let pts: Vec<Obj> = found
+            .iter()
+            .map(|f| {
+                obj! {"id": f.row.id, "line": f.row.line, "nominal": f.row.nominal, "deviation": f.row.deviation,
+                "kind": f.kind, "deposited_by": f.near}
+            })
+            .collect();
+        let layers: Vec<Obj> = dep
+            .layers
+            .iter()
+            .zip(&per_layer)
+            .enumerate()
+            .map(|(k, (l, c))| {
+                obj! {"layer": k + 1, "height": l.height, "rotary": l.rotary, "lines": l.lines,
+                "moves": l.moves, "missing": c.0, "excess": c.1}
+            })
+            .collect();
+        format!(
+            "{}\n",
+            json::to_string(
+                &obj! {"tol": tol, "radius": radius, "measured": rows.len(), "flagged": flagged,
+                "out_of_tol": found.len(), "not_near_a_deposit": unplaced, "points": pts, "layers": layers}
+            )?
+        )
+    } else {
+        let mut s = format!(
+            "# lampost inspect deposits: {name} against {pname} on {}, tol ±{tol}, radius {radius}\n# {} of {} measured points out of tolerance\nid x y z deviation kind line layer distance layers_within\n",
+            m.def.name,
+            found.len(),
+            rows.len()
+        );
+        for f in &found {
+            let r = f.row;
+            let (line, layer, dist, within) = match &f.near {
+                Some(n) => (
+                    n.line.to_string(),
+                    n.layer.to_string(),
+                    format!("{:.6}", n.distance),
+                    n.layers_within
+                        .iter()
+                        .map(|l| l.to_string())
+                        .collect::<Vec<_>>()
+                        .join(","),
+                ),
+                None => ("-".into(), "-".into(), "-".into(), "-".into()),
+            };
+            s.push_str(&format!(
+                "{} {:.6} {:.6} {:.6} {:.6} {} {line} {layer} {dist} {within}\n",
+                r.id, r.nominal[0], r.nominal[1], r.nominal[2], r.deviation, f.kind
+            ));
+        }
+        s.push_str("# per layer: layer height lines missing excess\n");
+        for (k, (l, c)) in dep.layers.iter().zip(&per_layer).enumerate() {
+            if c.0 + c.1 > 0 {
+                s.push_str(&format!(
+                    "# layer {} {:.4} {}-{} {} {}\n",
+                    k + 1,
+                    l.height,
+                    l.lines[0],
+                    l.lines[1],
+                    c.0,
+                    c.1
+                ));
+            }
+        }
+        s
+    };
+    write_file(output, &text)?;
+    if unplaced > 0 {
+        eprintln!("warning: {unplaced} out-of-tolerance points have no deposition within {radius} of them (listed with `-`)");
+    }
+    eprintln!(
+        "{} of {} points out of ±{tol}; {} layers deposited",
+        found.len(),
+        rows.len(),
+        dep.layers.len()
+    );
+    Ok(())
+}

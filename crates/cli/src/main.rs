@@ -572,6 +572,35 @@ enum InspectCmd {
         #[arg(long)]
         json: bool,
     },
+    /// Closing the loop for deposition: the measured points out of tolerance (material missing or in excess), each with the posted program's line and layer that deposited nearest to it within --radius.
+    Deposits {
+        /// The file `inspect reduce` wrote.
+        measured: String,
+        /// The posted deposition program the part was built with.
+        #[arg(long)]
+        posted: String,
+        /// Built-in machine name or machine file.
+        #[arg(long)]
+        machine: String,
+        /// Override a machine parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// The deposition head (default: `laser`).
+        #[arg(long)]
+        head: Option<String>,
+        /// Tolerance ± (machine units): beyond it material is missing or in excess.
+        #[arg(long)]
+        tol: f64,
+        /// How far from a point a deposition move may be to have deposited there.
+        #[arg(long)]
+        radius: f64,
+        /// Output file (atomic); standard output if absent.
+        #[arg(short, long)]
+        output: Option<String>,
+        /// Write JSON.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -929,6 +958,30 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 ply,
                 json,
             },
+        ),
+        Command::Inspect {
+            cmd:
+                InspectCmd::Deposits {
+                    measured,
+                    posted,
+                    machine,
+                    set,
+                    head,
+                    tol,
+                    radius,
+                    output,
+                    json,
+                },
+        } => inspect_cmds::deposits_cmd(
+            &machine,
+            &set,
+            head.as_deref(),
+            &posted,
+            &measured,
+            tol,
+            radius,
+            output.as_deref(),
+            json,
         ),
         Command::Preview {
             posted,

@@ -429,3 +429,164 @@ fn best_fit_refusals() {
         assert!(!setup.exists(), "{args:?}");
     }
 }
+
+/// Closing the loop for deposition: a wall of three layers posted on the NRC cell; the
+/// measured points out of tolerance name the posted line and layer that deposited
+/// nearest to them; a point far from any deposition says so; bad input refused.
+#[test]
+fn deposits_name_the_layers_and_lines() {
+    let dir = tempdir("inspect-deposits");
+    let prog = dir.join("wall.nc");
+    std::fs::write(
+        &prog,
+        "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X20 F600\nG0 Z5\nG0 X20 Z1\nG1 X0\nG0 Z6\nG0 X0 Z2\nG1 X20\nG0 Z10\nM2\n",
+    )
+    .expect("prog");
+    let posted = dir.join("wall.post.nc");
+    ok(&lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        s(&prog),
+        "-o",
+        s(&posted),
+    ]));
+    let meas = dir.join("wall.m");
+    // id, nominal, normal, measured, reading, deviation, status.
+    std::fs::write(
+        &meas,
+        "# made by hand\nid x y z i j k mx my mz reading deviation status\n\
+         top 10 0 2 0 0 1 10 0 1.95 0 -0.05 ok\n\
+         side 5 0 1 0 -1 0 5 -0.05 1 0 0.05 ok\n\
+         fine 6 0 1 0 -1 0 6 -0.001 1 0 0.001 ok\n\
+         far 50 0 0 0 0 1 50 0 -0.05 0 -0.05 ok\n\
+         lost 7 0 1 0 -1 0 - - - - - no_reading\n",
+    )
+    .expect("measured");
+    let out = ok(&lampost(&[
+        "inspect",
+        "deposits",
+        s(&meas),
+        "--posted",
+        s(&posted),
+        "--machine",
+        "nrc-lc",
+        "--tol",
+        "0.01",
+        "--radius",
+        "0.6",
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let layers = v["layers"].as_array().expect("layers");
+    let heights: Vec<f64> = layers
+        .iter()
+        .map(|l| l["height"].as_f64().expect("h"))
+        .collect();
+    assert_eq!(heights, [0.0, 1.0, 2.0], "{v}");
+    assert_eq!(v["out_of_tol"], 3);
+    assert_eq!(v["not_near_a_deposit"], 1);
+    let text = std::fs::read_to_string(&posted).expect("posted");
+    let lines: Vec<&str> = text.lines().collect();
+    // The line named is a feed along X with the laser on (after M71, before M72).
+    let deposits_at = |line: usize| {
+        let before = &lines[..line - 1];
+        let on = before.iter().rposition(|l| l.contains("M71"));
+        let off = before.iter().rposition(|l| l.contains("M72"));
+        on > off && lines[line - 1].contains('X') && !lines[line - 1].contains("G0")
+    };
+    let pts = v["points"].as_array().expect("points");
+    let by = |id: &str| pts.iter().find(|p| p["id"] == id).expect(id);
+    for (id, kind, layer) in [("top", "missing", 3), ("side", "excess", 2)] {
+        let p = by(id);
+        assert_eq!(p["kind"], kind);
+        let d = &p["deposited_by"];
+        assert_eq!(d["layer"], layer, "{p}");
+        assert!(d["distance"].as_f64().expect("d") < 1e-9, "{p}");
+        assert_eq!(d["layers_within"], serde_json::json!([layer]), "{p}");
+        let line = d["line"].as_u64().expect("line") as usize;
+        assert!(deposits_at(line), "{id}: line {line}: {}", lines[line - 1]);
+    }
+    assert!(by("far")["deposited_by"].is_null());
+    assert!(pts.iter().all(|p| p["id"] != "fine" && p["id"] != "lost"));
+    // A wider radius reaches the layers on either side.
+    let wide: serde_json::Value = serde_json::from_str(&ok(&lampost(&[
+        "inspect",
+        "deposits",
+        s(&meas),
+        "--posted",
+        s(&posted),
+        "--machine",
+        "nrc-lc",
+        "--tol",
+        "0.01",
+        "--radius",
+        "1.5",
+        "--json",
+    ])))
+    .expect("json");
+    let side = wide["points"]
+        .as_array()
+        .expect("p")
+        .iter()
+        .find(|p| p["id"] == "side")
+        .expect("side");
+    assert_eq!(
+        side["deposited_by"]["layers_within"],
+        serde_json::json!([1, 2, 3])
+    );
+    // Text output names the layers.
+    let t = ok(&lampost(&[
+        "inspect",
+        "deposits",
+        s(&meas),
+        "--posted",
+        s(&posted),
+        "--machine",
+        "nrc-lc",
+        "--tol",
+        "0.01",
+        "--radius",
+        "0.6",
+    ]));
+    assert!(t.contains("# layer 3 2.0000"), "{t}");
+    // Refused: a radius of 0; a posted program with a bad line, located.
+    let out_file = dir.join("d.txt");
+    let o = lampost(&[
+        "inspect",
+        "deposits",
+        s(&meas),
+        "--posted",
+        s(&posted),
+        "--machine",
+        "nrc-lc",
+        "--tol",
+        "0.01",
+        "--radius",
+        "0",
+        "-o",
+        s(&out_file),
+    ]);
+    assert!(!o.status.success());
+    assert!(!out_file.exists());
+    let bad = dir.join("bad.nc");
+    std::fs::write(&bad, "G21 G90\nM71\nG1 X1 F100\nG1 X2 Y\n").expect("bad");
+    let o = lampost(&[
+        "inspect",
+        "deposits",
+        s(&meas),
+        "--posted",
+        s(&bad),
+        "--machine",
+        "nrc-lc",
+        "--tol",
+        "0.01",
+        "--radius",
+        "1",
+        "-o",
+        s(&out_file),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("bad.nc:4"), "{}", stderr(&o));
+    assert!(!out_file.exists());
+}

@@ -26,6 +26,7 @@
 //! ```
 
 pub mod compare;
+pub mod deposits;
 pub mod error;
 pub mod map;
 pub mod plan;
