@@ -27,6 +27,7 @@
 
 pub mod compare;
 pub mod deposits;
+pub mod dist;
 pub mod error;
 pub mod map;
 pub mod plan;
