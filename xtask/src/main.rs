@@ -474,6 +474,7 @@ fn accuracy() -> Result<(), String> {
 }
 
 mod fuzz;
+mod inspect;
 mod plan;
 
 /// The manual pages, from the command line's definition, into `target/man`.
@@ -493,12 +494,13 @@ fn main() -> ExitCode {
         ["bench", "post"] => bench_post(),
         ["bench", "plan"] => plan::bench(&root()),
         ["bench", "robot"] => bench_robot(),
+        ["bench", "inspect"] => inspect::bench(&root()),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),
         ["calibration"] => calibration(200),
         ["man"] => man(),
         ["fuzz", rest @ ..] => fuzz::Config::parse(rest).and_then(|c| fuzz::run(&root(), &c)),
-        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan|robot] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
+        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan|robot|inspect] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -17,7 +17,7 @@ use lampost_mesh::{read_off, uv_sphere, write_off, Mesh, P3};
 use lampost_plan::{slice, Planes, SliceOptions, Slicing};
 
 /// This process's CPU time (user + system, /proc/self/stat, in clock ticks of 1/100 s).
-fn cpu_seconds() -> f64 {
+pub(crate) fn cpu_seconds() -> f64 {
     std::fs::read_to_string("/proc/self/stat")
         .ok()
         .and_then(|s| {

@@ -146,6 +146,21 @@ impl Setup {
         }
     }
 
+    /// The CAD (program) frame placed on the part by a rigid transform
+    /// `part = rotation·cad + translation` (a registration's): the origin is the
+    /// translation and the axes are the rotation's first and third columns. The one
+    /// writer of a registration's setup (`align register --write-setup`,
+    /// `inspect compare --best-fit --write-setup`).
+    pub fn from_transform(rotation: [[f64; 3]; 3], translation: [f64; 3], note: &str) -> Self {
+        let r = &rotation;
+        Setup {
+            origin: translation,
+            x_axis: [r[0][0], r[1][0], r[2][0]],
+            z_axis: [r[0][2], r[1][2], r[2][2]],
+            note: note.to_string(),
+        }
+    }
+
     /// The file text.
     pub fn to_toml(&self) -> String {
         let mut s = String::from(

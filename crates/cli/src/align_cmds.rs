@@ -639,15 +639,13 @@ pub fn register(
     drop(bar);
     let reg = reg.map_err(|e| with_lines(&name, &pts, e))?;
     if let Some(path) = write_setup {
-        let r = &reg.rotation;
-        let setup = lampost_align::Setup {
-            origin: reg.translation,
-            x_axis: [r[0][0], r[1][0], r[2][0]],
-            z_axis: [r[0][2], r[1][2], r[2][2]],
-            note: format!(
+        let setup = lampost_align::Setup::from_transform(
+            reg.rotation,
+            reg.translation,
+            &format!(
                 "lampost align register {name} --mesh {mesh_path}: CAD frame placed on the part"
             ),
-        };
+        );
         let mut out = Output::create(Some(path))?;
         out.writer()
             .write_all(setup.to_toml().as_bytes())

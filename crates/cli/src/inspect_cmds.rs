@@ -364,14 +364,114 @@ pub fn simulate_cmd(
     Ok(())
 }
 
-/// `inspect compare`: deviations of a reduced file, with statistics.
-pub fn compare_cmd(
-    measured: &str,
-    mesh: Option<&str>,
-    mesh_units: Option<crate::mesh_cmds::MeshUnits>,
-    tol: Option<f64>,
-    json_out: bool,
-) -> Result<(), CliError> {
+/// What `inspect compare` is asked for, beyond the measured file.
+#[derive(Debug, Default)]
+pub struct CompareArgs {
+    /// The nominal CAD mesh.
+    pub mesh: Option<String>,
+    /// Its units.
+    pub mesh_units: Option<crate::mesh_cmds::MeshUnits>,
+    /// The setup the measured part's program was posted with: places the mesh (program
+    /// frame) on the part.
+    pub setup: Option<String>,
+    /// Tolerance ±.
+    pub tol: Option<f64>,
+    /// Best-fit alignment first.
+    pub best_fit: bool,
+    /// Its locks.
+    pub lock: Option<String>,
+    /// Write the rigid correction as a setup file.
+    pub write_setup: Option<String>,
+    /// Per-point CSV.
+    pub csv: Option<String>,
+    /// SVG colour map.
+    pub svg: Option<String>,
+    /// Coloured PLY.
+    pub ply: Option<String>,
+    /// JSON on standard output.
+    pub json: bool,
+}
+
+/// One measured row of a reduced file.
+struct Row {
+    id: String,
+    line: usize,
+    nominal: [f64; 3],
+    normal: [f64; 3],
+    measured: [f64; 3],
+    deviation: f64,
+}
+
+/// The `ok` rows of a file `inspect reduce` wrote, and the count of flagged ones.
+fn read_measured(name: &str, text: &str) -> Result<(Vec<Row>, usize), CliError> {
+    let mut header = false;
+    let mut flagged = 0usize;
+    let mut rows = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let at = |what: String| {
+            CliError::failed(format!(
+                "error: {what}\n  --> {name}:{}\n   | {t}\n  = help: give the file `lampost inspect reduce` wrote\n",
+                i + 1
+            ))
+        };
+        if !header {
+            if !t.starts_with("id x y z i j k") {
+                return Err(at(
+                    "not a file `lampost inspect reduce` wrote (its header is `id x y z i j k mx my mz reading deviation status`)".into(),
+                ));
+            }
+            header = true;
+            continue;
+        }
+        let f: Vec<&str> = t.split_whitespace().collect();
+        if f.len() != 13 {
+            return Err(at(format!("{} columns, a reduced row has 13", f.len())));
+        }
+        if f[12] != "ok" {
+            flagged += 1;
+            continue;
+        }
+        let mut v = [0.0; 10];
+        for (k, x) in v.iter_mut().enumerate() {
+            let col = if k < 9 { k + 1 } else { 11 };
+            *x = f[col]
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| at(format!("`{}` is not a finite number", f[col])))?;
+        }
+        rows.push(Row {
+            id: f[0].to_string(),
+            line: i + 1,
+            nominal: [v[0], v[1], v[2]],
+            normal: [v[3], v[4], v[5]],
+            measured: [v[6], v[7], v[8]],
+            deviation: v[9],
+        });
+    }
+    Ok((rows, flagged))
+}
+
+fn stats_text(s: &compare::Stats, tol: Option<f64>) -> String {
+    let mut t = format!(
+        "n {}\nmean {:.6}\nsd {:.6}\nrms {:.6}\nmin {:.6}\nmax {:.6}\np05 {:.6}\np50 {:.6}\np95 {:.6}\n",
+        s.n, s.mean, s.sd, s.rms, s.min, s.max, s.p05, s.p50, s.p95
+    );
+    if let (Some(w), Some(tl)) = (s.within_tol, tol) {
+        t.push_str(&format!("within ±{tl}: {:.1} %\n", 100.0 * w));
+    }
+    t
+}
+
+/// `inspect compare`: deviations of a reduced file, with statistics; optionally after a
+/// best-fit alignment to the CAD mesh, with the correction as a setup, per-point CSV, an
+/// SVG colour map and a coloured PLY.
+pub fn compare_cmd(measured: &str, a: &CompareArgs) -> Result<(), CliError> {
+    let tol = a.tol;
     if let Some(t) = tol {
         if !(t.is_finite() && t > 0.0) {
             return Err(CliError::usage(format!(
@@ -379,96 +479,253 @@ pub fn compare_cmd(
             )));
         }
     }
-    let (name, text) = read(measured)?;
-    let mut devs = Vec::new();
-    let mut rows: Vec<Obj> = Vec::new();
-    let mut header = false;
-    let mut flagged = 0usize;
-    let mut measured_pts: Vec<[f64; 3]> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let t = raw.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        if !header {
-            if !t.starts_with("id x y z i j k") {
-                return Err(CliError::failed(format!(
-                    "error: {name}:{}: not a file `lampost inspect reduce` wrote (its header is `id x y z i j k mx my mz reading deviation status`)\n",
-                    i + 1
-                )));
-            }
-            header = true;
-            continue;
-        }
-        let f: Vec<&str> = t.split_whitespace().collect();
-        if f.len() != 13 {
-            return Err(CliError::failed(format!(
-                "error: {name}:{}: {} columns, a reduced row has 13\n   | {t}\n",
-                i + 1,
-                f.len()
-            )));
-        }
-        if f[12] != "ok" {
-            flagged += 1;
-            continue;
-        }
-        let d: f64 = f[11]
-            .parse()
-            .ok()
-            .filter(|x: &f64| x.is_finite())
-            .ok_or_else(|| {
-                CliError::failed(format!(
-                    "error: {name}:{}: the deviation `{}` is not a finite number\n",
-                    i + 1,
-                    f[11]
-                ))
-            })?;
-        devs.push(d);
-        let q: Vec<f64> = f[7..10].iter().filter_map(|x| x.parse().ok()).collect();
-        if q.len() == 3 {
-            measured_pts.push([q[0], q[1], q[2]]);
-        }
-        rows.push(obj! {"id": f[0], "deviation": d, "within_tol": tol.map(|t| d.abs() <= t)});
+    if (a.svg.is_some() || a.ply.is_some()) && tol.is_none() {
+        return Err(CliError::usage(
+            "error: --svg and --ply colour by tolerance band: give --tol T\n".to_string(),
+        ));
     }
-    let Some(s) = compare::stats(&devs, tol) else {
+    let (name, text) = read(measured)?;
+    let (rows, flagged) = read_measured(&name, &text)?;
+    if rows.is_empty() {
         return Err(CliError::failed(format!(
             "error: {name} has no measured point\n  = help: every row is flagged (see its status column)\n"
         )));
-    };
-    // Distances to the CAD mesh, signed where it is a closed solid.
-    let mesh_stats = match mesh {
+    }
+    let as_measured: Vec<f64> = rows.iter().map(|r| r.deviation).collect();
+    // The nominal mesh, placed on the part by the previous setup when one is given.
+    let previous = match &a.setup {
         Some(path) => {
-            let mut part = crate::mesh_cmds::read_mesh_file(path)?;
-            if let Some(crate::mesh_cmds::MeshUnits::In) = mesh_units {
-                part = part.scaled(25.4);
-            }
-            let (d, signed) = lampost_inspect::surface::distances(&part, &measured_pts)
-                .map_err(|e| error(path, "", e))?;
-            if !signed {
-                eprintln!("warning: {path} is not a closed, consistently oriented solid: its distances are unsigned");
-            }
-            for (row, x) in rows.iter_mut().zip(&d) {
-                row.set("mesh_distance", x);
-            }
-            compare::stats(&d, tol).map(|st| (st, signed))
+            let (sname, stext) = read(path)?;
+            Some(
+                lampost_post::frame::read_setup(&stext, &sname)
+                    .map_err(|e| CliError::failed(format!("error: {e}\n")))?,
+            )
         }
         None => None,
     };
-    let text = if json_out {
-        let mut o = obj! {"stats": s, "flagged": flagged, "points": rows};
+    let part = match &a.mesh {
+        Some(path) => {
+            let mut part = crate::mesh_cmds::read_mesh_file(path)?;
+            if let Some(crate::mesh_cmds::MeshUnits::In) = a.mesh_units {
+                part = part.scaled(25.4);
+            }
+            if let Some(f) = &previous {
+                for v in &mut part.vertices {
+                    *v = f.apply(v);
+                }
+            }
+            Some((path.as_str(), part))
+        }
+        None => None,
+    };
+    // The best fit: part = R·cad + t, from the points within the trimming threshold.
+    let fit = match (a.best_fit, &part) {
+        (false, _) => None,
+        (true, None) => {
+            return Err(CliError::usage(
+                "error: --best-fit needs the CAD mesh: give --mesh PART\n".to_string(),
+            ))
+        }
+        (true, Some((path, mesh))) => {
+            let locks = match &a.lock {
+                Some(l) => lampost_align::register::Locks::parse(l).map_err(|e| {
+                    CliError::usage(format!(
+                        "error: --lock {l}: {e}\n  = help: e.g. --lock z,tilt\n"
+                    ))
+                })?,
+                None => lampost_align::register::Locks::default(),
+            };
+            let pts: Vec<[f64; 3]> = rows.iter().map(|r| r.measured).collect();
+            let bar = crate::progress::Progress::working("best fit", false);
+            let fit = compare::best_fit(mesh, &pts, locks);
+            drop(bar);
+            Some(fit.map_err(|e| {
+                CliError::failed(format!(
+                    "error: the best fit of {name} to {path} failed: {e}\n  = help: lock what the measured faces cannot fix (--lock), or measure more faces\n"
+                ))
+            })?)
+        }
+    };
+    if a.write_setup.is_some() && fit.is_none() {
+        return Err(CliError::usage(
+            "error: --write-setup writes the best fit's correction: give --best-fit\n".to_string(),
+        ));
+    }
+    // Each point in the CAD frame (after the fit) and its deviation along the normal.
+    let cad: Vec<[f64; 3]> = rows
+        .iter()
+        .map(|r| fit.as_ref().map_or(r.measured, |f| f.to_cad(r.measured)))
+        .collect();
+    let devs: Vec<f64> = match &fit {
+        None => as_measured.clone(),
+        Some(_) => rows
+            .iter()
+            .zip(&cad)
+            .map(|(r, q)| (0..3).map(|k| (q[k] - r.nominal[k]) * r.normal[k]).sum())
+            .collect(),
+    };
+    let s = compare::stats(&devs, tol)
+        .ok_or_else(|| CliError::failed(format!("error: {name} has no measured point\n")))?;
+    // Distances to the CAD mesh, signed where it is a closed solid.
+    let (mesh_d, mesh_stats) = match &part {
+        Some((path, mesh)) => {
+            let (d, signed) =
+                lampost_inspect::surface::distances(mesh, &cad).map_err(|e| error(path, "", e))?;
+            if !signed {
+                eprintln!("warning: {path} is not a closed, consistently oriented solid: its distances are unsigned");
+            }
+            let st = compare::stats(&d, tol).map(|st| (st, signed));
+            (Some(d), st)
+        }
+        None => (None, None),
+    };
+    // Everything is made before anything is written.
+    let setup_text = match (&fit, &a.write_setup) {
+        (Some(f), Some(_)) => {
+            let (r, t) = (&f.registration.rotation, f.registration.translation);
+            // part = R·(P·program + o) + t: the correction composed with the setup the
+            // mesh was placed by (none: the identity).
+            let (pr, po) = match &previous {
+                Some(p) => (
+                    std::array::from_fn::<[f64; 3], 3, _>(|i| {
+                        std::array::from_fn(|j| p.rot[(i, j)])
+                    }),
+                    [p.origin.x, p.origin.y, p.origin.z],
+                ),
+                None => (
+                    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                    [0.0; 3],
+                ),
+            };
+            let rows3: [[f64; 3]; 3] = std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| r[i][k] * pr[k][j]).sum())
+            });
+            let origin: [f64; 3] =
+                std::array::from_fn(|i| (0..3).map(|k| r[i][k] * po[k]).sum::<f64>() + t[i]);
+            let setup = lampost_align::Setup::from_transform(
+                rows3,
+                origin,
+                &format!(
+                    "lampost inspect compare {name} --best-fit: the program frame placed on the part as measured{}",
+                    a.setup.as_deref().map_or(String::new(), |p| format!(" (the correction composed with {})", display_name(p)))
+                ),
+            );
+            Some(setup.to_toml())
+        }
+        _ => None,
+    };
+    let in_tol = |d: f64| tol.map(|t| d.abs() <= t);
+    let map_points: Vec<lampost_inspect::map::MapPoint> = rows
+        .iter()
+        .zip(&cad)
+        .zip(&devs)
+        .map(|((r, q), d)| lampost_inspect::map::MapPoint {
+            id: r.id.clone(),
+            point: *q,
+            deviation: *d,
+        })
+        .collect();
+    let csv_text = a.csv.as_ref().map(|_| {
+        let mut c = String::from(
+            "id,x,y,z,i,j,k,mx,my,mz,deviation_as_measured,deviation,mesh_distance,within_tol,fit_inlier\n",
+        );
+        for (k, r) in rows.iter().enumerate() {
+            let opt = |v: Option<String>| v.unwrap_or_default();
+            c.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                r.id,
+                r.nominal[0],
+                r.nominal[1],
+                r.nominal[2],
+                r.normal[0],
+                r.normal[1],
+                r.normal[2],
+                cad[k][0],
+                cad[k][1],
+                cad[k][2],
+                r.deviation,
+                devs[k],
+                opt(mesh_d.as_ref().map(|d| d[k].to_string())),
+                opt(in_tol(devs[k]).map(|b| b.to_string())),
+                opt(fit.as_ref().map(|f| f.inlier[k].to_string())),
+            ));
+        }
+        c
+    });
+    let title = format!("lampost inspect compare {name}");
+    let svg_text = match (&a.svg, tol) {
+        (Some(_), Some(t)) => Some(lampost_inspect::map::svg(
+            &map_points,
+            part.as_ref().map(|(_, m)| m),
+            t,
+            &title,
+        )),
+        _ => None,
+    };
+    let ply_text = match (&a.ply, tol) {
+        (Some(_), Some(t)) => Some(lampost_inspect::map::ply(&map_points, t, &title)),
+        _ => None,
+    };
+    let out = if a.json {
+        let points: Vec<Obj> = rows
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let mut o = obj! {"id": r.id, "line": r.line, "nominal": r.nominal, "normal": r.normal,
+                    "measured": cad[k], "deviation": devs[k], "within_tol": in_tol(devs[k])};
+                if fit.is_some() {
+                    o.set("deviation_as_measured", &r.deviation);
+                }
+                if let Some(d) = &mesh_d {
+                    o.set("mesh_distance", &d[k]);
+                }
+                if let Some(f) = &fit {
+                    o.set("fit_inlier", &f.inlier[k]);
+                }
+                o
+            })
+            .collect();
+        let mut o = obj! {"stats": s, "flagged": flagged, "points": points};
         if let Some((ms, signed)) = &mesh_stats {
             o.set("mesh_stats", ms);
             o.set("mesh_signed", signed);
         }
+        if let Some(f) = &fit {
+            let g = &f.registration;
+            o.set("stats_as_measured", &compare::stats(&as_measured, tol));
+            o.set(
+                "fit",
+                &obj! {"rotation": g.rotation, "translation": g.translation, "axis": g.axis,
+                "angle_deg": g.angle_deg, "rms": g.rms, "iterations": g.iterations,
+                "u_rotation_deg": g.u_rotation_deg, "u_translation": g.u_translation,
+                "centroid": f.centroid, "kept": f.inlier.iter().filter(|k| **k).count(),
+                "trimmed": f.inlier.iter().filter(|k| !**k).count(),
+                "threshold": f.threshold, "rounds": f.rounds},
+            );
+        }
         format!("{}\n", json::to_string(&o)?)
     } else {
-        let mut t = format!(
-            "n {}\nmean {:.6}\nsd {:.6}\nrms {:.6}\nmin {:.6}\nmax {:.6}\np05 {:.6}\np50 {:.6}\np95 {:.6}\n",
-            s.n, s.mean, s.sd, s.rms, s.min, s.max, s.p05, s.p50, s.p95
-        );
-        if let (Some(w), Some(tl)) = (s.within_tol, tol) {
-            t.push_str(&format!("within ±{tl}: {:.1} %\n", 100.0 * w));
+        let mut t = String::new();
+        if let Some(f) = &fit {
+            let g = &f.registration;
+            t.push_str(&format!(
+                "best fit: {} of {} points kept (trimmed beyond {:.3e} of the surface), {} rounds\ntranslation {:.6} {:.6} {:.6}\nrotation axis {:.6} {:.6} {:.6} by {:.6} deg\nfit rms {:.3e}\n",
+                f.inlier.iter().filter(|k| **k).count(),
+                f.inlier.len(),
+                f.threshold,
+                f.rounds,
+                g.translation[0], g.translation[1], g.translation[2],
+                g.axis[0], g.axis[1], g.axis[2], g.angle_deg, g.rms
+            ));
+            if let (Some(ur), Some(ut)) = (g.u_rotation_deg, g.u_translation) {
+                t.push_str(&format!(
+                    "u_rotation_deg {:.3e} {:.3e} {:.3e} (about x, y, z through {:.4} {:.4} {:.4})\nu_translation {:.3e} {:.3e} {:.3e}\n",
+                    ur[0], ur[1], ur[2], f.centroid[0], f.centroid[1], f.centroid[2], ut[0], ut[1], ut[2]
+                ));
+            }
+            t.push_str("deviations after the fit:\n");
         }
+        t.push_str(&stats_text(&s, tol));
         if flagged > 0 {
             t.push_str(&format!("flagged (not counted): {flagged}\n"));
         }
@@ -484,5 +741,163 @@ pub fn compare_cmd(
         }
         t
     };
-    write_file(None, &text)
+    for (path, body) in [
+        (&a.write_setup, &setup_text),
+        (&a.csv, &csv_text),
+        (&a.svg, &svg_text),
+        (&a.ply, &ply_text),
+    ] {
+        if let (Some(p), Some(b)) = (path, body) {
+            write_file(Some(p), b)?;
+        }
+    }
+    write_file(None, &out)
+}
+
+/// `inspect deposits`: where the measured part is out of tolerance, the layers and lines
+/// of the posted program that deposited there.
+#[allow(clippy::too_many_arguments)]
+pub fn deposits_cmd(
+    machine: &str,
+    sets: &[String],
+    head: Option<&str>,
+    posted: &str,
+    measured: &str,
+    tol: f64,
+    radius: f64,
+    output: Option<&str>,
+    json_out: bool,
+) -> Result<(), CliError> {
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(CliError::usage(format!(
+            "error: --tol {tol}: give a positive tolerance\n"
+        )));
+    }
+    let m = load_machine(machine, sets)?;
+    let h = match head {
+        Some(n) => m.head(n).map_err(kin_error)?,
+        None => m.head("laser").unwrap_or(0),
+    };
+    let (name, text) = read(measured)?;
+    let (rows, flagged) = read_measured(&name, &text)?;
+    let (pname, ptext) = read(posted)?;
+    let dep = lampost_inspect::deposits::replay(&m, h, ptext.as_bytes(), radius)
+        .map_err(|e| error(&pname, &ptext, e))?;
+    if dep.segments.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {pname} deposits nothing on {} (no feed move with the laser on, `{}` … `{}`)\n  = help: give the posted deposition program the part was built with\n",
+            m.def.name, m.def.process.laser_on, m.def.process.laser_off
+        )));
+    }
+    // Out of tolerance: missing (below −tol) or in excess (above +tol), each looked up
+    // at its nominal point (where the material should be).
+    struct Found<'a> {
+        row: &'a Row,
+        kind: &'static str,
+        near: Option<lampost_inspect::deposits::Near>,
+    }
+    let found: Vec<Found> = rows
+        .iter()
+        .filter(|r| r.deviation.abs() > tol)
+        .map(|r| Found {
+            row: r,
+            kind: if r.deviation < 0.0 {
+                "missing"
+            } else {
+                "excess"
+            },
+            near: dep.nearest(r.nominal),
+        })
+        .collect();
+    let mut per_layer = vec![(0usize, 0usize); dep.layers.len()];
+    for f in &found {
+        if let Some(n) = &f.near {
+            let e = &mut per_layer[n.layer - 1];
+            if f.kind == "missing" {
+                e.0 += 1;
+            } else {
+                e.1 += 1;
+            }
+        }
+    }
+    let unplaced = found.iter().filter(|f| f.near.is_none()).count();
+    let text = if json_out {
+        let pts: Vec<Obj> = found
+            .iter()
+            .map(|f| {
+                obj! {"id": f.row.id, "line": f.row.line, "nominal": f.row.nominal, "deviation": f.row.deviation,
+                "kind": f.kind, "deposited_by": f.near}
+            })
+            .collect();
+        let layers: Vec<Obj> = dep
+            .layers
+            .iter()
+            .zip(&per_layer)
+            .enumerate()
+            .map(|(k, (l, c))| {
+                obj! {"layer": k + 1, "height": l.height, "rotary": l.rotary, "lines": l.lines,
+                "moves": l.moves, "missing": c.0, "excess": c.1}
+            })
+            .collect();
+        format!(
+            "{}\n",
+            json::to_string(
+                &obj! {"tol": tol, "radius": radius, "measured": rows.len(), "flagged": flagged,
+                "out_of_tol": found.len(), "not_near_a_deposit": unplaced, "points": pts, "layers": layers}
+            )?
+        )
+    } else {
+        let mut s = format!(
+            "# lampost inspect deposits: {name} against {pname} on {}, tol ±{tol}, radius {radius}\n# {} of {} measured points out of tolerance\nid x y z deviation kind line layer distance layers_within\n",
+            m.def.name,
+            found.len(),
+            rows.len()
+        );
+        for f in &found {
+            let r = f.row;
+            let (line, layer, dist, within) = match &f.near {
+                Some(n) => (
+                    n.line.to_string(),
+                    n.layer.to_string(),
+                    format!("{:.6}", n.distance),
+                    n.layers_within
+                        .iter()
+                        .map(|l| l.to_string())
+                        .collect::<Vec<_>>()
+                        .join(","),
+                ),
+                None => ("-".into(), "-".into(), "-".into(), "-".into()),
+            };
+            s.push_str(&format!(
+                "{} {:.6} {:.6} {:.6} {:.6} {} {line} {layer} {dist} {within}\n",
+                r.id, r.nominal[0], r.nominal[1], r.nominal[2], r.deviation, f.kind
+            ));
+        }
+        s.push_str("# per layer: layer height lines missing excess\n");
+        for (k, (l, c)) in dep.layers.iter().zip(&per_layer).enumerate() {
+            if c.0 + c.1 > 0 {
+                s.push_str(&format!(
+                    "# layer {} {:.4} {}-{} {} {}\n",
+                    k + 1,
+                    l.height,
+                    l.lines[0],
+                    l.lines[1],
+                    c.0,
+                    c.1
+                ));
+            }
+        }
+        s
+    };
+    write_file(output, &text)?;
+    if unplaced > 0 {
+        eprintln!("warning: {unplaced} out-of-tolerance points have no deposition within {radius} of them (listed with `-`)");
+    }
+    eprintln!(
+        "{} of {} points out of ±{tol}; {} layers deposited",
+        found.len(),
+        rows.len(),
+        dep.layers.len()
+    );
+    Ok(())
 }

@@ -26,7 +26,10 @@
 //! ```
 
 pub mod compare;
+pub mod deposits;
+pub mod dist;
 pub mod error;
+pub mod map;
 pub mod plan;
 pub mod program;
 pub mod reduce;
