@@ -15,6 +15,7 @@ pub mod build;
 pub mod demo;
 pub mod error;
 pub mod perimeter;
+pub mod preview;
 pub mod raster;
 pub mod slice;
 
