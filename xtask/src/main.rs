@@ -489,6 +489,7 @@ fn main() -> ExitCode {
         ["bench", "kin"] => bench_kin(),
         ["bench", "post"] => bench_post(),
         ["bench", "plan"] => plan::bench(&root()),
+        ["bench", "plan-plate"] => plan::plate(),
         ["bench", "robot"] => bench_robot(),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
         ["accuracy"] => accuracy().and_then(|()| calibration(200)),

@@ -118,6 +118,10 @@ pub fn path(a: &PathArgs) -> Result<(), CliError> {
         },
         max_offset_deg: a.max_offset_angle,
         max_tilt_deg: a.max_tilt,
+        threads: a
+            .slice
+            .threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
     };
     let plan = lampost_plan::plan(&mesh, &s, &opts).map_err(|e| plan_error(&a.slice.file, &e))?;
     let pts = plan.points();

@@ -1,7 +1,7 @@
 //! Issue 15 items 4–7 through the CLI: `lampost plan demo` (paper 001's twisted plate),
 //! `lampost plan path` with rasters, the offset-angle check (`--check-only`), the JSON
-//! report and the SVG preview; the plate planned, posted on nrc-lc (through a pipe) and
-//! fadal-lamp, verified, and the ISO program read by rs274.
+//! report and the SVG preview; the plate planned, posted on nrc-lc (through a pipe),
+//! fadal-lamp and the puma-lens robot cell, verified, and the ISO program read by rs274.
 
 mod common;
 
@@ -247,14 +247,15 @@ fn without_laser_codes(text: &str) -> String {
 }
 
 /// Paper 001's plate, quarter scale, planned with rasters, posted on nrc-lc through a
-/// pipe (`plan path … -o - | post --per-point -`) and on fadal-lamp (the path in mm,
-/// the machine in inches), both verified; rs274 reads the ISO program to the same moves as
-/// `lampost trace`.
+/// pipe (`plan path … -o - | post --per-point -`), on fadal-lamp (the path in mm, the
+/// machine in inches) and on puma-lens (chunked location files), each verified; rs274
+/// reads the ISO program to the same moves as `lampost trace`.
 ///
 /// The perimeters are planned with `--approach build`: with the tangent approach the
 /// tool axis passes through the C axis (B = 0) mid-loop (the plate's middle and end caps
 /// have a vertical axis), and the per-point post refuses that move (an inverse-time feed
-/// out of range at the pole; an open finding in crates/post, docs/plan.md).
+/// out of range at the pole; an open finding in crates/post, docs/plan.md); the PUMA's
+/// wrist refuses it too (J4 turning half a turn where the axis passes its singularity).
 #[test]
 fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
     let dir = tempdir("plan-plate");
@@ -313,6 +314,20 @@ fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
         "--convert-units",
         s(&csv),
         s(&fadal),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("ok: "));
+    // Issue 17's last item: the same path on the robot cell, in chunks, verified.
+    let cell = dir.join("plate-puma");
+    let o = lampost(&["post", "--machine", "puma-lens", s(&csv), "-o", s(&cell)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "puma-lens",
+        s(&cell),
+        "--input",
+        s(&csv),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("ok: "));

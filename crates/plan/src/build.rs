@@ -48,6 +48,8 @@ pub struct PlanOptions {
     pub max_offset_deg: f64,
     /// Largest tilt of a tilted axis from the build direction, degrees.
     pub max_tilt_deg: f64,
+    /// Threads (1: this thread only); the plan does not depend on it.
+    pub threads: usize,
 }
 
 /// A perimeter point over the offset-angle limit.
@@ -192,12 +194,18 @@ impl SegGrid {
             }
         }
         let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
-        let n = segs.len() as f64;
-        let cell = ((w.max(1e-9) * h.max(1e-9) / n).sqrt() * 2.0)
-            .max(w.max(h) / 1024.0)
-            .max(1e-9);
-        let nx = ((w / cell).floor() as usize + 1).min(1025);
-        let ny = ((h / cell).floor() as usize + 1).min(1025);
+        // Cells about twice the mean segment's length, at most 16 per segment.
+        let mean = segs
+            .iter()
+            .map(|(a, b)| (b[0] - a[0]).hypot(b[1] - a[1]))
+            .sum::<f64>()
+            / segs.len() as f64;
+        let mut cell = (2.0 * mean).max(w.max(h) / 4096.0).max(1e-9);
+        while ((w / cell).floor() + 1.0) * ((h / cell).floor() + 1.0) > 16.0 * segs.len() as f64 + 1024.0 {
+            cell *= 1.5;
+        }
+        let nx = (w / cell).floor() as usize + 1;
+        let ny = (h / cell).floor() as usize + 1;
         let idx = |x: f64, d: usize, m: usize| (((x - lo[d]) / cell).floor().max(0.0) as usize).min(m - 1);
         let mut count = vec![0u32; nx * ny + 1];
         let range = |a: &[f64; 2], b: &[f64; 2]| {
@@ -251,6 +259,7 @@ impl SegGrid {
     fn nearest(&self, q: [f64; 2]) -> ([f64; 2], f64) {
         let ci = (((q[0] - self.lo[0]) / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
         let cj = (((q[1] - self.lo[1]) / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
+        // Squared distances while searching.
         let mut best = (q, f64::INFINITY);
         let reach = self.nx.max(self.ny);
         for r in 0..=reach {
@@ -265,18 +274,33 @@ impl SegGrid {
                     for &s in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
                         let (a, b) = self.segs[s as usize];
                         let p = closest(a, b, q);
-                        let d = (p[0] - q[0]).hypot(p[1] - q[1]);
+                        let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
                         if d < best.1 {
                             best = (p, d);
                         }
                     }
                 }
             }
-            if best.1 <= r as f64 * self.cell {
+            // Every cell not yet searched lies beyond the searched block's sides (those
+            // with cells beyond them): no nearer point there than the nearest side.
+            let mut bound = f64::INFINITY;
+            if i0 > 0 {
+                bound = bound.min(q[0] - (self.lo[0] + i0 as f64 * self.cell));
+            }
+            if i1 + 1 < self.nx {
+                bound = bound.min(self.lo[0] + (i1 + 1) as f64 * self.cell - q[0]);
+            }
+            if j0 > 0 {
+                bound = bound.min(q[1] - (self.lo[1] + j0 as f64 * self.cell));
+            }
+            if j1 + 1 < self.ny {
+                bound = bound.min(self.lo[1] + (j1 + 1) as f64 * self.cell - q[1]);
+            }
+            if bound == f64::INFINITY || (bound >= 0.0 && best.1 <= bound * bound) {
                 break;
             }
         }
-        best
+        (best.0, best.1.sqrt())
     }
 
     fn to_plane(&self, p: P3) -> [f64; 2] {
@@ -293,8 +317,8 @@ impl SegGrid {
     fn offset(&self, p: P3, a: P3) -> (f64, P3) {
         let down = a.dot(&self.normal);
         let t = (p - self.origin).dot(&self.normal);
-        let (bq, _) = self.nearest(self.to_plane(p));
         if !(down > 1e-12) || !(t > 0.0) {
+            let (bq, _) = self.nearest(self.to_plane(p));
             return (90.0, self.from_plane(bq));
         }
         let t = t / down;
@@ -363,12 +387,64 @@ pub fn plan(mesh: &Mesh, slicing: &Slicing, opts: &PlanOptions) -> Result<Plan, 
             }
         }
     }
-    let mut layers = Vec::with_capacity(slicing.slices.len());
+    let n = slicing.slices.len();
+    let threads = opts.threads.clamp(1, 64).min(n.max(1));
+    // Every layer depends only on its own slice and the one before: contiguous blocks of
+    // layers on `threads` threads, joined in order (the result does not depend on the
+    // thread count).
+    let block = |r: std::ops::Range<usize>| -> Vec<(LayerPlan, Vec<Violation>, usize)> {
+        r.map(|k| plan_layer(mesh, slicing, k, opts)).collect()
+    };
+    let parts: Vec<Vec<(LayerPlan, Vec<Violation>, usize)>> = if threads <= 1 {
+        vec![block(0..n)]
+    } else {
+        let cuts: Vec<usize> = (0..=threads).map(|t| t * n / threads).collect();
+        std::thread::scope(|sc| {
+            let handles: Vec<_> = cuts
+                .windows(2)
+                .map(|w| {
+                    let r = w[0]..w[1];
+                    sc.spawn(move || block(r))
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().unwrap_or_default())
+                .collect()
+        })
+    };
+    let mut layers = Vec::with_capacity(n);
+    let mut violations = Vec::new();
+    let mut tilted = 0;
+    for (l, v, t) in parts.into_iter().flatten() {
+        layers.push(l);
+        violations.extend(v);
+        tilted += t;
+    }
+    if layers.len() != n {
+        return Err(PlanError::Mesh("a planning thread failed".into()));
+    }
+    Ok(Plan {
+        layers,
+        violations,
+        tilted,
+    })
+}
+
+/// Layer `k` of the plan: its perimeters, the offset-angle check against layer `k − 1`
+/// (and tilting), its rasters; the points over the limit; how many were tilted.
+fn plan_layer(
+    mesh: &Mesh,
+    slicing: &Slicing,
+    k: usize,
+    opts: &PlanOptions,
+) -> (LayerPlan, Vec<Violation>, usize) {
+    let s = &slicing.slices[k];
+    let prev = k.checked_sub(1).and_then(|j| SegGrid::new(&slicing.slices[j]));
     let mut violations = Vec::new();
     let mut tilted = 0;
     let max_tilt = opts.max_tilt_deg.to_radians();
-    let mut prev: Option<SegGrid> = None;
-    for s in &slicing.slices {
+    {
         let mut loops: Vec<Vec<PathPoint>> = s
             .loops
             .iter()
@@ -423,19 +499,17 @@ pub fn plan(mesh: &Mesh, slicing: &Slicing, opts: &PlanOptions) -> Result<Plan, 
             Some(r) => (layer_runs(s, r), Some(crate::raster::layer_angle(r, s.index))),
             None => (Vec::new(), None),
         };
-        layers.push(LayerPlan {
-            index: s.index,
-            normal: s.normal,
-            loops,
-            offset_deg,
-            runs,
-            raster_angle_deg,
-        });
-        prev = SegGrid::new(s);
+        (
+            LayerPlan {
+                index: s.index,
+                normal: s.normal,
+                loops,
+                offset_deg,
+                runs,
+                raster_angle_deg,
+            },
+            violations,
+            tilted,
+        )
     }
-    Ok(Plan {
-        layers,
-        violations,
-        tilted,
-    })
 }

@@ -269,9 +269,14 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
     let mut used: Vec<Vec<bool>> = lines.iter().map(|l| vec![false; l.len()]).collect();
     let mut runs = Vec::new();
     let mut pos: Option<(f64, f64)> = None;
+    // Rays before `free` have no run left.
+    let mut free = 0;
     loop {
         // The first run left.
-        let Some((mut j, mut i)) = (0..lines.len())
+        while free < lines.len() && used[free].iter().all(|&u| u) {
+            free += 1;
+        }
+        let Some((mut j, mut i)) = (free..lines.len())
             .find_map(|j| used[j].iter().position(|u| !u).map(|i| (j, i)))
         else {
             break;

@@ -43,6 +43,7 @@ fn opts(r: Option<RasterOptions>, approach: Approach, max_offset: f64) -> PlanOp
         approach,
         max_offset_deg: max_offset,
         max_tilt_deg: 90.0,
+        threads: 1,
     }
 }
 
@@ -346,5 +347,13 @@ fn the_twisted_plate_plans_with_the_tangent_approach_under_the_limit() {
     assert!(small as f64 > 0.8 * all.len() as f64, "{small} of {}", all.len());
     for l in &tangent.layers {
         assert!(!l.runs.is_empty(), "layer {}", l.index);
+    }
+    // Threads do not change the plan.
+    for threads in [2, 3, 7] {
+        let o = PlanOptions {
+            threads,
+            ..opts(r, Approach::Tangent, 30.0)
+        };
+        assert_eq!(plan(&m, &s, &o).expect("plan"), tangent, "{threads} threads");
     }
 }
