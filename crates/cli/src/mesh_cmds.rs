@@ -261,7 +261,9 @@ pub(crate) fn plan_error(path: &str, e: &PlanError) -> CliError {
 
 /// `lampost plan slice`.
 /// Stage 1 of `plan slice` and `plan path`: the mesh read and sliced, the warnings said.
-pub(crate) fn sliced(a: &SliceArgs) -> Result<(Mesh, Slicing, lampost_mesh::ManifoldReport, usize), CliError> {
+pub(crate) fn sliced(
+    a: &SliceArgs,
+) -> Result<(Mesh, Slicing, lampost_mesh::ManifoldReport, usize), CliError> {
     let dir = vec3("--build-dir", &a.build_dir)?;
     let planes = match (&a.fan_axis, a.fan_step, a.layer) {
         (Some(axis), Some(step), None) => {

@@ -305,7 +305,11 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
             ))
         })?;
     let (lo, hi) = lampost_mesh::props::bounds(&mesh).unwrap_or_default();
-    if !(lo.iter().chain(hi.iter()).all(|c| c.is_finite() && c.abs() < 1e9)) {
+    if !(lo
+        .iter()
+        .chain(hi.iter())
+        .all(|c| c.is_finite() && c.abs() < 1e9))
+    {
         return Err(CliError::usage(format!(
             "error: plan demo: --scale {}: the plate would not be finite\n",
             a.scale

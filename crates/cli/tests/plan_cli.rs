@@ -114,7 +114,8 @@ fn the_report_and_the_preview_say_what_the_path_holds() {
     assert_eq!(groups.len(), 25);
     for (g, l) in groups.iter().zip(layers) {
         assert_eq!(
-            g.attribute("data-layer").and_then(|v| v.parse::<u64>().ok()),
+            g.attribute("data-layer")
+                .and_then(|v| v.parse::<u64>().ok()),
             l["index"].as_u64()
         );
         let class_count = |c: &str| {
@@ -123,7 +124,10 @@ fn the_report_and_the_preview_say_what_the_path_holds() {
                 .count()
         };
         assert_eq!(class_count("loop") as u64, l["loops"].as_u64().unwrap_or(0));
-        assert_eq!(class_count("raster") as u64, l["runs"].as_u64().unwrap_or(0));
+        assert_eq!(
+            class_count("raster") as u64,
+            l["runs"].as_u64().unwrap_or(0)
+        );
         assert!(class_count("tick") > 0);
         // Every drawn loop has its points.
         for pl in g
@@ -169,7 +173,11 @@ fn check_only_reports_the_layers_over_the_offset_angle() {
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("layer 1: worst offset angle 4"), "{out}");
     assert!(stderr(&o).contains("over the offset angle of 30°"));
-    assert!(stderr(&o).contains("warning: layer 1 loop 0 point "), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning: layer 1 loop 0 point "),
+        "{}",
+        stderr(&o)
+    );
     // The tangent approach: nothing stays over (corners are tilted); no file written.
     let o = lampost(&[
         "plan",
@@ -285,7 +293,15 @@ fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
     std::fs::write(&csv, &planned.stdout).expect("path");
     let nrc = dir.join("plate-nrc.ngc");
     let o = lampost_stdin(
-        &["post", "--machine", "nrc-lc", "--per-point", "-", "-o", s(&nrc)],
+        &[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--per-point",
+            "-",
+            "-o",
+            s(&nrc),
+        ],
         &planned.stdout,
     );
     assert!(o.status.success(), "{}", stderr(&o));

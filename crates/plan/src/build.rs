@@ -201,12 +201,16 @@ impl SegGrid {
             .sum::<f64>()
             / segs.len() as f64;
         let mut cell = (2.0 * mean).max(w.max(h) / 4096.0).max(1e-9);
-        while ((w / cell).floor() + 1.0) * ((h / cell).floor() + 1.0) > 16.0 * segs.len() as f64 + 1024.0 {
+        while ((w / cell).floor() + 1.0) * ((h / cell).floor() + 1.0)
+            > 16.0 * segs.len() as f64 + 1024.0
+        {
             cell *= 1.5;
         }
         let nx = (w / cell).floor() as usize + 1;
         let ny = (h / cell).floor() as usize + 1;
-        let idx = |x: f64, d: usize, m: usize| (((x - lo[d]) / cell).floor().max(0.0) as usize).min(m - 1);
+        let idx = |x: f64, d: usize, m: usize| {
+            (((x - lo[d]) / cell).floor().max(0.0) as usize).min(m - 1)
+        };
         let mut count = vec![0u32; nx * ny + 1];
         let range = |a: &[f64; 2], b: &[f64; 2]| {
             (
@@ -308,7 +312,7 @@ impl SegGrid {
         [d.dot(&self.e1), d.dot(&self.e2)]
     }
 
-    fn from_plane(&self, u: [f64; 2]) -> P3 {
+    fn point_at(&self, u: [f64; 2]) -> P3 {
         self.origin + self.e1 * u[0] + self.e2 * u[1]
     }
 
@@ -317,14 +321,14 @@ impl SegGrid {
     fn offset(&self, p: P3, a: P3) -> (f64, P3) {
         let down = a.dot(&self.normal);
         let t = (p - self.origin).dot(&self.normal);
-        if !(down > 1e-12) || !(t > 0.0) {
+        if down.is_nan() || t.is_nan() || down <= 1e-12 || t <= 0.0 {
             let (bq, _) = self.nearest(self.to_plane(p));
-            return (90.0, self.from_plane(bq));
+            return (90.0, self.point_at(bq));
         }
         let t = t / down;
         let q = p - a * t;
         let (b, s) = self.nearest(self.to_plane(q));
-        (s.atan2(t).to_degrees(), self.from_plane(b))
+        (s.atan2(t).to_degrees(), self.point_at(b))
     }
 }
 
@@ -440,7 +444,9 @@ fn plan_layer(
     opts: &PlanOptions,
 ) -> (LayerPlan, Vec<Violation>, usize) {
     let s = &slicing.slices[k];
-    let prev = k.checked_sub(1).and_then(|j| SegGrid::new(&slicing.slices[j]));
+    let prev = k
+        .checked_sub(1)
+        .and_then(|j| SegGrid::new(&slicing.slices[j]));
     let mut violations = Vec::new();
     let mut tilted = 0;
     let max_tilt = opts.max_tilt_deg.to_radians();
@@ -461,11 +467,14 @@ fn plan_layer(
                 for (pi, q) in l.iter_mut().enumerate() {
                     let (mut ang, b) = g.offset(q.p, q.axis);
                     if ang > opts.max_offset_deg && opts.approach == Approach::Tangent {
-                        if let Some(target) = unit(q.p - b).filter(|t| t.angle(&s.normal) <= max_tilt) {
+                        if let Some(target) =
+                            unit(q.p - b).filter(|t| t.angle(&s.normal) <= max_tilt)
+                        {
                             // The smallest turn towards the target that comes under the
                             // limit (the target itself gives 0).
                             let (mut lo, mut hi) = (0.0f64, 1.0f64);
-                            let at = |f: f64| unit(q.axis * (1.0 - f) + target * f).unwrap_or(target);
+                            let at =
+                                |f: f64| unit(q.axis * (1.0 - f) + target * f).unwrap_or(target);
                             let limit = opts.max_offset_deg * (1.0 - 1e-9);
                             if g.offset(q.p, target).0 <= limit {
                                 for _ in 0..40 {
@@ -496,7 +505,10 @@ fn plan_layer(
             }
         }
         let (runs, raster_angle_deg) = match &opts.raster {
-            Some(r) => (layer_runs(s, r), Some(crate::raster::layer_angle(r, s.index))),
+            Some(r) => (
+                layer_runs(s, r),
+                Some(crate::raster::layer_angle(r, s.index)),
+            ),
             None => (Vec::new(), None),
         };
         (

@@ -41,11 +41,7 @@ pub fn twisted_plate(scale: f64, thickness: f64, nu: usize, nv: usize) -> Option
             let (sn, cs) = psi.sin_cos();
             for j in 0..=nv {
                 let v = width * j as f64 / nv as f64;
-                vertices.push(P3::new(
-                    x,
-                    v * sn + s * thickness / (2.0 * cs),
-                    v * cs,
-                ));
+                vertices.push(P3::new(x, v * sn + s * thickness / (2.0 * cs), v * cs));
             }
         }
     }

@@ -21,6 +21,6 @@ pub mod slice;
 
 pub use build::{plan, Approach, LayerPlan, Plan, PlanOptions, Violation};
 pub use error::PlanError;
-pub use raster::{RasterOptions, Run};
 pub use perimeter::{perimeters, PathPoint, PerimeterOptions};
+pub use raster::{RasterOptions, Run};
 pub use slice::{slice, Gap, Loop, OpenChain, Planes, Slice, SliceOptions, Slicing};

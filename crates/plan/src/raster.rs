@@ -219,7 +219,7 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
             });
         }
     }
-    if edges.is_empty() || !(opts.hatch > 0.0) {
+    if edges.is_empty() || opts.hatch.is_nan() || opts.hatch <= 0.0 {
         return Vec::new();
     }
     let r = opts.inset.max(0.0);
@@ -236,7 +236,7 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
     let mut active: Vec<usize> = Vec::new();
     let mut next = 0;
     let span = (vmax - r) - (vmin + r);
-    if !(span > 0.0) {
+    if span.is_nan() || span <= 0.0 {
         return Vec::new();
     }
     let count = (span / opts.hatch).ceil().min(1e7) as usize;
@@ -276,8 +276,8 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
         while free < lines.len() && used[free].iter().all(|&u| u) {
             free += 1;
         }
-        let Some((mut j, mut i)) = (free..lines.len())
-            .find_map(|j| used[j].iter().position(|u| !u).map(|i| (j, i)))
+        let Some((mut j, mut i)) =
+            (free..lines.len()).find_map(|j| used[j].iter().position(|u| !u).map(|i| (j, i)))
         else {
             break;
         };
@@ -286,9 +286,8 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
             let (a, b) = lines[j][i];
             let v = v0 + j as f64 * opts.hatch;
             // Enter from the end nearer the last position.
-            let forward = pos.is_none_or(|(pu, pv)| {
-                (a - pu).hypot(v - pv) <= (b - pu).hypot(v - pv)
-            });
+            let forward =
+                pos.is_none_or(|(pu, pv)| (a - pu).hypot(v - pv) <= (b - pu).hypot(v - pv));
             let (ua, ub) = if forward { (a, b) } else { (b, a) };
             runs.push(Run {
                 from: point(ua, v),
@@ -331,7 +330,7 @@ mod tests {
             a: [0.0, 0.0],
             b: [10.0, 0.0],
         };
-        assert_eq!(capsule(&e, 0.5, 1.0).map(|(a, b)| (a, b)), {
+        assert_eq!(capsule(&e, 0.5, 1.0), {
             let s = (1.0f64 - 0.25).sqrt();
             Some((-s, 10.0 + s))
         });
@@ -343,7 +342,10 @@ mod tests {
         };
         assert_eq!(capsule(&e, 0.0, 0.5), Some((2.5, 3.5)));
         let (a, b) = capsule(&e, 5.3, 0.5).expect("meets");
-        assert!((a - 2.6).abs() < 1e-12 && (b - 3.4).abs() < 1e-12, "{a} {b}");
+        assert!(
+            (a - 2.6).abs() < 1e-12 && (b - 3.4).abs() < 1e-12,
+            "{a} {b}"
+        );
         assert_eq!(capsule(&e, 5.6, 0.5), None);
     }
 

@@ -184,7 +184,11 @@ fn a_rings_hole_is_not_filled_and_the_angle_turns_per_layer() {
         // bead times the loops' length (the outer loop shrinks, the hole grows).
         let half = (small * small - z * z).sqrt();
         let (r_in, r_out) = (big - half + bead / 2.0, big + half - bead / 2.0);
-        let area = sl.loops.iter().map(|l| l.area - bead / 2.0 * l.length).sum::<f64>();
+        let area = sl
+            .loops
+            .iter()
+            .map(|l| l.area - bead / 2.0 * l.length)
+            .sum::<f64>();
         let got = l.raster_length() * 0.4;
         assert!(
             (got - area).abs() / area < 5e-3,
@@ -334,7 +338,11 @@ fn the_twisted_plate_plans_with_the_tangent_approach_under_the_limit() {
     assert!(!vertical.violations.is_empty());
     let tangent = plan(&m, &s, &opts(r, Approach::Tangent, 30.0)).expect("plan");
     assert!(tangent.violations.is_empty());
-    assert!(tangent.worst_offset_deg() <= 30.0, "{}", tangent.worst_offset_deg());
+    assert!(
+        tangent.worst_offset_deg() <= 30.0,
+        "{}",
+        tangent.worst_offset_deg()
+    );
     // Along the faces the beam lands on the bead below; the end caps are vertical planes
     // (the rule gives them a vertical axis) and their corners were tilted.
     assert!(tangent.tilted > 0);
@@ -344,7 +352,11 @@ fn the_twisted_plate_plans_with_the_tangent_approach_under_the_limit() {
         .flat_map(|l| l.offset_deg.iter().flatten().copied())
         .collect();
     let small = all.iter().filter(|&&a| a < 5.0).count();
-    assert!(small as f64 > 0.8 * all.len() as f64, "{small} of {}", all.len());
+    assert!(
+        small as f64 > 0.8 * all.len() as f64,
+        "{small} of {}",
+        all.len()
+    );
     for l in &tangent.layers {
         assert!(!l.runs.is_empty(), "layer {}", l.index);
     }
@@ -354,6 +366,10 @@ fn the_twisted_plate_plans_with_the_tangent_approach_under_the_limit() {
             threads,
             ..opts(r, Approach::Tangent, 30.0)
         };
-        assert_eq!(plan(&m, &s, &o).expect("plan"), tangent, "{threads} threads");
+        assert_eq!(
+            plan(&m, &s, &o).expect("plan"),
+            tangent,
+            "{threads} threads"
+        );
     }
 }
