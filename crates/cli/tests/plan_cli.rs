@@ -209,6 +209,9 @@ fn bad_plan_arguments_write_nothing() {
         &["--max-offset-angle", "120"],
         &["--raster-angle", "nan"],
         &["--spacing", "0"],
+        &["--hatch", "1e-7"],
+        &["--spacing", "1e-9"],
+        &["--max-turn", "0.0001"],
     ] {
         let mut args = vec!["plan", "path", s(&stl), "--layer", "2", "-o", s(&out)];
         args.extend_from_slice(extra);

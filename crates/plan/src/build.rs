@@ -26,6 +26,13 @@ use crate::perimeter::{check, one_loop, PathPoint, PerimeterOptions};
 use crate::raster::{layer_runs, plane_axes, RasterOptions, Run};
 use crate::slice::{Slice, Slicing};
 
+/// Most perimeter points a plan may have (by its loops' length over the spacing).
+pub const MAX_POINTS: f64 = 5e7;
+/// Most raster rays a layer may have (its width over the hatch).
+pub const MAX_RAYS: f64 = 1e6;
+/// The smallest largest tool-axis turn between points, degrees.
+pub const MIN_TURN_DEG: f64 = 0.01;
+
 /// Where the perimeters' tool axes come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Approach {
@@ -366,7 +373,53 @@ pub fn plan(mesh: &Mesh, slicing: &Slicing, opts: &PlanOptions) -> Result<Plan, 
     };
     angle("largest offset angle", opts.max_offset_deg, 90.0)?;
     angle("largest tilt", opts.max_tilt_deg, 180.0)?;
+    // Bounded output: a spacing, turn or hatch so small that the path would not fit in
+    // memory is refused, not attempted.
+    let length: f64 = slicing
+        .slices
+        .iter()
+        .flat_map(|s| s.loops.iter().map(|l| l.length))
+        .sum();
+    if length / opts.perimeter.spacing > MAX_POINTS {
+        return Err(PlanError::Layer {
+            what: "point spacing",
+            value: opts.perimeter.spacing,
+            why: format!(
+                "so small that the perimeters ({length:.6e} mm) would have more than {MAX_POINTS:e} points"
+            ),
+        });
+    }
+    if opts.perimeter.max_turn_deg < MIN_TURN_DEG {
+        return Err(PlanError::Layer {
+            what: "largest tool-axis turn",
+            value: opts.perimeter.max_turn_deg,
+            why: format!("below {MIN_TURN_DEG}°"),
+        });
+    }
     if let Some(r) = &opts.raster {
+        let widest = slicing
+            .slices
+            .iter()
+            .map(|s| {
+                let mut lo = P3::repeat(f64::INFINITY);
+                let mut hi = P3::repeat(f64::NEG_INFINITY);
+                for p in s.loops.iter().flat_map(|l| &l.points) {
+                    lo = lo.inf(p);
+                    hi = hi.sup(p);
+                }
+                (hi - lo).norm()
+            })
+            .filter(|d| d.is_finite())
+            .fold(0.0, f64::max);
+        if widest / r.hatch > MAX_RAYS {
+            return Err(PlanError::Layer {
+                what: "hatch spacing",
+                value: r.hatch,
+                why: format!(
+                    "so small that a layer {widest:.6} mm wide would have more than {MAX_RAYS:e} rays"
+                ),
+            });
+        }
         if !(r.hatch.is_finite() && r.hatch > 0.0) {
             return Err(PlanError::Layer {
                 what: "hatch spacing",

@@ -242,6 +242,19 @@ fn hollow_parts_get_no_raster() {
         .is_err());
         assert!(plan(&m, &s, &opts(None, Approach::Tangent, bad)).is_err());
     }
+    // Sizes that would make the path too big to hold are refused, not attempted.
+    assert!(plan(
+        &m,
+        &s,
+        &opts(Some(raster(1e-6, 1.0, 0.0, 0.0)), Approach::Tangent, 45.0)
+    )
+    .is_err());
+    let mut o = opts(None, Approach::Tangent, 45.0);
+    o.perimeter.spacing = 1e-7;
+    assert!(plan(&m, &s, &o).is_err());
+    o.perimeter.spacing = 1.0;
+    o.perimeter.max_turn_deg = 1e-3;
+    assert!(plan(&m, &s, &o).is_err());
 }
 
 /// A closed hemisphere (a dome on a flat base) of radius `r`.
