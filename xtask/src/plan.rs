@@ -199,7 +199,17 @@ pub fn plate() -> Result<(), String> {
     let run = || -> Result<(lampost_plan::Plan, usize), String> {
         let s = parallel(&mesh, 0.5, 2)?;
         let p = lampost_plan::plan(&mesh, &s, &opts).map_err(|e| e.to_string())?;
-        let n = p.points().len();
+        // The path's points, made one by one as a writer takes them (each read: the count
+        // and the path's length).
+        let (n, _len, _) = p
+            .iter()
+            .fold((0usize, 0.0f64, None::<P3>), |(n, len, last), q| {
+                (
+                    n + 1,
+                    len + last.map_or(0.0, |l: P3| (q.p - l).norm()),
+                    Some(q.p),
+                )
+            });
         Ok((p, n))
     };
     let mut best = Duration::MAX;

@@ -127,23 +127,25 @@ impl Plan {
     /// The path: per layer its perimeters, then its rasters (laser off onto each run's
     /// start, on along it, the tool axis the build direction).
     pub fn points(&self) -> Vec<PathPoint> {
-        let mut out = Vec::new();
-        for l in &self.layers {
-            for lp in &l.loops {
-                out.extend_from_slice(lp);
-            }
-            for r in &l.runs {
-                for (p, laser) in [(r.from, false), (r.to, true)] {
-                    out.push(PathPoint {
+        self.iter().collect()
+    }
+
+    /// The path's points in order, without holding them all.
+    pub fn iter(&self) -> impl Iterator<Item = PathPoint> + '_ {
+        self.layers.iter().flat_map(|l| {
+            l.loops
+                .iter()
+                .flatten()
+                .copied()
+                .chain(l.runs.iter().flat_map(move |r| {
+                    [(r.from, false), (r.to, true)].map(|(p, laser)| PathPoint {
                         p,
                         axis: l.normal,
                         laser,
                         layer: l.index,
-                    });
-                }
-            }
-        }
-        out
+                    })
+                }))
+        })
     }
 
     /// The largest offset angle over all layers, degrees.
@@ -216,7 +218,8 @@ impl SegGrid {
         let nx = (w / cell).floor() as usize + 1;
         let ny = (h / cell).floor() as usize + 1;
         let idx = |x: f64, d: usize, m: usize| {
-            (((x - lo[d]) / cell).floor().max(0.0) as usize).min(m - 1)
+            // `as` truncates (a floor for the non-negative) and saturates (NaN: 0).
+            (((x - lo[d]) / cell).max(0.0) as usize).min(m - 1)
         };
         let mut count = vec![0u32; nx * ny + 1];
         let range = |a: &[f64; 2], b: &[f64; 2]| {
@@ -268,8 +271,9 @@ impl SegGrid {
     /// The nearest point of the segments to `q` (in the plane's coordinates) and its
     /// distance.
     fn nearest(&self, q: [f64; 2]) -> ([f64; 2], f64) {
-        let ci = (((q[0] - self.lo[0]) / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
-        let cj = (((q[1] - self.lo[1]) / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
+        // `as` truncates (a floor for the non-negative) and saturates.
+        let ci = (((q[0] - self.lo[0]) / self.cell).max(0.0) as usize).min(self.nx - 1);
+        let cj = (((q[1] - self.lo[1]) / self.cell).max(0.0) as usize).min(self.ny - 1);
         // Squared distances while searching.
         let mut best = (q, f64::INFINITY);
         let reach = self.nx.max(self.ny);
