@@ -197,6 +197,65 @@ fn check_only_reports_the_layers_over_the_offset_angle() {
     assert!(r["tilted"].as_u64().unwrap_or(0) > 0);
 }
 
+/// `plan demo --units in` writes the same plate in inches: planned with `--units in` it
+/// gives the same report as the millimetre file.
+#[test]
+fn the_demo_in_inches_plans_like_the_demo_in_millimetres() {
+    let dir = tempdir("plan-inch");
+    let mm = plate(&dir);
+    let inch = dir.join("plate-in.stl");
+    let o = lampost(&[
+        "plan",
+        "demo",
+        "--scale",
+        "0.25",
+        "--thickness",
+        "3",
+        "--along",
+        "60",
+        "--across",
+        "10",
+        "--units",
+        "in",
+        "-o",
+        s(&inch),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lampost(&["mesh", "info", "--json", s(&inch)]);
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    // Read without --units, the file's numbers: 75 mm is 2.9528 in.
+    let hi = info["bounds"]["max"][0].as_f64().unwrap_or(0.0);
+    assert!((hi - 75.0 / 25.4).abs() < 1e-9, "{info}");
+    let report = |file: &Path, units: &[&str]| {
+        let mut args = vec![
+            "plan",
+            "path",
+            s(file),
+            "--layer",
+            "2",
+            "--check-only",
+            "--json",
+        ];
+        args.extend_from_slice(units);
+        let o = lampost(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).expect("json")
+    };
+    let (a, b) = (report(&mm, &[]), report(&inch, &["--units", "in"]));
+    // The same plate, to the STL's printed digits (a point more or less where a chord's
+    // length over the spacing is a whole number).
+    assert_eq!(a["layers"], b["layers"]);
+    for k in [
+        "points",
+        "perimeter_length",
+        "raster_length",
+        "worst_offset_angle",
+    ] {
+        let (x, y) = (a[k].as_f64().unwrap_or(0.0), b[k].as_f64().unwrap_or(1.0));
+        assert!((x - y).abs() <= 1e-3 * x.abs().max(1.0), "{k}: {x} vs {y}");
+    }
+}
+
 #[test]
 fn bad_plan_arguments_write_nothing() {
     let dir = tempdir("plan-bad");
