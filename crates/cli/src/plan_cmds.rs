@@ -131,6 +131,19 @@ pub fn path(a: &PathArgs) -> Result<(), CliError> {
             a.slice.file
         )));
     }
+    // Never a non-finite number in a path: refused whole rather than written.
+    if let Some((i, q)) = pts
+        .iter()
+        .enumerate()
+        .find(|(_, q)| !(q.p.iter().chain(q.axis.iter()).all(|c| c.is_finite())))
+    {
+        return Err(CliError::failed(format!(
+            "error: {}: path point {i} (layer {}) is not finite; nothing written
+  = help: check the mesh near layer {} (`lampost mesh info`)
+",
+            a.slice.file, q.layer, q.layer
+        )));
+    }
     for v in plan.violations.iter().take(MAX_LISTED) {
         eprintln!(
             "warning: layer {} loop {} point {}: offset angle {:.2}° over {}° at ({:.4} {:.4} {:.4})",
