@@ -122,17 +122,20 @@ fn capsule(e: &Edge, v: f64, r: f64) -> Option<(f64, f64)> {
     (lo <= hi).then_some((lo, hi))
 }
 
-/// Sorted, merged union of intervals.
-fn merge(mut iv: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
-    iv.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<(f64, f64)> = Vec::with_capacity(iv.len());
-    for (a, b) in iv {
-        match out.last_mut() {
-            Some(last) if a <= last.1 => last.1 = last.1.max(b),
-            _ => out.push((a, b)),
+/// Sorted, merged union of intervals, in place.
+fn merge(iv: &mut Vec<(f64, f64)>) {
+    iv.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let mut n = 0;
+    for k in 0..iv.len() {
+        let (a, b) = iv[k];
+        if n > 0 && a <= iv[n - 1].1 {
+            iv[n - 1].1 = iv[n - 1].1.max(b);
+        } else {
+            iv[n] = (a, b);
+            n += 1;
         }
     }
-    out
+    iv.truncate(n);
 }
 
 /// `inside` minus `cut` (both sorted, disjoint); pieces shorter than `min` dropped.
@@ -163,8 +166,8 @@ fn subtract(inside: &[(f64, f64)], cut: &[(f64, f64)], min: f64) -> Vec<(f64, f6
 }
 
 /// The intervals of the line `v` inside the loops (non-zero winding).
-fn inside(edges: &[Edge], active: &[usize], v: f64) -> Vec<(f64, f64)> {
-    let mut x: Vec<(f64, i32)> = Vec::new();
+fn inside(edges: &[Edge], active: &[usize], v: f64, x: &mut Vec<(f64, i32)>) -> Vec<(f64, f64)> {
+    x.clear();
     for &i in active {
         let e = &edges[i];
         let (a, b) = (e.a, e.b);
@@ -175,11 +178,11 @@ fn inside(edges: &[Edge], active: &[usize], v: f64) -> Vec<(f64, f64)> {
             x.push((u, if b[1] > a[1] { 1 } else { -1 }));
         }
     }
-    x.sort_by(|a, b| a.0.total_cmp(&b.0));
+    x.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     let mut out = Vec::new();
     let mut w = 0;
     let mut start = 0.0;
-    for (u, d) in x {
+    for &(u, d) in x.iter() {
         // Walking along +u, an upward edge (counter-clockwise outer loop's right side)
         // closes: winding counts the edges to the right, so subtract.
         let before = w;
@@ -244,6 +247,8 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
     let v0 = vmin + r + 0.5 * (span - (count as f64 - 1.0) * opts.hatch);
     let mut lines: Vec<Vec<(f64, f64)>> = Vec::with_capacity(count);
     let min_run = 1e-9 * (1.0 + span);
+    let mut xs = Vec::new();
+    let mut cut = Vec::new();
     for j in 0..count {
         let v = v0 + j as f64 * opts.hatch;
         while next < order.len() && lo_of(&edges[order[next]]) <= v {
@@ -251,17 +256,12 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
             next += 1;
         }
         active.retain(|&i| hi_of(&edges[i]) >= v);
-        let ins = inside(&edges, &active, v);
-        let cut = if r > 0.0 {
-            merge(
-                active
-                    .iter()
-                    .filter_map(|&i| capsule(&edges[i], v, r))
-                    .collect(),
-            )
-        } else {
-            Vec::new()
-        };
+        let ins = inside(&edges, &active, v, &mut xs);
+        cut.clear();
+        if r > 0.0 {
+            cut.extend(active.iter().filter_map(|&i| capsule(&edges[i], v, r)));
+            merge(&mut cut);
+        }
         lines.push(subtract(&ins, &cut, min_run));
     }
     // Zig-zag.
