@@ -8,8 +8,8 @@
 //! - `cargo xtask bench post`: `lampost post` on a generated 1,000,000-line program
 //!   against `lampost fmt` and a numpy script (`xtask/post_baseline.py`), same run.
 //! - `cargo xtask bench plan`: slicing a 75k-triangle mesh at 0.1 mm layers against
-//!   trimesh's `section_multiplane` (same run), and a 1M-triangle mesh at 1,000 layers
-//!   (`plan.rs`).
+//!   trimesh's `section_multiplane` (same run), a 1M-triangle mesh at 1,000 layers, and
+//!   the whole plan of paper 001's twisted plate (`plan.rs`; `bench plan-plate` alone).
 //! - `cargo xtask bench robot`: `lampost post --machine puma-lens` and `lampost verify`
 //!   on paper 001's twisted plate at full size (about 10,000 locations), against the
 //!   Robotics Toolbox's `ikine_a` solving the same poses (`.tools/py-rtb`), same run.
@@ -493,6 +493,7 @@ fn main() -> ExitCode {
         ["bench", "kin"] => bench_kin(),
         ["bench", "post"] => bench_post(),
         ["bench", "plan"] => plan::bench(&root()),
+        ["bench", "plan-plate"] => plan::plate(),
         ["bench", "robot"] => bench_robot(),
         ["bench", "inspect"] => inspect::bench(&root()),
         ["bench"] => bench_gcode().and_then(|()| bench_kin()).and_then(|()| bench_post()),
@@ -500,7 +501,7 @@ fn main() -> ExitCode {
         ["calibration"] => calibration(200),
         ["man"] => man(),
         ["fuzz", rest @ ..] => fuzz::Config::parse(rest).and_then(|c| fuzz::run(&root(), &c)),
-        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan|robot|inspect] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
+        _ => Err(format!("usage: cargo xtask bench [gcode|kin|post|plan|plan-plate|robot|inspect] | cargo xtask accuracy | cargo xtask calibration | cargo xtask man | cargo xtask fuzz {}", fuzz::USAGE)),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,6 +12,7 @@ mod io;
 mod json;
 mod kin_cmds;
 mod mesh_cmds;
+mod plan_cmds;
 mod points;
 mod post_cmds;
 mod posted;
@@ -622,8 +623,10 @@ enum MeshCmd {
 enum PlanCmd {
     /// Slice a mesh into closed oriented loops: planes normal to a build direction, or a fan about an axis.
     Slice(mesh_cmds::SliceArgs),
-    /// The perimeters of every slice with their tool axes (paper 001's rule: the surface normal × the traversal, blended across face edges), as a per-point path `lampost post` reads.
-    Path(mesh_cmds::PathArgs),
+    /// Paper 001's plan per layer: perimeters with their tool axes (the surface normal × the traversal, blended across face edges), then rasters clipped to the inset loops; the offset-angle check (tilting where needed); the per-point path `lampost post` reads, a JSON report, an SVG preview.
+    Path(plan_cmds::PathArgs),
+    /// Paper 001's demonstration part: a 600 × 200 mm rectangle twisted 90° about a long edge, as a closed thin-walled STL (scaled with --scale).
+    Demo(plan_cmds::DemoArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -635,7 +638,7 @@ enum Command {
         #[command(subcommand)]
         cmd: MeshCmd,
     },
-    /// Deposition planning from a solid mesh (paper 001): slicing.
+    /// Deposition planning from a solid mesh (paper 001): slicing, the whole plan, the demo part.
     Plan {
         #[command(subcommand)]
         cmd: PlanCmd,
@@ -1249,7 +1252,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
         } => mesh_cmds::slice(&a),
         Command::Plan {
             cmd: PlanCmd::Path(a),
-        } => mesh_cmds::path(&a),
+        } => plan_cmds::path(&a),
+        Command::Plan {
+            cmd: PlanCmd::Demo(a),
+        } => plan_cmds::demo(&a),
         Command::Machines { cmd: None } => kin_cmds::machines(None),
         Command::Machines {
             cmd: Some(MachinesCmd::Show { name }),

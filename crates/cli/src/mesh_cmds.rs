@@ -88,7 +88,7 @@ fn read_mm(path: &str, units: Option<MeshUnits>) -> Result<(Mesh, Units), CliErr
     ))
 }
 
-fn write_out(output: Option<&str>, s: &[u8]) -> Result<(), CliError> {
+pub(crate) fn write_out(output: Option<&str>, s: &[u8]) -> Result<(), CliError> {
     let mut out = Output::create(output)?;
     out.writer().write_all(s).map_err(|e| CliError::write(&e))?;
     out.commit()
@@ -232,18 +232,20 @@ pub struct SliceArgs {
     /// Threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Write JSON (layers, loops with signed area and length, gaps, open chains).
-    #[arg(long, conflicts_with = "output")]
+    /// Write JSON (`plan slice`: layers, loops with signed area and length, gaps, open
+    /// chains, instead of the CSV; `plan path`: the plan's report on standard output).
+    #[arg(long)]
     pub json: bool,
     /// Write the loops' points as CSV (layer,loop,point,x,y,z,face) to this file.
     #[arg(short, long)]
     pub output: Option<String>,
 }
 
-fn plan_error(path: &str, e: &PlanError) -> CliError {
+pub(crate) fn plan_error(path: &str, e: &PlanError) -> CliError {
     let hint = match e {
         PlanError::Direction { .. } => "give a non-zero direction, e.g. --build-dir 0,0,1",
-        PlanError::Layer { .. } => "give a positive layer height (mm), e.g. --layer 0.5",
+        PlanError::Layer { what, .. } if *what == "layer height" => "give a positive layer height (mm), e.g. --layer 0.5",
+        PlanError::Layer { .. } => "give a positive number (see `lampost plan path --help`)",
         PlanError::LayerTooLarge { .. } => "the layer must be smaller than the part's height along the build direction",
         PlanError::Fan(_) => "put the fan's axis along an edge of the part, with the part on the side build-dir × axis",
         _ => "repair the mesh",
@@ -259,7 +261,9 @@ fn plan_error(path: &str, e: &PlanError) -> CliError {
 
 /// `lampost plan slice`.
 /// Stage 1 of `plan slice` and `plan path`: the mesh read and sliced, the warnings said.
-fn sliced(a: &SliceArgs) -> Result<(Mesh, Slicing, lampost_mesh::ManifoldReport, usize), CliError> {
+pub(crate) fn sliced(
+    a: &SliceArgs,
+) -> Result<(Mesh, Slicing, lampost_mesh::ManifoldReport, usize), CliError> {
     let dir = vec3("--build-dir", &a.build_dir)?;
     let planes = match (&a.fan_axis, a.fan_step, a.layer) {
         (Some(axis), Some(step), None) => {
@@ -334,6 +338,13 @@ fn sliced(a: &SliceArgs) -> Result<(Mesh, Slicing, lampost_mesh::ManifoldReport,
 }
 
 pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
+    if a.json && a.output.is_some() {
+        return Err(CliError::usage(
+            "error: the argument '--json' cannot be used with '--output <OUTPUT>'
+  = help: --json writes the slices to standard output
+",
+        ));
+    }
     let (_, s, report, open) = sliced(a)?;
     if a.json {
         write_json(None, slicing_json(&a.file, &s, &report))?;
@@ -425,71 +436,4 @@ fn csv(s: &Slicing) -> String {
         }
     }
     t
-}
-
-/// `plan path`: the options of `plan slice`, and how the perimeters are spaced and fed.
-#[derive(Debug, clap::Args)]
-pub struct PathArgs {
-    #[command(flatten)]
-    pub slice: SliceArgs,
-    /// Longest chord between two path points (mm).
-    #[arg(long, default_value_t = 1.0)]
-    pub spacing: f64,
-    /// Largest turn of the tool axis between two points (degrees).
-    #[arg(long, default_value_t = 2.0)]
-    pub max_turn: f64,
-    /// Feed written on every point (mm/min).
-    #[arg(long, default_value_t = 600.0)]
-    pub feed: f64,
-}
-
-/// `plan path`: the perimeters of every layer with their tool axes, as the per-point path
-/// `lampost post` reads (`x y z i j k feed laser`, mm).
-pub fn path(a: &PathArgs) -> Result<(), CliError> {
-    if !(a.feed.is_finite() && a.feed > 0.0) {
-        return Err(CliError::usage(format!(
-            "error: --feed {}: give a positive feed\n",
-            a.feed
-        )));
-    }
-    let (mesh, s, _, open) = sliced(&a.slice)?;
-    if open > 0 {
-        return Err(CliError::failed(format!(
-            "error: {}: {open} chains could not be closed into loops (see the warnings above); nothing written\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
-            a.slice.file
-        )));
-    }
-    let pts = lampost_plan::perimeters(
-        &mesh,
-        &s,
-        &lampost_plan::PerimeterOptions {
-            spacing: a.spacing,
-            max_turn_deg: a.max_turn,
-        },
-    )
-    .map_err(|e| plan_error(&a.slice.file, &e))?;
-    if pts.is_empty() {
-        return Err(CliError::failed(format!(
-            "error: {}: the slices hold no loop; nothing written\n",
-            a.slice.file
-        )));
-    }
-    let text = lampost_plan::perimeter::to_text(
-        &pts,
-        a.feed,
-        &format!(
-            "lampost plan path {}: {} layers, {} points; tool axis = surface normal x traversal (tip to head), mm",
-            a.slice.file,
-            s.slices.len(),
-            pts.len()
-        ),
-    );
-    write_out(a.slice.output.as_deref(), text.as_bytes())?;
-    eprintln!(
-        "planned {} points on {} layers of {}",
-        pts.len(),
-        s.slices.len(),
-        a.slice.file
-    );
-    Ok(())
 }

@@ -69,7 +69,7 @@ fn blend(a: P3, b: P3) -> P3 {
 /// Stage 1 and 2 for one loop: its points with blended axes (a vertex between two faces
 /// gets the mean of their axes), then spaced by `opts`. The first point is repeated at
 /// the end so the perimeter closes; the laser is off onto the first point.
-fn one_loop(
+pub(crate) fn one_loop(
     mesh: &Mesh,
     points: &[P3],
     faces: &[u32],
@@ -123,6 +123,18 @@ pub fn perimeters(
     slicing: &Slicing,
     opts: &PerimeterOptions,
 ) -> Result<Vec<PathPoint>, PlanError> {
+    check(opts)?;
+    let mut out = Vec::new();
+    for s in &slicing.slices {
+        for l in &s.loops {
+            out.extend(one_loop(mesh, &l.points, &l.faces, s.index, opts));
+        }
+    }
+    Ok(out)
+}
+
+/// `opts` refused when the spacing or the turn is not a positive number.
+pub(crate) fn check(opts: &PerimeterOptions) -> Result<(), PlanError> {
     if !(opts.spacing.is_finite() && opts.spacing > 0.0) {
         return Err(PlanError::Layer {
             what: "point spacing",
@@ -137,13 +149,7 @@ pub fn perimeters(
             why: "not a positive number of degrees".into(),
         });
     }
-    let mut out = Vec::new();
-    for s in &slicing.slices {
-        for l in &s.loops {
-            out.extend(one_loop(mesh, &l.points, &l.faces, s.index, opts));
-        }
-    }
-    Ok(out)
+    Ok(())
 }
 
 /// The path as the per-point file `lampost post` reads: a comment, the header `x y z i j

@@ -1,0 +1,348 @@
+//! `plan path` (paper 001's whole plan: perimeters with tool axes, rasters, the
+//! offset-angle check; the per-point path, a JSON report, an SVG preview) and `plan demo`
+//! (the twisted plate).
+
+use lampost_plan::{Approach, Plan, PlanOptions, RasterOptions};
+
+use crate::json::{self, obj, Obj};
+use crate::mesh_cmds::{plan_error, sliced, write_out, SliceArgs};
+use crate::report::CliError;
+
+/// The perimeters' approach (`--approach`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ApproachArg {
+    /// Paper 001's rule: tangent to the surface, across the traversal.
+    Tangent,
+    /// Along the build direction (a three-axis build).
+    Build,
+}
+
+/// `plan path`: the options of `plan slice`, and how the perimeters and rasters are laid.
+#[derive(Debug, clap::Args)]
+pub struct PathArgs {
+    #[command(flatten)]
+    pub slice: SliceArgs,
+    /// Longest chord between two perimeter points (mm).
+    #[arg(long, default_value_t = 1.0)]
+    pub spacing: f64,
+    /// Largest turn of the tool axis between two points (degrees).
+    #[arg(long, default_value_t = 2.0)]
+    pub max_turn: f64,
+    /// Feed written on every point (mm/min).
+    #[arg(long, default_value_t = 600.0)]
+    pub feed: f64,
+    /// Bead width (mm): rasters stay half of it inside the loops.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub bead: f64,
+    /// Distance between raster lines (mm; default: the bead width).
+    #[arg(long, allow_negative_numbers = true)]
+    pub hatch: Option<f64>,
+    /// Raster angle of the first layer (degrees, in the layer's plane).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub raster_angle: f64,
+    /// Raster angle added per layer (degrees).
+    #[arg(long, default_value_t = 90.0, allow_negative_numbers = true)]
+    pub raster_turn: f64,
+    /// A hollow part: perimeters only, no raster.
+    #[arg(long)]
+    pub hollow: bool,
+    /// The perimeters' approach.
+    #[arg(long, value_enum, default_value = "tangent")]
+    pub approach: ApproachArg,
+    /// Largest offset angle (degrees): how far a bead may overhang the one below.
+    #[arg(long, default_value_t = 45.0, allow_negative_numbers = true)]
+    pub max_offset_angle: f64,
+    /// Largest tilt of the tool axis from the build direction when tilting a point to
+    /// bring it under the offset angle (degrees).
+    #[arg(long, default_value_t = 90.0, allow_negative_numbers = true)]
+    pub max_tilt: f64,
+    /// Check the offset angle and report; write no path (exit 1 if points stay over it).
+    #[arg(long)]
+    pub check_only: bool,
+    /// Draw the plan as SVG to this file.
+    #[arg(long)]
+    pub preview: Option<String>,
+}
+
+/// Violations listed one by one in the JSON and on stderr before they are only counted.
+const MAX_LISTED: usize = 1000;
+
+/// `plan path`.
+pub fn path(a: &PathArgs) -> Result<(), CliError> {
+    if !(a.feed.is_finite() && a.feed > 0.0) {
+        return Err(CliError::usage(format!(
+            "error: --feed {}: give a positive feed\n",
+            a.feed
+        )));
+    }
+    let to_stdout = a.slice.output.as_deref().is_none_or(|o| o == "-");
+    if a.slice.json && to_stdout && !a.check_only {
+        return Err(CliError::usage(
+            "error: --json writes the report to standard output, where the path would go\n  = help: give -o PATH.csv for the path, or --check-only\n",
+        ));
+    }
+    if a.check_only && a.slice.output.is_some() {
+        return Err(CliError::usage(
+            "error: --check-only writes no path: leave out -o\n",
+        ));
+    }
+    let hatch = a.hatch.unwrap_or(a.bead);
+    for (flag, v) in [("--bead", a.bead), ("--hatch", hatch)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(CliError::usage(format!(
+                "error: {flag} {v}: give a positive width (mm)\n  = help: e.g. {flag} 1\n"
+            )));
+        }
+    }
+    let (mesh, s, _, open) = sliced(&a.slice)?;
+    if open > 0 {
+        return Err(CliError::failed(format!(
+            "error: {}: {open} chains could not be closed into loops (see the warnings above); nothing written\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
+            a.slice.file
+        )));
+    }
+    let opts = PlanOptions {
+        perimeter: lampost_plan::PerimeterOptions {
+            spacing: a.spacing,
+            max_turn_deg: a.max_turn,
+        },
+        raster: (!a.hollow).then_some(RasterOptions {
+            hatch,
+            inset: a.bead / 2.0,
+            angle_deg: a.raster_angle,
+            turn_deg: a.raster_turn,
+        }),
+        approach: match a.approach {
+            ApproachArg::Tangent => Approach::Tangent,
+            ApproachArg::Build => Approach::Build,
+        },
+        max_offset_deg: a.max_offset_angle,
+        max_tilt_deg: a.max_tilt,
+        threads: a
+            .slice
+            .threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    };
+    let plan = lampost_plan::plan(&mesh, &s, &opts).map_err(|e| plan_error(&a.slice.file, &e))?;
+    let pts = plan.points();
+    if pts.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {}: the slices hold no loop; nothing written\n",
+            a.slice.file
+        )));
+    }
+    // Never a non-finite number in a path: refused whole rather than written.
+    if let Some((i, q)) = pts
+        .iter()
+        .enumerate()
+        .find(|(_, q)| !(q.p.iter().chain(q.axis.iter()).all(|c| c.is_finite())))
+    {
+        return Err(CliError::failed(format!(
+            "error: {}: path point {i} (layer {}) is not finite; nothing written
+  = help: check the mesh near layer {} (`lampost mesh info`)
+",
+            a.slice.file, q.layer, q.layer
+        )));
+    }
+    for v in plan.violations.iter().take(MAX_LISTED) {
+        eprintln!(
+            "warning: layer {} loop {} point {}: offset angle {:.2}° over {}° at ({:.4} {:.4} {:.4})",
+            v.layer, v.loop_index, v.point, v.angle_deg, a.max_offset_angle, v.p.x, v.p.y, v.p.z
+        );
+    }
+    if plan.violations.len() > MAX_LISTED {
+        eprintln!(
+            "warning: {} more points over the offset angle",
+            plan.violations.len() - MAX_LISTED
+        );
+    }
+    // The preview, the path, then the report: nothing is written when an earlier one fails.
+    if let Some(svg) = &a.preview {
+        write_out(
+            Some(svg),
+            lampost_plan::preview::svg(&plan, 2.0 * a.bead.max(a.spacing), 5).as_bytes(),
+        )?;
+    }
+    let layers_over = {
+        let mut l: Vec<usize> = plan.violations.iter().map(|v| v.layer).collect();
+        l.dedup();
+        l.len()
+    };
+    if !a.check_only {
+        let text = lampost_plan::perimeter::to_text(
+            &pts,
+            a.feed,
+            &format!(
+                "lampost plan path {}: {} layers, {} points; perimeters then rasters per layer; tool axis tip to head (perimeters: {}; rasters: the build direction), mm",
+                a.slice.file,
+                s.slices.len(),
+                pts.len(),
+                match a.approach {
+                    ApproachArg::Tangent => "surface normal x traversal",
+                    ApproachArg::Build => "the build direction",
+                }
+            ),
+        );
+        write_out(a.slice.output.as_deref(), text.as_bytes())?;
+    }
+    if a.slice.json {
+        let text = json::to_string(&report(a, &plan, &s, &pts))?;
+        write_out(None, format!("{text}\n").as_bytes())?;
+    } else if a.check_only {
+        let mut t = format!(
+            "layers {}\nworst offset angle {:.3}°\ntilted points {}\npoints over {}°: {} on {layers_over} layers\n",
+            plan.layers.len(),
+            plan.worst_offset_deg(),
+            plan.tilted,
+            a.max_offset_angle,
+            plan.violations.len()
+        );
+        for l in &plan.layers {
+            if plan.violations.iter().any(|v| v.layer == l.index) {
+                t.push_str(&format!(
+                    "layer {}: worst offset angle {:.3}°\n",
+                    l.index,
+                    l.worst_offset_deg()
+                ));
+            }
+        }
+        write_out(None, t.as_bytes())?;
+    }
+    eprintln!(
+        "planned {} points on {} layers of {}; worst offset angle {:.2}°, {} points tilted, {} over {}°",
+        pts.len(),
+        s.slices.len(),
+        a.slice.file,
+        plan.worst_offset_deg(),
+        plan.tilted,
+        plan.violations.len(),
+        a.max_offset_angle
+    );
+    if a.check_only && !plan.violations.is_empty() {
+        return Err(CliError::failed(format!(
+            "error: {}: {} points on {layers_over} layers over the offset angle of {}°\n  = help: use --approach tangent, allow more --max-tilt, or change the build direction\n",
+            a.slice.file,
+            plan.violations.len(),
+            a.max_offset_angle
+        )));
+    }
+    Ok(())
+}
+
+/// The JSON report of a plan.
+fn report(
+    a: &PathArgs,
+    plan: &Plan,
+    s: &lampost_plan::Slicing,
+    pts: &[lampost_plan::PathPoint],
+) -> Obj {
+    let (mut on, mut off) = (0.0, 0.0);
+    for w in pts.windows(2) {
+        let d = (w[1].p - w[0].p).norm();
+        if w[1].laser {
+            on += d;
+        } else {
+            off += d;
+        }
+    }
+    let layers: Vec<Obj> = plan
+        .layers
+        .iter()
+        .zip(&s.slices)
+        .map(|(l, sl)| {
+            obj! {
+                "index": l.index, "height": sl.height, "loops": l.loops.len(),
+                "perimeter_length": l.perimeter_length(), "runs": l.runs.len(),
+                "raster_length": l.raster_length(), "raster_angle": l.raster_angle_deg,
+                "worst_offset_angle": l.worst_offset_deg(),
+            }
+        })
+        .collect();
+    let violations: Vec<Obj> = plan
+        .violations
+        .iter()
+        .take(MAX_LISTED)
+        .map(|v| obj! {"layer": v.layer, "loop": v.loop_index, "point": v.point, "angle": v.angle_deg, "at": [v.p.x, v.p.y, v.p.z]})
+        .collect();
+    obj! {
+        "file": a.slice.file.as_str(), "units": "mm", "layers": plan.layers.len(),
+        "loops": plan.layers.iter().map(|l| l.loops.len()).sum::<usize>(),
+        "points": pts.len(),
+        "perimeter_length": plan.layers.iter().map(|l| l.perimeter_length()).sum::<f64>(),
+        "raster_length": plan.layers.iter().map(|l| l.raster_length()).sum::<f64>(),
+        "travel_length": off,
+        "feed": a.feed,
+        "time_s": (on + off) / a.feed * 60.0,
+        "laser_on_s": on / a.feed * 60.0,
+        "approach": match a.approach { ApproachArg::Tangent => "tangent", ApproachArg::Build => "build" },
+        "max_offset_angle": a.max_offset_angle,
+        "worst_offset_angle": plan.worst_offset_deg(),
+        "tilted": plan.tilted,
+        "violation_count": plan.violations.len(),
+        "violations": violations,
+        "hollow": a.hollow,
+        "slices": layers,
+    }
+}
+
+/// `plan demo` arguments.
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    /// Scale of paper 001's 600 × 200 mm plate (0.25: 150 × 50 mm).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub scale: f64,
+    /// Wall thickness across the face (mm, not scaled).
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
+    pub thickness: f64,
+    /// Quads along the twisting edge.
+    #[arg(long, default_value_t = 120)]
+    pub along: usize,
+    /// Quads across the plate.
+    #[arg(long, default_value_t = 20)]
+    pub across: usize,
+    /// Units the STL is written in (the plate's sizes are in mm either way).
+    #[arg(long, value_enum, default_value = "mm")]
+    pub units: crate::mesh_cmds::MeshUnits,
+    /// The STL file (ASCII; atomic).
+    #[arg(short, long)]
+    pub output: String,
+}
+
+/// `plan demo`: paper 001's twisted plate as a closed STL.
+pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
+    let mesh = lampost_plan::demo::twisted_plate(a.scale, a.thickness, a.along, a.across)
+        .ok_or_else(|| {
+            CliError::usage(format!(
+                "error: plan demo: --scale {} --thickness {} --along {} --across {}: give positive sizes and 1 to 100000 quads each way\n  = help: e.g. --scale 0.25 --thickness 3\n",
+                a.scale, a.thickness, a.along, a.across
+            ))
+        })?;
+    let (lo, hi) = lampost_mesh::props::bounds(&mesh).unwrap_or_default();
+    if !(lo
+        .iter()
+        .chain(hi.iter())
+        .all(|c| c.is_finite() && c.abs() < 1e9))
+    {
+        return Err(CliError::usage(format!(
+            "error: plan demo: --scale {}: the plate would not be finite\n",
+            a.scale
+        )));
+    }
+    let (mesh, unit) = match a.units {
+        crate::mesh_cmds::MeshUnits::Mm => (mesh, "mm"),
+        crate::mesh_cmds::MeshUnits::In => (mesh.scaled(1.0 / 25.4), "in"),
+    };
+    let (lo, hi) = lampost_mesh::props::bounds(&mesh).unwrap_or_default();
+    write_out(
+        Some(&a.output),
+        lampost_mesh::write_ascii_stl(&mesh, "twisted-plate").as_bytes(),
+    )?;
+    eprintln!(
+        "wrote {}: paper 001's plate at scale {}, {} triangles, from ({:.4} {:.4} {:.4}) to ({:.4} {:.4} {:.4}) {unit}; build direction +z",
+        a.output,
+        a.scale,
+        mesh.triangles.len(),
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
+    Ok(())
+}
