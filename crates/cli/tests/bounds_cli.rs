@@ -253,6 +253,9 @@ fn post_and_verify_spool_a_program_from_a_pipe_instead_of_holding_it() {
     );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // The spooled copy is gone once the command ends.
-    let left: Vec<_> = std::fs::read_dir(&tmp).expect("temp dir").flatten().collect();
+    let left: Vec<_> = std::fs::read_dir(&tmp)
+        .expect("temp dir")
+        .flatten()
+        .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
