@@ -13,12 +13,12 @@
 //! - `thiserror`: the typed [`AlignError`].
 
 pub mod calib;
-pub mod error;
+mod error;
 pub mod fit;
-pub mod machine_file;
+mod machine_file;
 pub mod probe;
 pub mod register;
-pub mod setup;
+mod setup;
 pub mod study;
 
 pub use error::AlignError;
@@ -26,4 +26,5 @@ pub use fit::{
     circle3d, plane, residual_warning, sphere, sphere4, spread, CircleFit, PlaneFit, SphereFit,
     MAX_COORD, MAX_ITERATIONS, MAX_RESIDUAL_OF_SPREAD, P3,
 };
+pub use machine_file::calibrated_text;
 pub use setup::{level, plane_angle, Level, PlaneAngle, Setup};

@@ -458,12 +458,12 @@ pub fn pivot(
     if let Some(path) = write {
         // An edit of the machine file the calibration started from (its comments and
         // layout kept), or of the built-in it names.
-        let original = match lampost_kinematics::def::builtin_text(machine) {
+        let original = match lampost_kinematics::builtin_text(machine) {
             Some(t) => t.to_string(),
             None => std::fs::read_to_string(machine)
                 .map_err(|e| CliError::usage(format!("error: cannot read {machine}: {e}\n")))?,
         };
-        let text = lampost_align::machine_file::calibrated_text(&original, &m, &res, &name)
+        let text = lampost_align::calibrated_text(&original, &m, &res, &name)
             .map_err(|e| align_error(&name, e))?;
         let mut o = Output::create(Some(path))?;
         o.writer()

@@ -1,6 +1,8 @@
 //! `lampost machines` and `lampost kin fk|ik|rotate`.
 
-use lampost_kinematics::{def, Joints, KinError, Machine, MachineDef, ParamValue, Vector3};
+use lampost_kinematics::{
+    builtin_text, Joints, KinError, Machine, MachineDef, ParamValue, Vector3,
+};
 
 use crate::io::{display_name, open_input, Output};
 use crate::json::{self, obj, Obj};
@@ -130,7 +132,7 @@ pub fn overrides(sets: &[String]) -> Result<Vec<(String, ParamValue)>, CliError>
 
 /// Every built-in machine's name, tables and arms.
 pub fn builtin_names() -> Vec<&'static str> {
-    def::BUILTINS
+    lampost_kinematics::BUILTINS
         .iter()
         .chain(lampost_robot::ARM_BUILTINS.iter())
         .map(|(n, _)| *n)
@@ -145,7 +147,7 @@ pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
             "error: --machine {spec}: an arm (six-axis robot); this command is for table machines\n  = help: arms are posted and verified: `lampost post --machine {spec} PATH -o DIR`, `lampost verify --machine {spec} DIR --input PATH`\n"
         )));
     }
-    if def::builtin_text(spec).is_some() {
+    if builtin_text(spec).is_some() {
         return Machine::builtin(spec, &ov).map_err(kin_error);
     }
     let text = std::fs::read_to_string(spec).map_err(|e| {
@@ -253,7 +255,7 @@ pub fn machines(show: Option<&str>) -> Result<(), CliError> {
     match show {
         None => {
             let mut s = String::new();
-            for (name, _) in def::BUILTINS {
+            for (name, _) in lampost_kinematics::BUILTINS {
                 let d = MachineDef::builtin(name)
                     .map(|d| d.description)
                     .unwrap_or_default();
@@ -268,8 +270,8 @@ pub fn machines(show: Option<&str>) -> Result<(), CliError> {
             write_out(&mut out, &s)?;
         }
         Some(name) => {
-            let text = def::builtin_text(name)
-                .or_else(|| lampost_robot::def::builtin_text(name))
+            let text = builtin_text(name)
+                .or_else(|| lampost_robot::builtin_text(name))
                 .ok_or_else(|| {
                     let names = builtin_names();
                     CliError::usage(format!(

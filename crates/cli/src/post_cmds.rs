@@ -259,7 +259,7 @@ fn file_error(file: &str, text: &str, e: &toml::de::Error) -> CliError {
         let last = key
             .rsplit(['.', ']'])
             .find(|k| !k.is_empty() && !k.contains('['))?;
-        lampost_kinematics::check::key_offset(text, last)
+        lampost_kinematics::key_offset(text, last)
     });
     let (line, col) = at.map_or((0, 0), |start| {
         let before = &text[..start.min(text.len())];
@@ -462,7 +462,7 @@ pub fn sections(
     if let Some(job) = &pl.job {
         let text = std::fs::read_to_string(job)
             .map_err(|e| CliError::usage(format!("error: cannot read {job}: {e}\n")))?;
-        let jf = lampost_post::job::parse(&text).map_err(|e| file_error(job, &text, &e))?;
+        let jf = lampost_post::read_job(&text).map_err(|e| file_error(job, &text, &e))?;
         let dir = Path::new(job).parent().unwrap_or(Path::new("."));
         let mut out = Vec::new();
         for (k, s) in jf.section.iter().enumerate() {

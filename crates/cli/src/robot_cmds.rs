@@ -4,10 +4,10 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use lampost_robot::arm::{Arm, Config};
 use lampost_robot::chunk::{self, ChunkFile};
 use lampost_robot::plan::{self, PathPoint, Sample};
 use lampost_robot::RobotError;
+use lampost_robot::{Arm, Config};
 
 use crate::io::{display_name, TempFile};
 use crate::json::{self, obj, Obj};
@@ -17,18 +17,18 @@ use crate::report::CliError;
 /// The arm a `--machine` names, if it is one: a built-in arm, or a file with
 /// `kind = "arm"`.
 pub fn arm_for(spec: &str) -> Result<Option<Arm>, CliError> {
-    if let Some(text) = lampost_robot::def::builtin_text(spec) {
+    if let Some(text) = lampost_robot::builtin_text(spec) {
         return Arm::from_toml(text, &format!("<built-in {spec}>"))
             .map(Some)
             .map_err(|e| robot_error(e, None));
     }
-    if lampost_kinematics::def::builtin_text(spec).is_some() {
+    if lampost_kinematics::builtin_text(spec).is_some() {
         return Ok(None);
     }
     let Ok(text) = std::fs::read_to_string(spec) else {
         return Ok(None);
     };
-    if !lampost_robot::def::is_arm_text(&text) {
+    if !lampost_robot::is_arm_text(&text) {
         return Ok(None);
     }
     Arm::from_toml(&text, spec)
@@ -108,7 +108,7 @@ fn read_path(
     std::io::Read::read_to_string(&mut crate::io::open_input(input)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     let pts = lampost_post::pointwise::read_points(&text, &name).map_err(post_error)?;
-    let arm_mm = arm.units == lampost_robot::def::Units::Mm;
+    let arm_mm = arm.units == lampost_robot::Units::Mm;
     let k = match pl.units {
         Some(u) if matches!(u, crate::UnitsArg::Mm) != arm_mm => {
             if !pl.convert_units {
@@ -236,7 +236,7 @@ pub fn post(
         "format": chunk::FORMAT,
         "machine": arm.name,
         "input": name,
-        "units": if arm.units == lampost_robot::def::Units::Mm { "mm" } else { "inch" },
+        "units": if arm.units == lampost_robot::Units::Mm { "mm" } else { "inch" },
         "config": cfg.letters(),
         "spacing": spacing,
         "chunk_points": chunk_points,

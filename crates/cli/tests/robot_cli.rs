@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 
 use common::{lampost, tempdir};
-use lampost_robot::arm::{Arm, Config, Q};
+use lampost_robot::{Arm, Config, Q};
 
 /// A twisted plate's layers (paper 001's demo part, scaled by `scale`): the long edge
 /// along x, the face turning from +z to +y along it; each layer a pass along the edge at

@@ -6,7 +6,7 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use lampost_align::{calib, fit, probe, register, setup, P3};
+use lampost_align::{calib, fit, level, plane_angle, probe, register, P3};
 use lampost_gcode::{
     parse_line, Dialect, EWord, EmitOptions, Emitter, Event, Flavor, LineReader, Options, Order,
     ProgramReader, Stream, Units,
@@ -288,7 +288,7 @@ impl Ctx {
         let (arm_texts, tables): (Vec<Vec<u8>>, Vec<Vec<u8>>) =
             read_dir(&fx.join("machines"), &["toml"])
                 .into_iter()
-                .partition(|t| lampost_robot::def::is_arm_text(&String::from_utf8_lossy(t)));
+                .partition(|t| lampost_robot::is_arm_text(&String::from_utf8_lossy(t)));
         machine_texts.extend(tables);
         let mut machines = Vec::new();
         for t in &machine_texts {
@@ -908,7 +908,7 @@ impl Ctx {
                 mutate(r, input, TOML_TOKENS);
                 self.made(input, note);
                 let text = String::from_utf8_lossy(input);
-                if let Ok(job) = lampost_post::job::parse(&text) {
+                if let Ok(job) = lampost_post::read_job(&text) {
                     for s in &job.section {
                         // What the CLI makes of each section.
                         let f = Frame::from_axes(
@@ -1474,9 +1474,9 @@ fn numeric(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Re
             let m = &ctx.machines[r.below(ctx.machines.len())];
             let n = P3::new(r.extreme(), r.extreme(), r.extreme());
             *note += &format!(", machine {}, normal {n:?}", m.name);
-            finite("level", &setup::level(m, &n, &[0.0, 0.0]))?;
+            finite("level", &level(m, &n, &[0.0, 0.0]))?;
             let cad = P3::new(r.extreme(), r.extreme(), r.extreme());
-            let a = setup::plane_angle(&n, &cad);
+            let a = plane_angle(&n, &cad);
             if (n.norm() > 0.0 && cad.norm() > 0.0) && shows_nonfinite(&format!("{a:?}")) {
                 return Err(format!("plane_angle({n:?}, {cad:?}) = {a:?}"));
             }

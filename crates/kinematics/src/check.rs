@@ -279,7 +279,7 @@ fn length(key: &str, value: Option<f64>, zero_ok: bool, default: &str) -> Result
 }
 
 impl MachineDef {
-    /// Check every value the post writes as text (see [`crate::check`]) and the optional
+    /// Check every value the post writes as text (see the crate's docs, *What a machine file may hold*) and the optional
     /// process lengths, storing letters upper case. A definition from
     /// [`MachineDef::from_toml`] has passed already; [`crate::Machine::new`] runs it again
     /// for definitions built or changed in code. The error names the value and the

@@ -190,7 +190,7 @@ pub struct CalibrationRecord {
 }
 
 /// Process codes (M, S, P and Q words only, e.g. `"M71"` or `"M98 P10"`; see
-/// [`crate::check`]) and post settings. The papers give no laser or powder codes: the
+/// the crate docs' *What a machine file may hold*) and post settings. The papers give no laser or powder codes: the
 /// defaults are documented assumptions for the machine's integrator to set.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -358,7 +358,7 @@ fn find_non_finite(text: &str) -> Option<usize> {
 
 impl MachineDef {
     /// Read a machine file's text; `file` names it in errors. The values the post writes
-    /// as text are checked as data ([`crate::check`]): a refusal names the file, line and
+    /// as text are checked as data (the crate docs' *What a machine file may hold*): a refusal names the file, line and
     /// column of the offending text.
     pub fn from_toml(text: &str, file: &str) -> Result<Self, KinError> {
         if let Some(at) = find_non_finite(text) {

@@ -1,4 +1,4 @@
-//! Four `f64` lanes in lockstep, for the batch kinematics ([`crate::batch`]).
+//! Four `f64` lanes in lockstep, for the batch kinematics ([`crate::Machine::inverse_into`]).
 //!
 //! `F4` is four independent numbers; every operation is the scalar IEEE operation on
 //! each lane (so results are bit-identical to scalar code doing the same operations in

@@ -214,7 +214,7 @@ fn unreachable_tilt_names_the_limit() {
 
 #[test]
 fn bad_machine_files_are_refused_with_a_place() {
-    let good = lampost_kinematics::def::builtin_text("fadal-lamp").expect("text");
+    let good = lampost_kinematics::builtin_text("fadal-lamp").expect("text");
     // Where the Y limits stand, so the expected location follows the file.
     let y_line = good
         .lines()

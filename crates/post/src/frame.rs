@@ -103,7 +103,7 @@ pub fn read_setup(text: &str, file: &str) -> Result<Frame, PostError> {
             message: e.message().trim().to_string(),
         }
     })?;
-    if let Some((key, at, written, read)) = lampost_kinematics::check::dropped_elements(text, &s) {
+    if let Some((key, at, written, read)) = lampost_kinematics::dropped_elements(text, &s) {
         let (line, column) = at.map_or((0, 0), |a| line_col(text, a));
         return Err(PostError::File {
             file: file.to_string(),

@@ -32,7 +32,7 @@ pub struct JobSection {
 /// Read a job file's text; the error carries its span (the CLI locates it).
 pub fn parse(text: &str) -> Result<JobFile, toml::de::Error> {
     let job: JobFile = toml::from_str(text)?;
-    if let Some((key, _, written, read)) = lampost_kinematics::check::dropped_elements(text, &job) {
+    if let Some((key, _, written, read)) = lampost_kinematics::dropped_elements(text, &job) {
         return Err(serde::de::Error::custom(format!(
             "`{key}` has {written} values; it takes {read}"
         )));

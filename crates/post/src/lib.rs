@@ -5,10 +5,10 @@
 //! verification that replays a posted program through forward kinematics.
 //!
 //! Pipeline (each stage streams): text → [`lampost_gcode::Stream`] (moves in the program
-//! frame) → [`intended::Intended`] (placed in the part frame by a [`frame::Frame`], with
-//! the tool axis each move should have) → [`pipeline::post`] (rotaries per section or layer
+//! frame) → the intended path (placed in the part frame by a [`Frame`], with
+//! the tool axis each move should have) → [`post()`] (rotaries per section or layer
 //! by inverse kinematics, retract before every re-index, joint positions, process codes,
-//! limits on every point) → dialect text. [`verify::verify`] reads a posted program back
+//! limits on every point) → dialect text. [`verify()`] reads a posted program back
 //! and compares every feed point with the same intended path.
 //!
 //! Every block is written by one writer (`writer.rs`), whichever path made it: planar
@@ -26,23 +26,24 @@
 mod check;
 mod chords;
 pub mod collide;
-pub mod error;
-pub mod frame;
-pub mod intended;
-pub mod job;
+mod error;
+mod frame;
+mod intended;
+mod job;
 mod orient;
-pub mod pipeline;
+mod pipeline;
 pub mod pointwise;
-pub mod post;
+mod post;
 pub mod preview;
 pub mod safety;
 pub mod split;
-pub mod verify;
+mod verify;
 mod writer;
 
 pub use error::PostError;
 pub use frame::{read_setup, Frame};
 pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
+pub use job::{parse as read_job, JobFile, JobSection};
 pub use pipeline::{post, Rewind};
 pub use post::{default_head, PostConfig, PostDialect, PostReport, Process};
 pub use verify::{verify, verify_traced, VerifyReport};

@@ -144,7 +144,7 @@ impl<T: Rewind + ?Sized> Rewind for &mut T {
 /// Post `sections` for `machine` to `out`.
 ///
 /// Two threads: one reads, parses and interprets the input into intended steps (the
-/// [`Intended`] iterator), the other solves, writes and verifies them, in order; batches
+/// intended-path iterator), the other solves, writes and verifies them, in order; batches
 /// of 1,024 steps pass between them over a bounded channel (at most four in flight,
 /// so memory stays flat). The output is the same as one thread's, byte for byte: the
 /// writing side consumes the steps in input order. An error on either side stops both.

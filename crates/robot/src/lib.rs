@@ -1,8 +1,8 @@
 //! # lampost-robot
 //!
 //! Paper 001's robot cell: a six-axis arm (a PUMA 560) holds the part under a fixed LENS
-//! deposition head. This crate reads arm files ([`def`]), does the arm's kinematics
-//! ([`arm`]: classic DH forward kinematics, the closed-form PUMA inverse in all eight
+//! deposition head. This crate reads arm files ([`ArmDef`]), does the arm's kinematics
+//! ([`Arm`]: classic DH forward kinematics, the closed-form PUMA inverse in all eight
 //! configurations, a damped-least-squares inverse for other arms), turns a path into
 //! poses that bring each point to the laser's focus with the approach along the beam
 //! ([`plan`]), writes them as controller location files in chunks with a manifest and
@@ -14,12 +14,12 @@
 //! - `thiserror`: the typed [`RobotError`];
 //! - `lampost-kinematics`: the shared `Units`.
 
-pub mod arm;
+mod arm;
 pub mod chunk;
-pub mod def;
-pub mod error;
+mod def;
+mod error;
 pub mod plan;
 
-pub use arm::{Arm, Config, Frame, Q};
-pub use def::{ArmDef, ARM_BUILTINS};
+pub use arm::{wrap, Arm, Config, Frame, Q};
+pub use def::{builtin_text, is_arm_text, ArmDef, Units, ARM_BUILTINS};
 pub use error::RobotError;

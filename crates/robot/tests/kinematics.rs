@@ -2,7 +2,7 @@
 //! numerical inverse; the configuration of joint values is the one they were solved in;
 //! arm files with degenerate or bad values are refused at their line.
 
-use lampost_robot::arm::{wrap, Arm, Config, Frame, Q};
+use lampost_robot::{wrap, Arm, Config, Frame, Q};
 use lampost_robot::{ArmDef, RobotError};
 use proptest::prelude::*;
 
@@ -110,7 +110,7 @@ fn a_pose_beyond_reach_names_the_elbow() {
 
 #[test]
 fn a_non_puma_arm_uses_the_numerical_inverse() {
-    let text = lampost_robot::def::builtin_text("puma-lens")
+    let text = lampost_robot::builtin_text("puma-lens")
         .unwrap_or_default()
         .replacen(
             "d = 0.0\na = 0.0\nalpha = -90.0",
@@ -145,7 +145,7 @@ fn line_of(text: &str, needle: &str, nth: usize) -> usize {
 
 #[test]
 fn bad_arm_files_are_refused_at_their_line() {
-    let base = lampost_robot::def::builtin_text("puma-lens").unwrap_or_default();
+    let base = lampost_robot::builtin_text("puma-lens").unwrap_or_default();
     // A zero-length arm: every a and d zero.
     let zero = base
         .lines()

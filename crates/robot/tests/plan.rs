@@ -1,10 +1,10 @@
 //! Path to poses: resampling, the planned joints (focus on the point, approach along the
 //! beam, one configuration, limits), chunk cuts, and the location files' pose angles.
 
-use lampost_robot::arm::{Arm, Q};
 use lampost_robot::chunk::{chunk_ranges, from_zyz, part_of, zyz};
 use lampost_robot::plan::{plan, resample, PathPoint, Sample, MAX_TURN};
 use lampost_robot::RobotError;
+use lampost_robot::{Arm, Q};
 use nalgebra::Vector3;
 use proptest::prelude::*;
 

@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use lampost_robot::arm::{wrap, Arm, Config, Q};
+use lampost_robot::{wrap, Arm, Config, Q};
 
 fn root() -> PathBuf {
     let r = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
