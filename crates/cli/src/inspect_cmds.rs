@@ -497,7 +497,7 @@ pub fn compare_cmd(measured: &str, a: &CompareArgs) -> Result<(), CliError> {
         Some(path) => {
             let (sname, stext) = read(path)?;
             Some(
-                lampost_post::frame::read_setup(&stext, &sname)
+                lampost_post::read_setup(&stext, &sname)
                     .map_err(|e| CliError::failed(format!("error: {e}\n")))?,
             )
         }
