@@ -321,11 +321,11 @@ fn without_laser_codes(text: &str) -> String {
 /// machine in inches) and on puma-lens (chunked location files), each verified; rs274
 /// reads the ISO program to the same moves as `lampost trace`.
 ///
-/// The perimeters are planned with `--approach build`: with the tangent approach the
-/// tool axis passes through the C axis (B = 0) mid-loop (the plate's middle and end caps
-/// have a vertical axis), and the per-point post refuses that move (an inverse-time feed
-/// out of range at the pole; an open finding in crates/post, docs/plan.md); the PUMA's
-/// wrist refuses it too (J4 turning half a turn where the axis passes its singularity).
+/// The perimeters are planned with `--approach build` here, so that the same path also
+/// reaches on the FADAL and the PUMA: with the tangent approach the FADAL needs X beyond
+/// its travel where the axis leaves B's axis, and the PUMA's wrist refuses it (J4 turning
+/// half a turn where the axis passes its singularity). The tangent approach on nrc-lc is
+/// the next test.
 #[test]
 fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
     let dir = tempdir("plan-plate");
@@ -429,4 +429,56 @@ fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
     let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     let (total, _) = compare_with_rs274(&doc, &canon).expect("the same moves");
     assert!(total > 6 * 1000, "{total}");
+}
+
+/// The plate with paper 001's tangent approach on nrc-lc: the tool axis passes through
+/// the C axis (vertical) mid-loop, where C's angle is free; the post turns C in place
+/// there with the process off (a warning names the line) instead of one five-axis feed
+/// that swept the table half a turn (its inverse-time F overflowed the word).
+#[test]
+fn the_plate_with_the_tangent_approach_posts_on_nrc_lc() {
+    let dir = tempdir("plan-plate-tangent");
+    let stl = plate(&dir);
+    let csv = dir.join("plate.csv");
+    let o = lampost(&[
+        "plan",
+        "path",
+        s(&stl),
+        "--layer",
+        "2",
+        "--spacing",
+        "2",
+        "--hatch",
+        "1.5",
+        "--raster-angle",
+        "90",
+        "--raster-turn",
+        "0",
+        "-o",
+        s(&csv),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let nc = dir.join("plate.nc");
+    let o = lampost(&["post", "--machine", "nrc-lc", s(&csv), "-o", s(&nc)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("turns") && stderr(&o).contains("in place with the process off"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&["verify", "--machine", "nrc-lc", s(&csv), s(&nc)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Every inverse-time F is within the ISO word and no block is given under 1 ms.
+    let posted = std::fs::read_to_string(&nc).expect("posted");
+    let mut inverse = false;
+    for l in posted.lines() {
+        inverse = (inverse || l.contains("G93")) && !l.contains("G94");
+        if let (true, Some(f)) = (
+            inverse,
+            l.split_whitespace().find_map(|w| w.strip_prefix('F')),
+        ) {
+            let f: f64 = f.parse().expect("F");
+            assert!(f > 0.0 && f <= 60_000.0 + 1e-6, "{l}");
+        }
+    }
 }

@@ -22,6 +22,12 @@ use crate::writer::Writer;
 /// an inverse-time feed.
 pub const ROTARY_FEED_DEG_PER_MIN: f64 = 3600.0;
 
+/// The shortest time an inverse-time block is given (minutes: 1 ms). A controller
+/// cannot run blocks faster than it reads them; a piece next to a singular pose that
+/// would take less is written to take this long (slower, never faster, than asked), which
+/// also keeps its F word within every dialect's range.
+pub const MIN_BLOCK_MINUTES: f64 = 1.0 / 60_000.0;
+
 /// At a singular pose, an inner-axis turn larger than this (degrees) to the next point
 /// is made in place, the tip standing (see [`post_points`]); a smaller one is split
 /// along the move like any other.
@@ -235,38 +241,44 @@ impl Ctx<'_> {
         ))
     }
 
-    /// Whether the tool axis at `j` lies along the inner rotary axis: turning that axis
-    /// leaves the tool axis where it is, so its angle is free (a singular pose).
+    /// Whether the tool axis at `j` lies along the inner rotary axis, or within
+    /// [`AXIS_TOLERANCE_DEG`] of it: turning that axis then moves the tool axis by at most
+    /// twice that, so its angle is free, or as good as (a singular pose, or next to one).
     fn singular(&self, j: &[f64; 5]) -> bool {
         let mut turned = *j;
-        turned[3 + self.m.inner] += 90.0;
-        angle(&self.fk(j).1, &self.fk(&turned).1) <= 1e-7
+        turned[3 + self.m.inner] += 180.0;
+        angle(&self.fk(j).1, &self.fk(&turned).1) <= 2.0 * AXIS_TOLERANCE_DEG
     }
 
-    /// At a singular pose `j0` (tip `a`), turn the inner rotary to `c` with the tip and
-    /// the tool axis standing: the linear axes follow the table round, split until
-    /// straight joint interpolation keeps the tip within the tolerance.
-    #[allow(clippy::too_many_arguments)]
+    /// The joints that put the tip at `tip` with the table at `rot`.
+    fn at_table(&self, tip: &Vector3<f64>, rot: [f64; 2]) -> [f64; 5] {
+        let (jm, _) = crate::post::index_maps(self.m, self.head, &rot);
+        let x = crate::post::joints(&jm, tip);
+        [x[0], x[1], x[2], rot[0], rot[1]]
+    }
+
+    /// At a singular pose `j0` (tip `a`), turn the inner rotary to that of `j1` with the
+    /// tip standing: the linear axes follow the table round, split until straight joint
+    /// interpolation keeps the tip within the tolerance.
     fn turn_in_place(
         &self,
         a: &PathPoint,
         j0: [f64; 5],
         j1: [f64; 5],
-        branch: i8,
         depth: u32,
         out: &mut Vec<[f64; 5]>,
-    ) -> Result<(), PostError> {
+    ) {
         let mut jm = [0.0; 5];
         for k in 0..5 {
             jm[k] = (j0[k] + j1[k]) / 2.0;
         }
         if depth >= 24 || (self.fk(&jm).0 - a.tip).norm() <= self.tol {
             out.push(j1);
-            return Ok(());
+            return;
         }
-        let (js, _, _) = self.solve(&a.tip, &a.axis, &[jm[3], jm[4]], Some(branch), a.line)?;
-        self.turn_in_place(a, j0, js, branch, depth + 1, out)?;
-        self.turn_in_place(a, js, j1, branch, depth + 1, out)
+        let js = self.at_table(&a.tip, [jm[3], jm[4]]);
+        self.turn_in_place(a, j0, js, depth + 1, out);
+        self.turn_in_place(a, js, j1, depth + 1, out);
     }
 
     /// Split (t0, j0)–(t1, j1) until straight joint interpolation stays on the segment.
@@ -373,9 +385,9 @@ pub fn post_points<W: Write>(
             // it in place to the angle the next point needs (process off: the tip stands),
             // so the move itself does not sweep the table half a turn.
             let ci = 3 + machine.inner;
-            let mut near = [j0[3], j0[4]];
-            near[machine.inner] = j[ci];
-            let (jt, _, _) = ctx.solve(&a.tip, &a.axis, &near, Some(branch), a.line)?;
+            let mut rot = [j0[3], j0[4]];
+            rot[machine.inner] = j[ci];
+            let jt = ctx.at_table(&a.tip, rot);
             if (jt[ci] - j0[ci]).abs() > IN_PLACE_TURN_DEG {
                 let axis = &machine.rotary[machine.inner].name;
                 w.report.warnings.push(format!(
@@ -384,18 +396,13 @@ pub fn post_points<W: Write>(
                     (jt[ci] - j0[ci]).abs()
                 ));
                 let mut steps = Vec::new();
-                ctx.turn_in_place(&a, j0, jt, branch, 0, &mut steps)?;
+                ctx.turn_in_place(&a, j0, jt, 0, &mut steps);
                 w.process_for(cfg, false)?;
                 let mut j_prev = j0;
                 for js in steps {
                     let dr = (js[3] - j_prev[3]).abs().max((js[4] - j_prev[4]).abs());
-                    w.move5(
-                        &js,
-                        q.feed,
-                        Some(ROTARY_FEED_DEG_PER_MIN / dr.max(1e-9)),
-                        name,
-                        line,
-                    )?;
+                    let minutes = (dr / ROTARY_FEED_DEG_PER_MIN).max(MIN_BLOCK_MINUTES);
+                    w.move5(&js, q.feed, Some(1.0 / minutes), name, line)?;
                     j_prev = js;
                 }
                 j0 = jt;
@@ -403,6 +410,7 @@ pub fn post_points<W: Write>(
         }
         let mut pieces = Vec::new();
         ctx.split(&a, q, 0.0, j0, 1.0, j, branch, 0, &mut pieces)?;
+        let pieces = without_unwritable_pieces(pieces, j0, w.scale);
         w.process_for(cfg, q.deposit)?;
         let mut t_prev = 0.0;
         let mut j_prev = j0;
@@ -410,8 +418,11 @@ pub fn post_points<W: Write>(
             let seg = (q.tip - a.tip).norm() * (t - t_prev);
             let dr = (jp[3] - j_prev[3]).abs().max((jp[4] - j_prev[4]).abs());
             // Rotaries turning: inverse time, long enough for the rotary feed.
-            let per_min = (dr > 1e-9)
-                .then(|| 1.0 / (seg / q.feed).max(dr / ROTARY_FEED_DEG_PER_MIN).max(1e-9));
+            let per_min = (dr > 1e-9).then(|| {
+                1.0 / (seg / q.feed)
+                    .max(dr / ROTARY_FEED_DEG_PER_MIN)
+                    .max(MIN_BLOCK_MINUTES)
+            });
             w.move5(&jp, q.feed, per_min, name, line)?;
             t_prev = t;
             j_prev = jp;
@@ -420,6 +431,38 @@ pub fn post_points<W: Write>(
         prev = Some(*q);
     }
     w.finish(cfg).map(|(report, _)| report)
+}
+
+/// The pieces of a split segment without those the output cannot tell from the last one
+/// kept (every linear word within half its last digit, every rotary within 0.0005°):
+/// halving toward a singular pose leaves a tail of such pieces, each of which would be
+/// written as the same block with an inverse-time feed of a move lasting nanoseconds.
+/// The segment's last piece always ends where the segment ends.
+fn without_unwritable_pieces(
+    pieces: Vec<(f64, [f64; 5])>,
+    j0: [f64; 5],
+    scale: f64,
+) -> Vec<(f64, [f64; 5])> {
+    let unwritable = |a: &[f64; 5], b: &[f64; 5]| {
+        (0..3).all(|k| ((a[k] - b[k]) * scale).abs() < 0.5)
+            && (3..5).all(|k| (a[k] - b[k]).abs() < 0.0005)
+    };
+    let mut kept: Vec<(f64, [f64; 5])> = Vec::with_capacity(pieces.len());
+    let n = pieces.len();
+    for (i, (t, jp)) in pieces.into_iter().enumerate() {
+        let last_kept = kept.last().map_or(j0, |k| k.1);
+        if !unwritable(&last_kept, &jp) {
+            kept.push((t, jp));
+        } else if i + 1 == n {
+            // The end itself: it replaces the last piece kept (which the output cannot
+            // tell from it), or is the only piece.
+            match kept.last_mut() {
+                Some(k) => *k = (t, jp),
+                None => kept.push((t, jp)),
+            }
+        }
+    }
+    kept
 }
 
 /// Whether the tool at `tip`, `axis` is on the path from point `a` to point `b` as the
