@@ -1,9 +1,11 @@
 //! Closing the loop for deposition: which layers and lines of a posted program deposited
 //! where the measured part is out of tolerance.
 //!
-//! [`replay`] reads the posted program (its own text, through the interpreter and the
-//! machine's forward kinematics of the deposition head, nothing from the post) into the
-//! part-frame segments the tool point travelled with the laser on; each segment keeps its
+//! [`replay`] reads the posted program through the post's one replay
+//! ([`lampost_post::preview::replay`]: the text through the interpreter and the machine's
+//! forward kinematics of the deposition head, the laser followed by the machine's process
+//! codes, nothing from the post) into the part-frame segments the tool point travelled
+//! with the laser on; each segment keeps its
 //! posted line and its layer. A layer is one deposition height: the tip's height along the
 //! tool axis at the end of the move, with the table position (rotaries), to 1e-4 of the
 //! machine's unit; layers are numbered 1, 2, … in the order they first deposit.
@@ -13,8 +15,7 @@
 
 use std::collections::HashMap;
 
-use lampost_gcode::{Event, MoveKind, Options, Plane, Severity, Stream, Units, AXES};
-use lampost_kinematics::{Joints, Machine, Units as MUnits};
+use lampost_kinematics::{Joints, Machine};
 use serde::Serialize;
 
 use crate::error::InspectError;
@@ -69,19 +70,6 @@ pub struct Near {
     pub layers_within: Vec<usize>,
 }
 
-/// The M numbers of a process code such as `M71` (`M71 M8` gives both).
-fn m_codes(code: &str) -> Vec<f64> {
-    code.split_whitespace()
-        .filter_map(|w| {
-            let (l, n) = w.split_at(1);
-            (l.eq_ignore_ascii_case("m"))
-                .then(|| n.parse::<f64>().ok())
-                .flatten()
-        })
-        .collect()
-}
-
-const ARC_STEP_DEG: f64 = 5.0;
 /// The most grid entries one replay makes (the deposited length over half the radius).
 pub const MAX_GRID_ENTRIES: usize = 20_000_000;
 
@@ -100,170 +88,77 @@ pub fn replay(
             "--radius {radius}: give a positive distance"
         )));
     }
-    let (on, off) = (
-        m_codes(&m.def.process.laser_on),
-        m_codes(&m.def.process.laser_off),
-    );
-    if on.is_empty() || off.is_empty() {
+    if m.def.process.laser_on.trim().is_empty() || m.def.process.laser_off.trim().is_empty() {
         return Err(InspectError::Input(format!(
             "machine {} has no laser_on/laser_off M code in its [process] table: the deposition cannot be told from travel",
             m.def.name
         )));
     }
-    let units = match m.units {
-        MUnits::Inch => Units::Inch,
-        MUnits::Mm => Units::Mm,
-    };
-    let idx = |name: &str| {
-        name.bytes()
-            .next()
-            .and_then(|c| AXES.iter().position(|&a| a == c.to_ascii_uppercase()))
-    };
-    let names = m.axis_names();
-    let lin: Vec<usize> = names[..3].iter().map(|n| idx(n).unwrap_or(0)).collect();
-    let rot: Vec<usize> = names[3..].iter().map(|n| idx(n).unwrap_or(3)).collect();
-    let pose = |p: &[f64; 9]| {
-        let j = Joints {
-            linear: [p[lin[0]], p[lin[1]], p[lin[2]]],
-            rotary: [p[rot[0]], p[rot[1]]],
-        };
-        m.forward(&j, head)
-    };
-    // The laser's state is read from the text: the lines holding its codes.
-    let mut laser_at: Vec<Option<bool>> = Vec::new();
-    for (i, raw) in text.split(|&b| b == b'\n').enumerate() {
-        let mut state = None;
-        if let Ok(block) = lampost_gcode::parse_line(raw, (i + 1) as u32, 0) {
-            for w in block.words().filter(|w| w.letter == b'M') {
-                if on.contains(&w.value) {
-                    state = Some(true);
-                } else if off.contains(&w.value) {
-                    state = Some(false);
-                }
-            }
-        }
-        laser_at.push(state);
-    }
+    let preview = lampost_post::preview::replay(m, head, text).map_err(|e| match e {
+        lampost_post::PostError::Input { diag, .. } => InspectError::At {
+            line: diag.line as usize,
+            what: format!("the posted program: {}", diag.kind),
+        },
+        other => InspectError::Input(format!("the posted program: {other}")),
+    })?;
+    // The tool axis at each table position (part frame), for the layers' heights.
+    let axes: Vec<lampost_kinematics::Vector3<f64>> = preview
+        .positions
+        .iter()
+        .map(|r| {
+            m.forward(
+                &Joints {
+                    linear: [0.0; 3],
+                    rotary: *r,
+                },
+                head,
+            )
+            .axis
+        })
+        .collect();
     let unit = 1e-4;
     let mut out = Deposition {
         cell: 2.0 * radius,
         ..Deposition::default()
     };
     let mut keys: HashMap<[i64; 3], usize> = HashMap::new();
-    let mut laser = false;
-    let mut next_line = 1usize;
-    let stream = Stream::from_bytes(
-        text,
-        Options {
-            units,
-            ..Options::default()
-        },
-        true,
-    );
-    for ev in stream {
-        let ev = ev.map_err(|e| InspectError::Input(format!("the posted program: {e}")))?;
-        let mv = match ev {
-            Event::Diagnostic(d) if d.severity == Severity::Error => {
-                return Err(InspectError::At {
-                    line: d.line as usize,
-                    what: format!("the posted program: {}", d.kind),
-                })
-            }
-            Event::Diagnostic(_) => continue,
-            Event::Move(mv) => mv,
-        };
-        // The laser state up to and including the move's own line.
-        while next_line <= mv.line as usize {
-            if let Some(Some(s)) = laser_at.get(next_line - 1) {
-                laser = *s;
-            }
-            next_line += 1;
-        }
-        if !laser || matches!(mv.kind, MoveKind::Rapid | MoveKind::Probe) {
-            continue;
-        }
-        let end = pose(&mv.end);
-        let height = end.tip.dot(&end.axis);
-        let rotary = [mv.end[rot[0]], mv.end[rot[1]]];
-        let q = |x: f64| (x / unit).round() as i64;
-        let key = [
-            q(height),
-            (rotary[0] * 1e3).round() as i64,
-            (rotary[1] * 1e3).round() as i64,
-        ];
-        let layer = match keys.get(&key) {
-            Some(&k) => k,
-            None => {
-                out.layers.push(Layer {
-                    height,
-                    rotary,
-                    lines: [mv.line, mv.line],
-                    moves: 0,
-                });
-                keys.insert(key, out.layers.len());
-                out.layers.len()
-            }
-        };
-        let l = &mut out.layers[layer - 1];
-        l.lines[1] = mv.line;
-        l.moves += 1;
-        // The move's points: its ends, and an arc's chord points.
-        let mut pts = vec![mv.start];
-        if let MoveKind::Arc {
-            clockwise,
-            center,
-            plane,
-            turns,
-        } = mv.kind
-        {
-            let (a, b, n) = match plane {
-                Plane::XY => (0, 1, 2),
-                Plane::XZ => (2, 0, 1),
-                Plane::YZ => (1, 2, 0),
-            };
-            let (sa, sb) = (mv.start[a] - center[a], mv.start[b] - center[b]);
-            let (ea, eb) = (mv.end[a] - center[a], mv.end[b] - center[b]);
-            let tau = std::f64::consts::TAU;
-            let delta = eb.atan2(ea) - sb.atan2(sa);
-            let full = (sa - ea).hypot(sb - eb) < 1e-9;
-            let extra = tau * f64::from(turns.saturating_sub(1));
-            let sweep = if clockwise {
-                (if full {
-                    -tau
-                } else {
-                    delta.rem_euclid(tau) - tau
-                }) - extra
-            } else {
-                (if full { tau } else { delta.rem_euclid(tau) }) + extra
-            };
-            let r = sa.hypot(sb);
-            let k = ((sweep.abs().to_degrees() / ARC_STEP_DEG).ceil() as usize).clamp(1, 100_000);
-            for i in 1..k {
-                let t = i as f64 / k as f64;
-                let ang = sb.atan2(sa) + sweep * t;
-                let mut p = mv.end;
-                for (v, s) in p.iter_mut().zip(mv.start) {
-                    *v = s + (*v - s) * t;
+    for run in preview.runs.iter().filter(|r| r.laser) {
+        let rotary = preview.positions[run.position];
+        let axis = axes[run.position];
+        let mut last_line = None;
+        for (k, pair) in run.points.windows(2).enumerate() {
+            let line = run.lines.get(k + 1).copied().unwrap_or(0);
+            let end = pair[1];
+            let height = end[0] * axis.x + end[1] * axis.y + end[2] * axis.z;
+            let key = [
+                (height / unit).round() as i64,
+                (rotary[0] * 1e3).round() as i64,
+                (rotary[1] * 1e3).round() as i64,
+            ];
+            let layer = match keys.get(&key) {
+                Some(&l) => l,
+                None => {
+                    out.layers.push(Layer {
+                        height,
+                        rotary,
+                        lines: [line, line],
+                        moves: 0,
+                    });
+                    keys.insert(key, out.layers.len());
+                    out.layers.len()
                 }
-                p[a] = center[a] + r * ang.cos();
-                p[b] = center[b] + r * ang.sin();
-                p[n] = mv.start[n] + (mv.end[n] - mv.start[n]) * t;
-                pts.push(p);
+            };
+            let l = &mut out.layers[layer - 1];
+            l.lines[1] = line;
+            // A move's chord points (an arc's) count once.
+            if last_line != Some(line) {
+                l.moves += 1;
+                last_line = Some(line);
             }
-        }
-        pts.push(mv.end);
-        let tips: Vec<[f64; 3]> = pts
-            .iter()
-            .map(|p| {
-                let t = pose(p).tip;
-                [t.x, t.y, t.z]
-            })
-            .collect();
-        for w in tips.windows(2) {
             out.segments.push(Segment {
-                a: w[0],
-                b: w[1],
-                line: mv.line,
+                a: pair[0],
+                b: end,
+                line,
                 layer,
             });
         }
@@ -367,10 +262,7 @@ impl Deposition {
 #[cfg(test)]
 mod tests {
     #[test]
-    fn distances_and_codes() {
-        assert_eq!(super::m_codes("M71"), vec![71.0]);
-        assert_eq!(super::m_codes("m3 S100 M8"), vec![3.0, 8.0]);
-        assert!(super::m_codes("").is_empty());
+    fn segment_distances() {
         let d = super::seg_distance([1.0, 1.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
         assert!((d - 1.0).abs() < 1e-15);
         let e = super::seg_distance([3.0, 0.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
