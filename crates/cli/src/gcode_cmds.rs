@@ -2,8 +2,8 @@
 
 use std::io::Write;
 
-use lampost_gcode::emit::fixed;
-use lampost_gcode::flavor::DETECT_BYTES;
+use lampost_gcode::fixed;
+use lampost_gcode::DETECT_BYTES;
 use lampost_gcode::{
     parse_line_with, Block, Diagnostic, Dialect, EWord, EmitOptions, Emitter, ErrorKind, Event,
     Flavor, LineReader, Move, MoveKind, Options, Order, ProgramReader, Resolved, Severity, Stream,

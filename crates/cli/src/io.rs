@@ -4,7 +4,7 @@ use std::fs::{self, File};
 use std::io::{self, BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use lampost_gcode::lines::MAX_NUL_RUN;
+use lampost_gcode::MAX_NUL_RUN;
 
 use crate::report::CliError;
 

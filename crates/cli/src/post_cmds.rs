@@ -301,7 +301,7 @@ pub fn section_flavor(
     pl: &Placement,
     secs: &[Section],
 ) -> Result<lampost_gcode::Resolved, CliError> {
-    use lampost_gcode::flavor::DETECT_BYTES;
+    use lampost_gcode::DETECT_BYTES;
     use std::io::Read;
     let mut head = Vec::new();
     if pl.flavor == crate::FlavorArg::Auto {

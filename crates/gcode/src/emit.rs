@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use crate::ast::{Block, BlockKind, CommentStyle, Item, Span, Word};
+use crate::ast::{Block, BlockKind, CommentStyle, Item, Span};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::modal::{code_text, Units};
 
@@ -332,19 +332,6 @@ fn push_trimmed(out: &mut Vec<u8>, value: f64, decimals: usize, keep_point: bool
     } else if keep_point {
         out.push(b'.');
     }
-}
-
-/// The number text of a word in a dialect.
-pub fn format_value(
-    dialect: Dialect,
-    units: Units,
-    letter: u8,
-    register: Option<u8>,
-    value: f64,
-) -> String {
-    let mut s = Vec::with_capacity(16);
-    push_value(&mut s, dialect, units, letter, register, value);
-    String::from_utf8_lossy(&s).into_owned()
 }
 
 /// Append a whole number.
@@ -1044,11 +1031,6 @@ impl<W: Write> Emitter<W> {
         self.out.flush()?;
         Ok(self.out)
     }
-}
-
-/// The word as the emitter writes it verbatim (letter, register, number text).
-pub fn word_text(w: &Word<'_>) -> String {
-    w.display()
 }
 
 #[cfg(test)]

@@ -41,7 +41,7 @@ pub struct Params {
     locals: Vec<HashMap<String, f64>>,
     /// `#1`–`#30` of each caller, saved at a call.
     saved: Vec<[f64; SUB_PARAMS]>,
-    /// Fanuc Macro B variables (see [`crate::macrob`]), when the flavour reads them.
+    /// Fanuc Macro B variables (see Macro B (`macrob.rs`)), when the flavour reads them.
     pub(crate) fanuc: Option<Box<FanucVars>>,
 }
 
@@ -240,7 +240,7 @@ enum Param {
 }
 
 impl Params {
-    /// The parameters of a Fanuc Macro B program (see [`crate::macrob`]): `#` numbers are
+    /// The parameters of a Fanuc Macro B program (see Macro B (`macrob.rs`)): `#` numbers are
     /// Fanuc's variables, vacant until set.
     pub fn macro_b() -> Self {
         Params {

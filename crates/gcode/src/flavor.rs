@@ -1,12 +1,12 @@
 //! Flavours: which control a program was written for, and how that changes its reading.
 //!
 //! A [`Flavor`] is resolved once per program (for `auto`, from the program's first
-//! [`DETECT_BYTES`] bytes: see [`detect`]) and feeds [`crate::Options`]:
+//! [`DETECT_BYTES`] bytes: see [`crate::detect`]) and feeds [`crate::Options`]:
 //!
 //! - `marlin`, `reprap`: E is the extruder (slicer reading, number exponents);
 //! - `linuxcnc`: parameters, `[…]` expressions and O-word control lines are evaluated
 //!   (see [`crate::expr`]);
-//! - `fanuc`, `haas`: Fanuc Macro B is evaluated (see [`crate::macrob`]);
+//! - `fanuc`, `haas`: Fanuc Macro B is evaluated (see Macro B (`macrob.rs`));
 //! - `mach3`, `fadal`: macros stay verbatim; Haas `M97 P…` calls a local subprogram by its
 //!   N label (followed by [`crate::ProgramReader`] in every flavour).
 
@@ -21,7 +21,7 @@ pub const DETECT_BYTES: usize = 64 * 1024;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Flavor {
-    /// Decide from the program's content ([`detect`]).
+    /// Decide from the program's content ([`crate::detect`]).
     Auto,
     /// LinuxCNC (RS274NGC): parameters, expressions and O-words evaluated.
     #[serde(rename = "linuxcnc")]
@@ -73,7 +73,7 @@ impl Flavor {
         self == Flavor::LinuxCnc || self.macro_b()
     }
 
-    /// Fanuc Macro B is evaluated (see [`crate::macrob`]).
+    /// Fanuc Macro B is evaluated (see Macro B (`macrob.rs`)).
     pub fn macro_b(self) -> bool {
         matches!(self, Flavor::Fanuc | Flavor::Haas)
     }
@@ -105,7 +105,7 @@ pub struct Resolved {
 }
 
 impl Resolved {
-    /// `given` itself, or for [`Flavor::Auto`] what [`detect`] finds in `head` (the
+    /// `given` itself, or for [`Flavor::Auto`] what [`crate::detect`] finds in `head` (the
     /// program's first bytes).
     pub fn new(given: Flavor, head: &[u8]) -> Self {
         if given == Flavor::Auto {

@@ -49,7 +49,7 @@ pub struct Options {
     pub e_word: EWord,
     /// Skip blocks starting with `/`.
     pub block_delete: bool,
-    /// The control the program was written for (resolved: see [`crate::flavor`]).
+    /// The control the program was written for (resolved: see `flavor.rs`).
     pub flavor: crate::flavor::Flavor,
 }
 
@@ -1989,6 +1989,6 @@ mod tests {
         // Converting a position that fits stays exact.
         let (moves, diags) = run("G20 G90\nG0 X1 Y0 Z0\nG21\nG0 Y1\n");
         assert!(diags.is_empty(), "{diags:?}");
-        assert_eq!(moves[1].start[X], 25.4);
+        assert_eq!(moves[1].start[0], 25.4);
     }
 }

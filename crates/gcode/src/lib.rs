@@ -21,29 +21,33 @@
 //! - `thiserror`: the typed [`ErrorKind`];
 //! - `serde`: moves and modal state serialise to JSON for `lampost trace --json`.
 
-pub mod ast;
-pub mod diag;
-pub mod emit;
-pub mod expr;
-pub mod flavor;
+mod ast;
+mod diag;
+mod emit;
+mod expr;
+mod flavor;
 pub mod generate;
-pub mod interp;
-pub mod lines;
-pub mod macrob;
-pub mod modal;
-pub mod ngc;
-pub mod parse;
-pub mod program;
-pub mod stream;
+mod interp;
+mod lines;
+mod macrob;
+mod modal;
+mod ngc;
+mod parse;
+mod program;
+mod stream;
 
 pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Text, Word};
 pub use diag::{Diagnostic, ErrorKind, Severity, Snippet};
-pub use emit::{Dialect, EmitOptions, Emitter};
-pub use expr::Params;
-pub use flavor::{Flavor, Resolved};
-pub use interp::{Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin};
-pub use lines::{Line, LineReader, Lines};
-pub use modal::{Modal, Plane, Position, Units, AXES};
-pub use parse::{parse_line, parse_line_into, parse_line_with, parse_str_with};
+pub use emit::{fixed, out_of_range, round_half_away, Dialect, EmitOptions, Emitter};
+pub use expr::{sets_feed, Params};
+pub use flavor::{detect, Flavor, Resolved, DETECT_BYTES};
+pub use interp::{
+    Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin, ARC_RADIUS_TOLERANCE,
+    ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE,
+};
+pub use lines::{Line, LineReader, Lines, CHECKED_CHUNK, MAX_NUL_RUN};
+pub use modal::{FeedMode, Modal, Plane, Position, Units, AXES};
+pub use ngc::MAX_BLOCKS;
+pub use parse::{parse_line, parse_line_into, parse_line_with, parse_str_with, MAX_LINE_BYTES};
 pub use program::{Order, ProgramReader};
 pub use stream::{check, LineSource, Stream};

@@ -1,6 +1,6 @@
 //! Splitting input into lines: from a byte slice, or streamed from a reader.
 //!
-//! A streamed line longer than [`MAX_LINE_BYTES`] is not held: its first bytes are kept
+//! A streamed line longer than [`crate::MAX_LINE_BYTES`] is not held: its first bytes are kept
 //! (for the error's snippet), the rest is read past and only counted, so one line of any
 //! length takes at most 64 KiB of memory. [`MAX_NUL_RUN`] NUL bytes in a row (binary
 //! data, or a device such as `/dev/zero`) stop the reading with an error.
@@ -23,13 +23,13 @@ pub struct Line<'a> {
     /// Byte offset of the first byte in the input.
     pub offset: usize,
     /// The bytes, without the line ending (only the first bytes of a streamed line over
-    /// [`MAX_LINE_BYTES`]).
+    /// [`crate::MAX_LINE_BYTES`]).
     pub bytes: &'a [u8],
     /// The whole line's length without its ending: more than `bytes.len()` for a
-    /// streamed line over [`MAX_LINE_BYTES`], whose rest was read past unheld.
+    /// streamed line over [`crate::MAX_LINE_BYTES`], whose rest was read past unheld.
     pub len: usize,
     /// The bytes as text, when the source has already found them to be UTF-8 (in-memory
-    /// input, checked [`CHECKED_CHUNK`] bytes at a time); `None` when it has not (the
+    /// input, checked [`crate::CHECKED_CHUNK`] bytes at a time); `None` when it has not (the
     /// parser checks them: see [`crate::parse::parse_str_with`]).
     pub text: Option<&'a str>,
 }
@@ -39,7 +39,7 @@ pub struct Line<'a> {
 pub const CHECKED_CHUNK: usize = 64 * 1024;
 
 impl Line<'_> {
-    /// The error for a line over [`MAX_LINE_BYTES`] (with its whole length), if it is
+    /// The error for a line over [`crate::MAX_LINE_BYTES`] (with its whole length), if it is
     /// one; such a line is refused unscanned.
     pub fn too_long(&self) -> Option<Diagnostic> {
         (self.len > MAX_LINE_BYTES).then(|| {
@@ -93,7 +93,7 @@ impl<'a> Lines<'a> {
     }
 
     /// The text of the line at `start..end` (its ending excluded), checking the next
-    /// whole lines of up to [`CHECKED_CHUNK`] bytes from `start` (a line that starts a
+    /// whole lines of up to [`crate::CHECKED_CHUNK`] bytes from `start` (a line that starts a
     /// chunk) once its line is past the last checked.
     fn text(&mut self, start: usize, end: usize) -> Option<&'a str> {
         if end - start > MAX_LINE_BYTES {
@@ -142,7 +142,7 @@ impl<'a> Iterator for Lines<'a> {
 }
 
 /// Lines read one at a time from a reader into one reused buffer, so memory stays
-/// flat however long the program is: a line over [`MAX_LINE_BYTES`] is read past, only
+/// flat however long the program is: a line over [`crate::MAX_LINE_BYTES`] is read past, only
 /// its first bytes held (see the module documentation).
 #[derive(Debug)]
 pub struct LineReader<R> {
@@ -156,7 +156,7 @@ pub struct LineReader<R> {
     number: u32,
 }
 
-/// The most bytes of one line held: a line of [`MAX_LINE_BYTES`] with `\r\n`.
+/// The most bytes of one line held: a line of [`crate::MAX_LINE_BYTES`] with `\r\n`.
 const KEEP: usize = MAX_LINE_BYTES + 2;
 
 impl<R: BufRead> LineReader<R> {

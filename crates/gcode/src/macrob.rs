@@ -18,7 +18,7 @@
 //!
 //! Bounds: `G65` calls nest at most [`MAX_MACRO_DEPTH`] deep (Fanuc's four levels);
 //! blocks run again through loops and backward jumps are counted against
-//! [`crate::ngc::MAX_BLOCKS`], as LinuxCNC's O-word loops are. Every bad input (a `GOTO`
+//! [`crate::MAX_BLOCKS`], as LinuxCNC's O-word loops are. Every bad input (a `GOTO`
 //! to a label the program does not hold, `WHILE` without its `END`, `END` without its
 //! `DO`, a loop number reused inside its own loop, a loop number other than 1–3) is a
 //! located error.

@@ -4,11 +4,7 @@ use serde::Serialize;
 
 /// Axis letters in the order positions are stored.
 pub const AXES: [u8; 9] = *b"XYZABCUVW";
-/// Index of each axis letter in [`AXES`].
-pub const X: usize = 0;
-/// Y
-pub const Y: usize = 1;
-/// Z
+/// Index of Z in [`AXES`].
 pub const Z: usize = 2;
 /// True for the rotary axes A, B, C.
 pub fn is_rotary(axis: usize) -> bool {

@@ -154,7 +154,7 @@ pub struct ProgramReader<R> {
     labels: Option<Vec<(u32, usize, u32)>>,
     /// Where each followed `M97` body starts (offset, line).
     locals: Vec<(usize, u32)>,
-    /// [`crate::ngc::MAX_BLOCKS`] (smaller in tests).
+    /// [`crate::MAX_BLOCKS`] (smaller in tests).
     max_blocks: u64,
     /// Fanuc Macro B labels and loops (indexed at the first statement followed).
     macrob: Option<Box<crate::macrob::Control>>,
@@ -228,7 +228,7 @@ impl<R: Read + Seek> ProgramReader<R> {
     }
 
     /// At most `n` blocks are run again by loops and subroutine calls (default
-    /// [`crate::ngc::MAX_BLOCKS`]).
+    /// [`crate::MAX_BLOCKS`]).
     pub fn set_max_blocks(&mut self, n: u64) {
         self.max_blocks = n;
     }

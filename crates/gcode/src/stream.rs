@@ -27,7 +27,7 @@ pub trait LineSource {
         None
     }
 
-    /// Follow a LinuxCNC O-word control line (see [`crate::ngc`]) that was just handed
+    /// Follow a LinuxCNC O-word control line (see `ngc.rs`) that was just handed
     /// out; `None` when this source does not follow them (then the line is warned about).
     fn control(
         &mut self,
@@ -332,7 +332,7 @@ type MacroCall = (
     Option<Box<[Option<f64>; crate::expr::FANUC_LOCALS]>>,
 );
 
-/// A line of a Macro B flavour (see [`crate::macrob`]): words for the interpreter, a
+/// A line of a Macro B flavour (see Macro B (`macrob.rs`)): words for the interpreter, a
 /// statement noted in `control` for the source to follow, or a `G65` call noted in
 /// `call` (with the line in `control`).
 #[inline(never)]

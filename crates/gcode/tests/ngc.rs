@@ -228,9 +228,9 @@ fn an_unevaluated_feed_blames_no_later_block() {
             .count();
         assert_eq!(moves, 3, "{text}");
     }
-    assert!(!lampost_gcode::expr::sets_feed("#F = 2"));
-    assert!(!lampost_gcode::expr::sets_feed("G1 X#1 (F#2)"));
-    assert!(lampost_gcode::expr::sets_feed("G1 X1 f [#2 * 2]"));
+    assert!(!lampost_gcode::sets_feed("#F = 2"));
+    assert!(!lampost_gcode::sets_feed("G1 X#1 (F#2)"));
+    assert!(lampost_gcode::sets_feed("G1 X1 f [#2 * 2]"));
 }
 
 /// Moves and diagnostics of a Haas program read in `order`.

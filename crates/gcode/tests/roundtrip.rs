@@ -44,8 +44,7 @@ fn out_of_range(text: &[u8], opts: EmitOptions) -> bool {
     Lines::new(text).any(|l| {
         parse_line(l.bytes, 1, 0).is_ok_and(|b| {
             b.words().any(|w| {
-                lampost_gcode::emit::out_of_range(d, opts.units, w.letter, w.register, w.value)
-                    .is_some()
+                lampost_gcode::out_of_range(d, opts.units, w.letter, w.register, w.value).is_some()
             })
         })
     })

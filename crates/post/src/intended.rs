@@ -479,7 +479,7 @@ impl<'a> Intended<'a> {
                 }
             }
             let feed = if is_feed { m.feed * scale } else { 0.0 };
-            if is_feed && m.modal.feed_mode == lampost_gcode::modal::FeedMode::InverseTime {
+            if is_feed && m.modal.feed_mode == lampost_gcode::FeedMode::InverseTime {
                 return Err(PostError::Unsupported {
                     file: sec.name.clone(),
                     line: m.line,

@@ -2,7 +2,7 @@
 
 use std::io::Write;
 
-use lampost_gcode::emit::round_half_away;
+use lampost_gcode::round_half_away;
 use lampost_gcode::{parse_line, Dialect, EmitOptions, Emitter, Units};
 use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Affine, Machine, Units as MUnits};

@@ -6,9 +6,9 @@
 
 use std::io::Write;
 
-use lampost_gcode::emit::round_half_away;
-use lampost_gcode::interp::{ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE};
+use lampost_gcode::round_half_away;
 use lampost_gcode::Emitter;
+use lampost_gcode::{ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE};
 use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Affine, Machine};
 
