@@ -28,7 +28,7 @@
 pub mod compare;
 pub mod deposits;
 pub mod dist;
-pub mod error;
+mod error;
 pub mod map;
 pub mod plan;
 pub mod program;

@@ -2,8 +2,8 @@
 //!
 //! Triangle meshes shared by `align` (registration), `post` (the part for collision
 //! checks) and `plan` (slicing): readers for STL (ASCII and binary), OBJ and OFF with
-//! located errors ([`MeshError`]), welding ([`weld`]), the closed-manifold report naming
-//! the bad edges ([`topo`]), area, volume and normals ([`props`]), and ray casts, closest
+//! located errors ([`MeshError`]), welding ([`weld_exact`], [`weld_within`]), the closed-manifold report naming
+//! the bad edges ([`manifold_report`]), area, volume and normals ([`props`]), and ray casts, closest
 //! points and signed distance on a bounding-volume hierarchy ([`bvh`]).
 //!
 //! ## Why these dependencies
@@ -12,15 +12,16 @@
 //! - `thiserror`: the typed [`MeshError`] and [`bvh::BvhError`].
 
 pub mod bvh;
-pub mod error;
+mod error;
 pub mod props;
-pub mod read;
-pub mod topo;
-pub mod weld;
+mod read;
+mod topo;
+mod weld;
 
 pub use error::{MeshError, Pos};
 pub use read::{read, read_obj, read_off, read_stl, Format};
 pub use topo::{manifold_report, BadEdge, EdgeProblem, ManifoldReport};
+pub use weld::{weld_exact, weld_within};
 
 /// A point or vector (`f64`).
 pub type P3 = nalgebra::Vector3<f64>;

@@ -2,11 +2,11 @@
 
 use lampost_mesh::bvh::MeshBvh;
 use lampost_mesh::props::{area, bounds, face_normals, vertex_normals, volume};
-use lampost_mesh::weld::{weld_exact, weld_within};
 use lampost_mesh::{
     box_mesh, manifold_report, read, read_obj, read_off, read_stl, torus, uv_sphere,
     write_ascii_stl, write_off, EdgeProblem, Format, Mesh, MeshError, Pos, P3,
 };
+use lampost_mesh::{weld_exact, weld_within};
 
 fn binary_stl(m: &Mesh) -> Vec<u8> {
     let mut b = vec![b' '; 80];

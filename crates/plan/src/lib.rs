@@ -13,7 +13,7 @@
 
 pub mod build;
 pub mod demo;
-pub mod error;
+mod error;
 pub mod perimeter;
 pub mod preview;
 pub mod raster;
