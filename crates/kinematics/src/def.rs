@@ -310,7 +310,12 @@ pub fn builtin_text(name: &str) -> Option<&'static str> {
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize, String) {
-    let offset = offset.min(text.len());
+    // A place inside a multi-byte character (a refusal located by bytes in text with an
+    // emoji) is that character's start.
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
     let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
     let start = before.rfind('\n').map_or(0, |i| i + 1);
@@ -419,5 +424,19 @@ impl MachineDef {
     pub fn builtin(name: &str) -> Option<Self> {
         builtin_text(name)
             .and_then(|t| MachineDef::from_toml(t, &format!("<built-in {name}>")).ok())
+    }
+}
+
+#[cfg(test)]
+mod line_col_tests {
+    /// Fuzz run seed 2028, input 464801 (toml): a refusal's place inside an emoji
+    /// panicked on slicing the line.
+    #[test]
+    fn a_place_inside_a_multibyte_character_is_its_start() {
+        let text = "a = 1\nname = \"x😀y\"\n";
+        let inside = text.find('😀').expect("emoji") + 2;
+        let (line, col, shown) = super::line_col(text, inside);
+        assert_eq!((line, col), (2, 10));
+        assert_eq!(shown, "name = \"x😀y\"");
     }
 }
