@@ -59,6 +59,8 @@ pub(crate) enum Place {
     Rotary(usize),
     /// `name` of the i-th `[[head]]`.
     Head(usize),
+    /// A key of the i-th `[[head]]`'s `sensor` table.
+    Sensor(usize, &'static str),
     /// A key of `[process]`.
     Process(&'static str),
 }
@@ -121,6 +123,7 @@ fn number_len(s: &[u8]) -> (usize, bool) {
 /// A process code: M, S, P and Q words separated by spaces. Returns it upper case, the
 /// words joined by single spaces.
 pub(crate) fn process_code(key: &str, value: &str) -> Result<String, Refusal> {
+    // `key` is the value's dotted name as the file spells it (`process.laser_on`).
     let mut words: Vec<String> = Vec::new();
     let mut start = 0;
     for token in value.split(' ') {
@@ -138,7 +141,7 @@ pub(crate) fn process_code(key: &str, value: &str) -> Result<String, Refusal> {
             return Err(refuse(
                 at,
                 format!(
-                    "`process.{key}` holds `{}`{}: {CODE_RULE}; remove it",
+                    "`{key}` holds `{}`{}: {CODE_RULE}; remove it",
                     c.escape_debug(),
                     describe(c)
                 ),
@@ -149,7 +152,7 @@ pub(crate) fn process_code(key: &str, value: &str) -> Result<String, Refusal> {
             return Err(refuse(
                 at,
                 format!(
-                    "`process.{key}` holds `{}`, {}: {CODE_RULE}; remove it (the post writes \
+                    "`{key}` holds `{}`, {}: {CODE_RULE}; remove it (the post writes \
                      motion, feeds, tools and block numbers itself)",
                     token.escape_debug(),
                     word_kind(letter)
@@ -175,7 +178,7 @@ pub(crate) fn process_code(key: &str, value: &str) -> Result<String, Refusal> {
             return Err(refuse(
                 at + end,
                 format!(
-                    "`process.{key}` holds `{}`: {why}; {CODE_RULE}",
+                    "`{key}` holds `{}`: {why}; {CODE_RULE}",
                     token.escape_debug()
                 ),
             ));
@@ -184,7 +187,7 @@ pub(crate) fn process_code(key: &str, value: &str) -> Result<String, Refusal> {
             return Err(refuse(
                 at,
                 format!(
-                    "`process.{key}` holds `{}` without a number: {CODE_RULE}",
+                    "`{key}` holds `{}` without a number: {CODE_RULE}",
                     token.escape_debug()
                 ),
             ));
@@ -308,12 +311,12 @@ impl MachineDef {
         for (i, h) in self.heads.iter_mut().enumerate() {
             label("head name", &h.name).map_err(|r| (Place::Head(i), r))?;
             if let Some(sn) = &mut h.sensor {
-                let positive = |what: &str, v: f64, hi: f64| {
+                let positive = |what: &'static str, v: f64, hi: f64| {
                     if v.is_finite() && v > 0.0 && v <= hi {
                         Ok(())
                     } else {
                         Err((
-                            Place::Head(i),
+                            Place::Sensor(i, what),
                             Refusal {
                                 message: format!(
                                     "head `{}`: sensor.{what} = {v}: it must be a finite number > 0 and at most {hi}",
@@ -327,13 +330,14 @@ impl MachineDef {
                 positive("reference", sn.reference, 1e6)?;
                 positive("range", sn.range, 1e6)?;
                 positive("max_tilt_deg", sn.max_tilt_deg, 90.0)?;
-                sn.trigger =
-                    process_code("sensor.trigger", &sn.trigger).map_err(|r| (Place::Head(i), r))?;
+                sn.trigger = process_code("head.sensor.trigger", &sn.trigger)
+                    .map_err(|r| (Place::Sensor(i, "trigger"), r))?;
             }
         }
         let p = &mut self.process;
         for (key, code) in p.codes_mut() {
-            *code = process_code(key, code).map_err(|r| (Place::Process(key), r))?;
+            *code = process_code(&format!("process.{key}"), code)
+                .map_err(|r| (Place::Process(key), r))?;
         }
         p.laser_power_word =
             power_word(&p.laser_power_word).map_err(|r| (Place::Process("laser_power_word"), r))?;
@@ -359,7 +363,7 @@ struct Located {
     #[serde(default)]
     rotary: Vec<LocatedName>,
     #[serde(default, rename = "head")]
-    heads: Vec<LocatedName>,
+    heads: Vec<LocatedHead>,
     #[serde(default)]
     process: BTreeMap<String, Spanned<toml::Value>>,
 }
@@ -368,6 +372,14 @@ struct Located {
 struct LocatedName {
     #[serde(default)]
     name: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+struct LocatedHead {
+    #[serde(default)]
+    name: Option<Spanned<String>>,
+    #[serde(default)]
+    sensor: BTreeMap<String, Spanned<toml::Value>>,
 }
 
 /// The byte offset in `text` of a refusal: at the offending text where the value is
@@ -387,7 +399,15 @@ pub(crate) fn locate(text: &str, place: Place, at: usize) -> Option<usize> {
             .map(|s| (s.span(), Some(s.get_ref().clone())))?,
         Place::Linear(i) => named(&doc.linear, i)?,
         Place::Rotary(i) => named(&doc.rotary, i)?,
-        Place::Head(i) => named(&doc.heads, i)?,
+        Place::Head(i) => doc
+            .heads
+            .get(i)
+            .and_then(|h| h.name.as_ref())
+            .map(|s| (s.span(), Some(s.get_ref().clone())))?,
+        Place::Sensor(i, key) => {
+            let v = doc.heads.get(i)?.sensor.get(key)?;
+            (v.span(), v.get_ref().as_str().map(str::to_string))
+        }
         Place::Process(key) => {
             let v = doc.process.get(key)?;
             (v.span(), v.get_ref().as_str().map(str::to_string))
@@ -679,6 +699,21 @@ mod tests {
         let line = "laser_on = \"M71\\nG0 X900\"";
         let text = with_line(fadal(), "laser_on", line);
         refused_at(&text, line, "\"", "`\\n` (a line break)");
+    }
+
+    /// Fuzz run seed 2028 (input 464801): a sensor's refused trigger was placed at the
+    /// head's name (a multi-byte one there), not at the `trigger` it refuses.
+    #[test]
+    fn a_sensor_value_is_refused_where_it_stands() {
+        let nrc = crate::def::builtin_text("nrc-lc").unwrap_or_default();
+        let named = nrc.replace("name = \"sensor\"", "name = \"s😀nsor\"");
+        let line = "sensor = { reference = 30.0, range = 5.0, max_tilt_deg = 30.0, trigger = \"M76 G0 X9\" }";
+        let text = with_line(&named, "sensor", line);
+        refused_at(&text, line, "G0", "`head.sensor.trigger` holds `G0`");
+        let line =
+            "sensor = { reference = 30.0, range = -5.0, max_tilt_deg = 30.0, trigger = \"M76\" }";
+        let text = with_line(&named, "sensor", line);
+        refused_at(&text, line, "-5.0", "sensor.range = -5");
     }
 
     #[test]
