@@ -195,6 +195,10 @@ fn machine_coordinate_moves() {
         assert!(!o.status.success(), "{name}");
         let e = stderr(&o);
         assert!(e.contains(&format!("{name}:{line}:")), "{name}: {e}");
+        if name.starts_with("g28") {
+            // A slicer's start code homes this way: the message says what to remove.
+            assert!(e.contains("remove its homing"), "{name}: {e}");
+        }
         assert!(!out.exists(), "{name}");
     }
 }

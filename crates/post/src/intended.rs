@@ -533,7 +533,7 @@ impl Intended<'_> {
                 file: sec.name.clone(),
                 line: m.line,
                 what: format!(
-                    "{what} that moves more than Z cannot be placed on the part; keep only Z retracts in machine coordinates"
+                    "{what} that moves more than Z cannot be placed on the part: keep only Z retracts in machine coordinates (a slicer's start code homes the printer this way: remove its homing and bed-levelling lines)"
                 ),
             });
         }
