@@ -76,7 +76,7 @@ pub struct Placement {
     /// The control the input was written for (auto: decided from the first section's program).
     #[arg(long, value_enum, default_value = "auto")]
     pub flavor: crate::FlavorArg,
-    /// INPUT is a path with its own tool axis: rows `x y z i j k [feed] [laser]` (implied by a .csv name).
+    /// INPUT is a path with its own tool axis: rows `x y z i j k [feed] [laser]` (implied by a .csv name, or a first line `x y z i j k …` or of 6 to 8 numbers).
     #[arg(long)]
     pub per_point: bool,
     /// Stock as a box in the part frame, X0,Y0,Z0,X1,Y1,Z1 (machine units): safe heights clear it.
@@ -170,8 +170,65 @@ fn extra_work(
     Ok(Some(w))
 }
 
-fn is_per_point(pl: &Placement, input: Option<&str>) -> bool {
-    pl.per_point || input.is_some_and(|i| i.to_ascii_lowercase().ends_with(".csv"))
+/// INPUT as the post reads it: a file, or standard input or a pipe spooled to a
+/// temporary file (kept while the post reads it twice: it verifies what it wrote).
+pub struct InputFile {
+    /// The name for messages (`<stdin>` for `-`).
+    name: String,
+    path: PathBuf,
+    _spool: Option<TempFile>,
+}
+
+impl InputFile {
+    pub fn open(input: &str) -> Result<InputFile, CliError> {
+        let path = Path::new(input);
+        if input == "-" || crate::io::is_special(path) {
+            let temp = crate::io::spool(input)?;
+            return Ok(InputFile {
+                name: display_name(input),
+                path: temp.path().to_path_buf(),
+                _spool: Some(temp),
+            });
+        }
+        if !path.is_file() {
+            return Err(CliError::usage(format!(
+                "error: cannot open {input}\n  = help: check the path; use - for standard input\n"
+            )));
+        }
+        Ok(InputFile {
+            name: input.to_string(),
+            path: PathBuf::from(input),
+            _spool: None,
+        })
+    }
+
+    /// Whether it is a per-point path: `--per-point`, a `.csv` name, or a first line
+    /// that reads as one ([`lampost_post::pointwise::looks_like_points`]; standard input
+    /// too, so `lampost plan path … -o - | lampost post -` needs no flag).
+    fn per_point(&self, pl: &Placement) -> bool {
+        if pl.per_point || self.name.to_ascii_lowercase().ends_with(".csv") {
+            return true;
+        }
+        let mut head = Vec::with_capacity(4096);
+        let read = std::fs::File::open(&self.path)
+            .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, 4096), &mut head));
+        read.is_ok() && lampost_post::pointwise::looks_like_points(&String::from_utf8_lossy(&head))
+    }
+}
+
+/// INPUT opened; standard input when none is named for `--per-point` (a job or a
+/// missing program is for [`sections`] to judge).
+fn input_file(pl: &Placement, input: Option<&str>) -> Result<Option<InputFile>, CliError> {
+    match input {
+        Some(i) => InputFile::open(i).map(Some),
+        None if pl.per_point => InputFile::open("-").map(Some),
+        None => Ok(None),
+    }
+}
+
+/// INPUT when it is a per-point path.
+fn per_point_path<'a>(pl: &Placement, input: Option<&'a InputFile>) -> Option<&'a InputFile> {
+    input.filter(|i| i.per_point(pl))
 }
 
 /// The frame and points of a per-point input.
@@ -220,7 +277,7 @@ fn per_point_units(
 
 fn per_point_input(
     pl: &Placement,
-    input: &str,
+    input: &InputFile,
 ) -> Result<(Frame, Vec<lampost_post::pointwise::PathPoint>, String), CliError> {
     if pl.part.is_some() {
         return Err(CliError::usage("error: --part checks rapids of planar programs against the part; a per-point path is not checked against a mesh yet: leave out --part (use --stock for safe heights)\n".to_string()));
@@ -238,9 +295,8 @@ fn per_point_input(
                 .unwrap_or_else(Vector3::zeros),
         ),
     };
-    let name = display_name(input);
-    let mut text = String::new();
-    std::io::Read::read_to_string(&mut crate::io::open_input(input)?, &mut text)
+    let name = input.name.clone();
+    let text = std::fs::read_to_string(&input.path)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     let pts = lampost_post::pointwise::read_points(&text, &name).map_err(post_error)?;
     Ok((frame, pts, name))
@@ -276,23 +332,6 @@ fn setup_frame(path: &str) -> Result<Frame, CliError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| CliError::usage(format!("error: cannot read {path}: {e}\n")))?;
     lampost_post::read_setup(&text, path).map_err(post_error)
-}
-
-/// The program INPUT names. Standard input (`-`) or a pipe is spooled to a temporary
-/// file, returned beside it, that must live while the post reads (it reads the program
-/// again to verify), so memory stays flat at any size.
-fn source(input: &str) -> Result<(Source, Option<TempFile>), CliError> {
-    let path = Path::new(input);
-    if input == "-" || crate::io::is_special(path) {
-        let temp = crate::io::spool(input)?;
-        return Ok((Source::Path(temp.path().to_path_buf()), Some(temp)));
-    }
-    if !path.is_file() {
-        return Err(CliError::usage(format!(
-            "error: cannot open {input}\n  = help: check the path; use - for standard input\n"
-        )));
-    }
-    Ok((Source::Path(PathBuf::from(input)), None))
 }
 
 /// The flavour of the sections' programs: given, or for `auto` decided from the first
@@ -406,14 +445,13 @@ fn intended_options(pl: &Placement, secs: &[Section]) -> Result<IntendedOptions,
     })
 }
 
-/// Build the sections from the placement options and INPUT, with the temporary file
-/// that holds INPUT when it is standard input or a pipe (keep it while the sections
-/// are read).
+/// Build the sections from the placement options and INPUT (kept open while the
+/// sections are read).
 pub fn sections(
     m: &Machine,
     pl: &Placement,
-    input: Option<&str>,
-) -> Result<(Vec<Section>, Option<TempFile>), CliError> {
+    input: Option<&InputFile>,
+) -> Result<Vec<Section>, CliError> {
     let chosen = [pl.index.is_some(), pl.setup.is_some(), pl.job.is_some()]
         .iter()
         .filter(|x| **x)
@@ -516,7 +554,7 @@ pub fn sections(
                 "error: {job} has no [[section]]\n"
             )));
         }
-        return Ok((out, None));
+        return Ok(out);
     }
     let input = input
         .ok_or_else(|| CliError::usage("error: give the INPUT program (or --job)\n".to_string()))?;
@@ -525,15 +563,13 @@ pub fn sections(
         (None, Some(st)) => (setup_frame(st)?, Orient::ToolAxis),
         _ => (Frame::translation(origin), Orient::ToolAxis),
     };
-    let (source, spool) = source(input)?;
-    let section = Section {
-        name: display_name(input),
-        source,
+    Ok(vec![Section {
+        name: input.name.clone(),
+        source: Source::Path(input.path.clone()),
         frame,
         orient,
         layers,
-    };
-    Ok((vec![section], spool))
+    }])
 }
 
 /// Options of `lampost post`.
@@ -777,17 +813,15 @@ pub fn post(
                 .to_string(),
         ));
     }
+    let input = input_file(&a.place, input)?;
     let (tmp, file) = crate::io::TempFile::beside(output)?;
     let mut bw = std::io::BufWriter::with_capacity(1 << 16, file);
-    let (report, cfg) = if is_per_point(&a.place, input) {
+    let (report, cfg) = if let Some(path) = per_point_path(&a.place, input.as_ref()) {
         // The per-point post, then its verification of what was written.
-        let (frame, mut pts, name) = per_point_input(&a.place, input.unwrap_or("-"))?;
+        let (frame, mut pts, name) = per_point_input(&a.place, path)?;
         per_point_units(&m, &a.place, &name, &mut pts)?;
         let mut cfg = config(&m, a, &[])?;
-        let csv_bytes = input
-            .filter(|i| *i != "-")
-            .and_then(|i| std::fs::metadata(i).ok())
-            .map_or(0, |md| md.len());
+        let csv_bytes = std::fs::metadata(&path.path).map_or(0, |md| md.len());
         cfg.max_output_bytes = Some(output_bound(a.max_growth, csv_bytes)?);
         let short = Path::new(&name)
             .file_name()
@@ -813,7 +847,7 @@ pub fn post(
         .map_err(post_error)?;
         (report, cfg)
     } else {
-        let (secs, _spool) = sections(&m, &a.place, input)?;
+        let secs = sections(&m, &a.place, input.as_ref())?;
         let cfg = config(&m, a, &secs)?;
         refuse_dry(&secs, &cfg.intended, a.place.e_extrusion)?;
         let bar = crate::progress::Progress::counting("posting", "moves", a.place.quiet);
@@ -1094,8 +1128,9 @@ pub fn verify(
             *v = v.max(e);
         }
     };
-    let checked = if is_per_point(place, input) {
-        let (frame, mut pts, name) = per_point_input(place, input.unwrap_or("-"))?;
+    let input = input_file(place, input)?;
+    let checked = if let Some(path) = per_point_path(place, input.as_ref()) {
+        let (frame, mut pts, name) = per_point_input(place, path)?;
         per_point_units(&m, place, &name, &mut pts)?;
         lampost_post::pointwise::verify_points_traced(
             &m,
@@ -1108,7 +1143,7 @@ pub fn verify(
             &mut record,
         )
     } else {
-        let (secs, _spool) = sections(&m, place, input)?;
+        let secs = sections(&m, place, input.as_ref())?;
         let opts = intended_options(place, &secs)?;
         let work = extra_work(place, part.as_deref())?;
         lampost_post::verify_traced(
