@@ -24,42 +24,7 @@ use nalgebra::Vector3;
 /// Disagreement is allowed only this close (relative to the mesh's size) to grazing.
 const BAND: f64 = 1e-6;
 
-fn root() -> PathBuf {
-    let r = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    r.canonicalize().unwrap_or(r)
-}
-
-/// splitmix64: the same cases on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn dir(&mut self) -> Vector3<f64> {
-        loop {
-            let v = Vector3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let n = v.norm();
-            if n > 0.1 && n <= 1.0 {
-                return v / n;
-            }
-        }
-    }
-}
+use lampost_testkit::{oracle_present, root, SplitMix as Rng};
 
 /// A closed, star-shaped, non-convex mesh: an icosphere (3 subdivisions) with bumps.
 fn bumpy_sphere() -> Mesh {
@@ -186,7 +151,7 @@ enum Case {
 /// A random point on the surface and its unit normal.
 fn surface_point(m: &Mesh, rng: &mut Rng) -> (Vector3<f64>, Vector3<f64>) {
     loop {
-        let t = m.triangles[(rng.next() % m.triangles.len() as u64) as usize];
+        let t = m.triangles[(rng.next_u64() % m.triangles.len() as u64) as usize];
         let [p0, p1, p2] = t.map(|k| m.vertices[k as usize]);
         let n = (p1 - p0).cross(&(p2 - p0));
         if n.norm() == 0.0 {
@@ -324,17 +289,7 @@ struct Tally {
 fn collide_agrees_with_trimesh() {
     let root = root();
     let py = root.join(".tools/py/bin/python");
-    let required = std::env::var("LAMPOST_REQUIRE_PY").is_ok_and(|v| v == "1");
-    if !py.exists() {
-        assert!(
-            !required,
-            "LAMPOST_REQUIRE_PY=1 but {} is missing: run scripts/install-python.sh",
-            py.display()
-        );
-        eprintln!(
-            "SKIPPED: {} is missing (run scripts/install-python.sh, or set LAMPOST_REQUIRE_PY=1 to require it)",
-            py.display()
-        );
+    if !oracle_present(std::slice::from_ref(&py), "scripts/install-python.sh") {
         return;
     }
     let work = Path::new(env!("CARGO_TARGET_TMPDIR")).join("collide-oracle");
@@ -345,7 +300,7 @@ fn collide_agrees_with_trimesh() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(0x1a3b_5c7d_2011_0003);
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut paths: Vec<PathBuf> = std::fs::read_dir(root.join("fixtures/meshes"))
         .expect("fixtures/meshes")
         .flatten()

@@ -6,9 +6,7 @@ use lampost_kinematics::{Machine, Vector3};
 use lampost_post::pointwise::{on_segment, post_points, read_points, verify_points, PathPoint};
 use lampost_post::{Frame, IntendedOptions, PostConfig, PostDialect, PostError, Process};
 
-fn root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use lampost_testkit::root;
 
 /// The fixture `tilted-arc.csv` with lines (1-based) replaced.
 fn tilted_arc(replace: &[(usize, &str)]) -> String {
