@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 /// The child's targets, in round-robin order.
 pub const TARGETS: &[&str] = &[
-    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric",
+    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect",
 ];
 
 pub const USAGE: &str = "[--target all|gcode|fmt|post|toml|points|stl|probe|numeric|selftest[,…]] [--seconds N] [--seed S] [--input-ms MS] [--mem-mb MB] [--slice-seconds N]";

@@ -34,7 +34,7 @@ use crate::gen::{chunks, mutate, read_dir, shows_nonfinite, Rng};
 
 /// Every target, in round-robin order.
 pub const TARGETS: &[&str] = &[
-    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric",
+    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect",
 ];
 
 /// G-code tokens spliced into programs.
@@ -271,6 +271,8 @@ pub struct Ctx {
     points: Vec<Vec<u8>>,
     stl: Vec<Vec<u8>>,
     jobs: Vec<Vec<u8>>,
+    /// `lampost inspect`'s inputs: a measuring plan and a sensor log for it.
+    inspect: InspectSeeds,
     /// Where each input is written before it runs (`--trace`).
     trace: Option<std::path::PathBuf>,
 }
@@ -326,6 +328,7 @@ impl Ctx {
             points: read_dir(&fx.join("points"), &[]),
             stl: read_dir(&fx.join("meshes"), &["stl"]),
             jobs: read_dir(&fx.join("post/bearing-seat"), &["toml"]),
+            inspect: InspectSeeds::new()?,
             trace,
         })
     }
@@ -348,6 +351,7 @@ impl Ctx {
             "stl" => self.stl(r, input, note),
             "probe" => probe_log(self, r, input, note),
             "numeric" => numeric(self, r, input, note),
+            "inspect" => inspect(self, r, input, note),
             "selftest" => selftest(self, r, input, note),
             other => Err(format!("no target {other}")),
         }
@@ -1508,5 +1512,161 @@ fn selftest(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> R
         }
         3 => panic!("selftest panic"),
         _ => Ok(()),
+    }
+}
+
+/// The seeds of the `inspect` target: the NRC cell with its sensor head, a plan of
+/// points on a cone (every row a different table position), its text, and a log for it.
+#[derive(Debug)]
+struct InspectSeeds {
+    machine: Machine,
+    head: usize,
+    rows: Vec<lampost_inspect::PlanRow>,
+    plan: Vec<u8>,
+    log: Vec<u8>,
+}
+
+impl InspectSeeds {
+    fn new() -> Result<Self, String> {
+        use lampost_inspect::plan::{plan, to_text, Probe};
+        let machine = Machine::builtin("nrc-lc", &[]).map_err(|e| e.to_string())?;
+        let head = machine.head("sensor").map_err(|e| e.to_string())?;
+        let targets: Vec<lampost_inspect::Target> = (0..8)
+            .map(|k| {
+                let a = f64::from(k) * 0.7;
+                lampost_inspect::Target {
+                    id: format!("p{k}"),
+                    point: [20.0 * a.cos(), 20.0 * a.sin(), 5.0],
+                    normal: [0.6 * a.cos(), 0.6 * a.sin(), 0.8],
+                }
+            })
+            .collect();
+        let p = plan(&machine, head, Probe::Sensor, &targets, None).map_err(|e| e.to_string())?;
+        let plan = to_text(&machine, head, Probe::Sensor, &p.rows).into_bytes();
+        let mut log = String::from("# id r (mm)\n");
+        for (k, row) in p.rows.iter().enumerate() {
+            match k % 4 {
+                3 => log += &format!("{} none\n", row.id),
+                _ => log += &format!("{} {:.4}\n", row.id, 0.7 * k as f64 - 2.0),
+            }
+        }
+        // The seeds read as they are, or the target would only ever see refusals.
+        let text = String::from_utf8_lossy(&plan);
+        let (_, rows) = lampost_inspect::plan::read_text(&machine, head, &text)
+            .map_err(|e| format!("the inspect seed plan does not read: {e}"))?;
+        let readings = lampost_inspect::reduce::read_log(&log)
+            .map_err(|e| format!("the inspect seed log does not read: {e}"))?;
+        lampost_inspect::reduce::reduce(&machine, head, &rows, &readings)
+            .map_err(|e| format!("the inspect seed log does not reduce: {e}"))?;
+        Ok(InspectSeeds {
+            machine,
+            head,
+            rows: p.rows,
+            plan,
+            log: log.into_bytes(),
+        })
+    }
+}
+
+/// Tokens spliced into plans and logs.
+const INSPECT_TOKENS: &[&str] = &[
+    " ",
+    "\n",
+    "#",
+    "-",
+    "0",
+    "1e308",
+    "-1e308",
+    "NaN",
+    "inf",
+    "none",
+    "p0",
+    "p1",
+    "0.000000000",
+    "2.000000000",
+    "99999",
+    "# lampost inspect plan: machine nrc-lc, head sensor",
+    "# lampost inspect plan: machine nrc-lc, head laser",
+    ", stylus 0.5",
+    ", stylus -1",
+];
+
+/// `lampost inspect`'s readers: a measuring plan (`plan::read_text`) and a sensor log
+/// (`reduce::read_log`, then `reduce::reduce` against the seed plan). A refusal must be
+/// located (a line); a plan read must hold finite values and unit normals (a deviation
+/// is measured along the normal) and read back as written; every reduced point and
+/// deviation must be finite, and every plan row accounted for.
+fn inspect(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    use lampost_inspect::plan::{read_text, to_text};
+    use lampost_inspect::reduce::{read_log, reduce};
+    use lampost_inspect::InspectError;
+    let s = &ctx.inspect;
+    input.clear();
+    let log = r.coin();
+    *note = if log { "inspect log" } else { "inspect plan" }.into();
+    input.extend_from_slice(if log { &s.log } else { &s.plan });
+    mutate(r, input, INSPECT_TOKENS);
+    ctx.made(input, note);
+    let text = String::from_utf8_lossy(input);
+    let located = |e: &InspectError| {
+        matches!(e, InspectError::At { .. })
+            || matches!(e, InspectError::Input(w) if w.starts_with("not a lampost inspection plan"))
+    };
+    if log {
+        let readings = match read_log(&text) {
+            Ok(v) => v,
+            Err(e) if located(&e) => return Ok(()),
+            Err(e) => return Err(format!("read_log refused without a line: {e}")),
+        };
+        let out = match reduce(&s.machine, s.head, &s.rows, &readings) {
+            Ok(v) => v,
+            Err(e) if located(&e) => return Ok(()),
+            Err(e) => return Err(format!("reduce refused without a line: {e}")),
+        };
+        if out.len() != s.rows.len() {
+            return Err(format!(
+                "reduce: {} rows for a plan of {}",
+                out.len(),
+                s.rows.len()
+            ));
+        }
+        for m in &out {
+            let bad = m.measured.is_some_and(|p| !p.iter().all(|v| v.is_finite()))
+                || m.deviation.is_some_and(|d| !d.is_finite())
+                || m.reading.is_some_and(|d| !d.is_finite());
+            if bad {
+                return Err(format!("reduce: a non-finite value for {m:?}"));
+            }
+        }
+        return Ok(());
+    }
+    let (probe, rows) = match read_text(&s.machine, s.head, &text) {
+        Ok(v) => v,
+        Err(e) if located(&e) => return Ok(()),
+        Err(e) => return Err(format!("read_text refused without a line: {e}")),
+    };
+    for row in &rows {
+        let values = row.joints.values();
+        let finite = values
+            .iter()
+            .chain(&row.point)
+            .chain(&row.normal)
+            .chain(&row.beam)
+            .all(|v| v.is_finite())
+            && row.tilt_deg.is_finite();
+        let n = Vector3::from(row.normal).norm();
+        if !finite || (n - 1.0).abs() > 1e-6 {
+            return Err(format!(
+                "read_text: a row with a non-finite value or a normal of length {n}: {row:?}"
+            ));
+        }
+    }
+    let again = to_text(&s.machine, s.head, probe, &rows);
+    match read_text(&s.machine, s.head, &again) {
+        Ok((p2, rows2)) if p2 == probe && to_text(&s.machine, s.head, p2, &rows2) == again => {
+            Ok(())
+        }
+        Ok(_) => Err("read_text: a plan written again reads as another plan".into()),
+        Err(e) => Err(format!("read_text: a plan written again is refused: {e}")),
     }
 }

@@ -4,6 +4,7 @@
 //! motion small; and the plan's text form (the paper's Figure 7b rows, with the nominal
 //! point and normal).
 
+use lampost_gcode::fixed;
 use lampost_kinematics::{Joints, Machine, Vector3};
 
 use crate::error::InspectError;
@@ -284,24 +285,20 @@ pub fn to_text(m: &Machine, head: usize, probe: Probe, rows: &[PlanRow]) -> Stri
         names.join(" ")
     );
     for r in rows {
-        // `+ 0.0`: a −0 is written 0.
-        let j = r.joints.values().map(|x| x + 0.0);
-        s.push_str(&format!(
-            "{} {:.6} {:.6} {:.6} {:.6} {:.6} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {:.3}\n",
-            r.id,
-            j[0],
-            j[1],
-            j[2],
-            j[3],
-            j[4],
-            r.point[0],
-            r.point[1],
-            r.point[2],
-            r.normal[0],
-            r.normal[1],
-            r.normal[2],
-            r.tilt_deg
-        ));
+        // `fixed`: correctly rounded, and a value that rounds to zero is written without
+        // a sign (`-0.000000` would read back as another row than the one written).
+        let j = r.joints.values();
+        let cols = j
+            .iter()
+            .map(|&x| fixed(x, 6))
+            .chain(r.point.iter().chain(&r.normal).map(|&x| fixed(x, 9)))
+            .chain([fixed(r.tilt_deg, 3)]);
+        s.push_str(&r.id);
+        for c in cols {
+            s.push(' ');
+            s.push_str(&c);
+        }
+        s.push('\n');
     }
     s
 }
@@ -390,6 +387,23 @@ pub fn read_text(
             linear: [v[0], v[1], v[2]],
             rotary: [v[3], v[4]],
         };
+        // A deviation is measured along the normal: one that is not a unit vector
+        // (written with 9 decimals) would scale every deviation, or zero it.
+        let n = Vector3::new(v[8], v[9], v[10]).norm();
+        if (n - 1.0).abs() > 1e-6 {
+            return Err(InspectError::At {
+                line,
+                what: format!(
+                    "point {}: the normal {} {} {} has length {n:.9}, not 1",
+                    f[0], f[9], f[10], f[11]
+                ),
+            });
+        }
+        // The machine ran the plan: a row beyond its travel was not measured.
+        m.check_limits(&joints).map_err(|e| InspectError::At {
+            line,
+            what: format!("point {}: {e}", f[0]),
+        })?;
         let beam = m.forward(&joints, head).axis;
         let beam = beam / beam.norm();
         rows.push(PlanRow {
