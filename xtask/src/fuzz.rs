@@ -20,7 +20,7 @@ pub const TARGETS: &[&str] = &[
     "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect",
 ];
 
-pub const USAGE: &str = "[--target all|gcode|fmt|post|toml|points|stl|probe|numeric|selftest[,…]] [--seconds N] [--seed S] [--input-ms MS] [--mem-mb MB] [--slice-seconds N]";
+pub const USAGE: &str = "[--target all|gcode|fmt|post|toml|points|stl|probe|numeric|inspect|selftest[,…]] [--seconds N] [--seed S] [--input-ms MS] [--mem-mb MB] [--slice-seconds N]";
 
 /// Options of a run.
 #[derive(Debug, Clone)]
