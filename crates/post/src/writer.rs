@@ -22,30 +22,33 @@ use crate::post::{
 };
 use crate::safety::SafeHeights;
 
-/// The machine's process codes as words.
+/// The machine's process codes as words, read once; laser on carries the process's power.
 #[derive(Debug, Clone)]
 pub(crate) struct Codes {
     laser_on: Vec<(u8, f64)>,
     laser_off: Vec<(u8, f64)>,
     powder_on: Vec<(u8, f64)>,
     powder_off: Vec<(u8, f64)>,
-    power_letter: u8,
 }
 
 impl Codes {
-    fn of(m: &Machine) -> Result<Codes, PostError> {
+    fn of(m: &Machine, process: &Process) -> Result<Codes, PostError> {
         let p = &m.def.process;
-        Ok(Codes {
-            laser_on: code_words(&p.laser_on)?,
-            laser_off: code_words(&p.laser_off)?,
-            powder_on: code_words(&p.powder_on)?,
-            powder_off: code_words(&p.powder_off)?,
-            power_letter: p
+        let mut laser_on = code_words(&p.laser_on)?;
+        if let Process::Deposit { power } = process {
+            let letter = p
                 .laser_power_word
                 .bytes()
                 .next()
                 .unwrap_or(b'S')
-                .to_ascii_uppercase(),
+                .to_ascii_uppercase();
+            laser_on.push((letter, *power));
+        }
+        Ok(Codes {
+            laser_on,
+            laser_off: code_words(&p.laser_off)?,
+            powder_on: code_words(&p.powder_on)?,
+            powder_off: code_words(&p.powder_off)?,
         })
     }
 }
@@ -125,7 +128,7 @@ impl<'m, W: Write> Writer<'m, W> {
             safe: heights.at(&cfg.near),
             heights,
             in_run: false,
-            codes: Codes::of(machine)?,
+            codes: Codes::of(machine, &cfg.process)?,
             inverse_time: false,
             heights_used: Vec::new(),
             part: cfg.part.clone(),
@@ -228,13 +231,10 @@ impl<'m, W: Write> Writer<'m, W> {
     /// The process for a feed: laser and powder on for a deposition move (when the
     /// process deposits), off otherwise.
     pub(crate) fn process_for(&mut self, cfg: &PostConfig, deposit: bool) -> Result<(), PostError> {
-        if let Process::Deposit { power } = cfg.process {
+        if let Process::Deposit { .. } = cfg.process {
             if deposit && !self.laser {
-                let mut v = self.codes.laser_on.clone();
-                v.push((self.codes.power_letter, power));
-                self.words(&v, None)?;
-                let on = self.codes.powder_on.clone();
-                self.words(&on, None)?;
+                emit_words(&mut self.em, &self.codes.laser_on, None)?;
+                emit_words(&mut self.em, &self.codes.powder_on, None)?;
                 self.laser = true;
             } else if !deposit {
                 self.laser_off()?;
@@ -550,12 +550,7 @@ impl<'m, W: Write> Writer<'m, W> {
         w: &[(u8, f64)],
         comment: Option<&str>,
     ) -> Result<(), PostError> {
-        for &(l, v) in w {
-            if l == b'F' {
-                feed_writable(v)?;
-            }
-        }
-        self.em.words(w, comment).map_err(PostError::from)
+        emit_words(&mut self.em, w, comment)
     }
 
     /// [`Writer::words`] of a move made from input line `line`: a value the dialect
@@ -567,9 +562,8 @@ impl<'m, W: Write> Writer<'m, W> {
     /// Laser and powder off, if the laser is on.
     pub(crate) fn laser_off(&mut self) -> Result<(), PostError> {
         if self.laser {
-            let (off, powder) = (self.codes.laser_off.clone(), self.codes.powder_off.clone());
-            self.words(&off, None)?;
-            self.words(&powder, None)?;
+            emit_words(&mut self.em, &self.codes.laser_off, None)?;
+            emit_words(&mut self.em, &self.codes.powder_off, None)?;
             self.laser = false;
         }
         Ok(())
@@ -776,6 +770,21 @@ impl<'m, W: Write> Writer<'m, W> {
         }
         Ok(())
     }
+}
+
+/// Words as one block (the header's, the process codes', any the post makes): a feed
+/// that would be written as `F0` is refused first.
+fn emit_words<W: Write>(
+    em: &mut Emitter<W>,
+    w: &[(u8, f64)],
+    comment: Option<&str>,
+) -> Result<(), PostError> {
+    for &(l, v) in w {
+        if l == b'F' {
+            feed_writable(v)?;
+        }
+    }
+    em.words(w, comment).map_err(PostError::from)
 }
 
 /// An emitter error of a move from input line `line`: a value out of the dialect's
