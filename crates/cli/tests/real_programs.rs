@@ -9,13 +9,15 @@
 //! - `refused L:C message`: `lampost trace` stops with a located error, the first one
 //!   `lampost check` reports (each was read by hand: see `SOURCES.md`).
 //!
-//! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer) are traced with
-//! `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the verdict
-//! then says `post R runs` when the post deposits the extruding length (relative
-//! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
-//! start code's homing (`G28`) and bed levelling (`G29`) lines are left out of the posted
-//! input: a move to the printer's home cannot be placed on the part (the post refuses
-//! it, see docs/post.md), and nothing else is changed.
+//! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
+//! superslicer) are traced with `--e-word extrusion` and posted with
+//! `post --machine nrc-lc --e-extrusion`; the verdict then says `post R runs` when the
+//! post deposits the extruding length (relative difference ≤ 1e-9) with one laser-on per
+//! extruding run, or `post refused L: …`. Their start code's homing (`G28`) and bed
+//! levelling (`G29`) lines are left out of the posted input: a move to the printer's home
+//! cannot be placed on the part (the post refuses it, see docs/post.md), and nothing else
+//! is changed. Each must also be read as a slicer's program by `--flavor auto` (`marlin`
+//! or `reprap` in `check --json`).
 //!
 //! A verdict that changes fails the test: an improvement is recorded by running it with
 //! `LAMPOST_UPDATE_VERDICTS=1` and reviewing the diff of `VERDICTS`.
@@ -26,7 +28,15 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 5] = ["prusaslicer", "cura", "bambustudio", "slic3r", "kisslicer"];
+const SLICERS: [&str; 7] = [
+    "prusaslicer",
+    "cura",
+    "bambustudio",
+    "slic3r",
+    "kisslicer",
+    "simplify3d",
+    "superslicer",
+];
 
 /// The first error `lampost check` reports, as `L:C message`.
 fn first_error(path: &Path, e_word: &[&str]) -> String {
@@ -55,6 +65,17 @@ fn first_error(path: &Path, e_word: &[&str]) -> String {
                 )
             },
         )
+}
+
+/// The flavour `--flavor auto` finds for a program, as `check --json` reports it.
+fn auto_flavor(path: &Path) -> String {
+    let p = path.to_str().expect("utf-8 path");
+    let out = lampost(&["check", "--json", "--flavor", "auto", p]);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+    doc["flavor"]["flavor"]
+        .as_str()
+        .unwrap_or("(no flavour reported)")
+        .to_string()
 }
 
 /// Post a slicer program (homing and levelling lines left out) and compare its deposition
@@ -128,6 +149,8 @@ fn real_programs_against_their_verdicts() {
     let mut got: BTreeMap<String, String> = BTreeMap::new();
     let (mut equal, mut moves, mut deposits) = (0usize, 0usize, 0usize);
     let mut generators = std::collections::BTreeSet::new();
+    // Slicer programs `--flavor auto` does not read as a slicer's (marlin or reprap).
+    let mut misread = Vec::new();
     for path in &files {
         let gen = path
             .parent()
@@ -184,6 +207,12 @@ fn real_programs_against_their_verdicts() {
                 }
             }
         };
+        if slicer {
+            let f = auto_flavor(path);
+            if !matches!(f.as_str(), "marlin" | "reprap") {
+                misread.push(format!("{gen}/{name}: {f}"));
+            }
+        }
         if slicer && doc.is_some() {
             let v = post_verdict(path, &work);
             deposits += usize::from(!v.contains("refused"));
@@ -202,6 +231,11 @@ fn real_programs_against_their_verdicts() {
         generators.len()
     );
     assert!(generators.len() >= 8, "{generators:?}");
+    assert!(
+        misread.is_empty(),
+        "slicer programs --flavor auto does not read as a slicer's:\n{}",
+        misread.join("\n")
+    );
     let text: String = got.iter().map(|(k, v)| format!("{k} {v}\n")).collect();
     if std::env::var_os("LAMPOST_UPDATE_VERDICTS").is_some() {
         std::fs::write(&verdicts_path, &text).expect("write VERDICTS");
