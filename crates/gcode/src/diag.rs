@@ -120,6 +120,15 @@ pub enum ErrorKind {
     /// A canned cycle passed through, not expanded.
     #[error("canned cycle G{0} is passed through, not expanded into moves")]
     CannedCyclePassedThrough(String),
+    /// In a printer (slicer) program, a firmware's extended command that is a setting
+    /// and moves nothing (Klipper's `SET_PRESSURE_ADVANCE ADVANCE=0.05`,
+    /// `EXCLUDE_OBJECT_START NAME=part`): ignored.
+    #[error("{0} is a firmware setting (Klipper): no motion, ignored")]
+    FirmwareSetting(String),
+    /// In a printer (slicer) program, a firmware's macro or extended command that may
+    /// move (Klipper's `START_PRINT`, `PRINT_END`, `SET_GCODE_OFFSET`): not simulated.
+    #[error("{0} is a firmware macro or command (Klipper): its moves, if any, are not known and not simulated")]
+    FirmwareMacro(String),
     /// A macro line whose value a later stage would need.
     #[error("{0} is not evaluated: macros are kept verbatim, not run (statement lines are reported once)")]
     MacroNotEvaluated(&'static str),
@@ -261,6 +270,8 @@ impl ErrorKind {
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
+            ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
+            ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
             ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",

@@ -189,6 +189,24 @@ impl<S: LineSource> Iterator for Stream<S> {
                     ),
                 },
             };
+            // A printer (slicer) program's line that is no G-code but a firmware's
+            // extended command (`exponents`: E is extrusion, the program is a printer's):
+            // a warning naming it, and an empty block.
+            if parsed.is_err() && self.exponents {
+                if let Some((kind, len)) = firmware_command(line.bytes) {
+                    queue.push_back(Event::Diagnostic(Diagnostic::at(
+                        Severity::Warning,
+                        kind,
+                        line.number,
+                        line.offset,
+                        line.bytes,
+                        line.bytes.len() - line.bytes.trim_ascii_start().len(),
+                        len,
+                    )));
+                    block = Block::empty(line.number, line.offset);
+                    parsed = Ok(());
+                }
+            }
             // Macro lines only: the flavour's evaluation (plain lines never come here;
             // under Macro B also lines the parser refuses and G65 blocks).
             let mut control = None;
@@ -391,4 +409,64 @@ pub fn check(input: &[u8], opts: Options) -> Vec<Diagnostic> {
     };
     let src = ProgramReader::new(io::Cursor::new(input), Order::File);
     Stream::new(src, opts, false).filter_map(diags).collect()
+}
+
+/// Klipper's extended commands that set something and move nothing: ignored in a
+/// printer program (any other is a macro whose moves are not known).
+const FIRMWARE_SETTINGS: &[&str] = &[
+    "EXCLUDE_OBJECT_DEFINE",
+    "EXCLUDE_OBJECT_END",
+    "EXCLUDE_OBJECT_START",
+    "RESPOND",
+    "SET_EXTRUDER_ROTATION_DISTANCE",
+    "SET_FAN_SPEED",
+    "SET_GCODE_VARIABLE",
+    "SET_HEATER_TEMPERATURE",
+    "SET_IDLE_TIMEOUT",
+    "SET_INPUT_SHAPER",
+    "SET_LED",
+    "SET_PIN",
+    "SET_PRESSURE_ADVANCE",
+    "SET_PRINT_STATS_INFO",
+    "SET_RETRACTION",
+    "SET_TEMPERATURE_FAN_TARGET",
+    "SET_VELOCITY_LIMIT",
+    "TEMPERATURE_WAIT",
+];
+
+/// A firmware's extended command (Klipper: `START_PRINT BED=60`, `SET_PRESSURE_ADVANCE
+/// ADVANCE=0.05`, `_ON_LAYER_CHANGE`): a first token of letters, digits and
+/// underscores, at least three long, with an underscore or letters only (a word such as
+/// `G1` or a typo such as `GOX1` is not one), then the end, a space or a `;` comment.
+/// Its kind (a setting, or a macro that may move) and the end of the command's text in
+/// the line (before any comment).
+fn firmware_command(line: &[u8]) -> Option<(ErrorKind, usize)> {
+    let start = line.len() - line.trim_ascii_start().len();
+    let rest = &line[start..];
+    let n = rest
+        .iter()
+        .position(|c| !(c.is_ascii_alphanumeric() || *c == b'_'))
+        .unwrap_or(rest.len());
+    let name = &rest[..n];
+    let first_ok = name
+        .first()
+        .is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_');
+    let shape = name.contains(&b'_') || name.iter().all(u8::is_ascii_alphabetic);
+    let ends = rest.get(n).is_none_or(|c| matches!(c, b' ' | b'\t' | b';'));
+    if n < 3 || !first_ok || !shape || !ends {
+        return None;
+    }
+    let name = String::from_utf8_lossy(name).to_ascii_uppercase();
+    let end = rest
+        .iter()
+        .position(|&c| c == b';')
+        .map_or(line.len(), |i| start + i);
+    let text_end = start + line[start..end].trim_ascii_end().len();
+    let shown = String::from_utf8_lossy(&line[start..text_end]).into_owned();
+    let kind = if FIRMWARE_SETTINGS.contains(&name.as_str()) {
+        ErrorKind::FirmwareSetting(shown)
+    } else {
+        ErrorKind::FirmwareMacro(shown)
+    };
+    Some((kind, text_end))
 }

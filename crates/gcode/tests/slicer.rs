@@ -197,3 +197,54 @@ fn exponents_only_where_e_is_extrusion() {
         ErrorKind::LetterWithoutNumber('X')
     ));
 }
+
+/// Klipper's extended commands in a printer program (a RatOS SuperSlicer program starts
+/// with `START_PRINT …`): a setting is a warning and ignored, a macro a warning that says
+/// its moves are not known (the post refuses it); never "the letter S has no number".
+/// In a machining program, or for a token shaped like a word or a typo, they stay errors.
+#[test]
+fn klipper_commands_are_named_not_misread() {
+    let src = "START_PRINT BED_TEMP=60 EXTRUDER_TEMP=210 ; start\n\
+               SET_PRESSURE_ADVANCE ADVANCE=0.04\n\
+               EXCLUDE_OBJECT_START NAME=cube\n\
+               G1 X5 Y5 F600\n\
+               _ON_LAYER_CHANGE\n\
+               G1 X6 E0.1\n\
+               EXCLUDE_OBJECT_END NAME=cube\n";
+    let mut kinds = Vec::new();
+    let mut moves = 0;
+    for ev in Stream::from_bytes(src.as_bytes(), slicer(), false) {
+        match ev.expect("in memory") {
+            Event::Move(_) => moves += 1,
+            Event::Diagnostic(d) => {
+                kinds.push((d.line, d.is_error(), d.kind.clone(), d.snippet.text.clone()))
+            }
+        }
+    }
+    assert_eq!(moves, 2);
+    assert!(kinds.iter().all(|k| !k.1), "{kinds:?}");
+    let macros: Vec<u32> = kinds
+        .iter()
+        .filter(|k| matches!(k.2, ErrorKind::FirmwareMacro(_)))
+        .map(|k| k.0)
+        .collect();
+    let settings: Vec<u32> = kinds
+        .iter()
+        .filter(|k| matches!(k.2, ErrorKind::FirmwareSetting(_)))
+        .map(|k| k.0)
+        .collect();
+    assert_eq!(macros, [1, 5]);
+    assert_eq!(settings, [2, 3, 7]);
+    // The command's text, without its comment.
+    assert!(
+        matches!(&kinds[0].2, ErrorKind::FirmwareMacro(t) if t == "START_PRINT BED_TEMP=60 EXTRUDER_TEMP=210"),
+        "{kinds:?}"
+    );
+    // A machining program, a word-shaped token and a typo of G0 stay errors.
+    let d = check(b"START_PRINT\n", Options::default());
+    assert!(d.iter().any(|d| d.is_error()), "{d:?}");
+    for line in ["GOX1\n", "GO X1\n", "G1X\n"] {
+        let (_, errors) = run(line);
+        assert!(!errors.is_empty(), "{line}");
+    }
+}

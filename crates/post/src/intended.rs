@@ -355,6 +355,9 @@ impl<'a> Intended<'a> {
                         ErrorKind::NotSimulated(what) => Some(format!(
                             "{what} changes the path; the post cannot follow it"
                         )),
+                        ErrorKind::FirmwareMacro(what) => Some(format!(
+                            "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; remove the printer's start and end code from the slicer's custom G-code"
+                        )),
                         ErrorKind::CannedCyclePassedThrough(c) => {
                             Some(format!("canned cycle G{c} cannot be posted (not expanded)"))
                         }
