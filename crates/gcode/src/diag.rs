@@ -31,6 +31,9 @@ pub enum ErrorKind {
     /// A character that cannot start a word or comment.
     #[error("unexpected character `{0}`")]
     UnexpectedCharacter(char),
+    /// A `(` inside a `(` comment: comments do not nest.
+    #[error("a comment holds `(`: comments do not nest, so it ends at the first `)`")]
+    NestedComment,
     /// A number that cannot be read (too long, or not finite).
     #[error("cannot read the number `{0}`")]
     BadNumber(String),
@@ -89,6 +92,10 @@ pub enum ErrorKind {
     /// A centre word outside the active plane.
     #[error("{0} is not a centre word of the active plane")]
     ArcWrongPlaneWord(char),
+    /// A zero centre word along the active plane's normal (`K0` in G17, as FreeCAD's
+    /// grbl post writes): ignored outside LinuxCNC, which refuses it.
+    #[error("{0}0 is not a centre word of the active plane; zero, it changes nothing and is ignored (here and on later arcs)")]
+    ArcNormalCentreZero(char),
     /// Axis words with no motion mode.
     #[error("axis words but no motion mode is active (after G80 or at program start)")]
     NoMotionMode,
@@ -251,6 +258,7 @@ impl ErrorKind {
             ErrorKind::LetterWithoutNumber(_) => "give the word a value, e.g. `X0`, or remove the letter",
             ErrorKind::NumberWithoutLetter(_) => "put the address letter in front of the number, e.g. `X1.5`",
             ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
+            ErrorKind::NestedComment => "remove the inner parentheses or write `[ ]` instead (LinuxCNC refuses nested comments too)",
             ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
             ErrorKind::DuplicateWord(_) => "keep one value per letter in a block",
             ErrorKind::ModalGroupConflict { .. } => "keep one code of each modal group per block",
@@ -262,6 +270,7 @@ impl ErrorKind {
             ErrorKind::ArcRadiusTooSmall { .. } => "the radius must be at least half the chord; check R and the end point",
             ErrorKind::ArcZeroRadius => "check I/J/K or R",
             ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
+            ErrorKind::ArcNormalCentreZero(_) => "remove it: LinuxCNC (`--flavor linuxcnc`) refuses a centre word off the active plane",
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",

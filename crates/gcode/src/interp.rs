@@ -196,6 +196,9 @@ pub struct Interpreter {
     /// Axes named in the block being run.
     block_axes: u16,
     warned_macro: bool,
+    /// A zero centre word off the active plane (`K0` in G17) has been warned about: once
+    /// a program, as a post writes one on every arc.
+    warned_normal_centre: bool,
     /// Inside a LinuxCNC `G5.2` … `G5.3` NURBS block (control points, not moves).
     nurbs: bool,
     /// A skipped macro block set the feed rate from a value lampost does not know: later
@@ -325,6 +328,7 @@ impl Interpreter {
             axes_named: 0,
             block_axes: 0,
             warned_macro: false,
+            warned_normal_centre: false,
             nurbs: false,
             feed_from_macro: false,
             offset_cache: [0.0; 9],
@@ -1534,14 +1538,28 @@ impl Interpreter {
         let plane = self.modal.plane;
         let (u, v, n) = plane.axes();
         let centre_letter = |axis: usize| [b'I', b'J', b'K'][axis];
-        // A centre word of the plane's normal axis is a mistake.
+        // A centre word of the plane's normal axis is a mistake; a zero one changes
+        // nothing (FreeCAD's grbl post writes `K0.000` on every G17 arc, and grbl takes
+        // it): warned, and refused only for LinuxCNC, as rs274 refuses it.
         if let Some(word) = w.word(centre_letter(n)) {
-            return Err(diag(
-                b,
-                Severity::Error,
-                ErrorKind::ArcWrongPlaneWord(word.letter_char()),
-                Some(word.span),
-            ));
+            if word.value == 0.0 && self.opts.flavor != crate::flavor::Flavor::LinuxCnc {
+                if !self.warned_normal_centre {
+                    self.warned_normal_centre = true;
+                    self.warn(
+                        b,
+                        out,
+                        ErrorKind::ArcNormalCentreZero(word.letter_char()),
+                        Some(word.span),
+                    );
+                }
+            } else {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::ArcWrongPlaneWord(word.letter_char()),
+                    Some(word.span),
+                ));
+            }
         }
         let radius_word = w.word(b'R').or(w.registers[0]);
         let has_ijk = w.word(centre_letter(u)).is_some() || w.word(centre_letter(v)).is_some();
@@ -1932,6 +1950,45 @@ mod tests {
             }
         }
         (moves, diags)
+    }
+
+    #[test]
+    fn a_zero_centre_word_off_the_plane_is_ignored_but_for_linuxcnc() {
+        // FreeCAD's grbl post: `K0.000` on every G17 arc (FreeCAD Path, real program in
+        // fixtures/real-programs/freecad). Warned once, the arcs traced as without it.
+        let text = "G17 G21 G90 G0 X0 Y0\nG2 X10 Y0 I5 J0 K0.000 F100\nG2 X0 Y0 I-5 J0 K0\n";
+        let (moves, diags) = run(text);
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        assert_eq!(diags[0].severity, Severity::Warning);
+        assert_eq!((diags[0].line, diags[0].column), (2, 17));
+        assert!(diags[0].to_string().contains("K0 is not a centre word"));
+        let arcs: Vec<&Move> = moves
+            .iter()
+            .filter(|m| matches!(m.kind, MoveKind::Arc { .. }))
+            .collect();
+        assert_eq!(arcs.len(), 2);
+        let (plain, _) = run("G17 G21 G90 G0 X0 Y0\nG2 X10 Y0 I5 J0 F100\nG2 X0 Y0 I-5 J0\n");
+        assert_eq!(moves, plain);
+        // Not zero: still refused, at the word; in G18 the normal word is J.
+        let (_, diags) = run("G17 G0 X0 Y0\nG2 X10 Y0 I5 J0 K0.5 F100\n");
+        assert_eq!(diags[0].severity, Severity::Error);
+        assert!(diags[0].to_string().contains("K is not a centre word"));
+        let (_, diags) = run("G18 G0 X0 Z0\nG2 X10 Z0 I5 K0 J0 F100\n");
+        assert_eq!(diags[0].severity, Severity::Warning, "{diags:?}");
+        assert!(diags[0].to_string().contains("J0 is not a centre word"));
+        // LinuxCNC refuses it, as rs274 does ("K word given for arc in xy plane").
+        let opts = Options {
+            flavor: crate::flavor::Flavor::LinuxCnc,
+            ..Options::default()
+        };
+        let diags: Vec<Diagnostic> = Stream::from_bytes(text.as_bytes(), opts, false)
+            .filter_map(|e| match e.expect("in memory") {
+                Event::Diagnostic(d) => Some(d),
+                Event::Move(_) => None,
+            })
+            .collect();
+        assert_eq!(diags[0].severity, Severity::Error);
+        assert_eq!((diags[0].line, diags[0].column), (2, 17));
     }
 
     #[test]

@@ -465,7 +465,41 @@ fn simple_words<'a>(
 
 /// The parser's reference path: every line [`simple_words`] does not take (and, in the
 /// tests, every line), into `block` (reset, with its text).
+///
+/// A line that fails after a `(` comment holding another `(` fails because comments do
+/// not nest (`(DRILL 3MM (R))` ends at the first `)`, and the second is left over):
+/// that is the error reported, at the inner `(`, rather than what is left over.
 fn words_reference<'a>(
+    text: &'a str,
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    exponents: bool,
+) -> Result<(), Diagnostic> {
+    words_reference_items(text, line_no, offset, block, exponents).map_err(|e| {
+        let nested = block.items.iter().find_map(|item| match item {
+            Item::Comment(c) if c.style == CommentStyle::Paren && c.span.start < e.span.start => {
+                // The comment's text starts one byte after its `(`.
+                memchr::memchr(b'(', c.text.as_bytes()).map(|r| c.span.start + 1 + r - offset)
+            }
+            _ => None,
+        });
+        match nested {
+            Some(at) => Diagnostic::at(
+                Severity::Error,
+                ErrorKind::NestedComment,
+                line_no,
+                offset,
+                text.as_bytes(),
+                at,
+                at + 1,
+            ),
+            None => e,
+        }
+    })
+}
+
+fn words_reference_items<'a>(
     text: &'a str,
     line_no: u32,
     offset: usize,
@@ -895,6 +929,28 @@ mod tests {
                 proptest::prop_assert_eq!(&fast[..], &reference.items[..], "{:?}", line);
             }
         }
+    }
+
+    #[test]
+    fn a_nested_comment_is_named_at_its_inner_parenthesis() {
+        // Estlcam writes the tool's name into a comment (`(HSS Twist Drill, 3mm (R))`,
+        // a real program in fixtures/real-programs/estlcam): the comment ends at the
+        // first `)`, and what is left over is not the fault.
+        for (s, col) in [
+            ("(HSS Twist Drill, 3mm (R))", 23),
+            ("G0 X1 (a (b) c)", 10),
+            ("N10 G0 X1 (A) (B (C) D", 18),
+        ] {
+            let e = parse_line(s.as_bytes(), 7, 100).expect_err(s);
+            assert_eq!(e.kind, ErrorKind::NestedComment, "{s}");
+            assert_eq!((e.line, e.column), (7, col), "{s}");
+            assert_eq!(e.span.end - e.span.start, 1);
+        }
+        // A `(` inside a comment on a line that parses stays a comment (`(DRILL (3MM)`),
+        // and an error with no such comment before it is unchanged.
+        assert_eq!(words("G1 X1 (DRILL (3MM) Y2").len(), 3);
+        let e = parse_line(b"G1 X1 ) (a (b)", 1, 0).expect_err("stray");
+        assert_eq!(e.kind, ErrorKind::UnexpectedCharacter(')'));
     }
 
     #[test]
