@@ -203,8 +203,11 @@ pub struct Intended<'a> {
     /// The program Z a machine-coordinate retract left the head at: a feed may not start
     /// from there (its height on the part is not known).
     retract_z: Option<f64>,
-    /// What the user should hear of (a program read in units it did not name).
+    /// What the user should hear of (a program read in units it did not name, the
+    /// interpreter's warnings).
     notes: Vec<String>,
+    /// The section's warnings so far, one note per kind: (kind, first line, how many).
+    warned: Vec<(std::mem::Discriminant<ErrorKind>, u32, usize)>,
 }
 
 impl std::fmt::Debug for Intended<'_> {
@@ -239,6 +242,7 @@ impl<'a> Intended<'a> {
             frame_cache: None,
             retract_z: None,
             notes: Vec::new(),
+            warned: Vec::new(),
         }
     }
 
@@ -298,6 +302,7 @@ impl<'a> Intended<'a> {
                 // the flavour's parameters evaluated by the stream.
                 let src = ProgramReader::new(sec.source.open()?, Order::Execution);
                 self.stream = Some(Stream::new(src, opts, true));
+                self.warned.clear();
                 self.layer = 0;
                 self.layer_z = None;
                 self.moves_in_section = 0;
@@ -307,6 +312,13 @@ impl<'a> Intended<'a> {
                 None => {
                     if self.moves_in_section == 0 {
                         return Err(PostError::Empty(sec.name.clone()));
+                    }
+                    for &(_, first, n) in self.warned.iter().filter(|w| w.2 > 1) {
+                        self.notes.push(format!(
+                            "{}: {} more warning(s) like that of line {first}",
+                            sec.name,
+                            n - 1
+                        ));
                     }
                     if self
                         .stream
@@ -372,6 +384,16 @@ impl<'a> Intended<'a> {
                             line: d.line,
                             what,
                         });
+                    }
+                    // A warning the post passes: the user hears of it, once per kind
+                    // (with a count at the section's end).
+                    let key = std::mem::discriminant(&d.kind);
+                    match self.warned.iter_mut().find(|w| w.0 == key) {
+                        Some(w) => w.2 += 1,
+                        None => {
+                            self.warned.push((key, d.line, 1));
+                            self.notes.push(format!("{file}:{}: {}", d.line, d.kind));
+                        }
                     }
                     continue;
                 }
