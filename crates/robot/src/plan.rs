@@ -257,18 +257,26 @@ const EASY: f64 = 0.5;
 
 /// The turns about the beam at the first location, best first, judged for the whole path
 /// as a robot programmer turns a part on its holder: each of 72 turns (5° apart) is tried
-/// at up to [`LOOK_AHEAD`] locations spread over the path and the location after each, the
-/// part keeping that turn against the transported reference. Better asks less of the
-/// joints' speeds at the feed (in twentieths of the fastest, up to half of it counting as
-/// equal), then keeps the worst location farther from the joint limits and the elbow's
-/// stretch ([`Arm::margin`], in whole degrees, 30° or more counting as equal), then lies
-/// nearer the safe location. Turns that miss a location visited are left out.
+/// at up to [`LOOK_AHEAD`] locations (a quarter as many for an arm without the closed
+/// form) spread over the path and the location after each, the part keeping that turn
+/// against the transported reference. Better asks less of the joints' speeds at the feed
+/// (in twentieths of the fastest, up to half of it counting as equal), then keeps the
+/// worst location farther from the joint limits and the elbow's stretch ([`Arm::margin`],
+/// in whole degrees, 30° or more counting as equal), then lies nearer the safe location.
+/// Turns that miss a location visited are left out.
 pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Config) -> Vec<f64> {
     let n = samples.len().min(refs.len());
     if n == 0 {
         return Vec::new();
     }
-    let m = n.min(LOOK_AHEAD);
+    // A numerical inverse from a location far along the path may take its 500 steps: an
+    // arm without the closed form visits fewer.
+    let visits = if arm.closed_form {
+        LOOK_AHEAD
+    } else {
+        LOOK_AHEAD / 4
+    };
+    let m = n.min(visits);
     let visits: Vec<usize> = if m <= 1 {
         vec![0]
     } else {
