@@ -13,9 +13,8 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("utf8")
 }
 
-/// The plate at a quarter scale (150 × 50 mm), written by `plan demo`.
-fn plate(dir: &Path) -> PathBuf {
-    let stl = dir.join("plate.stl");
+/// `plan demo` of the plate at a quarter scale (150 × 50 mm) into `stl`, in `units`.
+fn write_plate(stl: &Path, units: &str) {
     let o = lampost(&[
         "plan",
         "demo",
@@ -27,20 +26,34 @@ fn plate(dir: &Path) -> PathBuf {
         "60",
         "--across",
         "10",
+        "--units",
+        units,
         "-o",
-        s(&stl),
+        s(stl),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = lampost(&["mesh", "info", "--json", s(&stl)]);
-    let info: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
-    assert_eq!(info["closed"], true, "{info}");
-    stl
+}
+
+/// The quarter-scale plate in millimetres, written once for all the tests of this file
+/// (a closed mesh; the tests only read it).
+fn plate() -> PathBuf {
+    static PLATE: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    PLATE
+        .get_or_init(|| {
+            let stl = tempdir("plan-plate-fixture").join("plate.stl");
+            write_plate(&stl, "mm");
+            let o = lampost(&["mesh", "info", "--json", s(&stl)]);
+            let info: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+            assert_eq!(info["closed"], true, "{info}");
+            stl
+        })
+        .clone()
 }
 
 #[test]
 fn the_report_and_the_preview_say_what_the_path_holds() {
     let dir = tempdir("plan-report");
-    let stl = plate(&dir);
+    let stl = plate();
     let (csv, svg) = (dir.join("p.csv"), dir.join("p.svg"));
     let o = lampost(&[
         "plan",
@@ -155,8 +168,7 @@ fn the_report_and_the_preview_say_what_the_path_holds() {
 
 #[test]
 fn check_only_reports_the_layers_over_the_offset_angle() {
-    let dir = tempdir("plan-check");
-    let stl = plate(&dir);
+    let stl = plate();
     let o = lampost(&[
         "plan",
         "path",
@@ -202,25 +214,9 @@ fn check_only_reports_the_layers_over_the_offset_angle() {
 #[test]
 fn the_demo_in_inches_plans_like_the_demo_in_millimetres() {
     let dir = tempdir("plan-inch");
-    let mm = plate(&dir);
+    let mm = plate();
     let inch = dir.join("plate-in.stl");
-    let o = lampost(&[
-        "plan",
-        "demo",
-        "--scale",
-        "0.25",
-        "--thickness",
-        "3",
-        "--along",
-        "60",
-        "--across",
-        "10",
-        "--units",
-        "in",
-        "-o",
-        s(&inch),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    write_plate(&inch, "in");
     let o = lampost(&["mesh", "info", "--json", s(&inch)]);
     let info: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     // Read without --units, the file's numbers: 75 mm is 2.9528 in.
@@ -259,7 +255,7 @@ fn the_demo_in_inches_plans_like_the_demo_in_millimetres() {
 #[test]
 fn bad_plan_arguments_write_nothing() {
     let dir = tempdir("plan-bad");
-    let stl = plate(&dir);
+    let stl = plate();
     let out = dir.join("out.csv");
     for extra in [
         &["--hatch", "0"][..],
@@ -329,7 +325,7 @@ fn without_laser_codes(text: &str) -> String {
 #[test]
 fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
     let dir = tempdir("plan-plate");
-    let stl = plate(&dir);
+    let stl = plate();
     let plan_args = [
         "plan",
         "path",
@@ -438,7 +434,7 @@ fn the_twisted_plate_is_planned_posted_and_verified_on_both_machines() {
 #[test]
 fn the_plate_with_the_tangent_approach_posts_on_nrc_lc() {
     let dir = tempdir("plan-plate-tangent");
-    let stl = plate(&dir);
+    let stl = plate();
     let csv = dir.join("plate.csv");
     let o = lampost(&[
         "plan",

@@ -385,6 +385,23 @@ impl Arm {
             .position(|(l, &v)| !(v >= l.lo - 1e-9 && v <= l.hi + 1e-9))
     }
 
+    /// How far joint values lie from trouble, radians: the least of every joint's distance
+    /// to its nearer limit and, for arms with the PUMA's twists, the elbow's angle from
+    /// stretched (θ3 = −atan2(d4, a3)) and from folded (half a turn on). Near a stretched
+    /// elbow a millimetre of travel turns the elbow by degrees: planning keeps away.
+    pub fn margin(&self, q: &Q) -> f64 {
+        let mut m = f64::INFINITY;
+        for (l, &v) in self.links.iter().zip(q) {
+            m = m.min(v - l.lo).min(l.hi - v);
+        }
+        if self.closed_form || self.approx.is_some() {
+            let l = &self.links;
+            let w = wrap(q[2] + l[2].offset + l[3].d.atan2(l[2].a)).abs();
+            m = m.min(w).min(PI - w);
+        }
+        m
+    }
+
     /// Each joint on the turn (±2π) nearest `near` that lies within its limits; `Err`
     /// names the first joint with none.
     pub fn fit_limits(&self, q: &Q, near: &Q) -> Result<Q, usize> {
@@ -392,6 +409,12 @@ impl Arm {
         for j in 0..6 {
             let l = &self.links[j];
             let base = near[j] + wrap(q[j] - near[j]);
+            // Mostly the nearest turn lies within the limits: every other is a half turn
+            // or more from `near`, so it is the answer (the loop below agrees).
+            if (base - near[j]).abs() < PI && base >= l.lo - 1e-9 && base <= l.hi + 1e-9 {
+                out[j] = base.clamp(l.lo, l.hi);
+                continue;
+            }
             let mut best: Option<f64> = None;
             for k in -2..=2 {
                 let c = base + TAU * f64::from(k);

@@ -67,7 +67,7 @@ impl RobotError {
         match self {
             RobotError::MachineFile { .. } => "fix the arm file; `lampost machines show puma-lens` prints a complete example",
             RobotError::Unreachable { .. } => "move the part on its holder ([holder] in the arm file), choose another configuration (--config), or shorten the path",
-            RobotError::TooFast { .. } => "lower the feed, smooth the approach directions, or raise the joint's max_speed if the arm allows it",
+            RobotError::TooFast { .. } => "lower the feed (the whole path's: the laser deposits per unit time, so slowing only this segment would deposit more here), smooth the approach directions, or raise the joint's max_speed if the arm allows it",
             RobotError::ChunkTooSmall { .. } => "give a larger --chunk-points (the controller's memory in locations), or split the run with a laser-off point",
             RobotError::Option(_) => "see `lampost post --help` and docs/robot.md",
             RobotError::Verify { .. } => "post the path again; edited or missing location files are not trusted",

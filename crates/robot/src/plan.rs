@@ -165,16 +165,13 @@ pub fn part_in_work(tip: &Vector3<f64>, axis: &Vector3<f64>, u: &Vector3<f64>, p
     Frame { r, t: -(r * tip) }
 }
 
-/// Plan every sample: joint values in configuration `cfg`, starting from the safe
-/// location. Errors name the input line and the joint.
-pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, RobotError> {
-    let mut out: Vec<Located> = Vec::with_capacity(samples.len());
-    let mut prev = arm.safe;
-    let mut psi_prev = 0.0;
+/// The reference perpendicular of every sample: the first sample's `perpendicular`,
+/// then carried along the path by the smallest turn of the axis.
+pub fn references(samples: &[Sample]) -> Vec<Vector3<f64>> {
+    let mut out = Vec::with_capacity(samples.len());
     let mut u = Vector3::zeros();
     let mut a_prev = Vector3::zeros();
     for (i, s) in samples.iter().enumerate() {
-        // The reference perpendicular, carried along the path by the smallest turn.
         u = if i == 0 {
             perpendicular(&s.axis)
         } else {
@@ -195,55 +192,215 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
             }
         };
         a_prev = s.axis;
-        let solve = |psi: f64, fresh: bool| -> Result<(Q, Frame), NoReach> {
-            let part = part_in_work(&s.tip, &s.axis, &u, psi);
-            let world = arm.head.mul(&part);
-            let flange = arm.flange_for(&world);
-            let raw = if arm.closed_form {
-                arm.inverse_closed(&flange, cfg, prev[3])?
-            } else {
-                // The first location (or one after a blocked turn) starts from the
-                // near-PUMA closed form in the asked configuration where there is one;
-                // then each location from the last.
-                let seed = match (&arm.approx, fresh) {
-                    (Some(ap), true) => ap
-                        .inverse_closed(&ap.flange_for(&world), cfg, prev[3])
-                        .ok()
-                        .and_then(|q| ap.fit_limits(&q, &prev).ok())
-                        .unwrap_or(prev),
-                    _ => prev,
-                };
-                arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
-                    joint: 2,
-                    why: "the numerical inverse does not converge (out of reach?)".into(),
-                })?
-            };
-            let q = arm.fit_limits(&raw, &prev).map_err(|j| NoReach {
-                joint: j,
-                why: format!(
-                    "{} would be {:.3}°, outside its limits [{:.1}°, {:.1}°]",
-                    arm.joint_name(j),
-                    raw[j].to_degrees(),
-                    arm.links[j].lo.to_degrees(),
-                    arm.links[j].hi.to_degrees()
-                ),
-            })?;
-            Ok((q, part))
+        out.push(u);
+    }
+    out
+}
+
+/// Locations the look-ahead of the first turn about the beam visits (evenly spread over
+/// the path, the first and last included).
+pub const LOOK_AHEAD: usize = 128;
+
+/// Candidate turns about the beam at the first location (5° apart).
+const TURNS: u32 = 72;
+
+/// The inverse at one location: joints within the limits nearest `prev`, in `cfg`.
+fn solve_at(
+    arm: &Arm,
+    s: &Sample,
+    u: &Vector3<f64>,
+    psi: f64,
+    cfg: Config,
+    prev: &Q,
+    fresh: bool,
+) -> Result<(Q, Frame), NoReach> {
+    let part = part_in_work(&s.tip, &s.axis, u, psi);
+    let world = arm.head.mul(&part);
+    let flange = arm.flange_for(&world);
+    let raw = if arm.closed_form {
+        arm.inverse_closed(&flange, cfg, prev[3])?
+    } else {
+        // The first location (or one after a blocked turn) starts from the near-PUMA
+        // closed form in the asked configuration where there is one; then each location
+        // from the last.
+        let seed = match (&arm.approx, fresh) {
+            (Some(ap), true) => ap
+                .inverse_closed(&ap.flange_for(&world), cfg, prev[3])
+                .ok()
+                .and_then(|q| ap.fit_limits(&q, prev).ok())
+                .unwrap_or(*prev),
+            _ => *prev,
         };
+        arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
+            joint: 2,
+            why: "the numerical inverse does not converge (out of reach?)".into(),
+        })?
+    };
+    let q = arm.fit_limits(&raw, prev).map_err(|j| NoReach {
+        joint: j,
+        why: format!(
+            "{} would be {:.3}°, outside its limits [{:.1}°, {:.1}°]",
+            arm.joint_name(j),
+            raw[j].to_degrees(),
+            arm.links[j].lo.to_degrees(),
+            arm.links[j].hi.to_degrees()
+        ),
+    })?;
+    Ok((q, part))
+}
+
+/// A margin counts up to this much (30°): beyond it the next criterion decides.
+const ENOUGH: f64 = std::f64::consts::PI / 6.0;
+
+/// Joint speeds up to this fraction of the fastest count as equal in the look-ahead.
+const EASY: f64 = 0.5;
+
+/// The turns about the beam at the first location, best first, judged for the whole path
+/// as a robot programmer turns a part on its holder: each of 72 turns (5° apart) is tried
+/// at up to [`LOOK_AHEAD`] locations (a quarter as many for an arm without the closed
+/// form) spread over the path and the location after each, the part keeping that turn
+/// against the transported reference. Better asks less of the joints' speeds at the feed
+/// (in twentieths of the fastest, up to half of it counting as equal), then keeps the
+/// worst location farther from the joint limits and the elbow's stretch ([`Arm::margin`],
+/// in whole degrees, 30° or more counting as equal), then lies nearer the safe location.
+/// Turns that miss a location visited are left out.
+pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Config) -> Vec<f64> {
+    let n = samples.len().min(refs.len());
+    if n == 0 {
+        return Vec::new();
+    }
+    // A numerical inverse from a location far along the path may take its 500 steps: an
+    // arm without the closed form visits fewer.
+    let visits = if arm.closed_form {
+        LOOK_AHEAD
+    } else {
+        LOOK_AHEAD / 4
+    };
+    let m = n.min(visits);
+    let visits: Vec<usize> = if m <= 1 {
+        vec![0]
+    } else {
+        (0..m).map(|k| k * (n - 1) / (m - 1)).collect()
+    };
+    // (speed, margin, -distance from safe) and the turn, for every turn that reaches.
+    let mut ranked: Vec<((f64, f64, f64), f64)> = Vec::new();
+    for k in 0..TURNS {
+        let psi = f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
+        let mut prev = arm.safe;
+        let (mut speed, mut worst) = (0.0f64, f64::INFINITY);
+        let mut from_safe = 0.0;
+        let mut reached = true;
+        'visits: for (v, &i) in visits.iter().enumerate() {
+            let mut at = |i: usize, prev: &Q, fresh: bool| {
+                let (q, _) = solve_at(arm, &samples[i], &refs[i], psi, cfg, prev, fresh).ok()?;
+                worst = worst.min(arm.margin(&q));
+                Some(q)
+            };
+            let Some(q) = at(i, &prev, v == 0) else {
+                reached = false;
+                break 'visits;
+            };
+            if v == 0 {
+                from_safe = q
+                    .iter()
+                    .zip(&arm.safe)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum();
+            }
+            prev = q;
+            if i + 1 < n && samples[i + 1].dt > 0.0 {
+                let Some(next) = at(i + 1, &q, false) else {
+                    reached = false;
+                    break 'visits;
+                };
+                for (j, l) in arm.links.iter().enumerate() {
+                    speed = speed.max((next[j] - q[j]).abs() / (l.max_speed * samples[i + 1].dt));
+                }
+            }
+        }
+        if !reached {
+            continue;
+        }
+        let deg = |m: f64| m.min(ENOUGH).to_degrees().floor();
+        let key = (-(speed.max(EASY) * 20.0).ceil(), deg(worst), -from_safe);
+        ranked.push((key, psi));
+    }
+    ranked.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap_or(std::cmp::Ordering::Equal));
+    ranked.into_iter().map(|r| r.1).collect()
+}
+
+/// Planning keeps every location this far (10°) from the joint limits and the elbow's
+/// stretch when it can.
+pub const CLEAR: f64 = std::f64::consts::PI / 18.0;
+
+/// At most this many first turns are tried after the one nearest the safe location.
+const TRIES: usize = 4;
+
+/// Plan every sample: joint values in configuration `cfg`, starting from the safe
+/// location; each location after the first turns about the beam to move the joints least
+/// from the last. The first location's turn is the one nearest the safe location; when
+/// that plan fails or brings a location within [`CLEAR`] of a joint limit or the elbow's
+/// stretch, up to four more are tried in [`first_turns`]'s order, and the plan that keeps
+/// farthest from trouble is taken (the first clear one). Errors (the nearest turn's) name
+/// the input line and the joint.
+pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, RobotError> {
+    let refs = references(samples);
+    let worst = |l: &[Located]| {
+        l.iter()
+            .map(|x| arm.margin(&x.q))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut best = track(arm, samples, &refs, cfg, None).map(|l| (worst(&l), l));
+    if matches!(&best, Ok((m, _)) if *m >= CLEAR) {
+        return best.map(|b| b.1);
+    }
+    for psi in first_turns(arm, samples, &refs, cfg)
+        .into_iter()
+        .take(TRIES)
+    {
+        let Ok(l) = track(arm, samples, &refs, cfg, Some(psi)) else {
+            continue;
+        };
+        let m = worst(&l);
+        if best.as_ref().map_or(true, |b| m > b.0) {
+            best = Ok((m, l));
+        }
+        if m >= CLEAR {
+            break;
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// The plan from a first turn about the beam (`None`: the one nearest the safe location).
+fn track(
+    arm: &Arm,
+    samples: &[Sample],
+    refs: &[Vector3<f64>],
+    cfg: Config,
+    start: Option<f64>,
+) -> Result<Vec<Located>, RobotError> {
+    let mut out: Vec<Located> = Vec::with_capacity(samples.len());
+    let mut prev = arm.safe;
+    let mut psi_prev = start.unwrap_or(0.0);
+    for (i, (s, u)) in samples.iter().zip(refs).enumerate() {
+        let solve = |psi: f64, fresh: bool| solve_at(arm, s, u, psi, cfg, &prev, fresh);
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
         let eval = |psi: f64| solve(psi, i == 0).map(|(q, p)| (cost(&q), q, p));
         let eval_fresh = |psi: f64| solve(psi, true).map(|(q, p)| (cost(&q), q, p));
         let mut best: Option<(f64, f64, Q, Frame)> = None; // (cost, psi, q, part)
-        if i > 0 {
+        if i > 0 || start.is_some() {
             if let Ok((c, q, p)) = eval(psi_prev) {
                 best = Some((c, psi_prev, q, p));
             }
         }
-        if best.is_none() {
+        let chosen = i == 0 && best.is_some();
+        let scanned = best.is_none();
+        if scanned {
             // Scan the whole turn (the first point, or the last turn is blocked).
             let mut fails: Vec<NoReach> = Vec::new();
-            for k in 0..72 {
-                let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / 72.0;
+            for k in 0..TURNS {
+                let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
                 match eval_fresh(psi) {
                     Ok((c, q, p)) => {
                         if best.as_ref().is_none_or(|b| c < b.0) {
@@ -257,9 +414,15 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
                 return Err(unreachable(arm, s, i, &fails));
             }
         }
-        // Refine: parabolic steps on the cost, shrinking.
-        if let Some(mut b) = best {
-            let mut h = 2f64.to_radians();
+        // Refine: parabolic steps on the cost (not at a first turn chosen for the whole
+        // path: drawing it towards the safe location would undo the choice). After a scan
+        // (the first location, or a blocked turn) four steps of shrinking width from 2°;
+        // from the last turn, steps 0.5° wide until the parabola's least lies within its
+        // reach (one step, mostly: the cost is smooth and the turn moves little), four at
+        // most.
+        if let (Some(mut b), false) = (best, chosen) {
+            let wide = i == 0 || scanned;
+            let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
             for _ in 0..4 {
                 let (Ok(lo), Ok(hi)) = (eval(b.1 - h), eval(b.1 + h)) else {
                     h /= 4.0;
@@ -273,8 +436,11 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
                 } else {
                     None
                 };
+                let mut reached = false;
                 if denom > 0.0 {
-                    let step = (-h * (hi.0 - lo.0) / (2.0 * denom)).clamp(-4.0 * h, 4.0 * h);
+                    let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
+                    reached = raw.abs() < 4.0 * h;
+                    let step = raw.clamp(-4.0 * h, 4.0 * h);
                     if let Ok(p) = eval(b.1 + step) {
                         if cand.as_ref().is_none_or(|c| p.0 < c.0 .0) {
                             cand = Some((p, b.1 + step));
@@ -286,7 +452,11 @@ pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, 
                         b = (c, psi, q, p);
                     }
                 }
-                h /= 4.0;
+                if wide {
+                    h /= 4.0;
+                } else if reached {
+                    break;
+                }
             }
             best = Some(b);
         }

@@ -127,3 +127,96 @@ proptest! {
         prop_assert!((back - r).abs().max() < 1e-12);
     }
 }
+
+/// The start of the planned full-size plate's first layer (`lampost plan path --approach
+/// build`): the beam vertical, the first move 0.06 mm towards the end of a 600 mm pass.
+/// The first turn about the beam used to be the one nearest the safe location (the arm
+/// upright, its elbow stretched), which put this end of the plate 1.5° from the elbow's
+/// stretch: J3 had to turn 0.68° for the first 0.06 mm (116°/s at 600 mm/min). Chosen for
+/// the whole path, the turn keeps every location well away from the stretch and the
+/// limits, and every joint well within its speed.
+#[test]
+fn the_first_turn_about_the_beam_keeps_the_whole_path_away_from_the_elbow_stretch() {
+    let arm = arm();
+    let up = [0.0, 0.0, 1.0];
+    let path = [
+        pt(-299.301970, 1.143362, 1.0, up, false, 3),
+        pt(-299.360139, 1.141525, 1.0, up, true, 4),
+        pt(-300.0, 1.12132, 1.0, up, true, 5),
+        pt(-300.0, -1.12132, 1.0, up, true, 6),
+        pt(300.0, -1.12132, 1.0, up, true, 7),
+        pt(300.0, 1.12132, 200.0, up, false, 8),
+        pt(-300.0, 1.12132, 200.0, up, true, 9),
+    ];
+    let s = resample(&path, 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let located = plan(&arm, &s, arm.config).unwrap_or_else(|e| panic!("{e}"));
+    // The elbow 20° or more from its stretch, every joint 2° or more within its limits.
+    let stretch = -(431.8f64.atan2(20.3));
+    for l in &located {
+        let q = l.q.map(f64::to_degrees);
+        assert!((l.q[2] - stretch).abs() > 20f64.to_radians(), "{q:?}");
+        assert!(arm.margin(&l.q) > 2f64.to_radians(), "{q:?}");
+    }
+    for (w, x) in located.windows(2).zip(&s[1..]) {
+        for (j, link) in arm.links.iter().enumerate() {
+            let dq = (w[1].q[j] - w[0].q[j]).abs();
+            assert!(
+                dq <= 0.5 * link.max_speed * x.dt + 1e-9,
+                "J{} at line {}",
+                j + 1,
+                x.line
+            );
+        }
+    }
+}
+
+/// `Arm::margin`: the distance to the nearer limit, or to the elbow's stretch.
+#[test]
+fn the_margin_is_the_nearest_limit_or_elbow_stretch() {
+    let arm = arm();
+    let stretch = -(431.8f64.atan2(20.3));
+    let mut q = [0.0, 1.0, stretch + 0.3, 0.0, 0.5, 0.0];
+    assert!((arm.margin(&q) - 0.3).abs() < 1e-12);
+    q[2] = stretch - 0.2;
+    assert!((arm.margin(&q) - 0.2).abs() < 1e-12);
+    // J5 0.1 rad from its upper limit (100°).
+    q[2] = -1.0;
+    q[4] = 100f64.to_radians() - 0.1;
+    assert!((arm.margin(&q) - 0.1).abs() < 1e-12);
+}
+
+/// The scalar reference of `Arm::fit_limits`: every turn of each joint within ±3 turns
+/// of the value, the one within the limits nearest the previous value (the first of
+/// equals, in order of turns).
+fn fit_limits_reference(arm: &Arm, q: &Q, near: &Q) -> Result<Q, usize> {
+    let tau = std::f64::consts::TAU;
+    let mut out = *q;
+    for j in 0..6 {
+        let l = &arm.links[j];
+        let base = near[j] + lampost_robot::wrap(q[j] - near[j]);
+        let mut best: Option<f64> = None;
+        for k in -3..=3 {
+            let c = base + tau * f64::from(k);
+            if c >= l.lo - 1e-9 && c <= l.hi + 1e-9 {
+                let c = c.clamp(l.lo, l.hi);
+                if best.is_none_or(|b| (c - near[j]).abs() < (b - near[j]).abs()) {
+                    best = Some(c);
+                }
+            }
+        }
+        out[j] = best.ok_or(j)?;
+    }
+    Ok(out)
+}
+
+proptest! {
+    /// The nearest-turn fast path of `fit_limits` gives what the whole search gives.
+    #[test]
+    fn fitting_the_limits_agrees_with_the_whole_search(
+        q in proptest::array::uniform6(-7.0..7.0f64),
+        near in proptest::array::uniform6(-5.0..5.0f64),
+    ) {
+        let arm = arm();
+        prop_assert_eq!(arm.fit_limits(&q, &near), fit_limits_reference(&arm, &q, &near));
+    }
+}
