@@ -9,51 +9,22 @@
 //!
 //! Skipped (with a message) when `.tools/py-rtb` is missing, unless `LAMPOST_REQUIRE_PY=1`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use lampost_robot::{wrap, Arm, Config, Q};
 
-fn root() -> PathBuf {
-    let r = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    r.canonicalize().unwrap_or(r)
-}
-
-/// splitmix64: the same cases on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+use lampost_testkit::{oracle_present, root, SplitMix as Rng};
 
 #[test]
 fn puma_agrees_with_the_robotics_toolbox() {
     let root = root();
     let py = root.join(".tools/py-rtb/bin/python");
-    let required = std::env::var("LAMPOST_REQUIRE_PY").is_ok_and(|v| v == "1");
-    if !py.exists() {
-        assert!(
-            !required,
-            "LAMPOST_REQUIRE_PY=1 but {} is missing: run scripts/install-robotics.sh",
-            py.display()
-        );
-        eprintln!(
-            "SKIPPED: {} is missing (run scripts/install-robotics.sh, or set LAMPOST_REQUIRE_PY=1 to require it)",
-            py.display()
-        );
+    if !oracle_present(std::slice::from_ref(&py), "scripts/install-robotics.sh") {
         return;
     }
     let arm = Arm::builtin("puma-lens").unwrap_or_else(|| panic!("built-in"));
-    let mut rng = Rng(17);
+    let mut rng = Rng::new(17);
     let n = 300;
     let cases: Vec<Q> = (0..n)
         .map(|_| {
