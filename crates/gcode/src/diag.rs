@@ -96,6 +96,9 @@ pub enum ErrorKind {
     /// grbl post writes): ignored outside LinuxCNC, which refuses it.
     #[error("{0}0 is not a centre word of the active plane; zero, it changes nothing and is ignored (here and on later arcs)")]
     ArcNormalCentreZero(char),
+    /// An arc centre word (I, J, K) on a straight move (G0, G1): no G2/G3 uses it.
+    #[error("{0} word with no G2 or G3 to use it: the straight move ignores it")]
+    CentreWordWithoutArc(char),
     /// Axis words with no motion mode.
     #[error("axis words but no motion mode is active (after G80 or at program start)")]
     NoMotionMode,
@@ -271,6 +274,7 @@ impl ErrorKind {
             ErrorKind::ArcZeroRadius => "check I/J/K or R",
             ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
             ErrorKind::ArcNormalCentreZero(_) => "remove it: LinuxCNC (`--flavor linuxcnc`) refuses a centre word off the active plane",
+            ErrorKind::CentreWordWithoutArc(_) => "a missing G2/G3? give the arc's code, or remove the word (LinuxCNC and grbl refuse it; `--flavor linuxcnc` does too)",
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",

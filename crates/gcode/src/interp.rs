@@ -1514,10 +1514,14 @@ impl Interpreter {
                     .or(b.words().next().map(|x| x.span)),
             )),
             Motion::Rapid => {
+                self.centre_words_unused(b, w, out)?;
                 self.emit(b, MoveKind::Rapid, target, 0.0, origin, out);
                 Ok(())
             }
             Motion::Linear | Motion::Thread | Motion::Probe => {
+                if self.modal.motion == Motion::Linear {
+                    self.centre_words_unused(b, w, out)?;
+                }
                 let feed = self.feed_for(b, w)?;
                 self.emit(b, MoveKind::Linear, target, feed, origin, out);
                 Ok(())
@@ -1525,6 +1529,26 @@ impl Interpreter {
             Motion::ArcCw | Motion::ArcCcw => self.arc(b, w, target, out),
             Motion::Canned(c) => self.canned_cycle(b, w, c, out),
         }
+    }
+
+    /// An arc centre word (I, J, K) on a straight move: a missing G2/G3, most likely.
+    /// LinuxCNC refuses it (as rs274 and grbl do); elsewhere a warning (Haas lathes
+    /// chamfer with I/K on G01, and printers ignore them).
+    fn centre_words_unused(
+        &self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        let Some(word) = [b'I', b'J', b'K'].iter().find_map(|&l| w.word(l)) else {
+            return Ok(());
+        };
+        let kind = ErrorKind::CentreWordWithoutArc(word.letter_char());
+        if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+            return Err(diag(b, Severity::Error, kind, Some(word.span)));
+        }
+        self.warn(b, out, kind, Some(word.span));
+        Ok(())
     }
 
     fn arc(
@@ -1989,6 +2013,35 @@ mod tests {
             .collect();
         assert_eq!(diags[0].severity, Severity::Error);
         assert_eq!((diags[0].line, diags[0].column), (2, 17));
+    }
+
+    /// Found by the real-program corpus (h12cam): `G1 X1 I5` passed `check` silently;
+    /// rs274 refuses it ("I word with no G2, G3, G87 to use it"), and so does grbl.
+    #[test]
+    fn a_centre_word_on_a_straight_move_is_named() {
+        let text = "G17 G21 G90 G0 X0 Y0\nG1 X10 Y0 I5 F100\nG0 X0 J2\n";
+        let (moves, diags) = run(text);
+        assert_eq!(moves.len(), 3);
+        assert_eq!(diags.len(), 2, "{diags:?}");
+        assert!(diags.iter().all(|d| d.severity == Severity::Warning));
+        assert_eq!((diags[0].line, diags[0].column), (2, 11));
+        assert!(diags[0].to_string().contains("I word with no G2 or G3"));
+        assert_eq!((diags[1].line, diags[1].column), (3, 7));
+        let opts = Options {
+            flavor: crate::flavor::Flavor::LinuxCnc,
+            ..Options::default()
+        };
+        let first = Stream::from_bytes(text.as_bytes(), opts, false)
+            .find_map(|e| match e.expect("in memory") {
+                Event::Diagnostic(d) => Some(d),
+                Event::Move(_) => None,
+            })
+            .expect("refused");
+        assert_eq!(first.severity, Severity::Error);
+        assert_eq!((first.line, first.column), (2, 11));
+        // On an arc they are its centre; in a canned cycle or a thread they are its own.
+        let (_, diags) = run("G17 G0 X0 Y0\nG2 X10 Y0 I5 J0 F100\n");
+        assert!(diags.is_empty(), "{diags:?}");
     }
 
     #[test]
