@@ -180,28 +180,12 @@ pub fn to_text(points: &[PathPoint], feed: f64, comment: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::slice::{slice, Planes, SliceOptions};
-
-    fn sliced(mesh: &Mesh, layer: f64) -> Slicing {
-        slice(
-            mesh,
-            &SliceOptions {
-                planes: Planes::Parallel {
-                    dir: P3::z(),
-                    layer,
-                    first: None,
-                },
-                stitch: None,
-                threads: 1,
-            },
-        )
-        .expect("slices")
-    }
+    use crate::slice::{slice, SliceOptions};
 
     #[test]
     fn walls_parallel_to_the_build_direction_get_it_as_the_tool_axis() {
         let m = lampost_mesh::box_mesh(P3::new(0.0, 0.0, 0.0), P3::new(20.0, 10.0, 6.0));
-        let s = sliced(&m, 1.0);
+        let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
         let opts = PerimeterOptions {
             spacing: 2.0,
             max_turn_deg: 2.0,
@@ -224,7 +208,7 @@ mod tests {
     fn on_a_sphere_the_axis_lies_in_the_surface_and_turns_gradually() {
         let r = 20.0;
         let m = lampost_mesh::uv_sphere(P3::zeros(), r, 48, 96);
-        let s = sliced(&m, 2.0);
+        let s = slice(&m, &SliceOptions::parallel(P3::z(), 2.0)).expect("slices");
         let opts = PerimeterOptions {
             spacing: 1.0,
             max_turn_deg: 2.0,
