@@ -23,7 +23,7 @@ mod weld;
 
 pub use error::{MeshError, Pos};
 pub use read::{read, read_obj, read_off, read_stl, Format};
-pub use threemf::{read_3mf, ThreeMf, MAX_PART};
+pub use threemf::{read_3mf, ThreeMf, MAX_PART, MAX_WORK};
 pub use topo::{manifold_report, BadEdge, EdgeProblem, ManifoldReport};
 pub use weld::{weld_exact, weld_within};
 

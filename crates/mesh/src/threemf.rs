@@ -20,6 +20,12 @@ pub const MAX_PART: usize = 1 << 30;
 /// Deepest nesting of components.
 const MAX_DEPTH: usize = 32;
 
+/// Most objects placed, vertices transformed and triangles read over the whole build
+/// (components can place an object many times over: a few bytes of XML nesting two
+/// components per level would otherwise place one 2^32 times). Ten million: a mesh of
+/// three million triangles, at most about 4 million triangles (300 MB) placed.
+pub const MAX_WORK: usize = 10_000_000;
+
 /// A refusal at a byte of the package.
 fn at_byte(b: usize, text: impl Into<String>, why: impl Into<String>) -> MeshError {
     MeshError::Package {
@@ -488,6 +494,9 @@ struct ModelReader<'a> {
     doc: &'a roxmltree::Document<'a>,
     objects: std::collections::HashMap<&'a str, roxmltree::Node<'a, 'a>>,
     corners: Vec<P3>,
+    /// Objects placed, vertices and triangles read so far, and the bound.
+    work: usize,
+    max_work: usize,
 }
 
 impl<'a> ModelReader<'a> {
@@ -536,6 +545,23 @@ impl<'a> ModelReader<'a> {
         })
     }
 
+    /// One more unit of work placing object `id` (from `from`), refused past
+    /// [`MAX_WORK`].
+    fn spend(&mut self, from: roxmltree::Node, id: &str) -> Result<(), MeshError> {
+        self.work += 1;
+        if self.work > self.max_work {
+            return Err(self.err(
+                from,
+                id,
+                format!(
+                    "the build places more than {} objects, vertices and triangles",
+                    self.max_work
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Object `id`'s triangles placed by `at`, added to the corners.
     fn object(
         &mut self,
@@ -554,6 +580,7 @@ impl<'a> ModelReader<'a> {
                 format!("components nest deeper than {MAX_DEPTH} (a cycle?)"),
             ));
         }
+        self.spend(from, id)?;
         let child = |n: roxmltree::Node<'a, 'a>, name: &str| {
             n.children()
                 .find(|c| c.is_element() && c.tag_name().name() == name)
@@ -562,6 +589,7 @@ impl<'a> ModelReader<'a> {
             let mut verts = Vec::new();
             if let Some(vs) = child(mesh, "vertices") {
                 for v in vs.children().filter(|c| c.tag_name().name() == "vertex") {
+                    self.spend(from, id)?;
                     let p = P3::new(
                         self.number(v, "x")?,
                         self.number(v, "y")?,
@@ -573,6 +601,7 @@ impl<'a> ModelReader<'a> {
             let flip = at.det() < 0.0;
             if let Some(ts) = child(mesh, "triangles") {
                 for t in ts.children().filter(|c| c.tag_name().name() == "triangle") {
+                    self.spend(from, id)?;
                     let mut c = [P3::zeros(); 3];
                     for (k, name) in ["v1", "v2", "v3"].iter().enumerate() {
                         let text = t.attribute(*name).unwrap_or("");
@@ -637,6 +666,11 @@ fn model_name(b: &[u8], list: &[Entry]) -> String {
 
 /// Read a 3MF package (see the module documentation).
 pub fn read_3mf(bytes: &[u8]) -> Result<ThreeMf, MeshError> {
+    read_within(bytes, MAX_WORK)
+}
+
+/// [`read_3mf`] with `max_work` in place of [`MAX_WORK`].
+fn read_within(bytes: &[u8], max_work: usize) -> Result<ThreeMf, MeshError> {
     let list = entries(bytes)?;
     let name = model_name(bytes, &list);
     let entry = list.iter().find(|e| e.name == name).ok_or_else(|| {
@@ -666,6 +700,8 @@ pub fn read_3mf(bytes: &[u8]) -> Result<ThreeMf, MeshError> {
         doc: &doc,
         objects: std::collections::HashMap::new(),
         corners: Vec::new(),
+        work: 0,
+        max_work,
     };
     if root.tag_name().name() != "model" {
         return Err(r.err(
@@ -949,6 +985,23 @@ mod tests {
             .expect_err("cycle")
             .to_string()
             .contains("nest deeper"));
+        // Two components per level, 30 levels: 2^30 placements of the tetrahedron,
+        // refused by the work bound rather than attempted.
+        let mut objs = String::new();
+        for k in 2..32 {
+            objs.push_str(&format!(
+                "<object id=\"{k}\"><components><component objectid=\"{}\" /><component objectid=\"{}\" /></components></object>",
+                k - 1,
+                k - 1
+            ));
+        }
+        let text = tetra("millimeter", "1")
+            .replace("</resources>", &format!("{objs}</resources>"))
+            .replace("<item objectid=\"1\" />", "<item objectid=\"31\" />");
+        let pkg = zip(&[("3D/3dmodel.model", text.as_bytes())]);
+        // (The bound made small here; `MAX_WORK` applies the same way.)
+        let e = read_within(&pkg, 100_000).expect_err("bomb");
+        assert!(e.to_string().contains("the build places more than"), "{e}");
     }
 
     #[test]
