@@ -19,7 +19,7 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use lampost_mesh::{read_off, uv_sphere, write_off, Mesh, P3};
-use lampost_plan::{slice, Planes, SliceOptions, Slicing};
+use lampost_plan::{slice, SliceOptions, Slicing};
 
 /// This process's CPU time (user + system, /proc/self/stat, in clock ticks of 1/100 s).
 pub(crate) fn cpu_seconds() -> f64 {
@@ -59,13 +59,8 @@ fn parallel(mesh: &Mesh, layer: f64, threads: usize) -> Result<Slicing, String> 
     slice(
         mesh,
         &SliceOptions {
-            planes: Planes::Parallel {
-                dir: P3::new(0.0, 0.0, 1.0),
-                layer,
-                first: None,
-            },
-            stitch: None,
             threads,
+            ..SliceOptions::parallel(P3::z(), layer)
         },
     )
     .map_err(|e| e.to_string())

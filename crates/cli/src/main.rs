@@ -624,7 +624,7 @@ enum PlanCmd {
     /// Slice a mesh into closed oriented loops: planes normal to a build direction, or a fan about an axis.
     Slice(mesh_cmds::SliceArgs),
     /// Paper 001's plan per layer: perimeters with their tool axes (the surface normal × the traversal, blended across face edges), then rasters clipped to the inset loops; the offset-angle check (tilting where needed); the per-point path `lampost post` reads, a JSON report, an SVG preview.
-    Path(plan_cmds::PathArgs),
+    Path(Box<plan_cmds::PathArgs>),
     /// Paper 001's demonstration part: a 600 × 200 mm rectangle twisted 90° about a long edge, as a closed thin-walled STL (scaled with --scale).
     Demo(plan_cmds::DemoArgs),
 }

@@ -52,13 +52,26 @@ fn located(path: &str, bytes: &[u8], e: &MeshError) -> CliError {
             "error: {e}\n --> {path}: byte {b}{}\n  = help: {hint}\n",
             e.text().map(|t| format!(" ({t})")).unwrap_or_default()
         )),
-        None => CliError::failed(format!("error: {path}: {e}\n  = help: {hint}\n")),
+        // A 3MF's model part says its place in the message (part, line, column).
+        None => CliError::failed(format!(
+            "error: {path}: {e}{}\n  = help: {hint}\n",
+            e.text()
+                .filter(|t| !t.is_empty())
+                .map(|t| format!("\n  = text: {t}"))
+                .unwrap_or_default()
+        )),
     }
 }
 
 /// Read a mesh file (`-`: standard input; format from the extension, else from the
 /// content), welded exactly.
 pub fn read_mesh_file(path: &str) -> Result<Mesh, CliError> {
+    read_mesh_format(path).map(|(m, _)| m)
+}
+
+/// [`read_mesh_file`] and the format read (a 3MF is read in millimetres: it says its
+/// units).
+fn read_mesh_format(path: &str) -> Result<(Mesh, Format), CliError> {
     let bytes = if path == "-" {
         let mut b = Vec::new();
         std::io::Read::read_to_end(&mut std::io::stdin(), &mut b).map(|_| b)
@@ -67,16 +80,27 @@ pub fn read_mesh_file(path: &str) -> Result<Mesh, CliError> {
     }
     .map_err(|e| {
         CliError::usage(format!(
-            "error: cannot read {path}: {e}\n  = help: give a mesh file (STL, OBJ or OFF)\n"
+            "error: cannot read {path}: {e}\n  = help: give a mesh file (STL, OBJ, OFF or 3MF)\n"
         ))
     })?;
     let format = Format::from_path(path).unwrap_or_else(|| Format::sniff(&bytes));
-    lampost_mesh::read(&bytes, format).map_err(|e| located(path, &bytes, &e))
+    lampost_mesh::read(&bytes, format)
+        .map(|m| (m, format))
+        .map_err(|e| located(path, &bytes, &e))
 }
 
 /// Read a mesh in millimetres: `--units` names the file's units (default mm).
 fn read_mm(path: &str, units: Option<MeshUnits>) -> Result<(Mesh, Units), CliError> {
-    let mesh = read_mesh_file(path)?;
+    let (mesh, format) = read_mesh_format(path)?;
+    if format == Format::ThreeMf {
+        // Already in millimetres, from the file's own unit.
+        if units.is_some() {
+            return Err(CliError::usage(format!(
+                "error: {path}: a 3MF file says its units (its model's `unit`): leave out --units\n"
+            )));
+        }
+        return Ok((mesh, Units::Mm));
+    }
     let u = units.map_or(Units::Mm, MeshUnits::units);
     Ok((
         if u == Units::Mm {

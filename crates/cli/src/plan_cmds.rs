@@ -62,7 +62,88 @@ pub struct PathArgs {
     /// Draw the plan as SVG to this file.
     #[arg(long)]
     pub preview: Option<String>,
+    /// Check the machine's reach: every point solved by its inverse kinematics as `lampost
+    /// post` places the path (built-in name or machine file); unreachable: exit 1, nothing
+    /// written.
+    #[arg(long)]
+    pub machine: Option<String>,
+    /// Override a machine parameter: NAME=x,y,z or NAME=value (repeatable; with --machine).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Head (with --machine; default: the post's for deposition).
+    #[arg(long)]
+    pub head: Option<String>,
+    /// Program origin in the part frame, x,y,z mm (with --machine; as `lampost post --origin`).
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+    /// Rotary position the first point is solved nearest, e.g. A=0,B=0 (with --machine).
+    #[arg(long, allow_hyphen_values = true)]
+    pub near: Option<String>,
 }
+
+/// The machine and placement of `--machine` (none without it).
+fn machine_reach(
+    a: &PathArgs,
+    pts: &[lampost_plan::PathPoint],
+) -> Result<Option<lampost_plan::Reach>, CliError> {
+    let Some(spec) = a.machine.as_deref() else {
+        if a.head.is_some() || a.origin.is_some() || a.near.is_some() || !a.set.is_empty() {
+            return Err(CliError::usage(
+                "error: --head, --origin, --near and --set place the path on a machine: give --machine too
+".to_string(),
+            ));
+        }
+        return Ok(None);
+    };
+    let m = crate::kin_cmds::load_machine(spec, &a.set)?;
+    let head = match a.head.as_deref() {
+        Some(h) => m.head(h).map_err(crate::kin_cmds::kin_error)?,
+        None => lampost_post::default_head(&m, true),
+    };
+    let origin = a
+        .origin
+        .as_deref()
+        .map(|o| crate::kin_cmds::vector("--origin", o))
+        .transpose()?
+        .unwrap_or_else(lampost_kinematics::Vector3::zeros);
+    let near = crate::kin_cmds::near_rotary(&m, a.near.as_deref())?;
+    Ok(Some(lampost_plan::reach(
+        &m,
+        pts,
+        &lampost_plan::ReachOptions { head, origin, near },
+    )))
+}
+
+/// The reach as JSON.
+fn reach_json(r: &lampost_plan::Reach) -> Obj {
+    let axes: Vec<Obj> = r
+        .axes
+        .iter()
+        .map(|x| {
+            obj! {
+                "axis": x.name.as_str(),
+                "used": x.used.map(|(lo, hi)| [lo, hi]),
+                "limits": x.limits.map(|(lo, hi)| [lo, hi]),
+            }
+        })
+        .collect();
+    let first = r.first.as_ref().map(|u| {
+        obj! {
+            "point": u.index, "line": u.index + PATH_HEADER_LINES + 1, "layer": u.layer,
+            "at": [u.p.x, u.p.y, u.p.z], "axis": [u.axis.x, u.axis.y, u.axis.z],
+            "why": u.why.as_str(),
+        }
+    });
+    obj! {
+        "machine": r.machine.as_str(), "reachable": r.reachable(), "points": r.points,
+        "unreachable": r.unreachable,
+        "unreachable_layers": r.unreachable_layers.iter().take(MAX_LISTED).copied().collect::<Vec<usize>>(),
+        "first_unreachable": first, "branch_flips": r.branch_flips, "axes": axes,
+    }
+}
+
+/// Lines before the first point of a path file: the comment and the header.
+const PATH_HEADER_LINES: usize = 2;
 
 /// Violations listed one by one in the JSON and on stderr before they are only counted.
 const MAX_LISTED: usize = 1000;
@@ -156,6 +237,28 @@ pub fn path(a: &PathArgs) -> Result<(), CliError> {
             plan.violations.len() - MAX_LISTED
         );
     }
+    let reach = machine_reach(a, &pts)?;
+    if let Some(r) = reach.as_ref().filter(|r| !r.reachable()) {
+        if a.slice.json {
+            let text = json::to_string(&report(a, &plan, &s, &pts, reach.as_ref()))?;
+            write_out(None, format!("{text}\n").as_bytes())?;
+        }
+        let u = r.first.as_ref();
+        return Err(CliError::failed(format!(
+            "error: {}: {} of {} path points are beyond the reach of {} (first: layer {}, point {} at ({:.4} {:.4} {:.4}), path line {}: {}); nothing written\n  = help: move the part with --origin, or change the build direction or --max-tilt; the JSON report (--json) gives each axis's extent against its travel\n",
+            a.slice.file,
+            r.unreachable,
+            r.points,
+            r.machine,
+            u.map_or(0, |u| u.layer),
+            u.map_or(0, |u| u.index),
+            u.map_or(0.0, |u| u.p.x),
+            u.map_or(0.0, |u| u.p.y),
+            u.map_or(0.0, |u| u.p.z),
+            u.map_or(0, |u| u.index + PATH_HEADER_LINES + 1),
+            u.map_or("", |u| u.why.as_str()),
+        )));
+    }
     // The preview, the path, then the report: nothing is written when an earlier one fails.
     if let Some(svg) = &a.preview {
         write_out(
@@ -186,7 +289,7 @@ pub fn path(a: &PathArgs) -> Result<(), CliError> {
         write_out(a.slice.output.as_deref(), text.as_bytes())?;
     }
     if a.slice.json {
-        let text = json::to_string(&report(a, &plan, &s, &pts))?;
+        let text = json::to_string(&report(a, &plan, &s, &pts, reach.as_ref()))?;
         write_out(None, format!("{text}\n").as_bytes())?;
     } else if a.check_only {
         let mut t = format!(
@@ -204,6 +307,21 @@ pub fn path(a: &PathArgs) -> Result<(), CliError> {
                     l.index,
                     l.worst_offset_deg()
                 ));
+            }
+        }
+        if let Some(r) = &reach {
+            t.push_str(&format!(
+                "reach on {}: every point ({}); {} branch flips\n",
+                r.machine, r.points, r.branch_flips
+            ));
+            for x in &r.axes {
+                if let (Some((lo, hi)), lim) = (x.used, x.limits) {
+                    t.push_str(&format!(
+                        "  {} {lo:.4} .. {hi:.4} of {}\n",
+                        x.name,
+                        lim.map_or("unlimited".to_string(), |(a, b)| format!("{a} .. {b}"))
+                    ));
+                }
             }
         }
         write_out(None, t.as_bytes())?;
@@ -235,6 +353,7 @@ fn report(
     plan: &Plan,
     s: &lampost_plan::Slicing,
     pts: &[lampost_plan::PathPoint],
+    reach: Option<&lampost_plan::Reach>,
 ) -> Obj {
     let (mut on, mut off) = (0.0, 0.0);
     for w in pts.windows(2) {
@@ -281,6 +400,7 @@ fn report(
         "violation_count": plan.violations.len(),
         "violations": violations,
         "hollow": a.hollow,
+        "reach": reach.map(reach_json),
         "slices": layers,
     }
 }

@@ -254,7 +254,7 @@ fn three_mf_is_refused_with_the_reason_and_first_places_the_first_plane() {
     let o = lampost(&["mesh", "info", p.to_str().expect("utf-8")]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        stderr(&o).contains("3MF files are not read yet"),
+        stderr(&o).contains("no ZIP end-of-central-directory record"),
         "{}",
         stderr(&o)
     );

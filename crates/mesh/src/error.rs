@@ -70,6 +70,16 @@ pub enum MeshError {
         /// What is wrong.
         why: String,
     },
+    /// A 3MF package (ZIP) or its model part (XML) that cannot be read.
+    #[error("{place}: {why}")]
+    Package {
+        /// Where: `byte N` of the package, or the part with its line and column.
+        place: String,
+        /// The offending text (empty where there is none).
+        text: String,
+        /// What is wrong.
+        why: String,
+    },
     /// The file holds no triangles.
     #[error("the mesh has no triangles")]
     Empty,
@@ -86,7 +96,7 @@ impl MeshError {
             MeshError::Syntax { at, .. }
             | MeshError::NotFinite { at, .. }
             | MeshError::Index { at, .. } => Some(*at),
-            MeshError::Empty | MeshError::Unsupported(_) => None,
+            MeshError::Empty | MeshError::Unsupported(_) | MeshError::Package { .. } => None,
         }
     }
 
@@ -95,7 +105,8 @@ impl MeshError {
         match self {
             MeshError::Syntax { text, .. }
             | MeshError::NotFinite { text, .. }
-            | MeshError::Index { text, .. } => Some(text),
+            | MeshError::Index { text, .. }
+            | MeshError::Package { text, .. } => Some(text),
             _ => None,
         }
     }
@@ -113,8 +124,11 @@ impl MeshError {
             MeshError::Index { .. } => {
                 "faces name vertices 1..n in OBJ (negative: counted back from the last), 0..n-1 in OFF"
             }
+            MeshError::Package { .. } => {
+                "export the 3MF again (a ZIP package holding 3D/3dmodel.model), or give STL, OBJ or OFF"
+            }
             MeshError::Empty => "the file holds no faces: export the solid, not a sketch",
-            MeshError::Unsupported(_) => "give an STL (ASCII or binary), OBJ or OFF file",
+            MeshError::Unsupported(_) => "give an STL (ASCII or binary), OBJ, OFF or 3MF file",
         }
     }
 }

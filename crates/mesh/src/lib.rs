@@ -1,7 +1,7 @@
 //! # lampost-mesh
 //!
 //! Triangle meshes shared by `align` (registration), `post` (the part for collision
-//! checks) and `plan` (slicing): readers for STL (ASCII and binary), OBJ and OFF with
+//! checks) and `plan` (slicing): readers for STL (ASCII and binary), OBJ, OFF and 3MF with
 //! located errors ([`MeshError`]), welding ([`weld_exact`], [`weld_within`]), the closed-manifold report naming
 //! the bad edges ([`manifold_report`]), area, volume and normals ([`props`]), and ray casts, closest
 //! points and signed distance on a bounding-volume hierarchy ([`bvh`]).
@@ -9,17 +9,21 @@
 //! ## Why these dependencies
 //! - `nalgebra`: the `f64` vectors every lampost crate uses;
 //! - `parry3d-f64`: the BVH and its triangle queries, in `f64`;
-//! - `thiserror`: the typed [`MeshError`] and [`bvh::BvhError`].
+//! - `thiserror`: the typed [`MeshError`] and [`bvh::BvhError`];
+//! - `roxmltree`: 3MF's model XML, with line and column for every refusal (the ZIP
+//!   package and its DEFLATE data are read here, [`read_3mf`]).
 
 pub mod bvh;
 mod error;
 pub mod props;
 mod read;
+mod threemf;
 mod topo;
 mod weld;
 
 pub use error::{MeshError, Pos};
 pub use read::{read, read_obj, read_off, read_stl, Format};
+pub use threemf::{read_3mf, ThreeMf, MAX_PART, MAX_WORK};
 pub use topo::{manifold_report, BadEdge, EdgeProblem, ManifoldReport};
 pub use weld::{weld_exact, weld_within};
 

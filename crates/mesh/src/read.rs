@@ -1,5 +1,5 @@
 //! Mesh readers: STL (ASCII and binary), OBJ (`v`/`f`, polygons fan-triangulated, negative
-//! indices) and OFF. Each returns an exactly welded [`Mesh`] ([`crate::weld::weld_exact`]);
+//! indices), OFF, and 3MF (`crate::threemf`). Each returns an exactly welded [`Mesh`] ([`crate::weld::weld_exact`]);
 //! every refusal is a [`MeshError`] with its place in the file.
 
 use crate::error::{MeshError, Pos};
@@ -14,7 +14,7 @@ pub enum Format {
     Obj,
     /// Object File Format (Geomview).
     Off,
-    /// 3D Manufacturing Format (not read by this crate: see docs/mesh.md).
+    /// 3D Manufacturing Format (read in millimetres: the file says its units).
     ThreeMf,
 }
 
@@ -84,10 +84,15 @@ pub fn read(bytes: &[u8], format: Format) -> Result<Mesh, MeshError> {
         Format::Stl => read_stl(bytes),
         Format::Obj => read_obj(bytes),
         Format::Off => read_off(bytes),
-        Format::ThreeMf => Err(MeshError::Unsupported(
-            "3MF files are not read yet (the `threemf` crate is not a dependency): export STL, OBJ or OFF"
-                .into(),
-        )),
+        // In millimetres: a 3MF says its units.
+        Format::ThreeMf => {
+            let t = crate::threemf::read_3mf(bytes)?;
+            Ok(if t.mm_per_unit == 1.0 {
+                t.mesh
+            } else {
+                t.mesh.scaled(t.mm_per_unit)
+            })
+        }
     }
 }
 

@@ -157,6 +157,41 @@ impl Plan {
     }
 }
 
+/// A segment of the previous layer's loops as the grid keeps it: its start `a`, its
+/// direction `d` (end − start) and `l2 = d·d`, so that a query computes only the
+/// projection.
+#[derive(Debug, Clone, Copy)]
+struct GridSeg {
+    a: [f64; 2],
+    d: [f64; 2],
+    l2: f64,
+}
+
+impl GridSeg {
+    fn new(a: [f64; 2], b: [f64; 2]) -> GridSeg {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        GridSeg {
+            a,
+            d,
+            l2: d[0] * d[0] + d[1] * d[1],
+        }
+    }
+
+    /// The point of the segment nearest `q` and its squared distance.
+    #[inline]
+    fn closest(&self, q: [f64; 2]) -> ([f64; 2], f64) {
+        let (a, d) = (self.a, self.d);
+        let t = if self.l2 > 0.0 {
+            (((q[0] - a[0]) * d[0] + (q[1] - a[1]) * d[1]) / self.l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let p = [a[0] + t * d[0], a[1] + t * d[1]];
+        let (x, y) = (p[0] - q[0], p[1] - q[1]);
+        (p, x * x + y * y)
+    }
+}
+
 /// The previous layer's loops as segments in its plane, bucketed in a grid for nearest-
 /// point queries.
 struct SegGrid {
@@ -164,29 +199,34 @@ struct SegGrid {
     e1: P3,
     e2: P3,
     normal: P3,
-    segs: Vec<([f64; 2], [f64; 2])>,
     lo: [f64; 2],
     cell: f64,
     nx: usize,
     ny: usize,
+    /// Cell `c`'s segments are `items[start[c]..start[c + 1]]`.
     start: Vec<u32>,
-    items: Vec<u32>,
+    /// Each cell's segments (copied into every cell the segment's bounding box meets),
+    /// cell after cell, in the loops' order within a cell.
+    items: Vec<GridSeg>,
 }
 
 impl SegGrid {
     fn new(s: &Slice) -> Option<SegGrid> {
         let (e1, e2) = plane_axes(s.normal);
         let o = s.origin;
-        let mut segs = Vec::new();
+        let mut segs: Vec<GridSeg> =
+            Vec::with_capacity(s.loops.iter().map(|l| l.points.len()).sum());
+        let mut uv: Vec<[f64; 2]> = Vec::new();
         for l in &s.loops {
             let k = l.points.len();
-            let uv: Vec<[f64; 2]> = l
-                .points
-                .iter()
-                .map(|p| [(p - o).dot(&e1), (p - o).dot(&e2)])
-                .collect();
+            uv.clear();
+            uv.extend(
+                l.points
+                    .iter()
+                    .map(|p| [(p - o).dot(&e1), (p - o).dot(&e2)]),
+            );
             for i in 0..k {
-                segs.push((uv[i], uv[(i + 1) % k]));
+                segs.push(GridSeg::new(uv[i], uv[(i + 1) % k]));
             }
         }
         if segs.is_empty() {
@@ -194,21 +234,19 @@ impl SegGrid {
         }
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
-        for (a, b) in &segs {
-            for c in [a, b] {
+        let mut total = 0.0;
+        for g in &segs {
+            for c in [g.a, [g.a[0] + g.d[0], g.a[1] + g.d[1]]] {
                 for d in 0..2 {
                     lo[d] = lo[d].min(c[d]);
                     hi[d] = hi[d].max(c[d]);
                 }
             }
+            total += g.l2.sqrt();
         }
         let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
         // Cells about twice the mean segment's length, at most 16 per segment.
-        let mean = segs
-            .iter()
-            .map(|(a, b)| (b[0] - a[0]).hypot(b[1] - a[1]))
-            .sum::<f64>()
-            / segs.len() as f64;
+        let mean = total / segs.len() as f64;
         let mut cell = (2.0 * mean).max(w.max(h) / 4096.0).max(1e-9);
         while ((w / cell).floor() + 1.0) * ((h / cell).floor() + 1.0)
             > 16.0 * segs.len() as f64 + 1024.0
@@ -221,17 +259,21 @@ impl SegGrid {
             // `as` truncates (a floor for the non-negative) and saturates (NaN: 0).
             (((x - lo[d]) / cell).max(0.0) as usize).min(m - 1)
         };
+        // Each segment's block of cells, found once.
+        let ranges: Vec<[usize; 4]> = segs
+            .iter()
+            .map(|g| {
+                let b = [g.a[0] + g.d[0], g.a[1] + g.d[1]];
+                [
+                    idx(g.a[0].min(b[0]), 0, nx),
+                    idx(g.a[0].max(b[0]), 0, nx),
+                    idx(g.a[1].min(b[1]), 1, ny),
+                    idx(g.a[1].max(b[1]), 1, ny),
+                ]
+            })
+            .collect();
         let mut count = vec![0u32; nx * ny + 1];
-        let range = |a: &[f64; 2], b: &[f64; 2]| {
-            (
-                idx(a[0].min(b[0]), 0, nx),
-                idx(a[0].max(b[0]), 0, nx),
-                idx(a[1].min(b[1]), 1, ny),
-                idx(a[1].max(b[1]), 1, ny),
-            )
-        };
-        for (a, b) in &segs {
-            let (x0, x1, y0, y1) = range(a, b);
+        for &[x0, x1, y0, y1] in &ranges {
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     count[y * nx + x + 1] += 1;
@@ -242,13 +284,12 @@ impl SegGrid {
             count[i] += count[i - 1];
         }
         let mut fill = count.clone();
-        let mut items = vec![0u32; count[nx * ny] as usize];
-        for (si, (a, b)) in segs.iter().enumerate() {
-            let (x0, x1, y0, y1) = range(a, b);
+        let mut items = vec![segs[0]; count[nx * ny] as usize];
+        for (g, &[x0, x1, y0, y1]) in segs.iter().zip(&ranges) {
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let c = y * nx + x;
-                    items[fill[c] as usize] = si as u32;
+                    items[fill[c] as usize] = *g;
                     fill[c] += 1;
                 }
             }
@@ -258,7 +299,6 @@ impl SegGrid {
             e1,
             e2,
             normal: s.normal,
-            segs,
             lo,
             cell,
             nx,
@@ -266,6 +306,13 @@ impl SegGrid {
             start: count,
             items,
         })
+    }
+
+    /// The segments of cell `(i, j)`.
+    #[inline]
+    fn cell_items(&self, i: usize, j: usize) -> &[GridSeg] {
+        let c = j * self.nx + i;
+        &self.items[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
     /// The nearest point of the segments to `q` (in the plane's coordinates) and its
@@ -276,23 +323,31 @@ impl SegGrid {
         let cj = (((q[1] - self.lo[1]) / self.cell).max(0.0) as usize).min(self.ny - 1);
         // Squared distances while searching.
         let mut best = (q, f64::INFINITY);
+        let search = |i: usize, j: usize, best: &mut ([f64; 2], f64)| {
+            for g in self.cell_items(i, j) {
+                let (p, d) = g.closest(q);
+                if d < best.1 {
+                    *best = (p, d);
+                }
+            }
+        };
         let reach = self.nx.max(self.ny);
         for r in 0..=reach {
             let (i0, i1) = (ci.saturating_sub(r), (ci + r).min(self.nx - 1));
             let (j0, j1) = (cj.saturating_sub(r), (cj + r).min(self.ny - 1));
+            // The ring of cells at Chebyshev distance r (those inside the grid), row by
+            // row: whole rows at its top and bottom, the two side cells between.
             for j in j0..=j1 {
-                for i in i0..=i1 {
-                    if i.abs_diff(ci).max(j.abs_diff(cj)) != r {
-                        continue;
+                if j.abs_diff(cj) == r {
+                    for i in i0..=i1 {
+                        search(i, j, &mut best);
                     }
-                    let c = j * self.nx + i;
-                    for &s in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
-                        let (a, b) = self.segs[s as usize];
-                        let p = closest(a, b, q);
-                        let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-                        if d < best.1 {
-                            best = (p, d);
-                        }
+                } else {
+                    if ci >= r {
+                        search(ci - r, j, &mut best);
+                    }
+                    if r > 0 && ci + r < self.nx {
+                        search(ci + r, j, &mut best);
                     }
                 }
             }
@@ -328,31 +383,20 @@ impl SegGrid {
     }
 
     /// The offset angle (degrees) of a point `p` with axis `a` over this layer, and the
-    /// nearest bead point `b`.
-    fn offset(&self, p: P3, a: P3) -> (f64, P3) {
+    /// nearest bead point `b` in the plane's coordinates ([`SegGrid::point_at`] makes it
+    /// a point, needed only to tilt).
+    fn offset(&self, p: P3, a: P3) -> (f64, [f64; 2]) {
         let down = a.dot(&self.normal);
         let t = (p - self.origin).dot(&self.normal);
         if down.is_nan() || t.is_nan() || down <= 1e-12 || t <= 0.0 {
             let (bq, _) = self.nearest(self.to_plane(p));
-            return (90.0, self.point_at(bq));
+            return (90.0, bq);
         }
         let t = t / down;
         let q = p - a * t;
         let (b, s) = self.nearest(self.to_plane(q));
-        (s.atan2(t).to_degrees(), self.point_at(b))
+        (s.atan2(t).to_degrees(), b)
     }
-}
-
-/// The point of segment `a b` nearest `q`.
-fn closest(a: [f64; 2], b: [f64; 2], q: [f64; 2]) -> [f64; 2] {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let l2 = d[0] * d[0] + d[1] * d[1];
-    let t = if l2 > 0.0 {
-        (((q[0] - a[0]) * d[0] + (q[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    [a[0] + t * d[0], a[1] + t * d[1]]
 }
 
 fn unit(v: P3) -> Option<P3> {
@@ -525,7 +569,7 @@ fn plan_layer(
                     let (mut ang, b) = g.offset(q.p, q.axis);
                     if ang > opts.max_offset_deg && opts.approach == Approach::Tangent {
                         if let Some(target) =
-                            unit(q.p - b).filter(|t| t.angle(&s.normal) <= max_tilt)
+                            unit(q.p - g.point_at(b)).filter(|t| t.angle(&s.normal) <= max_tilt)
                         {
                             // The smallest turn towards the target that comes under the
                             // limit (the target itself gives 0).
@@ -580,5 +624,69 @@ fn plan_layer(
             violations,
             tilted,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::slice::Loop;
+    use proptest::prelude::*;
+
+    /// A slice holding `loops` (points in the plane z = 0).
+    fn slice_of(loops: Vec<Vec<P3>>) -> Slice {
+        Slice {
+            index: 0,
+            normal: P3::z(),
+            origin: P3::zeros(),
+            height: 0.0,
+            loops: loops
+                .into_iter()
+                .map(|points| Loop {
+                    faces: vec![0; points.len()],
+                    points,
+                    area: 0.0,
+                    length: 0.0,
+                    stitched: 0,
+                })
+                .collect(),
+            open: Vec::new(),
+            gaps: Vec::new(),
+            segments: 0,
+        }
+    }
+
+    proptest! {
+        /// The grid's nearest point is the nearest of all segments (the reference: every
+        /// segment tried), to the last bit of the distance.
+        #[test]
+        fn the_grids_nearest_point_is_the_nearest_of_every_segment(
+            loops in prop::collection::vec(
+                prop::collection::vec((-50.0f64..50.0, -20.0f64..20.0), 3..40),
+                1..4,
+            ),
+            queries in prop::collection::vec((-80.0f64..80.0, -60.0f64..60.0), 1..30),
+        ) {
+            let loops: Vec<Vec<P3>> = loops
+                .iter()
+                .map(|l| l.iter().map(|&(x, y)| P3::new(x, y, 0.0)).collect())
+                .collect();
+            let s = slice_of(loops.clone());
+            let g = SegGrid::new(&s).expect("segments");
+            for &(x, y) in &queries {
+                let q = g.to_plane(P3::new(x, y, 0.0));
+                let (_, d) = g.nearest(q);
+                let mut best = f64::INFINITY;
+                for l in &loops {
+                    let k = l.len();
+                    for i in 0..k {
+                        let (a, b) = (g.to_plane(l[i]), g.to_plane(l[(i + 1) % k]));
+                        let (_, d2) = GridSeg::new(a, b).closest(q);
+                        best = best.min(d2);
+                    }
+                }
+                prop_assert_eq!(d, best.sqrt());
+            }
+        }
     }
 }

@@ -87,22 +87,27 @@ pub(crate) fn one_loop(
     let at: Vec<P3> = (0..k)
         .map(|i| blend(seg[(i + k - 1) % k], seg[i]))
         .collect();
-    let mut out = Vec::with_capacity(k + 1);
+    // Points per segment first, so the path is allocated once.
+    let max_turn = opts.max_turn_deg.to_radians();
+    let steps: Vec<usize> = (0..k)
+        .map(|i| {
+            let chord = (points[(i + 1) % k] - points[i]).norm();
+            let turn = at[i].angle(&at[(i + 1) % k]);
+            ((chord / opts.spacing).ceil())
+                .max((turn / max_turn).ceil())
+                .clamp(1.0, 1e6) as usize
+        })
+        .collect();
+    let mut out = Vec::with_capacity(1 + steps.iter().sum::<usize>());
     out.push(PathPoint {
         p: points[0],
         axis: at[0],
         laser: false,
         layer,
     });
-    let max_turn = opts.max_turn_deg.to_radians();
-    for i in 0..k {
+    for (i, &n) in steps.iter().enumerate() {
         let (p0, p1) = (points[i], points[(i + 1) % k]);
         let (a0, a1) = (at[i], at[(i + 1) % k]);
-        let chord = (p1 - p0).norm();
-        let turn = a0.angle(&a1);
-        let n = ((chord / opts.spacing).ceil())
-            .max((turn / max_turn).ceil())
-            .clamp(1.0, 1e6) as usize;
         for j in 1..=n {
             let s = j as f64 / n as f64;
             let axis = blend(a0 * (1.0 - s), a1 * s);
@@ -175,28 +180,12 @@ pub fn to_text(points: &[PathPoint], feed: f64, comment: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::slice::{slice, Planes, SliceOptions};
-
-    fn sliced(mesh: &Mesh, layer: f64) -> Slicing {
-        slice(
-            mesh,
-            &SliceOptions {
-                planes: Planes::Parallel {
-                    dir: P3::z(),
-                    layer,
-                    first: None,
-                },
-                stitch: None,
-                threads: 1,
-            },
-        )
-        .expect("slices")
-    }
+    use crate::slice::{slice, SliceOptions};
 
     #[test]
     fn walls_parallel_to_the_build_direction_get_it_as_the_tool_axis() {
         let m = lampost_mesh::box_mesh(P3::new(0.0, 0.0, 0.0), P3::new(20.0, 10.0, 6.0));
-        let s = sliced(&m, 1.0);
+        let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
         let opts = PerimeterOptions {
             spacing: 2.0,
             max_turn_deg: 2.0,
@@ -219,7 +208,7 @@ mod tests {
     fn on_a_sphere_the_axis_lies_in_the_surface_and_turns_gradually() {
         let r = 20.0;
         let m = lampost_mesh::uv_sphere(P3::zeros(), r, 48, 96);
-        let s = sliced(&m, 2.0);
+        let s = slice(&m, &SliceOptions::parallel(P3::z(), 2.0)).expect("slices");
         let opts = PerimeterOptions {
             spacing: 1.0,
             max_turn_deg: 2.0,

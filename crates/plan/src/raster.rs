@@ -69,11 +69,29 @@ pub fn layer_angle(opts: &RasterOptions, k: usize) -> f64 {
     (opts.angle_deg + opts.turn_deg * k as f64).rem_euclid(360.0)
 }
 
-/// An edge in the ray frame: `(u, v)` ends, `u` along the rays, `v` across.
+/// An edge in the ray frame: `(u, v)` ends, `u` along the rays, `v` across, with its
+/// unit direction and length (computed once per layer, not once per ray).
 #[derive(Debug, Clone, Copy)]
 struct Edge {
     a: [f64; 2],
     b: [f64; 2],
+    /// Unit direction from `a` to `b` (zero for a zero-length edge).
+    t: [f64; 2],
+    /// Length.
+    len: f64,
+}
+
+impl Edge {
+    fn new(a: [f64; 2], b: [f64; 2]) -> Edge {
+        let (du, dv) = (b[0] - a[0], b[1] - a[1]);
+        let len = du.hypot(dv);
+        let t = if len > 0.0 {
+            [du / len, dv / len]
+        } else {
+            [0.0, 0.0]
+        };
+        Edge { a, b, t, len }
+    }
 }
 
 /// The interval of `u` on the line `v = const` within `r` of the edge (one interval: the
@@ -92,10 +110,9 @@ fn capsule(e: &Edge, v: f64, r: f64) -> Option<(f64, f64)> {
     }
     // The rectangle: 0 ≤ (P − a)·t ≤ L and |(P − a)·m| ≤ r, with P = (u, v), t the unit
     // direction, m its normal; each is c0 + c1·u within bounds.
-    let (du, dv) = (e.b[0] - e.a[0], e.b[1] - e.a[1]);
-    let len = du.hypot(dv);
+    let len = e.len;
     if len > 0.0 {
-        let (tu, tv) = (du / len, dv / len);
+        let [tu, tv] = e.t;
         let (mu, mv) = (-tv, tu);
         let mut rl = f64::NEG_INFINITY;
         let mut rh = f64::INFINITY;
@@ -138,9 +155,9 @@ fn merge(iv: &mut Vec<(f64, f64)>) {
     iv.truncate(n);
 }
 
-/// `inside` minus `cut` (both sorted, disjoint); pieces shorter than `min` dropped.
-fn subtract(inside: &[(f64, f64)], cut: &[(f64, f64)], min: f64) -> Vec<(f64, f64)> {
-    let mut out = Vec::new();
+/// `inside` minus `cut` (both sorted, disjoint), appended to `out`; pieces shorter than
+/// `min` dropped.
+fn subtract(inside: &[(f64, f64)], cut: &[(f64, f64)], min: f64, out: &mut Vec<(f64, f64)>) {
     let mut j = 0;
     for &(a, b) in inside {
         let mut s = a;
@@ -162,12 +179,19 @@ fn subtract(inside: &[(f64, f64)], cut: &[(f64, f64)], min: f64) -> Vec<(f64, f6
             out.push((s, b));
         }
     }
-    out
 }
 
-/// The intervals of the line `v` inside the loops (non-zero winding).
-fn inside(edges: &[Edge], active: &[usize], v: f64, x: &mut Vec<(f64, i32)>) -> Vec<(f64, f64)> {
+/// The intervals of the line `v` inside the loops (non-zero winding), into `out`
+/// (cleared first); `x` is scratch.
+fn inside(
+    edges: &[Edge],
+    active: &[usize],
+    v: f64,
+    x: &mut Vec<(f64, i32)>,
+    out: &mut Vec<(f64, f64)>,
+) {
     x.clear();
+    out.clear();
     for &i in active {
         let e = &edges[i];
         let (a, b) = (e.a, e.b);
@@ -179,7 +203,6 @@ fn inside(edges: &[Edge], active: &[usize], v: f64, x: &mut Vec<(f64, i32)>) -> 
         }
     }
     x.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out = Vec::new();
     let mut w = 0;
     let mut start = 0.0;
     for &(u, d) in x.iter() {
@@ -193,7 +216,14 @@ fn inside(edges: &[Edge], active: &[usize], v: f64, x: &mut Vec<(f64, i32)>) -> 
             out.push((start, u));
         }
     }
-    out
+}
+
+/// One ray's run before ordering: `u` from `a` to `b` on ray `ray`.
+#[derive(Debug, Clone, Copy)]
+struct Span {
+    a: f64,
+    b: f64,
+    ray: usize,
 }
 
 /// The raster runs of one slice, in zig-zag order, at layer `k`'s angle.
@@ -204,22 +234,17 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
     let along = e1 * c + e2 * s;
     let across = n.cross(&along);
     let o = slice.origin;
-    let mut edges = Vec::new();
+    let mut edges = Vec::with_capacity(slice.loops.iter().map(|l| l.points.len()).sum());
+    let mut uv: Vec<[f64; 2]> = Vec::new();
     for l in &slice.loops {
         let k = l.points.len();
-        let uv: Vec<[f64; 2]> = l
-            .points
-            .iter()
-            .map(|p| {
-                let d = p - o;
-                [d.dot(&along), d.dot(&across)]
-            })
-            .collect();
+        uv.clear();
+        uv.extend(l.points.iter().map(|p| {
+            let d = p - o;
+            [d.dot(&along), d.dot(&across)]
+        }));
         for i in 0..k {
-            edges.push(Edge {
-                a: uv[i],
-                b: uv[(i + 1) % k],
-            });
+            edges.push(Edge::new(uv[i], uv[(i + 1) % k]));
         }
     }
     if edges.is_empty() || opts.hatch.is_nan() || opts.hatch <= 0.0 {
@@ -231,11 +256,13 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
         .iter()
         .map(|e| e.a[1])
         .fold(f64::NEG_INFINITY, f64::max);
-    // Edges ordered by their lowest v (less the inset) for a sweep over the rays.
-    let mut order: Vec<usize> = (0..edges.len()).collect();
+    // Edges ordered by their lowest v (less the inset) for a sweep over the rays (ties in
+    // the loops' order).
     let lo_of = |e: &Edge| e.a[1].min(e.b[1]) - r;
     let hi_of = |e: &Edge| e.a[1].max(e.b[1]) + r;
-    order.sort_by(|&i, &j| lo_of(&edges[i]).total_cmp(&lo_of(&edges[j])));
+    // A stable sort: the loops run mostly monotone in v, runs it merges cheaply.
+    let mut order: Vec<(f64, usize)> = edges.iter().map(lo_of).zip(0..).collect();
+    order.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut active: Vec<usize> = Vec::new();
     let mut next = 0;
     let span = (vmax - r) - (vmin + r);
@@ -245,74 +272,76 @@ pub fn layer_runs(slice: &Slice, opts: &RasterOptions) -> Vec<Run> {
     let count = (span / opts.hatch).ceil().min(1e7) as usize;
     // Centre the rays in the inset's extent.
     let v0 = vmin + r + 0.5 * (span - (count as f64 - 1.0) * opts.hatch);
-    let mut lines: Vec<Vec<(f64, f64)>> = Vec::with_capacity(count);
+    // Every ray's runs, ray after ray; `first[j]..first[j + 1]` are ray j's.
+    let mut spans: Vec<Span> = Vec::new();
+    let mut first: Vec<usize> = Vec::with_capacity(count + 1);
     let min_run = 1e-9 * (1.0 + span);
     let mut xs = Vec::new();
     let mut cut = Vec::new();
+    let mut ins = Vec::new();
+    let mut pieces = Vec::new();
     for j in 0..count {
         let v = v0 + j as f64 * opts.hatch;
-        while next < order.len() && lo_of(&edges[order[next]]) <= v {
-            active.push(order[next]);
+        while next < order.len() && order[next].0 <= v {
+            active.push(order[next].1);
             next += 1;
         }
         active.retain(|&i| hi_of(&edges[i]) >= v);
-        let ins = inside(&edges, &active, v, &mut xs);
+        inside(&edges, &active, v, &mut xs, &mut ins);
         cut.clear();
         if r > 0.0 {
             cut.extend(active.iter().filter_map(|&i| capsule(&edges[i], v, r)));
             merge(&mut cut);
         }
-        lines.push(subtract(&ins, &cut, min_run));
+        first.push(spans.len());
+        pieces.clear();
+        subtract(&ins, &cut, min_run, &mut pieces);
+        spans.extend(pieces.iter().map(|&(a, b)| Span { a, b, ray: j }));
     }
+    first.push(spans.len());
     // Zig-zag.
     let point = |u: f64, v: f64| o + along * u + across * v;
-    let mut used: Vec<Vec<bool>> = lines.iter().map(|l| vec![false; l.len()]).collect();
-    let mut runs = Vec::new();
-    let mut pos: Option<(f64, f64)> = None;
-    // Rays before `free` have no run left.
+    let mut used = vec![false; spans.len()];
+    let mut runs = Vec::with_capacity(spans.len());
+    // The last run's end, along the rays.
+    let mut pos: Option<f64> = None;
+    // Spans before `free` are used: the first one left starts each zig-zag (the first
+    // run left on the first ray that has one).
     let mut free = 0;
     loop {
-        // The first run left.
-        while free < lines.len() && used[free].iter().all(|&u| u) {
+        while free < spans.len() && used[free] {
             free += 1;
         }
-        let Some((mut j, mut i)) =
-            (free..lines.len()).find_map(|j| used[j].iter().position(|u| !u).map(|i| (j, i)))
-        else {
+        if free == spans.len() {
             break;
-        };
+        }
+        let mut i = free;
         loop {
-            used[j][i] = true;
-            let (a, b) = lines[j][i];
+            used[i] = true;
+            let Span { a, b, ray: j } = spans[i];
             let v = v0 + j as f64 * opts.hatch;
-            // Enter from the end nearer the last position.
-            let forward =
-                pos.is_none_or(|(pu, pv)| (a - pu).hypot(v - pv) <= (b - pu).hypot(v - pv));
+            // Enter from the end nearer the last position (both ends are on the ray, as
+            // far across from it: the nearer along the ray).
+            let forward = pos.is_none_or(|pu| (a - pu).abs() <= (b - pu).abs());
             let (ua, ub) = if forward { (a, b) } else { (b, a) };
             runs.push(Run {
                 from: point(ua, v),
                 to: point(ub, v),
             });
-            pos = Some((ub, v));
+            pos = Some(ub);
             // The next ray's unused run overlapping this one, nearest the end.
-            let Some(nl) = lines.get(j + 1) else {
+            if j + 1 >= count {
                 break;
-            };
-            let best = nl
-                .iter()
-                .enumerate()
-                .filter(|(k, (c, d))| !used[j + 1][*k] && *c < b && *d > a)
-                .min_by(|x, y| {
-                    let dx = (x.1 .0 - ub).abs().min((x.1 .1 - ub).abs());
-                    let dy = (y.1 .0 - ub).abs().min((y.1 .1 - ub).abs());
+            }
+            let best = (first[j + 1]..first[j + 2])
+                .filter(|&k| !used[k] && spans[k].a < b && spans[k].b > a)
+                .min_by(|&x, &y| {
+                    let dx = (spans[x].a - ub).abs().min((spans[x].b - ub).abs());
+                    let dy = (spans[y].a - ub).abs().min((spans[y].b - ub).abs());
                     dx.total_cmp(&dy)
-                })
-                .map(|(k, _)| k);
+                });
             match best {
-                Some(k) => {
-                    j += 1;
-                    i = k;
-                }
+                Some(k) => i = k,
                 None => break,
             }
         }
@@ -326,20 +355,14 @@ mod tests {
 
     #[test]
     fn a_capsule_meets_a_line_in_the_right_interval() {
-        let e = Edge {
-            a: [0.0, 0.0],
-            b: [10.0, 0.0],
-        };
+        let e = Edge::new([0.0, 0.0], [10.0, 0.0]);
         assert_eq!(capsule(&e, 0.5, 1.0), {
             let s = (1.0f64 - 0.25).sqrt();
             Some((-s, 10.0 + s))
         });
         assert_eq!(capsule(&e, 1.5, 1.0), None);
         // A vertical edge: the line crosses the rectangle across.
-        let e = Edge {
-            a: [3.0, -5.0],
-            b: [3.0, 5.0],
-        };
+        let e = Edge::new([3.0, -5.0], [3.0, 5.0]);
         assert_eq!(capsule(&e, 0.0, 0.5), Some((2.5, 3.5)));
         let (a, b) = capsule(&e, 5.3, 0.5).expect("meets");
         assert!(
@@ -351,13 +374,20 @@ mod tests {
 
     #[test]
     fn subtracting_intervals() {
+        let sub = |inside: &[(f64, f64)], cut: &[(f64, f64)]| {
+            let mut out = vec![(-7.0, -6.0)];
+            subtract(inside, cut, 0.0, &mut out);
+            // Appended after what was there.
+            assert_eq!(out.remove(0), (-7.0, -6.0));
+            out
+        };
         assert_eq!(
-            subtract(&[(0.0, 10.0)], &[(-1.0, 1.0), (4.0, 5.0), (9.0, 12.0)], 0.0),
+            sub(&[(0.0, 10.0)], &[(-1.0, 1.0), (4.0, 5.0), (9.0, 12.0)]),
             vec![(1.0, 4.0), (5.0, 9.0)]
         );
-        assert_eq!(subtract(&[(0.0, 10.0)], &[(-1.0, 11.0)], 0.0), vec![]);
+        assert_eq!(sub(&[(0.0, 10.0)], &[(-1.0, 11.0)]), vec![]);
         assert_eq!(
-            subtract(&[(0.0, 2.0), (3.0, 6.0)], &[(1.0, 4.0)], 0.0),
+            sub(&[(0.0, 2.0), (3.0, 6.0)], &[(1.0, 4.0)]),
             vec![(0.0, 1.0), (4.0, 6.0)]
         );
     }

@@ -94,6 +94,22 @@ pub struct SliceOptions {
     pub threads: usize,
 }
 
+impl SliceOptions {
+    /// Planes normal to `dir`, `layer` apart, the first half a layer above the lowest
+    /// vertex; the default stitching tolerance; one thread.
+    pub fn parallel(dir: P3, layer: f64) -> SliceOptions {
+        SliceOptions {
+            planes: Planes::Parallel {
+                dir,
+                layer,
+                first: None,
+            },
+            stitch: None,
+            threads: 1,
+        }
+    }
+}
+
 /// A closed loop of a slice.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Loop {

@@ -5,24 +5,7 @@
 use lampost_mesh::{Mesh, P3};
 use lampost_plan::{
     plan, slice, Approach, PerimeterOptions, PlanOptions, Planes, RasterOptions, SliceOptions,
-    Slicing,
 };
-
-fn sliced(mesh: &Mesh, layer: f64) -> Slicing {
-    slice(
-        mesh,
-        &SliceOptions {
-            planes: Planes::Parallel {
-                dir: P3::z(),
-                layer,
-                first: None,
-            },
-            stitch: None,
-            threads: 1,
-        },
-    )
-    .expect("slices")
-}
 
 fn raster(hatch: f64, bead: f64, angle: f64, turn: f64) -> RasterOptions {
     RasterOptions {
@@ -68,7 +51,7 @@ fn boundary_dist(s: &lampost_plan::Slice, p: P3) -> f64 {
 #[test]
 fn a_rectangles_rasters_cover_its_inset_area_and_stay_inside() {
     let m = lampost_mesh::box_mesh(P3::new(0.0, 0.0, 0.0), P3::new(20.0, 10.0, 3.0));
-    let s = sliced(&m, 1.0);
+    let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
     for (angle, want_runs) in [(0.0, 18), (90.0, 38)] {
         let p = plan(
             &m,
@@ -122,7 +105,7 @@ fn a_rectangles_rasters_cover_its_inset_area_and_stay_inside() {
 #[test]
 fn at_an_angle_the_runs_stay_in_the_inset_and_fill_it() {
     let m = lampost_mesh::box_mesh(P3::new(-7.0, -3.0, 0.0), P3::new(13.0, 12.0, 2.0));
-    let s = sliced(&m, 1.0);
+    let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
     let p = plan(
         &m,
         &s,
@@ -220,7 +203,7 @@ fn a_rings_hole_is_not_filled_and_the_angle_turns_per_layer() {
 #[test]
 fn hollow_parts_get_no_raster() {
     let m = lampost_mesh::box_mesh(P3::new(0.0, 0.0, 0.0), P3::new(20.0, 10.0, 3.0));
-    let s = sliced(&m, 1.0);
+    let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
     let p = plan(&m, &s, &opts(None, Approach::Tangent, 45.0)).expect("plan");
     assert!(p.layers.iter().all(|l| l.runs.is_empty()));
     assert!(p.points().iter().all(|q| q.axis == P3::z()));
@@ -295,7 +278,7 @@ fn a_dome_built_up_overhangs_with_a_vertical_approach_and_not_with_the_tangent_o
     let m = dome(r, 48, 128);
     assert!(lampost_mesh::manifold_report(&m).closed_oriented());
     assert!(lampost_mesh::props::volume(&m) > 0.0);
-    let s = sliced(&m, 1.0);
+    let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
     let limit = 45.0;
     let vertical = plan(&m, &s, &opts(None, Approach::Build, limit)).expect("plan");
     let mut bad: Vec<usize> = vertical.violations.iter().map(|v| v.layer).collect();
@@ -335,7 +318,7 @@ fn a_dome_built_up_overhangs_with_a_vertical_approach_and_not_with_the_tangent_o
 #[test]
 fn the_twisted_plate_plans_with_the_tangent_approach_under_the_limit() {
     let m = lampost_plan::demo::twisted_plate(0.25, 3.0, 60, 10).expect("plate");
-    let s = sliced(&m, 1.0);
+    let s = slice(&m, &SliceOptions::parallel(P3::z(), 1.0)).expect("slices");
     assert_eq!(s.slices.len(), 50);
     let r = Some(raster(0.8, 1.0, 90.0, 0.0));
     let vertical = plan(&m, &s, &opts(r, Approach::Build, 30.0)).expect("plan");
