@@ -270,6 +270,8 @@ pub struct Ctx {
     csv: Vec<Vec<u8>>,
     points: Vec<Vec<u8>>,
     stl: Vec<Vec<u8>>,
+    /// 3MF packages (ZIP, DEFLATE parts, model XML).
+    threemf: Vec<Vec<u8>>,
     jobs: Vec<Vec<u8>>,
     /// `lampost inspect`'s inputs: a measuring plan and a sensor log for it.
     inspect: InspectSeeds,
@@ -327,6 +329,7 @@ impl Ctx {
             csv: read_dir(&fx.join("post"), &["csv"]),
             points: read_dir(&fx.join("points"), &[]),
             stl: read_dir(&fx.join("meshes"), &["stl"]),
+            threemf: read_dir(&fx.join("meshes/3mf"), &["3mf"]),
             jobs: read_dir(&fx.join("post/bearing-seat"), &["toml"]),
             inspect: InspectSeeds::new()?,
             trace,
@@ -981,6 +984,21 @@ impl Ctx {
 
     fn stl(&self, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
         input.clear();
+        if !self.threemf.is_empty() && r.one_in(6) {
+            // A 3MF package, its bytes mutated: the ZIP directory, the inflater (before
+            // the CRC is checked) and the model XML all see damage.
+            *note = "3MF package, mutated".into();
+            input.extend_from_slice(r.pick_bytes(&self.threemf));
+            mutate(r, input, &[]);
+            self.made(input, note);
+            if let Ok(t) = mesh::read_3mf(input) {
+                if !(t.mm_per_unit.is_finite() && t.mm_per_unit > 0.0) {
+                    return Err(format!("read_3mf: {} mm per unit", t.mm_per_unit));
+                }
+                check_mesh("read_3mf", &t.mesh)?;
+            }
+            return Ok(());
+        }
         match r.below(5) {
             3 | 4 => {
                 // OBJ and OFF: a generated box or sphere, written in the format, mutated.
