@@ -18,27 +18,13 @@ use std::time::{Duration, Instant};
 
 use lampost_mesh::{torus, Mesh, P3};
 
-/// splitmix64.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use lampost_testkit::SplitMix as Rng;
 
 fn points(m: &Mesh, n: usize, off: f64) -> Vec<[f64; 3]> {
-    let mut rng = Rng(2026);
+    let mut rng = Rng::new(2026);
     (0..n)
         .map(|_| {
-            let t = m.triangles[(rng.next() % m.triangles.len() as u64) as usize];
+            let t = m.triangles[(rng.next_u64() % m.triangles.len() as u64) as usize];
             let [a, b, c] = t.map(|i| m.vertices[i as usize]);
             let (mut u, mut v) = (rng.unit(), rng.unit());
             if u + v > 1.0 {
