@@ -168,27 +168,17 @@ pub fn distances(mesh: &Mesh, points: &[[f64; 3]]) -> Result<(Vec<f64>, bool), I
     distances_on(mesh, points, threads)
 }
 
-/// [`distances`] on `threads` threads: the points cut into as many runs, each answered
-/// by its own thread against the one index ([`crate::dist::DistIndex`]; the same answers
-/// whatever the count).
+/// [`distances`] on `threads` threads: the index built (with the manifold report that
+/// decides the sign, and the points' spatial order, on their own threads), then the
+/// points answered in runs of [`crate::dist::RUN`] in Morton order
+/// ([`crate::dist::morton_order`]), each run started afresh
+/// ([`crate::dist::DistIndex::answer_run`]) and taken by whichever thread is free; each
+/// answer is put back in its place. The same answers whatever the thread count.
 pub fn distances_on(
     mesh: &Mesh,
     points: &[[f64; 3]],
     threads: usize,
 ) -> Result<(Vec<f64>, bool), InspectError> {
-    let idx = crate::dist::DistIndex::new(mesh)
-        .ok_or_else(|| InspectError::Input("the mesh cannot be indexed: no triangles".into()))?;
-    let signed = lampost_mesh::manifold_report(mesh).closed_oriented();
-    let one = |q: &[f64; 3]| {
-        if !q.iter().all(|x| x.is_finite()) {
-            return Err(InspectError::Input("the query point is not finite".into()));
-        }
-        Ok(if signed {
-            idx.signed_distance(*q)
-        } else {
-            idx.distance(*q)
-        })
-    };
     if u32::try_from(points.len()).is_err() {
         return Err(InspectError::Input(format!(
             "{} points: at most {} in one comparison",
@@ -196,82 +186,71 @@ pub fn distances_on(
             u32::MAX
         )));
     }
-    let threads = threads.clamp(1, 64);
-    // Below a few thousand points a thread costs more than it saves.
-    if threads == 1 || points.len() < 4096 {
-        let out = points.iter().map(one).collect::<Result<Vec<f64>, _>>()?;
-        return Ok((out, signed));
+    if let Some(i) = points.iter().position(|q| !q.iter().all(|x| x.is_finite())) {
+        return Err(InspectError::Input(format!(
+            "point {} of {}: the query point is not finite",
+            i + 1,
+            points.len()
+        )));
     }
-    // The points are answered in a spatial order (Morton codes over their box), so
-    // neighbours share the index's cache lines; each answer is put back in its place.
-    let order = morton_order(points);
-    let chunk = order.len().div_ceil(threads);
-    let parts: Vec<Vec<f64>> = std::thread::scope(|s| {
-        let handles: Vec<_> = order
-            .chunks(chunk)
-            .map(|ids| {
-                s.spawn(move || {
-                    ids.iter()
-                        .map(|&i| one(&points[i as usize]))
-                        .collect::<Result<Vec<f64>, InspectError>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join()
-                    .map_err(|_| InspectError::Input("internal: a distance thread failed".into()))?
-            })
-            .collect::<Result<Vec<_>, InspectError>>()
+    let threads = threads.clamp(1, 64);
+    let (idx, signed, order) = if threads == 1 {
+        (
+            crate::dist::DistIndex::new(mesh),
+            lampost_mesh::manifold_report(mesh).closed_oriented(),
+            spatial(points),
+        )
+    } else {
+        std::thread::scope(|s| {
+            let signed = s.spawn(|| lampost_mesh::manifold_report(mesh).closed_oriented());
+            let order = s.spawn(|| spatial(points));
+            let idx = crate::dist::DistIndex::new(mesh);
+            let failed = || InspectError::Input("internal: a distance thread failed".into());
+            Ok::<_, InspectError>((
+                idx,
+                signed.join().map_err(|_| failed())?,
+                order.join().map_err(|_| failed())?,
+            ))
+        })?
+    };
+    let idx =
+        idx.ok_or_else(|| InspectError::Input("the mesh cannot be indexed: no triangles".into()))?;
+    let (order, in_order) = order;
+    let mut sorted = vec![0.0; points.len()];
+    let runs = std::sync::Mutex::new(
+        in_order
+            .chunks(crate::dist::RUN)
+            .zip(sorted.chunks_mut(crate::dist::RUN)),
+    );
+    let work = || {
+        while let Some((run, out)) = runs.lock().ok().and_then(|mut r| r.next()) {
+            idx.answer_run(run, signed, out);
+        }
+    };
+    // Below a few thousand points a thread costs more than it saves.
+    let helpers = if points.len() < 4096 { 0 } else { threads - 1 };
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..helpers).map(|_| s.spawn(work)).collect();
+        work();
+        for h in handles {
+            h.join()
+                .map_err(|_| InspectError::Input("internal: a distance thread failed".into()))?;
+        }
+        Ok::<_, InspectError>(())
     })?;
     let mut out = vec![0.0; points.len()];
-    for (&i, d) in order.iter().zip(parts.iter().flatten()) {
+    for (&i, d) in order.iter().zip(&sorted) {
         out[i as usize] = *d;
     }
     Ok((out, signed))
 }
 
-/// The points' indices in Morton (Z-curve) order over their bounding box, 21 bits an
-/// axis; points that are not finite go last (their answer is an error anyway).
-fn morton_order(points: &[[f64; 3]]) -> Vec<u32> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let spread = |mut x: u64| {
-        x &= 0x1f_ffff;
-        x = (x | x << 32) & 0x1f_0000_0000_ffff;
-        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
-        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-        x = (x | x << 2) & 0x1249_2492_4924_9249;
-        x
-    };
-    let mut keyed: Vec<(u64, u32)> = points
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            if !p.iter().all(|x| x.is_finite()) {
-                return (u64::MAX, i as u32);
-            }
-            let q = |k: usize| {
-                let w = hi[k] - lo[k];
-                let t = if w > 0.0 { (p[k] - lo[k]) / w } else { 0.0 };
-                (t * 2_097_151.0) as u64
-            };
-            (
-                spread(q(0)) | spread(q(1)) << 1 | spread(q(2)) << 2,
-                i as u32,
-            )
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+/// The points' Morton order ([`crate::dist::morton_order`]), and the points in it (read
+/// in one pass: they lie all over memory).
+fn spatial(points: &[[f64; 3]]) -> (Vec<u32>, Vec<[f64; 3]>) {
+    let order = crate::dist::morton_order(points);
+    let in_order = order.iter().map(|&i| points[i as usize]).collect();
+    (order, in_order)
 }
 
 #[cfg(test)]
