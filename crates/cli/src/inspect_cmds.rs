@@ -71,6 +71,8 @@ pub struct Sampling {
     pub spacing: Option<f64>,
     /// The mesh file's units.
     pub mesh_units: Option<crate::mesh_cmds::MeshUnits>,
+    /// Section planes (`AXIS=VALUES` each) to sample along instead of the whole mesh.
+    pub sections: Vec<String>,
 }
 
 /// A mesh file in the machine's units (`units`: the file's, default the machine's).
@@ -132,9 +134,22 @@ pub fn plan_cmd(
             (name, text, targets)
         }
         (None, Some(mesh)) => {
+            let mut sections = Vec::new();
+            for spec in &sampling.sections {
+                sections.extend(lampost_inspect::surface::parse_sections(spec).map_err(|e| {
+                    CliError::failed(format!(
+                        "error: {e}\n  = help: --sections AXIS=VALUES: x, y or z, then values and start:stop:step ranges, comma-separated (z=5,10,15 or x=0:100:10)\n"
+                    ))
+                })?);
+            }
             let part = mesh_in(&m, mesh, sampling.mesh_units)?;
-            let targets = lampost_inspect::surface::sample(&part, sampling.spacing.unwrap_or(0.0))
-                .map_err(|e| error(mesh, "", e))?;
+            let spacing = sampling.spacing.unwrap_or(0.0);
+            let targets = if sections.is_empty() {
+                lampost_inspect::surface::sample(&part, spacing)
+            } else {
+                lampost_inspect::surface::sample_sections(&part, &sections, spacing)
+            }
+            .map_err(|e| error(mesh, "", e))?;
             (display_name(mesh), String::new(), targets)
         }
         (None, None) => {

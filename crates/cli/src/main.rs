@@ -460,9 +460,12 @@ enum InspectCmd {
         /// Or sample the CAD mesh (STL, OBJ, OFF; in the machine's units unless --mesh-units) about --spacing apart, with its face normals.
         #[arg(long, requires = "spacing")]
         mesh: Option<String>,
-        /// Distance between sampling points on the mesh.
+        /// Distance between sampling points on the mesh (along each section with --sections).
         #[arg(long)]
         spacing: Option<f64>,
+        /// Sample along section planes instead of over the whole mesh, as CMM software scans sections: AXIS=VALUES, values and start:stop:step ranges comma-separated (z=5,10,15 or x=0:100:10); repeatable.
+        #[arg(long, value_name = "AXIS=VALUES", requires = "mesh")]
+        sections: Vec<String>,
         /// The mesh file's units (default: the machine's).
         #[arg(long, value_enum)]
         mesh_units: Option<mesh_cmds::MeshUnits>,
@@ -841,6 +844,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     mesh,
                     spacing,
                     mesh_units,
+                    sections,
                     max_tilt,
                     skip_unreachable,
                     stylus_radius,
@@ -856,6 +860,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 mesh,
                 spacing,
                 mesh_units,
+                sections,
             },
             max_tilt,
             output.as_deref(),

@@ -64,6 +64,204 @@ pub fn sample(mesh: &Mesh, spacing: f64) -> Result<Vec<Target>, InspectError> {
     Ok(out)
 }
 
+/// A section plane: coordinate `axis` (0 x, 1 y, 2 z) equal to `value`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Section {
+    /// 0, 1, 2 for x, y, z.
+    pub axis: usize,
+    /// The plane's coordinate.
+    pub value: f64,
+}
+
+/// The most section planes one plan takes.
+pub const MAX_SECTIONS: usize = 10_000;
+
+/// Section planes from `AXIS=LIST`: the axis `x`, `y` or `z`, and a comma-separated list
+/// of values and ranges `start:stop:step` (from start up to stop, stop included when a
+/// whole number of steps away). `z=5,10,15`, `x=0:100:10`, `y=-5,0:20:2.5`.
+pub fn parse_sections(spec: &str) -> Result<Vec<Section>, InspectError> {
+    let bad = |why: String| InspectError::Input(format!("--sections {spec}: {why}"));
+    let Some((axis, list)) = spec.split_once('=') else {
+        return Err(bad("give AXIS=VALUES, e.g. z=5,10,15 or x=0:100:10".into()));
+    };
+    let axis = match axis.trim() {
+        "x" | "X" => 0,
+        "y" | "Y" => 1,
+        "z" | "Z" => 2,
+        other => return Err(bad(format!("`{other}` is not an axis (x, y or z)"))),
+    };
+    let num = |t: &str| -> Result<f64, InspectError> {
+        match t.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(bad(format!("`{}` is not a finite number", t.trim()))),
+        }
+    };
+    let mut out = Vec::new();
+    for item in list.split(',') {
+        let parts: Vec<&str> = item.split(':').collect();
+        match parts.as_slice() {
+            [v] => out.push(Section {
+                axis,
+                value: num(v)?,
+            }),
+            [a, b, c] => {
+                let (start, stop, step) = (num(a)?, num(b)?, num(c)?);
+                if step <= 0.0 || stop < start {
+                    return Err(bad(format!(
+                        "`{}`: give start:stop:step with start ≤ stop and a positive step",
+                        item.trim()
+                    )));
+                }
+                let n = ((stop - start) / step * (1.0 + 1e-12)).floor();
+                if !(n.is_finite() && n < MAX_SECTIONS as f64) {
+                    return Err(bad(format!("more than {MAX_SECTIONS} sections")));
+                }
+                for k in 0..=(n as usize) {
+                    out.push(Section {
+                        axis,
+                        value: start + k as f64 * step,
+                    });
+                }
+            }
+            _ => {
+                return Err(bad(format!(
+                    "`{}` is neither a value nor start:stop:step",
+                    item.trim()
+                )))
+            }
+        }
+        if out.len() > MAX_SECTIONS {
+            return Err(bad(format!("more than {MAX_SECTIONS} sections")));
+        }
+    }
+    Ok(out)
+}
+
+/// Sampling points along section planes, as CMM software scans sections: each plane cuts
+/// the mesh into curves (the planner's slicer, `lampost_plan::slice`: closed loops, or open
+/// chains where the mesh is open), and along each curve a point every `spacing` of its
+/// length from its start (the last gap of a closed curve at most `spacing`), with the
+/// outward normal of the triangle it lies on. Ids are `s<section>-<n>`, sections numbered
+/// from 1 in the order given. A plane that misses the mesh is an error.
+pub fn sample_sections(
+    mesh: &Mesh,
+    sections: &[Section],
+    spacing: f64,
+) -> Result<Vec<Target>, InspectError> {
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(InspectError::Input(format!(
+            "--spacing {spacing}: give a positive distance"
+        )));
+    }
+    let normals = lampost_mesh::props::face_normals(mesh);
+    let mut out = Vec::new();
+    for (k, sec) in sections.iter().enumerate() {
+        let name = format!("section {}={}", ["x", "y", "z"][sec.axis.min(2)], sec.value);
+        let mut dir = Vector3::zeros();
+        dir[sec.axis.min(2)] = 1.0;
+        let (lo, hi) = mesh
+            .triangles
+            .iter()
+            .flatten()
+            .filter_map(|&i| mesh.vertices.get(i as usize))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v[sec.axis.min(2)]), hi.max(v[sec.axis.min(2)]))
+            });
+        if !(sec.value > lo && sec.value < hi) {
+            return Err(InspectError::Input(format!(
+                "{name} misses the mesh (it spans {lo} to {hi} there)"
+            )));
+        }
+        // One plane: the first at the value, the next a whole extent above (beyond).
+        let opts = lampost_plan::SliceOptions {
+            planes: lampost_plan::Planes::Parallel {
+                dir,
+                layer: hi - lo,
+                first: Some(sec.value - lo),
+            },
+            stitch: None,
+            threads: 1,
+        };
+        let slicing = lampost_plan::slice(mesh, &opts)
+            .map_err(|e| InspectError::Input(format!("{name}: {e}")))?;
+        let mut count = 0;
+        let curves = slicing.slices.iter().flat_map(|s| {
+            s.loops
+                .iter()
+                .map(|l| (&l.points, &l.faces, true))
+                .chain(s.open.iter().map(|c| (&c.points, &c.faces, false)))
+        });
+        for (points, faces, closed) in curves {
+            for (p, f) in along(points, faces, closed, spacing) {
+                let n = normals
+                    .get(f as usize)
+                    .copied()
+                    .unwrap_or_else(Vector3::zeros);
+                if n.norm() == 0.0 {
+                    continue;
+                }
+                count += 1;
+                out.push(Target {
+                    id: format!("s{}-{count}", k + 1),
+                    point: [p.x, p.y, p.z],
+                    normal: [n.x, n.y, n.z],
+                });
+                if out.len() > MAX_SAMPLES {
+                    return Err(InspectError::Input(format!(
+                        "--spacing {spacing} gives more than {MAX_SAMPLES} points: sample more coarsely"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Points every `spacing` of a polyline's length from its start, each with the face of
+/// the segment it lies on (`faces[i]`: the segment from point i to point i + 1; a
+/// closed polyline's last segment joins its last point to its first).
+fn along(
+    points: &[Vector3<f64>],
+    faces: &[u32],
+    closed: bool,
+    spacing: f64,
+) -> Vec<(Vector3<f64>, u32)> {
+    let n = points.len();
+    let segments = if closed { n } else { n.saturating_sub(1) };
+    let mut out = Vec::new();
+    // Arc length at the start of the current segment; the next point wanted is the
+    // k-th, at k·spacing.
+    let (mut s0, mut k) = (0.0, 0u32);
+    let mut total = 0.0;
+    for i in 0..segments.min(faces.len()) {
+        total += (points[(i + 1) % n] - points[i]).norm();
+    }
+    for i in 0..segments.min(faces.len()) {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        let len = (b - a).norm();
+        loop {
+            let want = f64::from(k) * spacing;
+            let more = if closed {
+                want < total - 1e-9 * spacing
+            } else {
+                want <= total
+            };
+            if !(more && want <= s0 + len) {
+                break;
+            }
+            let t = if len > 0.0 { (want - s0) / len } else { 0.0 };
+            out.push((a + (b - a) * t, faces[i]));
+            k += 1;
+            if out.len() > MAX_SAMPLES {
+                // The caller refuses so many.
+                return out;
+            }
+        }
+        s0 += len;
+    }
+    out
+}
+
 /// A simulated sensor: what it reads on `actual`.
 #[derive(Debug, Clone, Copy)]
 pub struct SimOptions {
@@ -256,6 +454,54 @@ fn spatial(points: &[[f64; 3]]) -> (Vec<u32>, Vec<[f64; 3]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Values and ranges, the stop included when a whole number of steps away (also
+    /// when the step is not exact in binary).
+    #[test]
+    fn section_specifications() {
+        let v = |spec: &str| -> Vec<(usize, f64)> {
+            parse_sections(spec)
+                .expect(spec)
+                .iter()
+                .map(|s| (s.axis, s.value))
+                .collect()
+        };
+        assert_eq!(v("z=5,10,15"), [(2, 5.0), (2, 10.0), (2, 15.0)]);
+        assert_eq!(
+            v("x=0:10:2.5"),
+            [(0, 0.0), (0, 2.5), (0, 5.0), (0, 7.5), (0, 10.0)]
+        );
+        assert_eq!(v("Y=-1,0:1:0.5"), [(1, -1.0), (1, 0.0), (1, 0.5), (1, 1.0)]);
+        assert_eq!(v("z=0:1:0.1").len(), 11);
+        assert_eq!(v("z=0:0.95:0.1").len(), 10);
+        for bad in ["z", "q=1", "z=", "z=1:2", "z=inf", "z=2:1:1", "z=0:1:-1"] {
+            assert!(parse_sections(bad).is_err(), "{bad}");
+        }
+    }
+
+    /// Points every `spacing` along a polyline, the last gap of a closed one at most
+    /// `spacing`, each on its segment's face.
+    #[test]
+    fn points_along_a_polyline() {
+        let p = |x: f64, y: f64| Vector3::new(x, y, 0.0);
+        let square = [p(0.0, 0.0), p(4.0, 0.0), p(4.0, 4.0), p(0.0, 4.0)];
+        let got = along(&square, &[10, 11, 12, 13], true, 1.5);
+        // Perimeter 16: points at 0, 1.5, …, 15.
+        assert_eq!(got.len(), 11);
+        for (k, (q, f)) in got.iter().enumerate() {
+            let s = 1.5 * k as f64;
+            // A point at a corner is on the segment it ends.
+            let side = ((s / 4.0).ceil() as usize).max(1) - 1;
+            assert_eq!(*f, 10 + side as u32, "{k}");
+            let t = s - 4.0 * side as f64;
+            let want = square[side] + (square[(side + 1) % 4] - square[side]) * (t / 4.0);
+            assert!((q - want).norm() < 1e-12, "{k}: {q:?} vs {want:?}");
+        }
+        // Open: both ends.
+        let got = along(&square[..2], &[7], false, 2.0);
+        assert_eq!(got.len(), 3);
+        assert!((got[2].0 - p(4.0, 0.0)).norm() < 1e-12);
+    }
 
     /// Threads change nothing: the same distances, bit for bit, on 1 and 3 threads.
     #[test]
