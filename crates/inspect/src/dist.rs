@@ -106,15 +106,28 @@ const EMPTY: Node = Node {
     count: [0; 4],
 };
 
-/// Squared distances from `p` to the four boxes of `n` (0 inside).
+/// The larger of two numbers that are not NaN (`f64::max` without its NaN handling: one
+/// instruction).
+#[inline(always)]
+fn larger(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Squared distances from `p` to the four boxes of `n` (0 inside; an empty slot's +∞).
 #[inline(always)]
 fn box_dist2(p: V, n: &Node) -> [f64; 4] {
     let mut d = [0.0; 4];
     for ((lo, hi), pk) in n.lo.iter().zip(&n.hi).zip(p) {
-        // Beyond lo, beyond hi, or between (lo ≤ hi): the value of the three-way
-        // branch, without its unpredictable jumps.
-        let e: [f64; 4] = std::array::from_fn(|j| (lo[j] - pk).max(pk - hi[j]).max(0.0));
-        d = std::array::from_fn(|j| d[j] + e[j] * e[j]);
+        for (dj, (l, h)) in d.iter_mut().zip(lo.iter().zip(hi)) {
+            // Beyond lo, beyond hi, or between (lo ≤ hi): the value of the three-way
+            // branch, without its unpredictable jumps.
+            let e = larger(larger(l - pk, pk - h), 0.0);
+            *dj += e * e;
+        }
     }
     d
 }
@@ -457,39 +470,13 @@ impl DistIndex {
     /// once. The same distances as [`Self::distance`] and [`Self::signed_distance`]
     /// one by one; of two equally near triangles another may be named, so a sign may
     /// differ only where the distance is nothing.
-    ///
-    /// Compiled for each instruction set and run with the best the processor has
-    /// (`pulp`, as `lampost_kinematics`' batch does).
     pub fn answer_run(&self, points: &[V], signed: bool, out: &mut [f64]) {
-        pulp::Arch::new().dispatch(Run {
-            idx: self,
-            points,
-            signed,
-            out,
-        });
-    }
-}
-
-/// One run of [`DistIndex::answer_run`] (a `pulp` operation: its body is compiled for
-/// each instruction set).
-struct Run<'a> {
-    idx: &'a DistIndex,
-    points: &'a [V],
-    signed: bool,
-    out: &'a mut [f64],
-}
-
-impl pulp::WithSimd for Run<'_> {
-    type Output = ();
-
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) {
         let mut hint = None;
         let mut stack = Vec::new();
-        for (o, &p) in self.out.iter_mut().zip(self.points) {
-            let b = self.idx.nearest(p, hint, &mut stack);
+        for (o, &p) in out.iter_mut().zip(points) {
+            let b = self.nearest(p, hint, &mut stack);
             hint = b.near.map(|_| b.leaf);
-            *o = self.idx.answer(p, b.near, self.signed);
+            *o = self.answer(p, b.near, signed);
         }
     }
 }
