@@ -1,14 +1,21 @@
 //! [`DistIndex`]: closest points and signed distances to a triangle mesh, in `f64`, for
 //! many points at once (the deviations of a whole measurement).
 //!
-//! A bounding-volume hierarchy of the triangles (median splits on the longest axis of the
-//! centroids' box, up to 4 triangles a leaf), searched nearer child first and pruned by
-//! the best squared distance found; the closest point on a triangle by its Voronoi regions
-//! (Ericson, *Real-Time Collision Detection*, 5.1.5), which also names the feature it lies
-//! on. The sign is that of the feature's angle-weighted pseudo-normal (Bærentzen and
-//! Aanæs, 2005): the face's normal, the sum of an edge's two face normals, or a vertex's
-//! face normals weighted by their angles there; negative inside. Degenerate (zero-area)
-//! triangles are left out: each of their points lies on a neighbour's edge.
+//! A bounding-volume hierarchy of the triangles, four children a node, up to 4 triangles
+//! a leaf, built in one pass over the triangles sorted by the Morton code of their
+//! centroids (each node a run of that order, cut where the codes' highest bit changes;
+//! boxes bottom-up). A search runs down from the root, nearer children first, pruned by
+//! the best squared distance found; or, for points taken in a spatial order
+//! ([`DistIndex::answer_run`]), starts at the leaf of the point before's closest point
+//! and climbs to the root, searching at each level the other children nearer than the
+//! best. The closest point on a triangle by its Voronoi regions (Ericson, *Real-Time
+//! Collision Detection*, 5.1.5), which also names the feature it lies on. The sign is
+//! that of the feature's angle-weighted pseudo-normal (Bærentzen and Aanæs, 2005): the
+//! face's normal, the sum of an edge's two face normals, or a vertex's face normals
+//! weighted by their angles there (worked out when asked, from the triangles around the
+//! vertex); negative inside. Degenerate (zero-area) triangles are left out: each of
+//! their points lies on a neighbour's edge. The scalar reference, every triangle tried,
+//! is in the tests, which hold the tree's answers to it bit for bit.
 
 use lampost_mesh::Mesh;
 
