@@ -436,6 +436,12 @@ pub fn distances_on(
         }
         Ok::<_, InspectError>(())
     })?;
+    // Every run answered (a lock poisoned would have stopped the threads early).
+    if !matches!(runs.into_inner().map(|mut r| r.next().is_none()), Ok(true)) {
+        return Err(InspectError::Input(
+            "internal: a distance thread stopped early".into(),
+        ));
+    }
     let mut out = vec![0.0; points.len()];
     for (&i, d) in order.iter().zip(&sorted) {
         out[i as usize] = *d;
