@@ -71,6 +71,8 @@ pub struct Sampling {
     pub spacing: Option<f64>,
     /// The mesh file's units.
     pub mesh_units: Option<crate::mesh_cmds::MeshUnits>,
+    /// Section planes (`AXIS=VALUES` each) to sample along instead of the whole mesh.
+    pub sections: Vec<String>,
 }
 
 /// A mesh file in the machine's units (`units`: the file's, default the machine's).
@@ -132,9 +134,22 @@ pub fn plan_cmd(
             (name, text, targets)
         }
         (None, Some(mesh)) => {
+            let mut sections = Vec::new();
+            for spec in &sampling.sections {
+                sections.extend(lampost_inspect::surface::parse_sections(spec).map_err(|e| {
+                    CliError::failed(format!(
+                        "error: {e}\n  = help: --sections AXIS=VALUES: x, y or z, then values and start:stop:step ranges, comma-separated (z=5,10,15 or x=0:100:10)\n"
+                    ))
+                })?);
+            }
             let part = mesh_in(&m, mesh, sampling.mesh_units)?;
-            let targets = lampost_inspect::surface::sample(&part, sampling.spacing.unwrap_or(0.0))
-                .map_err(|e| error(mesh, "", e))?;
+            let spacing = sampling.spacing.unwrap_or(0.0);
+            let targets = if sections.is_empty() {
+                lampost_inspect::surface::sample(&part, spacing)
+            } else {
+                lampost_inspect::surface::sample_sections(&part, &sections, spacing)
+            }
+            .map_err(|e| error(mesh, "", e))?;
             (display_name(mesh), String::new(), targets)
         }
         (None, None) => {
@@ -364,31 +379,42 @@ pub fn simulate_cmd(
     Ok(())
 }
 
-/// What `inspect compare` is asked for, beyond the measured file.
-#[derive(Debug, Default)]
+/// What `inspect compare` is asked for, beyond the measured file: its options, defined
+/// once (flattened into the command line's `inspect compare`).
+#[derive(Debug, Default, clap::Args)]
 pub struct CompareArgs {
-    /// The nominal CAD mesh.
+    /// The nominal CAD mesh: each measured point's signed distance to it too (unsigned where the mesh is open).
+    #[arg(long)]
     pub mesh: Option<String>,
-    /// Its units.
+    /// The mesh file's units, when not the measured file's machine's.
+    #[arg(long, value_enum)]
     pub mesh_units: Option<crate::mesh_cmds::MeshUnits>,
-    /// The setup the measured part's program was posted with: places the mesh (program
-    /// frame) on the part.
+    /// The setup the measured part's program was posted with: the mesh (program frame) is placed on the part by it, and --write-setup composes the correction with it.
+    #[arg(long, requires = "mesh")]
     pub setup: Option<String>,
-    /// Tolerance ±.
+    /// Tolerance ± (same unit).
+    #[arg(long)]
     pub tol: Option<f64>,
-    /// Best-fit alignment first.
+    /// Best-fit the measured points to the mesh first (the registration of `align register`, trimmed of points beyond 3 robust sigma), then report deviations after it.
+    #[arg(long, requires = "mesh")]
     pub best_fit: bool,
-    /// Its locks.
+    /// Degrees of freedom the best fit holds: x, y, z, rx, ry, rz, tilt, translation, rotation (comma-separated).
+    #[arg(long, requires = "best_fit")]
     pub lock: Option<String>,
-    /// Write the rigid correction as a setup file.
+    /// Write the best fit as a setup file (atomic) for `lampost post --setup`: the program frame placed on the part as measured.
+    #[arg(long, value_name = "FILE.toml", requires = "best_fit")]
     pub write_setup: Option<String>,
-    /// Per-point CSV.
+    /// Per-point CSV (atomic).
+    #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<String>,
-    /// SVG colour map.
+    /// SVG colour map of the deviations over the part, top view, with a Tol+/Tol− legend (needs --tol).
+    #[arg(long, value_name = "FILE.svg", requires = "tol")]
     pub svg: Option<String>,
-    /// Coloured PLY.
+    /// Coloured point cloud, ASCII PLY (vertex colours by tolerance band, deviation as quality; needs --tol).
+    #[arg(long, value_name = "FILE.ply", requires = "tol")]
     pub ply: Option<String>,
-    /// JSON on standard output.
+    /// Write JSON.
+    #[arg(long)]
     pub json: bool,
 }
 

@@ -460,9 +460,12 @@ enum InspectCmd {
         /// Or sample the CAD mesh (STL, OBJ, OFF; in the machine's units unless --mesh-units) about --spacing apart, with its face normals.
         #[arg(long, requires = "spacing")]
         mesh: Option<String>,
-        /// Distance between sampling points on the mesh.
+        /// Distance between sampling points on the mesh (along each section with --sections).
         #[arg(long)]
         spacing: Option<f64>,
+        /// Sample along section planes instead of over the whole mesh, as CMM software scans sections: AXIS=VALUES, values and start:stop:step ranges comma-separated (z=5,10,15 or x=0:100:10); repeatable.
+        #[arg(long, value_name = "AXIS=VALUES", requires = "mesh")]
+        sections: Vec<String>,
         /// The mesh file's units (default: the machine's).
         #[arg(long, value_enum)]
         mesh_units: Option<mesh_cmds::MeshUnits>,
@@ -539,39 +542,8 @@ enum InspectCmd {
     Compare {
         /// The file `inspect reduce` wrote.
         measured: String,
-        /// The nominal CAD mesh: each measured point's signed distance to it too (unsigned where the mesh is open).
-        #[arg(long)]
-        mesh: Option<String>,
-        /// The mesh file's units, when not the measured file's machine's.
-        #[arg(long, value_enum)]
-        mesh_units: Option<mesh_cmds::MeshUnits>,
-        /// The setup the measured part's program was posted with: the mesh (program frame) is placed on the part by it, and --write-setup composes the correction with it.
-        #[arg(long, requires = "mesh")]
-        setup: Option<String>,
-        /// Tolerance ± (same unit).
-        #[arg(long)]
-        tol: Option<f64>,
-        /// Best-fit the measured points to the mesh first (the registration of `align register`, trimmed of points beyond 3 robust sigma), then report deviations after it.
-        #[arg(long, requires = "mesh")]
-        best_fit: bool,
-        /// Degrees of freedom the best fit holds: x, y, z, rx, ry, rz, tilt, translation, rotation (comma-separated).
-        #[arg(long, requires = "best_fit")]
-        lock: Option<String>,
-        /// Write the best fit as a setup file (atomic) for `lampost post --setup`: the program frame placed on the part as measured.
-        #[arg(long, value_name = "FILE.toml", requires = "best_fit")]
-        write_setup: Option<String>,
-        /// Per-point CSV (atomic).
-        #[arg(long, value_name = "FILE.csv")]
-        csv: Option<String>,
-        /// SVG colour map of the deviations over the part, top view, with a Tol+/Tol− legend (needs --tol).
-        #[arg(long, value_name = "FILE.svg", requires = "tol")]
-        svg: Option<String>,
-        /// Coloured point cloud, ASCII PLY (vertex colours by tolerance band, deviation as quality; needs --tol).
-        #[arg(long, value_name = "FILE.ply", requires = "tol")]
-        ply: Option<String>,
-        /// Write JSON.
-        #[arg(long)]
-        json: bool,
+        #[command(flatten)]
+        args: inspect_cmds::CompareArgs,
     },
     /// Closing the loop for deposition: the measured points out of tolerance (material missing or in excess), each with the posted program's line and layer that deposited nearest to it within --radius.
     Deposits {
@@ -872,6 +844,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                     mesh,
                     spacing,
                     mesh_units,
+                    sections,
                     max_tilt,
                     skip_unreachable,
                     stylus_radius,
@@ -887,6 +860,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 mesh,
                 spacing,
                 mesh_units,
+                sections,
             },
             max_tilt,
             output.as_deref(),
@@ -939,37 +913,8 @@ fn run(cli: Cli) -> Result<(), CliError> {
             output.as_deref(),
         ),
         Command::Inspect {
-            cmd:
-                InspectCmd::Compare {
-                    measured,
-                    mesh,
-                    mesh_units,
-                    setup,
-                    tol,
-                    best_fit,
-                    lock,
-                    write_setup,
-                    csv,
-                    svg,
-                    ply,
-                    json,
-                },
-        } => inspect_cmds::compare_cmd(
-            &measured,
-            &inspect_cmds::CompareArgs {
-                mesh,
-                mesh_units,
-                setup,
-                tol,
-                best_fit,
-                lock,
-                write_setup,
-                csv,
-                svg,
-                ply,
-                json,
-            },
-        ),
+            cmd: InspectCmd::Compare { measured, args },
+        } => inspect_cmds::compare_cmd(&measured, &args),
         Command::Inspect {
             cmd:
                 InspectCmd::Deposits {

@@ -64,6 +64,204 @@ pub fn sample(mesh: &Mesh, spacing: f64) -> Result<Vec<Target>, InspectError> {
     Ok(out)
 }
 
+/// A section plane: coordinate `axis` (0 x, 1 y, 2 z) equal to `value`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Section {
+    /// 0, 1, 2 for x, y, z.
+    pub axis: usize,
+    /// The plane's coordinate.
+    pub value: f64,
+}
+
+/// The most section planes one plan takes.
+pub const MAX_SECTIONS: usize = 10_000;
+
+/// Section planes from `AXIS=LIST`: the axis `x`, `y` or `z`, and a comma-separated list
+/// of values and ranges `start:stop:step` (from start up to stop, stop included when a
+/// whole number of steps away). `z=5,10,15`, `x=0:100:10`, `y=-5,0:20:2.5`.
+pub fn parse_sections(spec: &str) -> Result<Vec<Section>, InspectError> {
+    let bad = |why: String| InspectError::Input(format!("--sections {spec}: {why}"));
+    let Some((axis, list)) = spec.split_once('=') else {
+        return Err(bad("give AXIS=VALUES, e.g. z=5,10,15 or x=0:100:10".into()));
+    };
+    let axis = match axis.trim() {
+        "x" | "X" => 0,
+        "y" | "Y" => 1,
+        "z" | "Z" => 2,
+        other => return Err(bad(format!("`{other}` is not an axis (x, y or z)"))),
+    };
+    let num = |t: &str| -> Result<f64, InspectError> {
+        match t.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(bad(format!("`{}` is not a finite number", t.trim()))),
+        }
+    };
+    let mut out = Vec::new();
+    for item in list.split(',') {
+        let parts: Vec<&str> = item.split(':').collect();
+        match parts.as_slice() {
+            [v] => out.push(Section {
+                axis,
+                value: num(v)?,
+            }),
+            [a, b, c] => {
+                let (start, stop, step) = (num(a)?, num(b)?, num(c)?);
+                if step <= 0.0 || stop < start {
+                    return Err(bad(format!(
+                        "`{}`: give start:stop:step with start ≤ stop and a positive step",
+                        item.trim()
+                    )));
+                }
+                let n = ((stop - start) / step * (1.0 + 1e-12)).floor();
+                if !(n.is_finite() && n < MAX_SECTIONS as f64) {
+                    return Err(bad(format!("more than {MAX_SECTIONS} sections")));
+                }
+                for k in 0..=(n as usize) {
+                    out.push(Section {
+                        axis,
+                        value: start + k as f64 * step,
+                    });
+                }
+            }
+            _ => {
+                return Err(bad(format!(
+                    "`{}` is neither a value nor start:stop:step",
+                    item.trim()
+                )))
+            }
+        }
+        if out.len() > MAX_SECTIONS {
+            return Err(bad(format!("more than {MAX_SECTIONS} sections")));
+        }
+    }
+    Ok(out)
+}
+
+/// Sampling points along section planes, as CMM software scans sections: each plane cuts
+/// the mesh into curves (the planner's slicer, `lampost_plan::slice`: closed loops, or open
+/// chains where the mesh is open), and along each curve a point every `spacing` of its
+/// length from its start (the last gap of a closed curve at most `spacing`), with the
+/// outward normal of the triangle it lies on. Ids are `s<section>-<n>`, sections numbered
+/// from 1 in the order given. A plane that misses the mesh is an error.
+pub fn sample_sections(
+    mesh: &Mesh,
+    sections: &[Section],
+    spacing: f64,
+) -> Result<Vec<Target>, InspectError> {
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(InspectError::Input(format!(
+            "--spacing {spacing}: give a positive distance"
+        )));
+    }
+    let normals = lampost_mesh::props::face_normals(mesh);
+    let mut out = Vec::new();
+    for (k, sec) in sections.iter().enumerate() {
+        let name = format!("section {}={}", ["x", "y", "z"][sec.axis.min(2)], sec.value);
+        let mut dir = Vector3::zeros();
+        dir[sec.axis.min(2)] = 1.0;
+        let (lo, hi) = mesh
+            .triangles
+            .iter()
+            .flatten()
+            .filter_map(|&i| mesh.vertices.get(i as usize))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v[sec.axis.min(2)]), hi.max(v[sec.axis.min(2)]))
+            });
+        if !(sec.value > lo && sec.value < hi) {
+            return Err(InspectError::Input(format!(
+                "{name} misses the mesh (it spans {lo} to {hi} there)"
+            )));
+        }
+        // One plane: the first at the value, the next a whole extent above (beyond).
+        let opts = lampost_plan::SliceOptions {
+            planes: lampost_plan::Planes::Parallel {
+                dir,
+                layer: hi - lo,
+                first: Some(sec.value - lo),
+            },
+            stitch: None,
+            threads: 1,
+        };
+        let slicing = lampost_plan::slice(mesh, &opts)
+            .map_err(|e| InspectError::Input(format!("{name}: {e}")))?;
+        let mut count = 0;
+        let curves = slicing.slices.iter().flat_map(|s| {
+            s.loops
+                .iter()
+                .map(|l| (&l.points, &l.faces, true))
+                .chain(s.open.iter().map(|c| (&c.points, &c.faces, false)))
+        });
+        for (points, faces, closed) in curves {
+            for (p, f) in along(points, faces, closed, spacing) {
+                let n = normals
+                    .get(f as usize)
+                    .copied()
+                    .unwrap_or_else(Vector3::zeros);
+                if n.norm() == 0.0 {
+                    continue;
+                }
+                count += 1;
+                out.push(Target {
+                    id: format!("s{}-{count}", k + 1),
+                    point: [p.x, p.y, p.z],
+                    normal: [n.x, n.y, n.z],
+                });
+                if out.len() > MAX_SAMPLES {
+                    return Err(InspectError::Input(format!(
+                        "--spacing {spacing} gives more than {MAX_SAMPLES} points: sample more coarsely"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Points every `spacing` of a polyline's length from its start, each with the face of
+/// the segment it lies on (`faces[i]`: the segment from point i to point i + 1; a
+/// closed polyline's last segment joins its last point to its first).
+fn along(
+    points: &[Vector3<f64>],
+    faces: &[u32],
+    closed: bool,
+    spacing: f64,
+) -> Vec<(Vector3<f64>, u32)> {
+    let n = points.len();
+    let segments = if closed { n } else { n.saturating_sub(1) };
+    let mut out = Vec::new();
+    // Arc length at the start of the current segment; the next point wanted is the
+    // k-th, at k·spacing.
+    let (mut s0, mut k) = (0.0, 0u32);
+    let mut total = 0.0;
+    for i in 0..segments.min(faces.len()) {
+        total += (points[(i + 1) % n] - points[i]).norm();
+    }
+    for i in 0..segments.min(faces.len()) {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        let len = (b - a).norm();
+        loop {
+            let want = f64::from(k) * spacing;
+            let more = if closed {
+                want < total - 1e-9 * spacing
+            } else {
+                want <= total
+            };
+            if !(more && want <= s0 + len) {
+                break;
+            }
+            let t = if len > 0.0 { (want - s0) / len } else { 0.0 };
+            out.push((a + (b - a) * t, faces[i]));
+            k += 1;
+            if out.len() > MAX_SAMPLES {
+                // The caller refuses so many.
+                return out;
+            }
+        }
+        s0 += len;
+    }
+    out
+}
+
 /// A simulated sensor: what it reads on `actual`.
 #[derive(Debug, Clone, Copy)]
 pub struct SimOptions {
@@ -168,27 +366,17 @@ pub fn distances(mesh: &Mesh, points: &[[f64; 3]]) -> Result<(Vec<f64>, bool), I
     distances_on(mesh, points, threads)
 }
 
-/// [`distances`] on `threads` threads: the points cut into as many runs, each answered
-/// by its own thread against the one index ([`crate::dist::DistIndex`]; the same answers
-/// whatever the count).
+/// [`distances`] on `threads` threads: the index built (with the manifold report that
+/// decides the sign, and the points' spatial order, on their own threads), then the
+/// points answered in runs of [`crate::dist::RUN`] in Morton order
+/// ([`crate::dist::morton_order`]), each run started afresh
+/// ([`crate::dist::DistIndex::answer_run`]) and taken by whichever thread is free; each
+/// answer is put back in its place. The same answers whatever the thread count.
 pub fn distances_on(
     mesh: &Mesh,
     points: &[[f64; 3]],
     threads: usize,
 ) -> Result<(Vec<f64>, bool), InspectError> {
-    let idx = crate::dist::DistIndex::new(mesh)
-        .ok_or_else(|| InspectError::Input("the mesh cannot be indexed: no triangles".into()))?;
-    let signed = lampost_mesh::manifold_report(mesh).closed_oriented();
-    let one = |q: &[f64; 3]| {
-        if !q.iter().all(|x| x.is_finite()) {
-            return Err(InspectError::Input("the query point is not finite".into()));
-        }
-        Ok(if signed {
-            idx.signed_distance(*q)
-        } else {
-            idx.distance(*q)
-        })
-    };
     if u32::try_from(points.len()).is_err() {
         return Err(InspectError::Input(format!(
             "{} points: at most {} in one comparison",
@@ -196,87 +384,130 @@ pub fn distances_on(
             u32::MAX
         )));
     }
-    let threads = threads.clamp(1, 64);
-    // Below a few thousand points a thread costs more than it saves.
-    if threads == 1 || points.len() < 4096 {
-        let out = points.iter().map(one).collect::<Result<Vec<f64>, _>>()?;
-        return Ok((out, signed));
+    if let Some(i) = points.iter().position(|q| !q.iter().all(|x| x.is_finite())) {
+        return Err(InspectError::Input(format!(
+            "point {} of {}: the query point is not finite",
+            i + 1,
+            points.len()
+        )));
     }
-    // The points are answered in a spatial order (Morton codes over their box), so
-    // neighbours share the index's cache lines; each answer is put back in its place.
-    let order = morton_order(points);
-    let chunk = order.len().div_ceil(threads);
-    let parts: Vec<Vec<f64>> = std::thread::scope(|s| {
-        let handles: Vec<_> = order
-            .chunks(chunk)
-            .map(|ids| {
-                s.spawn(move || {
-                    ids.iter()
-                        .map(|&i| one(&points[i as usize]))
-                        .collect::<Result<Vec<f64>, InspectError>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join()
-                    .map_err(|_| InspectError::Input("internal: a distance thread failed".into()))?
-            })
-            .collect::<Result<Vec<_>, InspectError>>()
+    let threads = threads.clamp(1, 64);
+    let (idx, signed, order) = if threads == 1 {
+        (
+            crate::dist::DistIndex::new(mesh),
+            lampost_mesh::manifold_report(mesh).closed_oriented(),
+            spatial(points),
+        )
+    } else {
+        std::thread::scope(|s| {
+            let signed = s.spawn(|| lampost_mesh::manifold_report(mesh).closed_oriented());
+            let order = s.spawn(|| spatial(points));
+            let idx = crate::dist::DistIndex::new(mesh);
+            let failed = || InspectError::Input("internal: a distance thread failed".into());
+            Ok::<_, InspectError>((
+                idx,
+                signed.join().map_err(|_| failed())?,
+                order.join().map_err(|_| failed())?,
+            ))
+        })?
+    };
+    let idx =
+        idx.ok_or_else(|| InspectError::Input("the mesh cannot be indexed: no triangles".into()))?;
+    let (order, in_order) = order;
+    let mut sorted = vec![0.0; points.len()];
+    let runs = std::sync::Mutex::new(
+        in_order
+            .chunks(crate::dist::RUN)
+            .zip(sorted.chunks_mut(crate::dist::RUN)),
+    );
+    let work = || {
+        while let Some((run, out)) = runs.lock().ok().and_then(|mut r| r.next()) {
+            idx.answer_run(run, signed, out);
+        }
+    };
+    // Below a few thousand points a thread costs more than it saves.
+    let helpers = if points.len() < 4096 { 0 } else { threads - 1 };
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..helpers).map(|_| s.spawn(work)).collect();
+        work();
+        for h in handles {
+            h.join()
+                .map_err(|_| InspectError::Input("internal: a distance thread failed".into()))?;
+        }
+        Ok::<_, InspectError>(())
     })?;
+    // Every run answered (a lock poisoned would have stopped the threads early).
+    if !matches!(runs.into_inner().map(|mut r| r.next().is_none()), Ok(true)) {
+        return Err(InspectError::Input(
+            "internal: a distance thread stopped early".into(),
+        ));
+    }
     let mut out = vec![0.0; points.len()];
-    for (&i, d) in order.iter().zip(parts.iter().flatten()) {
+    for (&i, d) in order.iter().zip(&sorted) {
         out[i as usize] = *d;
     }
     Ok((out, signed))
 }
 
-/// The points' indices in Morton (Z-curve) order over their bounding box, 21 bits an
-/// axis; points that are not finite go last (their answer is an error anyway).
-fn morton_order(points: &[[f64; 3]]) -> Vec<u32> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let spread = |mut x: u64| {
-        x &= 0x1f_ffff;
-        x = (x | x << 32) & 0x1f_0000_0000_ffff;
-        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
-        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-        x = (x | x << 2) & 0x1249_2492_4924_9249;
-        x
-    };
-    let mut keyed: Vec<(u64, u32)> = points
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            if !p.iter().all(|x| x.is_finite()) {
-                return (u64::MAX, i as u32);
-            }
-            let q = |k: usize| {
-                let w = hi[k] - lo[k];
-                let t = if w > 0.0 { (p[k] - lo[k]) / w } else { 0.0 };
-                (t * 2_097_151.0) as u64
-            };
-            (
-                spread(q(0)) | spread(q(1)) << 1 | spread(q(2)) << 2,
-                i as u32,
-            )
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+/// The points' Morton order ([`crate::dist::morton_order`]), and the points in it (read
+/// in one pass: they lie all over memory).
+fn spatial(points: &[[f64; 3]]) -> (Vec<u32>, Vec<[f64; 3]>) {
+    let order = crate::dist::morton_order(points);
+    let in_order = order.iter().map(|&i| points[i as usize]).collect();
+    (order, in_order)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Values and ranges, the stop included when a whole number of steps away (also
+    /// when the step is not exact in binary).
+    #[test]
+    fn section_specifications() {
+        let v = |spec: &str| -> Vec<(usize, f64)> {
+            parse_sections(spec)
+                .expect(spec)
+                .iter()
+                .map(|s| (s.axis, s.value))
+                .collect()
+        };
+        assert_eq!(v("z=5,10,15"), [(2, 5.0), (2, 10.0), (2, 15.0)]);
+        assert_eq!(
+            v("x=0:10:2.5"),
+            [(0, 0.0), (0, 2.5), (0, 5.0), (0, 7.5), (0, 10.0)]
+        );
+        assert_eq!(v("Y=-1,0:1:0.5"), [(1, -1.0), (1, 0.0), (1, 0.5), (1, 1.0)]);
+        assert_eq!(v("z=0:1:0.1").len(), 11);
+        assert_eq!(v("z=0:0.95:0.1").len(), 10);
+        for bad in ["z", "q=1", "z=", "z=1:2", "z=inf", "z=2:1:1", "z=0:1:-1"] {
+            assert!(parse_sections(bad).is_err(), "{bad}");
+        }
+    }
+
+    /// Points every `spacing` along a polyline, the last gap of a closed one at most
+    /// `spacing`, each on its segment's face.
+    #[test]
+    fn points_along_a_polyline() {
+        let p = |x: f64, y: f64| Vector3::new(x, y, 0.0);
+        let square = [p(0.0, 0.0), p(4.0, 0.0), p(4.0, 4.0), p(0.0, 4.0)];
+        let got = along(&square, &[10, 11, 12, 13], true, 1.5);
+        // Perimeter 16: points at 0, 1.5, …, 15.
+        assert_eq!(got.len(), 11);
+        for (k, (q, f)) in got.iter().enumerate() {
+            let s = 1.5 * k as f64;
+            // A point at a corner is on the segment it ends.
+            let side = ((s / 4.0).ceil() as usize).max(1) - 1;
+            assert_eq!(*f, 10 + side as u32, "{k}");
+            let t = s - 4.0 * side as f64;
+            let want = square[side] + (square[(side + 1) % 4] - square[side]) * (t / 4.0);
+            assert!((q - want).norm() < 1e-12, "{k}: {q:?} vs {want:?}");
+        }
+        // Open: both ends.
+        let got = along(&square[..2], &[7], false, 2.0);
+        assert_eq!(got.len(), 3);
+        assert!((got[2].0 - p(4.0, 0.0)).norm() < 1e-12);
+    }
 
     /// Threads change nothing: the same distances, bit for bit, on 1 and 3 threads.
     #[test]
