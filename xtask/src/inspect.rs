@@ -51,7 +51,7 @@ pub fn bench(root: &Path) -> Result<(), String> {
             .join(" ")
     );
     let t = Instant::now();
-    let idx = lampost_inspect::dist::DistIndex::new(&mesh).ok_or("no triangles")?;
+    let idx = lampost_mesh::dist::DistIndex::new(&mesh).ok_or("no triangles")?;
     let build = t.elapsed().as_secs_f64();
     drop(idx);
     let t = Instant::now();

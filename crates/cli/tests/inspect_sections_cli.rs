@@ -138,7 +138,7 @@ fn sections_of_a_sphere_lie_on_it() {
     assert!(o.status.success(), "{}", stderr(&o));
     let got = rows(&std::fs::read_to_string(&out).expect("plan"));
     assert!(got.len() > 40, "{} rows", got.len());
-    let idx = lampost_inspect::dist::DistIndex::new(&mesh).expect("index");
+    let idx = lampost_mesh::dist::DistIndex::new(&mesh).expect("index");
     let mut seen = [false; 4];
     for (id, p, n) in &got {
         let sec: usize = id[1..]

@@ -3,7 +3,7 @@
 //! points that do not fit).
 
 use lampost_align::register::{register, Locks, Registration};
-use lampost_mesh::bvh::MeshBvh;
+use lampost_mesh::dist::DistIndex;
 use lampost_mesh::Mesh;
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
@@ -129,8 +129,10 @@ fn median(v: &mut [f64]) -> f64 {
 /// from the kept points. Refused: fewer kept points than the free parameters and one, a
 /// mesh or points the registration refuses.
 pub fn best_fit(mesh: &Mesh, points: &[[f64; 3]], locks: Locks) -> Result<BestFit, InspectError> {
-    let bvh = MeshBvh::new(mesh).map_err(|e| InspectError::Input(e.to_string()))?;
-    let solid = bvh.is_solid();
+    // The residuals by the same index as the deviations (`surface::distances`).
+    let index = DistIndex::new(mesh)
+        .ok_or_else(|| InspectError::Input("the mesh cannot be indexed: no triangles".into()))?;
+    let solid = lampost_mesh::manifold_report(mesh).closed_oriented();
     let all: Vec<Vector3<f64>> = points.iter().map(|p| Vector3::from(*p)).collect();
     let free = locks
         .translate
@@ -164,15 +166,20 @@ pub fn best_fit(mesh: &Mesh, points: &[[f64; 3]], locks: Locks) -> Result<BestFi
             centroid: [0.0; 3],
         };
         let mut residuals = Vec::with_capacity(points.len());
-        for p in points {
-            let q = Vector3::from(fit.to_cad(*p));
-            let d = if solid {
-                bvh.signed_distance(q)
-            } else {
-                bvh.closest(q).map(|c| c.distance)
+        for (i, p) in points.iter().enumerate() {
+            let q = fit.to_cad(*p);
+            if !q.iter().all(|x| x.is_finite()) {
+                return Err(InspectError::Input(format!(
+                    "point {} of {}: not finite in the CAD frame",
+                    i + 1,
+                    points.len()
+                )));
             }
-            .map_err(|e| InspectError::Input(e.to_string()))?;
-            residuals.push(d);
+            residuals.push(if solid {
+                index.signed_distance(q)
+            } else {
+                index.distance(q)
+            });
         }
         let mut r = residuals.clone();
         let med = median(&mut r);

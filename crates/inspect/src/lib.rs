@@ -27,7 +27,6 @@
 
 pub mod compare;
 pub mod deposits;
-pub mod dist;
 mod error;
 pub mod map;
 pub mod plan;

@@ -368,9 +368,9 @@ pub fn distances(mesh: &Mesh, points: &[[f64; 3]]) -> Result<(Vec<f64>, bool), I
 
 /// [`distances`] on `threads` threads: the index built (with the manifold report that
 /// decides the sign, and the points' spatial order, on their own threads), then the
-/// points answered in runs of [`crate::dist::RUN`] in Morton order
-/// ([`crate::dist::morton_order`]), each run started afresh
-/// ([`crate::dist::DistIndex::answer_run`]) and taken by whichever thread is free; each
+/// points answered in runs of [`lampost_mesh::dist::RUN`] in Morton order
+/// ([`lampost_mesh::dist::morton_order`]), each run started afresh
+/// ([`lampost_mesh::dist::DistIndex::answer_run`]) and taken by whichever thread is free; each
 /// answer is put back in its place. The same answers whatever the thread count.
 pub fn distances_on(
     mesh: &Mesh,
@@ -394,7 +394,7 @@ pub fn distances_on(
     let threads = threads.clamp(1, 64);
     let (idx, signed, order) = if threads == 1 {
         (
-            crate::dist::DistIndex::new(mesh),
+            lampost_mesh::dist::DistIndex::new(mesh),
             lampost_mesh::manifold_report(mesh).closed_oriented(),
             spatial(points),
         )
@@ -402,7 +402,7 @@ pub fn distances_on(
         std::thread::scope(|s| {
             let signed = s.spawn(|| lampost_mesh::manifold_report(mesh).closed_oriented());
             let order = s.spawn(|| spatial(points));
-            let idx = crate::dist::DistIndex::new(mesh);
+            let idx = lampost_mesh::dist::DistIndex::new(mesh);
             let failed = || InspectError::Input("internal: a distance thread failed".into());
             Ok::<_, InspectError>((
                 idx,
@@ -417,8 +417,8 @@ pub fn distances_on(
     let mut sorted = vec![0.0; points.len()];
     let runs = std::sync::Mutex::new(
         in_order
-            .chunks(crate::dist::RUN)
-            .zip(sorted.chunks_mut(crate::dist::RUN)),
+            .chunks(lampost_mesh::dist::RUN)
+            .zip(sorted.chunks_mut(lampost_mesh::dist::RUN)),
     );
     let work = || {
         while let Some((run, out)) = runs.lock().ok().and_then(|mut r| r.next()) {
@@ -449,10 +449,10 @@ pub fn distances_on(
     Ok((out, signed))
 }
 
-/// The points' Morton order ([`crate::dist::morton_order`]), and the points in it (read
+/// The points' Morton order ([`lampost_mesh::dist::morton_order`]), and the points in it (read
 /// in one pass: they lie all over memory).
 fn spatial(points: &[[f64; 3]]) -> (Vec<u32>, Vec<[f64; 3]>) {
-    let order = crate::dist::morton_order(points);
+    let order = lampost_mesh::dist::morton_order(points);
     let in_order = order.iter().map(|&i| points[i as usize]).collect();
     (order, in_order)
 }

@@ -20,35 +20,16 @@
 //! Skipped (with a message) when a venv or the meshes are missing, unless
 //! `LAMPOST_REQUIRE_PY=1`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use lampost_mesh::{Mesh, P3};
 
-fn root() -> PathBuf {
-    let r = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    r.canonicalize().unwrap_or(r)
-}
-
-/// splitmix64: the same points on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use lampost_testkit::{oracle_present, root, SplitMix as Rng};
 
 /// Half the points anywhere in the box grown by 10 %, half near the surface.
 fn points(m: &Mesh, n: usize, seed: u64) -> Vec<[f64; 3]> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let (mut lo, mut hi) = (P3::repeat(f64::INFINITY), P3::repeat(f64::NEG_INFINITY));
     for v in &m.vertices {
         lo = lo.inf(v);
@@ -62,7 +43,7 @@ fn points(m: &Mesh, n: usize, seed: u64) -> Vec<[f64; 3]> {
             let p = P3::from_fn(|i, _| lo[i] + (hi[i] - lo[i]) * rng.unit());
             out.push([p.x, p.y, p.z]);
         } else {
-            let t = m.triangles[(rng.next() % m.triangles.len() as u64) as usize];
+            let t = m.triangles[(rng.next_u64() % m.triangles.len() as u64) as usize];
             let [a, b, c] = t.map(|i| m.vertices[i as usize]);
             let (mut u, mut v) = (rng.unit(), rng.unit());
             if u + v > 1.0 {
@@ -139,7 +120,6 @@ fn oracle(py: &Path, which: &str, jobs: &[Vec<String>]) -> Vec<Vec<f64>> {
 #[test]
 fn signed_distances_agree_with_trimesh_and_open3d() {
     let root = root();
-    let required = std::env::var("LAMPOST_REQUIRE_PY").is_ok_and(|v| v == "1");
     let pys = [
         (
             "trimesh",
@@ -154,18 +134,8 @@ fn signed_distances_agree_with_trimesh_and_open3d() {
     ];
     let meshes = root.join(".tools/meshes");
     for (_, py, script) in &pys {
-        if !py.exists() || !meshes.exists() {
-            assert!(
-                !required,
-                "LAMPOST_REQUIRE_PY=1 but {} or {} is missing: run scripts/{script} and scripts/install-meshes.sh",
-                py.display(),
-                meshes.display()
-            );
-            eprintln!(
-                "SKIPPED: {} or {} is missing (run scripts/{script} and scripts/install-meshes.sh, or set LAMPOST_REQUIRE_PY=1 to require them)",
-                py.display(),
-                meshes.display()
-            );
+        let install = format!("scripts/{script} and scripts/install-meshes.sh");
+        if !oracle_present(&[py.clone(), meshes.clone()], &install) {
             return;
         }
     }

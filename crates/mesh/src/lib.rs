@@ -3,8 +3,10 @@
 //! Triangle meshes shared by `align` (registration), `post` (the part for collision
 //! checks) and `plan` (slicing): readers for STL (ASCII and binary), OBJ, OFF and 3MF with
 //! located errors ([`MeshError`]), welding ([`weld_exact`], [`weld_within`]), the closed-manifold report naming
-//! the bad edges ([`manifold_report`]), area, volume and normals ([`props`]), and ray casts, closest
-//! points and signed distance on a bounding-volume hierarchy ([`bvh`]).
+//! the bad edges ([`manifold_report`]), area, volume and normals ([`props`]), ray casts, closest
+//! points and signed distance on a bounding-volume hierarchy ([`bvh`], parry3d's), and
+//! closest points and signed distances of many points at once, the deviations of a whole
+//! measurement, on an index of its own ([`dist::DistIndex`]: `inspect compare`'s).
 //!
 //! ## Why these dependencies
 //! - `nalgebra`: the `f64` vectors every lampost crate uses;
@@ -14,6 +16,7 @@
 //!   package and its DEFLATE data are read here, [`read_3mf`]).
 
 pub mod bvh;
+pub mod dist;
 mod error;
 pub mod props;
 mod read;

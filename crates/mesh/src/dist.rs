@@ -17,7 +17,7 @@
 //! their points lies on a neighbour's edge. The scalar reference, every triangle tried,
 //! is in the tests, which hold the tree's answers to it bit for bit.
 
-use lampost_mesh::Mesh;
+use crate::Mesh;
 
 type V = [f64; 3];
 
@@ -637,9 +637,9 @@ mod tests {
     /// Against the closest point over every triangle, and parry's signs, on a sphere.
     #[test]
     fn agrees_with_brute_force_and_parry() {
-        let m = lampost_mesh::uv_sphere(lampost_mesh::P3::new(1.0, -2.0, 0.5), 10.0, 16, 32);
+        let m = crate::uv_sphere(crate::P3::new(1.0, -2.0, 0.5), 10.0, 16, 32);
         let idx = DistIndex::new(&m).expect("index");
-        let bvh = lampost_mesh::bvh::MeshBvh::new(&m).expect("bvh");
+        let bvh = crate::bvh::MeshBvh::new(&m).expect("bvh");
         for k in 0..2000 {
             let t = f64::from(k) * 0.01;
             let p = [
@@ -661,9 +661,7 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             let d = idx.signed_distance(p);
             assert_eq!(d.abs(), brute, "{p:?}");
-            let theirs = bvh
-                .signed_distance(lampost_mesh::P3::from(p))
-                .expect("parry");
+            let theirs = bvh.signed_distance(crate::P3::from(p)).expect("parry");
             assert!((d - theirs).abs() < 1e-9, "{p:?}: {d} vs {theirs}");
         }
     }
@@ -671,10 +669,10 @@ mod tests {
     /// A mesh of 80,000 triangles (a deep tree): the same answers as parry's.
     #[test]
     fn a_big_mesh_agrees_with_parry() {
-        let m = lampost_mesh::uv_sphere(lampost_mesh::P3::zeros(), 10.0, 200, 200);
+        let m = crate::uv_sphere(crate::P3::zeros(), 10.0, 200, 200);
         assert!(m.triangles.len() >= 65_536);
         let idx = DistIndex::new(&m).expect("index");
-        let bvh = lampost_mesh::bvh::MeshBvh::new(&m).expect("bvh");
+        let bvh = crate::bvh::MeshBvh::new(&m).expect("bvh");
         for k in 0..500 {
             let t = f64::from(k) * 0.013;
             let p = [
@@ -682,9 +680,7 @@ mod tests {
                 12.0 * (5.3 * t).cos(),
                 10.5 * (3.7 * t).sin(),
             ];
-            let theirs = bvh
-                .signed_distance(lampost_mesh::P3::from(p))
-                .expect("parry");
+            let theirs = bvh.signed_distance(crate::P3::from(p)).expect("parry");
             assert!((idx.signed_distance(p) - theirs).abs() < 1e-12, "{p:?}");
         }
     }
@@ -692,13 +688,13 @@ mod tests {
     /// A generated solid, moved and turned, and a few triangles copied on top of
     /// others (equal Morton codes: the middle split) and a zero-area one.
     fn solid(kind: u8, n: u32, shift: [f64; 3], dup: usize) -> Mesh {
-        let c = lampost_mesh::P3::from(shift);
+        let c = crate::P3::from(shift);
         let mut m = match kind % 3 {
-            0 => lampost_mesh::uv_sphere(c, 7.0, n + 3, 2 * n + 3),
-            1 => lampost_mesh::torus(c, 9.0, 3.0, 2 * n + 3, n + 3),
+            0 => crate::uv_sphere(c, 7.0, n + 3, 2 * n + 3),
+            1 => crate::torus(c, 9.0, 3.0, 2 * n + 3, n + 3),
             _ => {
-                let half = lampost_mesh::P3::new(4.0, 2.5, 1.5);
-                lampost_mesh::box_mesh(c - half, c + half)
+                let half = crate::P3::new(4.0, 2.5, 1.5);
+                crate::box_mesh(c - half, c + half)
             }
         };
         let t = m.triangles[0];
