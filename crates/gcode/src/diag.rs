@@ -96,6 +96,11 @@ pub enum ErrorKind {
     /// grbl post writes): ignored outside LinuxCNC, which refuses it.
     #[error("{0}0 is not a centre word of the active plane; zero, it changes nothing and is ignored (here and on later arcs)")]
     ArcNormalCentreZero(char),
+    /// In a printer program, `G90` while `M83` holds: E stays relative here (Marlin 1,
+    /// Prusa's firmware, RepRapFirmware); Marlin 2 reads the E words after it as
+    /// positions.
+    #[error("G90 while M83 holds: E is read as relative from here on, as Marlin 1, Prusa's firmware and RepRapFirmware read it; Marlin 2 reads E as positions after G90")]
+    EModeAfterG90,
     /// An arc centre word (I, J, K) on a straight move (G0, G1): no G2/G3 uses it.
     #[error("{0} word with no G2 or G3 to use it: the straight move ignores it")]
     CentreWordWithoutArc(char),
@@ -274,6 +279,7 @@ impl ErrorKind {
             ErrorKind::ArcZeroRadius => "check I/J/K or R",
             ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
             ErrorKind::ArcNormalCentreZero(_) => "remove it: LinuxCNC (`--flavor linuxcnc`) refuses a centre word off the active plane",
+            ErrorKind::EModeAfterG90 => "for Marlin 2, put M83 after the G90 (or post with --flavor reprap for RepRapFirmware, where G90 and G91 never change E)",
             ErrorKind::CentreWordWithoutArc(_) => "a missing G2/G3? give the arc's code, or remove the word (LinuxCNC and grbl refuse it; `--flavor linuxcnc` does too)",
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",

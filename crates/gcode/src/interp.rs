@@ -199,6 +199,8 @@ pub struct Interpreter {
     /// A zero centre word off the active plane (`K0` in G17) has been warned about: once
     /// a program, as a post writes one on every arc.
     warned_normal_centre: bool,
+    /// G90 under M83 has been warned about (see [`ErrorKind::EModeAfterG90`]).
+    warned_e_mode: bool,
     /// Inside a LinuxCNC `G5.2` … `G5.3` NURBS block (control points, not moves).
     nurbs: bool,
     /// A skipped macro block set the feed rate from a value lampost does not know: later
@@ -329,6 +331,7 @@ impl Interpreter {
             block_axes: 0,
             warned_macro: false,
             warned_normal_centre: false,
+            warned_e_mode: false,
             nurbs: false,
             feed_from_macro: false,
             offset_cache: [0.0; 9],
@@ -987,7 +990,10 @@ impl Interpreter {
                 if w.has_g(920) {
                     // G92 E: the extruder's position is set; nothing moves.
                     self.extrusion = e.value;
-                } else if self.e_relative || self.modal.distance == Distance::Incremental {
+                } else if self.e_relative
+                    || (self.modal.distance == Distance::Incremental
+                        && self.opts.flavor != crate::flavor::Flavor::RepRap)
+                {
                     self.extrusion += e.value;
                     self.pending_e = e.value;
                 } else {
@@ -1133,6 +1139,19 @@ impl Interpreter {
         w: &Words<'_, '_>,
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
+        // G90 while M83 holds: firmwares differ on what E is next. lampost keeps it
+        // relative, as Marlin 1, Prusa's firmware and RepRapFirmware do; Marlin 2 makes
+        // it absolute again. Said once, where it happens.
+        if let Some((gw, 900)) = w.g_in(GGroup::Distance) {
+            if self.e_relative
+                && self.opts.e_word == EWord::Extrusion
+                && self.opts.flavor != crate::flavor::Flavor::RepRap
+                && !self.warned_e_mode
+            {
+                self.warned_e_mode = true;
+                self.warn(b, out, ErrorKind::EModeAfterG90, Some(gw.span));
+            }
+        }
         let m = &mut self.modal;
         if let Some((_, c)) = w.g_in(GGroup::Plane) {
             m.plane = match c {

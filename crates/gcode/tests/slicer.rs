@@ -248,3 +248,41 @@ fn klipper_commands_are_named_not_misread() {
         assert!(!errors.is_empty(), "{line}");
     }
 }
+
+/// E's mode across G90/G91, where firmwares differ: after `M83` a `G90` keeps E relative
+/// (Marlin 1, Prusa, RepRapFirmware), said once in a warning because Marlin 2 reads E as
+/// positions there; under `--flavor reprap` G91 never makes E relative (RepRapFirmware:
+/// only M82/M83 set it), elsewhere it does (Marlin).
+#[test]
+fn e_mode_across_g90_and_g91_follows_the_flavour() {
+    let extruded = |src: &str, opts: Options| -> (Vec<Option<f64>>, Vec<(u32, ErrorKind)>) {
+        let mut e = Vec::new();
+        let mut d = Vec::new();
+        for ev in Stream::from_bytes(src.as_bytes(), opts, false) {
+            match ev.expect("in memory") {
+                Event::Move(m) => e.push(m.extruded),
+                Event::Diagnostic(x) => d.push((x.line, x.kind)),
+            }
+        }
+        (e, d)
+    };
+    let (e, d) = extruded("M83\nG90\nG1 X1 E1 F600\nG90\nG1 X2 E1\n", slicer());
+    assert_eq!(e, [Some(1.0), Some(1.0)], "E stays relative");
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0], (2, ErrorKind::EModeAfterG90));
+    let reprap = Options {
+        flavor: lampost_gcode::Flavor::RepRap,
+        ..slicer()
+    };
+    let (_, d) = extruded("M83\nG90\nG1 X1 E1 F600\n", reprap);
+    assert!(d.is_empty(), "RepRapFirmware: no doubt, {d:?}");
+    let g91 = "M82\nG91\nG1 X1 E1 F600\nG1 X1 E2\n";
+    let (e, _) = extruded(g91, reprap);
+    assert_eq!(
+        e,
+        [Some(1.0), Some(1.0)],
+        "RepRapFirmware: E absolute under G91"
+    );
+    let (e, _) = extruded(g91, slicer());
+    assert_eq!(e, [Some(1.0), Some(2.0)], "Marlin: G91 makes E relative");
+}
