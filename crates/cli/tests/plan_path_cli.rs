@@ -10,15 +10,21 @@ use common::*;
 /// `crates/plan/src/perimeter.rs`'s tests — but the per-point post refuses them where a
 /// loop starts with the axis tilted the other way from the last loop's end: an open
 /// finding, docs/plan.md.)
-#[test]
-fn a_block_is_planned_posted_and_verified() {
-    let dir = tempdir("plan-path");
+/// A 20 × 10 × 12 mm block, and it as an STL file in `dir`.
+fn block_stl(dir: &std::path::Path) -> (lampost_mesh::Mesh, std::path::PathBuf) {
     let mesh = lampost_mesh::box_mesh(
         lampost_mesh::P3::new(-10.0, -5.0, 0.0),
         lampost_mesh::P3::new(10.0, 5.0, 12.0),
     );
     let stl = dir.join("block.stl");
     std::fs::write(&stl, lampost_mesh::write_ascii_stl(&mesh, "block")).expect("stl");
+    (mesh, stl)
+}
+
+#[test]
+fn a_block_is_planned_posted_and_verified() {
+    let dir = tempdir("plan-path");
+    let (mesh, stl) = block_stl(&dir);
     let path = dir.join("block-path.csv");
     let o = lampost(&[
         "plan",
@@ -93,12 +99,7 @@ fn a_block_is_planned_posted_and_verified() {
 #[test]
 fn a_path_on_standard_input_is_told_from_a_program() {
     let dir = tempdir("plan-path-sniff");
-    let mesh = lampost_mesh::box_mesh(
-        lampost_mesh::P3::new(-10.0, -5.0, 0.0),
-        lampost_mesh::P3::new(10.0, 5.0, 12.0),
-    );
-    let stl = dir.join("block.stl");
-    std::fs::write(&stl, lampost_mesh::write_ascii_stl(&mesh, "block")).expect("stl");
+    let (_, stl) = block_stl(&dir);
     let planned = lampost(&[
         "plan",
         "path",

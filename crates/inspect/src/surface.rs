@@ -13,6 +13,27 @@ use crate::reduce::Reading;
 /// The most sampling points one plan takes.
 pub const MAX_SAMPLES: usize = 200_000;
 
+/// A sampling point added, within the bound on how many one plan may have.
+fn push_target(
+    out: &mut Vec<Target>,
+    id: String,
+    p: &Vector3<f64>,
+    n: &Vector3<f64>,
+    spacing: f64,
+) -> Result<(), InspectError> {
+    out.push(Target {
+        id,
+        point: [p.x, p.y, p.z],
+        normal: [n.x, n.y, n.z],
+    });
+    if out.len() > MAX_SAMPLES {
+        return Err(InspectError::Input(format!(
+            "--spacing {spacing} gives more than {MAX_SAMPLES} points: sample more coarsely"
+        )));
+    }
+    Ok(())
+}
+
 /// Sampling points on every triangle of `mesh`, about `spacing` apart: a triangle is cut
 /// into k² similar ones (k its longest edge over the spacing, rounded up) and each
 /// upright one's centroid is a point, with the triangle's outward normal (the mesh's
@@ -48,16 +69,7 @@ pub fn sample(mesh: &Mesh, spacing: f64) -> Result<Vec<Target>, InspectError> {
                 );
                 let p = a + (b - a) * u + (c - a) * v;
                 count += 1;
-                out.push(Target {
-                    id: format!("t{}-{count}", f + 1),
-                    point: [p.x, p.y, p.z],
-                    normal: [n.x, n.y, n.z],
-                });
-                if out.len() > MAX_SAMPLES {
-                    return Err(InspectError::Input(format!(
-                        "--spacing {spacing} gives more than {MAX_SAMPLES} points: sample more coarsely"
-                    )));
-                }
+                push_target(&mut out, format!("t{}-{count}", f + 1), &p, &n, spacing)?;
             }
         }
     }
@@ -201,16 +213,7 @@ pub fn sample_sections(
                     continue;
                 }
                 count += 1;
-                out.push(Target {
-                    id: format!("s{}-{count}", k + 1),
-                    point: [p.x, p.y, p.z],
-                    normal: [n.x, n.y, n.z],
-                });
-                if out.len() > MAX_SAMPLES {
-                    return Err(InspectError::Input(format!(
-                        "--spacing {spacing} gives more than {MAX_SAMPLES} points: sample more coarsely"
-                    )));
-                }
+                push_target(&mut out, format!("s{}-{count}", k + 1), &p, &n, spacing)?;
             }
         }
     }
