@@ -75,24 +75,27 @@ pub struct Sampling {
     pub sections: Vec<String>,
 }
 
-/// A mesh file in the machine's units (`units`: the file's, default the machine's).
+/// A mesh file in the machine's units (`units`: the file's, default the machine's; a
+/// 3MF in the units it says).
 fn mesh_in(
     m: &Machine,
     path: &str,
     units: Option<crate::mesh_cmds::MeshUnits>,
 ) -> Result<lampost_mesh::Mesh, CliError> {
-    use crate::mesh_cmds::MeshUnits;
-    let mesh = crate::mesh_cmds::read_mesh_file(path)?;
-    let factor = match (units, m.units) {
-        (Some(MeshUnits::Mm), lampost_kinematics::Units::Inch) => 1.0 / 25.4,
-        (Some(MeshUnits::In), lampost_kinematics::Units::Mm) => 25.4,
-        _ => 1.0,
-    };
-    Ok(if factor == 1.0 {
-        mesh
-    } else {
-        mesh.scaled(factor)
-    })
+    let want = crate::mesh_cmds::machine_units(m.units);
+    crate::mesh_cmds::read_mesh_in(path, units, want).map(|(mesh, _)| mesh)
+}
+
+/// The units of a measured file: those of the machine its header names (`# lampost
+/// inspect measured: machine NAME, …`), when that machine can be loaded.
+fn measured_units(text: &str) -> Option<lampost_mesh::Units> {
+    let head = text
+        .lines()
+        .next()?
+        .strip_prefix("# lampost inspect measured: machine ")?;
+    let name = head.split(',').next()?.trim();
+    let m = crate::kin_cmds::load_machine(name, &[]).ok()?;
+    Some(crate::mesh_cmds::machine_units(m.units))
 }
 
 /// `inspect plan`.
@@ -531,10 +534,16 @@ pub fn compare_cmd(measured: &str, a: &CompareArgs) -> Result<(), CliError> {
     };
     let part = match &a.mesh {
         Some(path) => {
-            let mut part = crate::mesh_cmds::read_mesh_file(path)?;
-            if let Some(crate::mesh_cmds::MeshUnits::In) = a.mesh_units {
-                part = part.scaled(25.4);
-            }
+            // In the measured points' units: those of the machine the file names.
+            let mut part = match measured_units(&text) {
+                Some(want) => crate::mesh_cmds::read_mesh_in(path, a.mesh_units, want)?.0,
+                None if a.mesh_units.is_some() => {
+                    return Err(CliError::usage(format!(
+                        "error: {name}: its header names no machine lampost can load, so its units are not known: leave out --mesh-units and give the mesh in the measured file's units\n"
+                    )))
+                }
+                None => crate::mesh_cmds::read_mesh_file(path)?,
+            };
             if let Some(f) = &previous {
                 for v in &mut part.vertices {
                     *v = f.apply(v);

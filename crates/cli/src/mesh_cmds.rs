@@ -89,27 +89,47 @@ fn read_mesh_format(path: &str) -> Result<(Mesh, Format), CliError> {
         .map_err(|e| located(path, &bytes, &e))
 }
 
-/// Read a mesh in millimetres: `--units` names the file's units (default mm).
-fn read_mm(path: &str, units: Option<MeshUnits>) -> Result<(Mesh, Units), CliError> {
+/// A mesh file in `want` units: a 3MF in the units it says (its model's `unit`; a
+/// units option with it is refused), any other in `given` (default: `want`). The one
+/// reading of a mesh's units for every command that takes a mesh (`mesh`, `plan`,
+/// `inspect`, `post --part`). Also the units the file was read in.
+pub fn read_mesh_in(
+    path: &str,
+    given: Option<MeshUnits>,
+    want: Units,
+) -> Result<(Mesh, Units), CliError> {
     let (mesh, format) = read_mesh_format(path)?;
-    if format == Format::ThreeMf {
-        // Already in millimetres, from the file's own unit.
-        if units.is_some() {
+    let from = if format == Format::ThreeMf {
+        // Read in millimetres, from the file's own unit.
+        if given.is_some() {
             return Err(CliError::usage(format!(
-                "error: {path}: a 3MF file says its units (its model's `unit`): leave out --units\n"
+                "error: {path}: a 3MF file says its units (its model's `unit`): leave out the units option\n"
             )));
         }
-        return Ok((mesh, Units::Mm));
+        Units::Mm
+    } else {
+        given.map_or(want, MeshUnits::units)
+    };
+    let mesh = if from == want {
+        mesh
+    } else {
+        mesh.scaled(from.to_mm() / want.to_mm())
+    };
+    Ok((mesh, from))
+}
+
+/// The mesh units of a machine's units.
+pub fn machine_units(u: lampost_kinematics::Units) -> Units {
+    match u {
+        lampost_kinematics::Units::Mm => Units::Mm,
+        lampost_kinematics::Units::Inch => Units::In,
     }
-    let u = units.map_or(Units::Mm, MeshUnits::units);
-    Ok((
-        if u == Units::Mm {
-            mesh
-        } else {
-            mesh.scaled(u.to_mm())
-        },
-        u,
-    ))
+}
+
+/// Read a mesh in millimetres: `--units` names the file's units (default mm).
+fn read_mm(path: &str, units: Option<MeshUnits>) -> Result<(Mesh, Units), CliError> {
+    let (mesh, u) = read_mesh_in(path, units, Units::Mm)?;
+    Ok((mesh, u))
 }
 
 pub(crate) fn write_out(output: Option<&str>, s: &[u8]) -> Result<(), CliError> {
@@ -460,4 +480,61 @@ fn csv(s: &Slicing) -> String {
         }
     }
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn box_3mf() -> String {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../fixtures/meshes/3mf/box.3mf"
+        )
+        .to_string()
+    }
+
+    fn extent(m: &Mesh) -> [f64; 3] {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for v in &m.vertices {
+            for k in 0..3 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]]
+    }
+
+    /// A 3MF says its units: read for an inch machine (the FADAL), the 10 × 20 × 30 mm
+    /// box is 10/25.4 × 20/25.4 × 30/25.4 in, whatever the command (inspect and
+    /// `post --part` took it as inches before); a units option with it is refused.
+    #[test]
+    fn a_3mf_is_read_in_the_units_it_says() {
+        let (mm, from) = read_mesh_in(&box_3mf(), None, Units::Mm).expect("reads");
+        assert_eq!(from, Units::Mm);
+        let (inch, _) = read_mesh_in(&box_3mf(), None, Units::In).expect("reads");
+        let (a, b) = (extent(&mm), extent(&inch));
+        for k in 0..3 {
+            assert!((a[k] - [10.0, 20.0, 30.0][k]).abs() < 1e-9, "{a:?}");
+            assert!((b[k] - a[k] / 25.4).abs() < 1e-12, "{b:?}");
+        }
+        assert!(read_mesh_in(&box_3mf(), Some(MeshUnits::In), Units::In).is_err());
+    }
+
+    /// Any other mesh is in the units given, else in those wanted.
+    #[test]
+    fn other_meshes_are_in_the_units_given_else_those_wanted() {
+        let stl = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../fixtures/meshes/block.stl"
+        );
+        let (as_is, from) = read_mesh_in(stl, None, Units::In).expect("reads");
+        assert_eq!(from, Units::In);
+        let (scaled, from) = read_mesh_in(stl, Some(MeshUnits::Mm), Units::In).expect("reads");
+        assert_eq!(from, Units::Mm);
+        let (a, b) = (extent(&as_is), extent(&scaled));
+        for k in 0..3 {
+            assert!((b[k] - a[k] / 25.4).abs() < 1e-12, "{a:?} {b:?}");
+        }
+    }
 }

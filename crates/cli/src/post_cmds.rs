@@ -99,22 +99,20 @@ fn part_mesh(
     let Some(path) = &pl.part else {
         return Ok(None);
     };
-    let mesh = crate::align_cmds::read_mesh(path)?;
+    let given = match pl.part_units.as_deref() {
+        Some("mm") => Some(crate::mesh_cmds::MeshUnits::Mm),
+        Some("inch") => Some(crate::mesh_cmds::MeshUnits::In),
+        _ => None,
+    };
+    let want = crate::mesh_cmds::machine_units(m.units);
+    let (mesh, _) = crate::mesh_cmds::read_mesh_in(path, given, want)?;
     let bad = |e: lampost_post::collide::CollideError| {
         CliError::failed(format!(
             "error: {path}: {e}\n  = help: export the part as an STL with finite coordinates\n"
         ))
     };
-    let mut part = lampost_post::collide::PartMesh::from_mesh(&mesh).map_err(bad)?;
+    let part = lampost_post::collide::PartMesh::from_mesh(&mesh).map_err(bad)?;
     let machine_mm = m.units == lampost_kinematics::Units::Mm;
-    let factor = match (pl.part_units.as_deref(), machine_mm) {
-        (Some("mm"), false) => 1.0 / 25.4,
-        (Some("inch"), true) => 25.4,
-        _ => 1.0,
-    };
-    if factor != 1.0 {
-        part = part.scaled(factor).map_err(bad)?;
-    }
     // A mesh in other units than it is read in is far larger (or smaller) than the machine.
     let (lo, hi) = part.bounds();
     let size = (hi - lo).norm();
