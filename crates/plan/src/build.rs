@@ -30,6 +30,10 @@ use crate::slice::{Slice, Slicing};
 pub const MAX_POINTS: f64 = 5e7;
 /// Most raster rays a layer may have (its width over the hatch).
 pub const MAX_RAYS: f64 = 1e6;
+/// How far past the offset-angle limit an angle may be by rounding alone, degrees: a
+/// wall leaning exactly at the limit (the twisted plate's ends at 45°) computes to 45 ±
+/// 1e-14, which is not over it.
+pub const ANGLE_ROUNDING_DEG: f64 = 1e-9;
 /// The smallest largest tool-axis turn between points, degrees.
 pub const MIN_TURN_DEG: f64 = 0.01;
 
@@ -567,7 +571,9 @@ fn plan_layer(
             for (li, l) in loops.iter_mut().enumerate() {
                 for (pi, q) in l.iter_mut().enumerate() {
                     let (mut ang, b) = g.offset(q.p, q.axis);
-                    if ang > opts.max_offset_deg && opts.approach == Approach::Tangent {
+                    if ang > opts.max_offset_deg + ANGLE_ROUNDING_DEG
+                        && opts.approach == Approach::Tangent
+                    {
                         if let Some(target) =
                             unit(q.p - g.point_at(b)).filter(|t| t.angle(&s.normal) <= max_tilt)
                         {
@@ -593,7 +599,7 @@ fn plan_layer(
                         }
                     }
                     offset_deg[li][pi] = ang;
-                    if ang > opts.max_offset_deg {
+                    if ang > opts.max_offset_deg + ANGLE_ROUNDING_DEG {
                         violations.push(Violation {
                             layer: s.index,
                             loop_index: li,

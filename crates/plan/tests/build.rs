@@ -369,3 +369,21 @@ fn the_twisted_plate_plans_with_the_tangent_approach_under_the_limit() {
         );
     }
 }
+
+/// A wall leaning exactly at the limit is not over it: the twisted plate's ends lean 45°
+/// and computed to 45.000000000000014°, which a 45° limit reported as a violation
+/// ("offset angle 45.00° over 45°").
+#[test]
+fn an_angle_at_the_limit_by_rounding_is_not_over_it() {
+    let m = lampost_plan::demo::twisted_plate(0.1, 3.0, 120, 20).expect("plate");
+    let s = slice(&m, &SliceOptions::parallel(P3::z(), 2.0)).expect("slices");
+    let r = Some(raster(1.5, 1.0, 90.0, 0.0));
+    let p = plan(&m, &s, &opts(r, Approach::Build, 45.0)).expect("plan");
+    let worst = p.worst_offset_deg();
+    // Past 45 by rounding only (what the old strict comparison called a violation).
+    assert!(worst > 45.0 && worst - 45.0 < 1e-9, "{worst}");
+    assert!(p.violations.is_empty(), "{:?}", p.violations.first());
+    // Just under the lean, they are over.
+    let q = plan(&m, &s, &opts(r, Approach::Build, 44.9)).expect("plan");
+    assert!(!q.violations.is_empty());
+}
