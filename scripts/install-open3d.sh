@@ -9,19 +9,6 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 dest="$here/.tools/py-o3d"
 py="$dest/bin/python"
 pins=(open3d-cpu==0.19.0 numpy==1.26.4)
-if [ ! -x "$py" ]; then
-  rm -rf "$dest"
-  python3 -m venv "$dest"
-fi
-if ! "$py" - "${pins[@]}" <<'PY' >/dev/null 2>&1
-import sys
-from importlib.metadata import version
-for pin in sys.argv[1:]:
-    name, want = pin.split("==")
-    assert version(name) == want, pin
-import open3d  # noqa: F401
-PY
-then
-  "$py" -m pip install --quiet --disable-pip-version-check "${pins[@]}"
-fi
+. "$here/scripts/lib/venv.sh"
+pinned_venv "$dest" "open3d" "${pins[@]}"
 "$py" -c "import open3d, numpy; print('distance oracle ready:', '$py', 'open3d', open3d.__version__, 'numpy', numpy.__version__)"

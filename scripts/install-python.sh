@@ -10,19 +10,6 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 dest="$here/.tools/py"
 py="$dest/bin/python"
 pins=(numpy==2.4.6 scipy==1.17.1 trimesh==5.2.0 rtree==1.4.1 networkx==3.6.1 shapely==2.2.0)
-if [ ! -x "$py" ]; then
-  rm -rf "$dest"
-  python3 -m venv "$dest"
-fi
-if ! "$py" - "${pins[@]}" <<'PY' >/dev/null 2>&1
-import sys
-from importlib.metadata import version
-for pin in sys.argv[1:]:
-    name, want = pin.split("==")
-    assert version(name) == want, pin
-import numpy, scipy, trimesh, rtree, networkx, shapely  # noqa: F401
-PY
-then
-  "$py" -m pip install --quiet --disable-pip-version-check "${pins[@]}"
-fi
+. "$here/scripts/lib/venv.sh"
+pinned_venv "$dest" "numpy scipy trimesh rtree networkx shapely" "${pins[@]}"
 "$py" -c "import trimesh, numpy, scipy, rtree; print('python oracle ready:', '$py', 'trimesh', trimesh.__version__, 'numpy', numpy.__version__, 'scipy', scipy.__version__, 'rtree', rtree.__version__)"

@@ -9,19 +9,6 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 dest="$here/.tools/py-rtb"
 py="$dest/bin/python"
 pins=(roboticstoolbox-python==1.5.0 spatialmath-python==1.1.18 rtb-data==2.0.0 numpy==2.4.6 scipy==1.17.1 matplotlib==3.11.2 ansitable==1.2.0)
-if [ ! -x "$py" ]; then
-  rm -rf "$dest"
-  python3 -m venv "$dest"
-fi
-if ! "$py" - "${pins[@]}" <<'PY' >/dev/null 2>&1
-import sys
-from importlib.metadata import version
-for pin in sys.argv[1:]:
-    name, want = pin.split("==")
-    assert version(name) == want, pin
-import roboticstoolbox  # noqa: F401
-PY
-then
-  "$py" -m pip install --quiet --disable-pip-version-check "${pins[@]}"
-fi
+. "$here/scripts/lib/venv.sh"
+pinned_venv "$dest" "roboticstoolbox" "${pins[@]}"
 "$py" -c "import roboticstoolbox as rtb, numpy; print('robot oracle ready:', '$py', 'roboticstoolbox', rtb.__version__, 'numpy', numpy.__version__)"
