@@ -421,8 +421,28 @@ impl Ctx {
         };
         match mode {
             0 => {
+                let mut fast = Vec::new();
                 for ev in Stream::from_bytes(input, opts, stop) {
-                    check(ev.map_err(|e| e.to_string())?)?;
+                    let ev = ev.map_err(|e| e.to_string())?;
+                    check(ev.clone())?;
+                    fast.push(ev);
+                }
+                // The fast lane for plain moves and the reference path agree.
+                let reference = Stream::from_bytes(input, opts, stop)
+                    .reference_only()
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| e.to_string())?;
+                if fast != reference {
+                    let i = fast
+                        .iter()
+                        .zip(&reference)
+                        .take_while(|(a, b)| a == b)
+                        .count();
+                    return Err(format!(
+                        "event {i}: the fast lane gave {:?}, the reference path {:?}",
+                        fast.get(i),
+                        reference.get(i)
+                    ));
                 }
             }
             1 | 2 => {

@@ -14,6 +14,7 @@ use serde::Serialize;
 use crate::ast::{Block, BlockKind, Item, Word};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::modal::*;
+use crate::parse::PlainMotion;
 
 /// What the E word means.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -504,6 +505,57 @@ impl Interpreter {
             return Ok(());
         }
         self.execute(b, &w, settings, out)
+    }
+
+    /// The fast lane's interpreter (see [`crate::stream`]): a plain straight move
+    /// ([`PlainMotion`]) run as [`Interpreter::block`] runs it, when the state lets it
+    /// run the common way (a program not ended, no NURBS block open, G0 or G1 in force
+    /// or named, feed per minute with a feed rate for G1, F not negative) and it has an
+    /// axis word. Then its move goes to `out` and `true` is returned; otherwise nothing
+    /// changes and `false` sends the line to the reference path, which also gives any
+    /// error. The two agree (property-tested in `stream.rs`).
+    pub(crate) fn plain_motion(
+        &mut self,
+        p: &PlainMotion,
+        line: u32,
+        out: &mut impl FnMut(Event),
+    ) -> bool {
+        let motion = match p.motion {
+            Some(0) => Motion::Rapid,
+            Some(_) => Motion::Linear,
+            None => self.modal.motion,
+        };
+        let feed = p.feed.unwrap_or(self.modal.feed);
+        let runs_plainly = !self.ended
+            && !self.nurbs
+            && p.axes != 0
+            && self.modal.feed_mode != FeedMode::InverseTime
+            && p.feed.is_none_or(|f| f >= 0.0)
+            && match motion {
+                Motion::Rapid => true,
+                Motion::Linear => feed > 0.0 || self.feed_from_macro,
+                _ => false,
+            };
+        if !runs_plainly {
+            return false;
+        }
+        // As `block` and `execute` run it: the block's axes, E unchanged, F, the motion
+        // mode (a named one ends any canned cycle's parameters), then the move.
+        self.block_axes = p.axes;
+        self.axes_named |= p.axes;
+        self.pending_e = 0.0;
+        self.modal.feed = feed;
+        if p.motion.is_some() {
+            self.modal.motion = motion;
+            self.canned = CannedParams::default();
+        }
+        let target = self.target_of(|a| (p.axes & (1 << a) != 0).then_some(p.values[a]), false);
+        let (kind, feed) = match motion {
+            Motion::Rapid => (MoveKind::Rapid, 0.0),
+            _ => (MoveKind::Linear, self.modal.feed),
+        };
+        self.emit(line, kind, target, feed, Origin::Block, out);
+        true
     }
 
     /// A line that is no G-code block: a grbl console command (`$H`, `$$`, `$32=1`, `?`).
@@ -1405,10 +1457,16 @@ impl Interpreter {
     }
 
     fn target(&self, w: &Words<'_, '_>, g53: bool) -> Position {
+        self.target_of(|a| w.get(AXES[a]), g53)
+    }
+
+    /// Where a block's axis words (`value(i)` for `AXES[i]`) take the tool.
+    #[inline]
+    fn target_of(&self, value: impl Fn(usize) -> Option<f64>, g53: bool) -> Position {
         let mut t = self.pos;
         let off = self.offset();
-        for (a, &l) in AXES.iter().enumerate() {
-            if let Some(v) = w.get(l) {
+        for a in 0..AXES.len() {
+            if let Some(v) = value(a) {
                 t[a] = if g53 {
                     v
                 } else {
@@ -1450,7 +1508,7 @@ impl Interpreter {
 
     fn emit(
         &mut self,
-        b: &Block<'_>,
+        line: u32,
         kind: MoveKind,
         end: Position,
         feed: f64,
@@ -1482,7 +1540,7 @@ impl Interpreter {
             extrusion: self.extrusion_now(),
             extruded: self.extruded_now(),
             modal: self.modal,
-            line: b.line,
+            line,
             origin,
             axes_named: self.axes_named,
             block_axes: self.block_axes,
@@ -1520,7 +1578,7 @@ impl Interpreter {
                 )),
                 None,
             );
-            self.emit(b, MoveKind::Probe, target, feed, origin, out);
+            self.emit(b.line, MoveKind::Probe, target, feed, origin, out);
             return Ok(());
         }
         match self.modal.motion {
@@ -1534,7 +1592,7 @@ impl Interpreter {
             )),
             Motion::Rapid => {
                 self.centre_words_unused(b, w, out)?;
-                self.emit(b, MoveKind::Rapid, target, 0.0, origin, out);
+                self.emit(b.line, MoveKind::Rapid, target, 0.0, origin, out);
                 Ok(())
             }
             Motion::Linear | Motion::Thread | Motion::Probe => {
@@ -1542,7 +1600,7 @@ impl Interpreter {
                     self.centre_words_unused(b, w, out)?;
                 }
                 let feed = self.feed_for(b, w)?;
-                self.emit(b, MoveKind::Linear, target, feed, origin, out);
+                self.emit(b.line, MoveKind::Linear, target, feed, origin, out);
                 Ok(())
             }
             Motion::ArcCw | Motion::ArcCcw => self.arc(b, w, target, out),
@@ -1732,7 +1790,7 @@ impl Interpreter {
         center[u] = cu;
         center[v] = cv;
         self.emit(
-            b,
+            b.line,
             MoveKind::Arc {
                 clockwise: cw,
                 center,
@@ -1898,13 +1956,13 @@ impl Interpreter {
             // Preliminary: up to the R plane if below it.
             if self.pos[Z] < r_abs {
                 let t = at(self.pos, r_abs);
-                self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
             }
             let t = at(xy, self.pos[Z]);
-            self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+            self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
             if self.pos[Z] != r_abs {
                 let t = at(self.pos, r_abs);
-                self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
             }
             match code {
                 730 | 830 => {
@@ -1921,42 +1979,42 @@ impl Interpreter {
                         };
                         if code == 830 && depth < r_abs {
                             let t = at(self.pos, depth + delta);
-                            self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                            self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                         }
                         let t = at(self.pos, next);
-                        self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                        self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                         depth = next;
                         if depth > bottom {
                             let up = if code == 830 { r_abs } else { depth + delta };
                             let t = at(self.pos, up);
-                            self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                            self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                         }
                     }
                     let t = at(self.pos, clear);
-                    self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                 }
                 840 | 850 => {
                     // Feed in, feed out to R, then rapid to the clearance level.
                     let t = at(self.pos, bottom);
-                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                     let t = at(self.pos, r_abs);
-                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                     let t = at(self.pos, clear);
-                    self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                 }
                 890 => {
                     // Feed in, dwell, feed all the way out to the clearance level.
                     let t = at(self.pos, bottom);
-                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                     let t = at(self.pos, clear);
-                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                 }
                 _ => {
                     // 81, 82 (dwell at the bottom), 86 (spindle stops at the bottom).
                     let t = at(self.pos, bottom);
-                    self.emit(b, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                     let t = at(self.pos, clear);
-                    self.emit(b, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+                    self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                 }
             }
             // Absolute repeats drill the same hole again; incremental ones step on.

@@ -100,44 +100,29 @@ fn scan_number(b: &[u8]) -> Option<(usize, f64)> {
     const POW10: [f64; 16] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
     ];
-    let mut i = 0;
-    let negative = match b.first() {
-        Some(b'-') => {
-            i = 1;
-            true
-        }
-        Some(b'+') => {
-            i = 1;
-            false
-        }
-        _ => false,
-    };
+    let mut i = usize::from(matches!(b.first(), Some(b'-' | b'+')));
+    let negative = i == 1 && b[0] == b'-';
+    // The digits' value (wrapping: a number of more than 15 digits is refused below,
+    // before its value is used).
     let mut mantissa: u64 = 0;
-    let mut digits = 0usize;
     let int_start = i;
-    while i < b.len() && b[i].is_ascii_digit() {
-        mantissa = mantissa * 10 + u64::from(b[i] - b'0');
-        digits += 1;
+    while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
         i += 1;
-        if digits > 15 {
-            return None;
-        }
     }
     let int_digits = i - int_start;
     let mut decimals = 0usize;
-    if i < b.len() && b[i] == b'.' {
+    if b.get(i) == Some(&b'.') {
         i += 1;
-        while i < b.len() && b[i].is_ascii_digit() {
-            mantissa = mantissa * 10 + u64::from(b[i] - b'0');
-            digits += 1;
-            decimals += 1;
+        let frac_start = i;
+        while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
             i += 1;
-            if digits > 15 {
-                return None;
-            }
         }
+        decimals = i - frac_start;
     }
-    if int_digits == 0 && decimals == 0 {
+    let digits = int_digits + decimals;
+    if digits == 0 || digits > 15 {
         return None;
     }
     let v = mantissa as f64 / POW10[decimals];
@@ -461,6 +446,87 @@ fn simple_words<'a>(
         }
     }
     true
+}
+
+/// A line of plain motion (see [`plain_motion`]): what the interpreter's fast lane
+/// needs of it, read straight from the bytes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PlainMotion {
+    /// `G0` or `G1` (as codes in tenths: 0 or 10), when the line names one.
+    pub motion: Option<u16>,
+    /// The axes with a word, bit `i` for `AXES[i]`.
+    pub axes: u16,
+    /// The axis words' values, by index in `AXES` (0 where `axes` has no bit).
+    pub values: [f64; 9],
+    /// The F word's value.
+    pub feed: Option<f64>,
+}
+
+/// The fast lane's reading of a line (see [`crate::stream`]): the common straight move
+/// of CAM output, `[N…] [G0|G1] axis words [F…]` in any order, each letter once, every
+/// number in its common spelling ([`scan_number`]), blanks between words, nothing else
+/// (no comment, no E, no other letter or code). `None` for anything else, which the
+/// reference path ([`parse_line_with`], then [`crate::Interpreter::block`]) reads; where
+/// this answers, the two give the same events (property-tested in `stream.rs`).
+const NOT_PLAIN: u8 = 255;
+const PLAIN_G: u8 = 254;
+const PLAIN_F: u8 = 253;
+const PLAIN_N: u8 = 252;
+
+/// What each letter (`A` first) is to [`plain_motion`]: an axis (its index in `AXES`),
+/// G, F, N, or a letter that sends the line to the reference path.
+const PLAIN_LETTERS: [u8; 26] = {
+    let mut kinds = [NOT_PLAIN; 26];
+    let mut i = 0;
+    while i < crate::modal::AXES.len() {
+        kinds[(crate::modal::AXES[i] - b'A') as usize] = i as u8;
+        i += 1;
+    }
+    kinds[(b'G' - b'A') as usize] = PLAIN_G;
+    kinds[(b'F' - b'A') as usize] = PLAIN_F;
+    kinds[(b'N' - b'A') as usize] = PLAIN_N;
+    kinds
+};
+
+pub(crate) fn plain_motion(bytes: &[u8]) -> Option<PlainMotion> {
+    let mut p = PlainMotion {
+        motion: None,
+        axes: 0,
+        values: [0.0; 9],
+        feed: None,
+    };
+    let mut seen: u32 = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        let c = bytes[i];
+        if c == b' ' || c == b'\t' {
+            i += 1;
+            continue;
+        }
+        // Letters (either case) only, and each once.
+        let index = (c | 0x20).wrapping_sub(b'a');
+        let kind = *PLAIN_LETTERS.get(usize::from(index))?;
+        let bit = 1u32 << index;
+        if kind == NOT_PLAIN || seen & bit != 0 {
+            return None;
+        }
+        seen |= bit;
+        let (len, value) = scan_number(&bytes[i + 1..])?;
+        match kind {
+            PLAIN_G => match Word::code_of(value) {
+                Some(code @ (0 | 10)) => p.motion = Some(code),
+                _ => return None,
+            },
+            PLAIN_F => p.feed = Some(value),
+            PLAIN_N => {}
+            axis => {
+                p.axes |= 1 << axis;
+                p.values[usize::from(axis)] = value;
+            }
+        }
+        i += 1 + len;
+    }
+    Some(p)
 }
 
 /// The parser's reference path: every line [`simple_words`] does not take (and, in the

@@ -8,7 +8,7 @@ use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
-use crate::parse::{parse_line_with, parse_str_with};
+use crate::parse::{parse_line_with, parse_str_with, plain_motion, MAX_LINE_BYTES};
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
@@ -87,6 +87,9 @@ pub struct Stream<S> {
     exponents: bool,
     /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
     params: Option<Box<Params>>,
+    /// Plain straight moves take the fast lane ([`plain_motion`]); off only in the test
+    /// that compares the two.
+    fast_lane: bool,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -111,12 +114,21 @@ impl<S: LineSource> Stream<S> {
             any_content: false,
             exponents: opts.e_word == EWord::Extrusion,
             params,
+            fast_lane: true,
         }
     }
 
     /// The interpreter, for its final state.
     pub fn interpreter(&self) -> &Interpreter {
         &self.interp
+    }
+
+    /// The same stream with every line read the reference way: no fast lane for plain
+    /// straight moves. The events are the same (property-tested, and compared by the
+    /// fuzz's `gcode` target); for tests and fuzzing that compare the two.
+    pub fn reference_only(mut self) -> Self {
+        self.fast_lane = false;
+        self
     }
 }
 
@@ -173,83 +185,104 @@ impl<S: LineSource> Iterator for Stream<S> {
             // error, then the source's diagnostics, and the loop hands them out. (Events
             // go straight into the queue: moving a large `Event` through an `Option` on
             // the way out costs more than the queue.)
-            let mut block = Block::empty(line.number, line.offset);
-            let mut parsed = match line.too_long() {
-                Some(d) => Err(d),
-                None => match line.text {
-                    Some(text) => {
-                        parse_str_with(text, line.number, line.offset, &mut block, self.exponents)
-                    }
-                    None => parse_line_with(
-                        line.bytes,
-                        line.number,
-                        line.offset,
-                        &mut block,
-                        self.exponents,
-                    ),
-                },
-            };
-            // A printer (slicer) program's line that is no G-code but a firmware's
-            // extended command (`exponents`: E is extrusion, the program is a printer's):
-            // a warning naming it, and an empty block.
-            if parsed.is_err() && self.exponents {
-                if let Some((kind, len)) = firmware_command(line.bytes) {
-                    queue.push_back(Event::Diagnostic(Diagnostic::at(
-                        Severity::Warning,
-                        kind,
-                        line.number,
-                        line.offset,
-                        line.bytes,
-                        line.bytes.len() - line.bytes.trim_ascii_start().len(),
-                        len,
-                    )));
-                    block = Block::empty(line.number, line.offset);
-                    parsed = Ok(());
-                }
-            }
-            // Macro lines only: the flavour's evaluation (plain lines never come here;
-            // under Macro B also lines the parser refuses and G65 blocks).
             let mut control = None;
             let mut call = None;
-            if let Some(params) = self.params.as_deref_mut() {
-                if params.is_macro_b() {
-                    if block.kind != BlockKind::Words || parsed.is_err() || has_g65(&block) {
-                        // The system variables read the state after the block before.
-                        params.after_block(&self.interp);
-                        parsed = evaluate_macro_b(
-                            &line,
-                            &mut block,
-                            params,
-                            parsed,
-                            &mut control,
-                            &mut call,
-                        );
-                    }
-                } else if block.kind != BlockKind::Words && parsed.is_ok() {
-                    parsed = evaluate(&line, &mut block, params, &mut control);
+            // The fast lane: a plain straight move, read and run without a `Block`.
+            let plain = self.fast_lane && line.len <= MAX_LINE_BYTES && {
+                match plain_motion(line.bytes) {
+                    Some(p) => self
+                        .interp
+                        .plain_motion(&p, line.number, &mut |e| queue.push_back(e)),
+                    None => false,
                 }
-            }
-            let failed = match parsed {
-                Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
-                    Ok(()) => {
-                        if let Some(params) = self.params.as_deref_mut() {
-                            // The queue held nothing before this block: its events are
-                            // exactly the block's.
-                            after_moves(params, queue);
-                        }
-                        false
+            };
+            let failed = if plain {
+                if let Some(params) = self.params.as_deref_mut() {
+                    after_moves(params, queue);
+                }
+                false
+            } else {
+                let mut block = Block::empty(line.number, line.offset);
+                let mut parsed = match line.too_long() {
+                    Some(d) => Err(d),
+                    None => match line.text {
+                        Some(text) => parse_str_with(
+                            text,
+                            line.number,
+                            line.offset,
+                            &mut block,
+                            self.exponents,
+                        ),
+                        None => parse_line_with(
+                            line.bytes,
+                            line.number,
+                            line.offset,
+                            &mut block,
+                            self.exponents,
+                        ),
+                    },
+                };
+                // A printer (slicer) program's line that is no G-code but a firmware's
+                // extended command (`exponents`: E is extrusion, the program is a printer's):
+                // a warning naming it, and an empty block.
+                if parsed.is_err() && self.exponents {
+                    if let Some((kind, len)) = firmware_command(line.bytes) {
+                        queue.push_back(Event::Diagnostic(Diagnostic::at(
+                            Severity::Warning,
+                            kind,
+                            line.number,
+                            line.offset,
+                            line.bytes,
+                            line.bytes.len() - line.bytes.trim_ascii_start().len(),
+                            len,
+                        )));
+                        block = Block::empty(line.number, line.offset);
+                        parsed = Ok(());
                     }
+                }
+                // Macro lines only: the flavour's evaluation (plain lines never come here;
+                // under Macro B also lines the parser refuses and G65 blocks).
+                if let Some(params) = self.params.as_deref_mut() {
+                    if params.is_macro_b() {
+                        if block.kind != BlockKind::Words || parsed.is_err() || has_g65(&block) {
+                            // The system variables read the state after the block before.
+                            params.after_block(&self.interp);
+                            parsed = evaluate_macro_b(
+                                &line,
+                                &mut block,
+                                params,
+                                parsed,
+                                &mut control,
+                                &mut call,
+                            );
+                        }
+                    } else if block.kind != BlockKind::Words && parsed.is_ok() {
+                        parsed = evaluate(&line, &mut block, params, &mut control);
+                    }
+                }
+                let failed = match parsed {
+                    Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
+                        Ok(()) => {
+                            if let Some(params) = self.params.as_deref_mut() {
+                                // The queue held nothing before this block: its events are
+                                // exactly the block's.
+                                after_moves(params, queue);
+                            }
+                            false
+                        }
+                        Err(d) => {
+                            queue.push_back(Event::Diagnostic(d));
+                            true
+                        }
+                    },
                     Err(d) => {
                         queue.push_back(Event::Diagnostic(d));
                         true
                     }
-                },
-                Err(d) => {
-                    queue.push_back(Event::Diagnostic(d));
-                    true
-                }
+                };
+                drop(block);
+                failed
             };
-            drop(block);
             let mut failed = failed;
             if let (Some((text, number, offset)), Some(params)) =
                 (control, self.params.as_deref_mut())
@@ -469,4 +502,127 @@ fn firmware_command(line: &[u8]) -> Option<(ErrorKind, usize)> {
         ErrorKind::FirmwareMacro(shown)
     };
     Some((kind, text_end))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flavor::Flavor;
+    use proptest::prelude::*;
+
+    /// Every event of `text` read with the fast lane on or off.
+    fn events(text: &str, flavor: Flavor, order: Option<Order>, fast_lane: bool) -> Vec<Event> {
+        let opts = flavor.options(Options::default(), None);
+        fn collect<S: LineSource>(mut s: Stream<S>, fast_lane: bool) -> Vec<Event> {
+            s.fast_lane = fast_lane;
+            s.map(|e| e.expect("in-memory input")).collect()
+        }
+        match order {
+            None => collect(Stream::from_bytes(text.as_bytes(), opts, false), fast_lane),
+            Some(order) => collect(
+                Stream::new(
+                    ProgramReader::new(io::Cursor::new(text.as_bytes()), order),
+                    opts,
+                    false,
+                ),
+                fast_lane,
+            ),
+        }
+    }
+
+    /// A word of a random line: the plain lane's words in every spelling, and the codes,
+    /// words and forms around them that change how a plain line runs or send it the
+    /// reference way.
+    fn token() -> impl Strategy<Value = String> {
+        let number = prop_oneof![
+            6 => "[+-]?[0-9]{0,3}(\\.[0-9]{0,4})?",
+            1 => "[0-9]{14,17}",
+            1 => "-?[0-9]\\.[0-9]e[+-]?[0-9]",
+            1 => Just("-0".to_string()),
+        ];
+        prop_oneof![
+            8 => ("[XYZABCUVWxyzabc]", number.clone()).prop_map(|(l, n)| format!("{l}{n}")),
+            3 => ("[FNfn]", number.clone()).prop_map(|(l, n)| format!("{l}{n}")),
+            1 => ("[EIJKRSTHLPQD]", number).prop_map(|(l, n)| format!("{l}{n}")),
+            4 => prop_oneof![
+                Just("G0"), Just("G1"), Just("G00"), Just("G01"), Just("g1"), Just("G1.0"),
+                Just("G-0"), Just("G0.1"), Just("G2"), Just("G3"), Just("G90"), Just("G91"),
+                Just("G20"), Just("G21"), Just("G93"), Just("G94"), Just("G95"), Just("G80"),
+                Just("G81"), Just("G53"), Just("G92"), Just("G54"), Just("G55"), Just("G5.2"),
+                Just("G5.3"), Just("G38.2"), Just("G33"), Just("G28"), Just("G4"),
+            ].prop_map(str::to_string),
+            2 => prop_oneof![
+                Just("M2"), Just("M30"), Just("M3"), Just("M5"), Just("M82"), Just("M83"),
+                Just("M98"), Just("M99"), Just("O100"), Just("T1"), Just("M6"),
+            ].prop_map(str::to_string),
+            1 => prop_oneof![
+                Just("(c)"), Just(";c"), Just("/"), Just("#1=2"), Just("[1]"), Just("%"),
+                Just("X"), Just("\t"), Just("é"), Just("\r"), Just("*"), Just("X#1"),
+            ].prop_map(str::to_string),
+        ]
+    }
+
+    fn program() -> impl Strategy<Value = String> {
+        let line = (
+            proptest::collection::vec(token(), 0..6),
+            proptest::collection::vec(prop_oneof![Just(""), Just(" "), Just("  ")], 6),
+        )
+            .prop_map(|(tokens, joins)| {
+                let mut line = String::new();
+                for (t, j) in tokens.iter().zip(&joins) {
+                    line.push_str(t);
+                    line.push_str(j);
+                }
+                line
+            });
+        proptest::collection::vec(line, 0..40).prop_map(|lines| lines.join("\n"))
+    }
+
+    fn flavor() -> impl Strategy<Value = Flavor> {
+        prop_oneof![
+            Just(Flavor::LinuxCnc),
+            Just(Flavor::Fanuc),
+            Just(Flavor::Haas),
+            Just(Flavor::Fadal),
+            Just(Flavor::Mach3),
+            Just(Flavor::Marlin),
+            Just(Flavor::RepRap),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(800))]
+        /// The fast lane (`plain_motion`, parser and interpreter) gives exactly the
+        /// events of the reference path, whatever comes before and around plain lines.
+        #[test]
+        fn the_fast_lane_agrees_with_the_reference_path(
+            text in program(),
+            flavor in flavor(),
+            order in prop_oneof![Just(None), Just(Some(Order::File)), Just(Some(Order::Execution))],
+        ) {
+            let fast = events(&text, flavor, order, true);
+            let reference = events(&text, flavor, order, false);
+            prop_assert_eq!(fast, reference, "{:?}", text);
+        }
+    }
+
+    /// The property's programs do take the fast lane (a test that the comparison above
+    /// compares something).
+    #[test]
+    fn plain_lines_take_the_fast_lane() {
+        let text = "G21 G90\nG0 X1 Y2\nG1 X3 F100\nN10 y4.5 z-1.\nX5\nG2 X0 Y0 I1 J1\n";
+        let mut s = Stream::from_bytes(text.as_bytes(), Options::default(), false);
+        let mut plain = 0;
+        while let Some(line) = s.src.next() {
+            if let Some(p) = plain_motion(line.bytes) {
+                plain += 1;
+                assert!(p.axes != 0, "{:?}", line.bytes);
+            }
+        }
+        assert_eq!(plain, 4);
+        assert_eq!(
+            events(text, Flavor::Fadal, None, true),
+            events(text, Flavor::Fadal, None, false)
+        );
+    }
 }
