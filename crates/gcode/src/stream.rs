@@ -611,9 +611,8 @@ mod tests {
     #[test]
     fn plain_lines_take_the_fast_lane() {
         let text = "G21 G90\nG0 X1 Y2\nG1 X3 F100\nN10 y4.5 z-1.\nX5\nG2 X0 Y0 I1 J1\n";
-        let mut s = Stream::from_bytes(text.as_bytes(), Options::default(), false);
         let mut plain = 0;
-        while let Some(line) = s.src.next() {
+        for line in Lines::new(text.as_bytes()) {
             if let Some(p) = plain_motion(line.bytes) {
                 plain += 1;
                 assert!(p.axes != 0, "{:?}", line.bytes);
