@@ -507,13 +507,15 @@ impl Interpreter {
         self.execute(b, &w, settings, out)
     }
 
-    /// The fast lane's interpreter (see [`crate::stream`]): a plain straight move
+    /// The fast lane's interpreter (see [`crate::stream`]): a plain move
     /// ([`PlainMotion`]) run as [`Interpreter::block`] runs it, when the state lets it
-    /// run the common way (a program not ended, no NURBS block open, G0 or G1 in force
-    /// or named, feed per minute with a feed rate for G1, F not negative) and it has an
-    /// axis word. Then its move goes to `out` and `true` is returned; otherwise nothing
-    /// changes and `false` sends the line to the reference path, which also gives any
-    /// error. The two agree (property-tested in `stream.rs`).
+    /// run the common way (a program not ended, no NURBS block open, G0 to G3 in force
+    /// or named, feed per minute with a feed rate for a feed move, F not negative), it
+    /// has an axis word, centre words only on an arc and in its plane, and an arc passes
+    /// the checks of its radius. Then its move goes to `out` and `true` is returned;
+    /// otherwise nothing changes and `false` sends the line to the reference path,
+    /// which also gives any error or warning. The two agree (property-tested in
+    /// `stream.rs`, and compared by the fuzz's `gcode` target).
     pub(crate) fn plain_motion(
         &mut self,
         p: &PlainMotion,
@@ -522,38 +524,62 @@ impl Interpreter {
     ) -> bool {
         let motion = match p.motion {
             Some(0) => Motion::Rapid,
-            Some(_) => Motion::Linear,
+            Some(10) => Motion::Linear,
+            Some(20) => Motion::ArcCw,
+            Some(_) => Motion::ArcCcw,
             None => self.modal.motion,
         };
-        let feed = p.feed.unwrap_or(self.modal.feed);
+        let modal_feed = p.feed.unwrap_or(self.modal.feed);
         let runs_plainly = !self.ended
             && !self.nurbs
             && p.axes != 0
             && self.modal.feed_mode != FeedMode::InverseTime
             && p.feed.is_none_or(|f| f >= 0.0)
             && match motion {
-                Motion::Rapid => true,
-                Motion::Linear => feed > 0.0 || self.feed_from_macro,
+                Motion::Rapid => p.centres == 0,
+                Motion::Linear => p.centres == 0 && (modal_feed > 0.0 || self.feed_from_macro),
+                Motion::ArcCw | Motion::ArcCcw => modal_feed > 0.0 || self.feed_from_macro,
                 _ => false,
             };
         if !runs_plainly {
             return false;
         }
+        let target = self.target_of(|a| (p.axes & (1 << a) != 0).then_some(p.values[a]), false);
+        let (kind, feed) = match motion {
+            Motion::Rapid => (MoveKind::Rapid, 0.0),
+            Motion::Linear => (MoveKind::Linear, modal_feed),
+            _ => {
+                let plane = self.modal.plane;
+                let (u, v, n) = plane.axes();
+                // Centre words in the plane only, one at least.
+                if p.centres & (1 << n) != 0 || p.centres & (1 << u | 1 << v) == 0 {
+                    return false;
+                }
+                let Ok((cu, cv)) = self.centre_of(p.centre[u], p.centre[v], &target) else {
+                    return false;
+                };
+                let mut center = [self.pos[0], self.pos[1], self.pos[2]];
+                center[u] = cu;
+                center[v] = cv;
+                let arc = MoveKind::Arc {
+                    clockwise: motion == Motion::ArcCw,
+                    center,
+                    plane,
+                    turns: 1,
+                };
+                (arc, modal_feed)
+            }
+        };
         // As `block` and `execute` run it: the block's axes, E unchanged, F, the motion
         // mode (a named one ends any canned cycle's parameters), then the move.
         self.block_axes = p.axes;
         self.axes_named |= p.axes;
         self.pending_e = 0.0;
-        self.modal.feed = feed;
+        self.modal.feed = modal_feed;
         if p.motion.is_some() {
             self.modal.motion = motion;
             self.canned = CannedParams::default();
         }
-        let target = self.target_of(|a| (p.axes & (1 << a) != 0).then_some(p.values[a]), false);
-        let (kind, feed) = match motion {
-            Motion::Rapid => (MoveKind::Rapid, 0.0),
-            _ => (MoveKind::Linear, self.modal.feed),
-        };
         self.emit(line, kind, target, feed, Origin::Block, out);
         true
     }
@@ -1515,6 +1541,20 @@ impl Interpreter {
         origin: Origin,
         out: &mut impl FnMut(Event),
     ) {
+        out(Event::Move(self.make_move(line, kind, end, feed, origin)));
+    }
+
+    /// The move from the tool's position to `end` (machine frame), reported in the work
+    /// system in force; the tool is then at `end`.
+    #[inline(always)]
+    fn make_move(
+        &mut self,
+        line: u32,
+        kind: MoveKind,
+        end: Position,
+        feed: f64,
+        origin: Origin,
+    ) -> Move {
         let kind = match kind {
             MoveKind::Arc {
                 clockwise,
@@ -1532,7 +1572,7 @@ impl Interpreter {
             }
             k => k,
         };
-        out(Event::Move(Move {
+        let m = Move {
             kind,
             start: self.to_program(self.pos),
             end: self.to_program(end),
@@ -1544,8 +1584,9 @@ impl Interpreter {
             origin,
             axes_named: self.axes_named,
             block_axes: self.block_axes,
-        }));
+        };
         self.pos = end;
+        m
     }
 
     fn motion(
@@ -1690,9 +1731,9 @@ impl Interpreter {
             }
             None => 1,
         };
-        let (spiral_tol, radius_tol) = match self.modal.units {
-            Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
-            Units::Mm => (ARC_SPIRAL_TOLERANCE.1, ARC_RADIUS_TOLERANCE.1),
+        let radius_tol = match self.modal.units {
+            Units::Inch => ARC_RADIUS_TOLERANCE.0,
+            Units::Mm => ARC_RADIUS_TOLERANCE.1,
         };
         let (su, sv) = (self.pos[u], self.pos[v]);
         let (eu, ev) = (target[u], target[v]);
@@ -1711,36 +1752,8 @@ impl Interpreter {
             (true, None) => {
                 let iu = w.get(centre_letter(u)).unwrap_or(0.0);
                 let iv = w.get(centre_letter(v)).unwrap_or(0.0);
-                let (cu, cv) = match self.modal.arc_distance {
-                    Distance::Incremental => (su + iu, sv + iv),
-                    Distance::Absolute => {
-                        let off = self.offset();
-                        (iu + off[u], iv + off[v])
-                    }
-                };
-                let r1 = (su - cu).hypot(sv - cv);
-                let r2 = (eu - cu).hypot(ev - cv);
-                if r1 < radius_tol || r2 < radius_tol {
-                    return Err(diag(b, Severity::Error, ErrorKind::ArcZeroRadius, None));
-                }
-                let diff = (r1 - r2).abs();
-                let relative = diff / r1.max(r2);
-                if diff > 100.0 * spiral_tol
-                    || (relative > ARC_SPIRAL_RELATIVE && diff > spiral_tol)
-                {
-                    return Err(diag(
-                        b,
-                        Severity::Error,
-                        ErrorKind::ArcRadiusMismatch {
-                            start: r1,
-                            end: r2,
-                            diff,
-                            tolerance: spiral_tol,
-                        },
-                        None,
-                    ));
-                }
-                (cu, cv)
+                self.centre_of(iu, iv, &target)
+                    .map_err(|kind| diag(b, Severity::Error, kind, None))?
             }
             (false, Some(rw)) => {
                 let r = rw.value;
@@ -1803,6 +1816,42 @@ impl Interpreter {
             out,
         );
         Ok(())
+    }
+
+    /// The centre (in the plane's axes) of an arc from the tool's position to `target`
+    /// given by its centre words `iu`, `iv`, with LinuxCNC's checks: not a zero radius,
+    /// and the radii at the two ends within the spiral tolerance.
+    fn centre_of(&self, iu: f64, iv: f64, target: &Position) -> Result<(f64, f64), ErrorKind> {
+        let (u, v, _) = self.modal.plane.axes();
+        let (spiral_tol, radius_tol) = match self.modal.units {
+            Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
+            Units::Mm => (ARC_SPIRAL_TOLERANCE.1, ARC_RADIUS_TOLERANCE.1),
+        };
+        let (su, sv) = (self.pos[u], self.pos[v]);
+        let (eu, ev) = (target[u], target[v]);
+        let (cu, cv) = match self.modal.arc_distance {
+            Distance::Incremental => (su + iu, sv + iv),
+            Distance::Absolute => {
+                let off = self.offset();
+                (iu + off[u], iv + off[v])
+            }
+        };
+        let r1 = (su - cu).hypot(sv - cv);
+        let r2 = (eu - cu).hypot(ev - cv);
+        if r1 < radius_tol || r2 < radius_tol {
+            return Err(ErrorKind::ArcZeroRadius);
+        }
+        let diff = (r1 - r2).abs();
+        let relative = diff / r1.max(r2);
+        if diff > 100.0 * spiral_tol || (relative > ARC_SPIRAL_RELATIVE && diff > spiral_tol) {
+            return Err(ErrorKind::ArcRadiusMismatch {
+                start: r1,
+                end: r2,
+                diff,
+                tolerance: spiral_tol,
+            });
+        }
+        Ok((cu, cv))
     }
 
     fn canned_cycle(

@@ -125,7 +125,11 @@ fn scan_number(b: &[u8]) -> Option<(usize, f64)> {
     if digits == 0 || digits > 15 {
         return None;
     }
-    let v = mantissa as f64 / POW10[decimals];
+    // Whole numbers (`G1`, `F1200.`) need no division (by 1: the same value).
+    let v = match decimals {
+        0 => mantissa as f64,
+        d => mantissa as f64 / POW10[d],
+    };
     Some((i, if negative { -v } else { v }))
 }
 
@@ -452,7 +456,8 @@ fn simple_words<'a>(
 /// needs of it, read straight from the bytes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PlainMotion {
-    /// `G0` or `G1` (as codes in tenths: 0 or 10), when the line names one.
+    /// `G0`, `G1`, `G2` or `G3` (as codes in tenths: 0, 10, 20, 30), when the line
+    /// names one.
     pub motion: Option<u16>,
     /// The axes with a word, bit `i` for `AXES[i]`.
     pub axes: u16,
@@ -460,10 +465,14 @@ pub(crate) struct PlainMotion {
     pub values: [f64; 9],
     /// The F word's value.
     pub feed: Option<f64>,
+    /// The centre words I, J, K given, bit `i` for `IJK[i]`.
+    pub centres: u8,
+    /// Their values, by index (0 where `centres` has no bit).
+    pub centre: [f64; 3],
 }
 
-/// The fast lane's reading of a line (see [`crate::stream`]): the common straight move
-/// of CAM output, `[N…] [G0|G1] axis words [F…]` in any order, each letter once, every
+/// The fast lane's reading of a line (see [`crate::stream`]): the common move of CAM
+/// output, `[N…] [G0|G1|G2|G3] axis words [I… J… K…] [F…]` in any order, each letter once, every
 /// number in its common spelling ([`scan_number`]), blanks between words, nothing else
 /// (no comment, no E, no other letter or code). `None` for anything else, which the
 /// reference path ([`parse_line_with`], then [`crate::Interpreter::block`]) reads; where
@@ -472,9 +481,13 @@ const NOT_PLAIN: u8 = 255;
 const PLAIN_G: u8 = 254;
 const PLAIN_F: u8 = 253;
 const PLAIN_N: u8 = 252;
+/// I, J and K, in order.
+const PLAIN_I: u8 = 9;
+const PLAIN_K: u8 = 11;
 
 /// What each letter (`A` first) is to [`plain_motion`]: an axis (its index in `AXES`),
-/// G, F, N, or a letter that sends the line to the reference path.
+/// a centre word (`PLAIN_I` + its index in `IJK`), G, F, N, or a letter that sends the
+/// line to the reference path.
 const PLAIN_LETTERS: [u8; 26] = {
     let mut kinds = [NOT_PLAIN; 26];
     let mut i = 0;
@@ -485,6 +498,9 @@ const PLAIN_LETTERS: [u8; 26] = {
     kinds[(b'G' - b'A') as usize] = PLAIN_G;
     kinds[(b'F' - b'A') as usize] = PLAIN_F;
     kinds[(b'N' - b'A') as usize] = PLAIN_N;
+    kinds[(b'I' - b'A') as usize] = PLAIN_I;
+    kinds[(b'J' - b'A') as usize] = PLAIN_I + 1;
+    kinds[(b'K' - b'A') as usize] = PLAIN_K;
     kinds
 };
 
@@ -494,6 +510,8 @@ pub(crate) fn plain_motion(bytes: &[u8]) -> Option<PlainMotion> {
         axes: 0,
         values: [0.0; 9],
         feed: None,
+        centres: 0,
+        centre: [0.0; 3],
     };
     let mut seen: u32 = 0;
     let mut i = 0;
@@ -514,11 +532,16 @@ pub(crate) fn plain_motion(bytes: &[u8]) -> Option<PlainMotion> {
         let (len, value) = scan_number(&bytes[i + 1..])?;
         match kind {
             PLAIN_G => match Word::code_of(value) {
-                Some(code @ (0 | 10)) => p.motion = Some(code),
+                Some(code @ (0 | 10 | 20 | 30)) => p.motion = Some(code),
                 _ => return None,
             },
             PLAIN_F => p.feed = Some(value),
             PLAIN_N => {}
+            PLAIN_I..=PLAIN_K => {
+                let i = usize::from(kind - PLAIN_I);
+                p.centres |= 1 << i;
+                p.centre[i] = value;
+            }
             axis => {
                 p.axes |= 1 << axis;
                 p.values[usize::from(axis)] = value;

@@ -187,9 +187,17 @@ impl<S: LineSource> Iterator for Stream<S> {
             // the way out costs more than the queue.)
             let mut control = None;
             let mut call = None;
-            // The fast lane: a plain straight move, read and run without a `Block`.
+            let mut direct = None;
+            // The fast lane: a plain move, read and run without a `Block`. Where nothing
+            // follows up its move (no parameters to update, no diagnostic from the
+            // source), the move is handed out at once.
             let plain = self.fast_lane && line.len <= MAX_LINE_BYTES && {
                 match plain_motion(line.bytes) {
+                    Some(p) if self.params.is_none() => {
+                        let direct = &mut direct;
+                        self.interp
+                            .plain_motion(&p, line.number, &mut |e| *direct = Some(e))
+                    }
                     Some(p) => self
                         .interp
                         .plain_motion(&p, line.number, &mut |e| queue.push_back(e)),
@@ -330,6 +338,16 @@ impl<S: LineSource> Iterator for Stream<S> {
                         params.leave_macro();
                     }
                     for d in params.take_stops() {
+                        self.queue.push_back(Event::Diagnostic(d));
+                    }
+                }
+            }
+            if let Some(event) = direct {
+                match self.src.take_diagnostic() {
+                    None => return Some(Ok(event)),
+                    Some(d) => {
+                        failed |= d.is_error();
+                        self.queue.push_back(event);
                         self.queue.push_back(Event::Diagnostic(d));
                     }
                 }
@@ -562,8 +580,10 @@ mod tests {
         ]
     }
 
-    fn program() -> impl Strategy<Value = String> {
-        let line = (
+    /// A random line, or a few lines that make arcs whose radii agree (random centre
+    /// words almost never do), in any plane and distance mode.
+    fn line() -> impl Strategy<Value = String> {
+        let words = (
             proptest::collection::vec(token(), 0..6),
             proptest::collection::vec(prop_oneof![Just(""), Just(" "), Just("  ")], 6),
         )
@@ -575,7 +595,28 @@ mod tests {
                 }
                 line
             });
-        proptest::collection::vec(line, 0..40).prop_map(|lines| lines.join("\n"))
+        let arc = (
+            prop_oneof![Just(("G17", 'X', 'Y', 'I', 'J')), Just(("G18", 'Z', 'X', 'K', 'I')), Just(("G19", 'Y', 'Z', 'J', 'K'))],
+            prop_oneof![Just("G2"), Just("G3"), Just("g02"), Just("")],
+            -50i32..50,
+            1i32..40,
+            prop_oneof![Just(""), Just(" F120"), Just(" F0"), Just(" F-1")],
+            prop_oneof![Just(""), Just("G91.1 "), Just("G90.1 ")],
+        )
+            .prop_map(|((plane, u, v, i, j), g, c, r, f, arc_distance)| {
+                // From (c, 0) half way round to (c + 2r, 0) about (c + r, 0), and back.
+                let (c, r) = (f64::from(c) / 4.0, f64::from(r) / 8.0);
+                format!(
+                    "{plane} {arc_distance}G0 {u}{c} {v}0\n{g} {u}{e} {v}0 {i}{r} {j}0{f}\n{u}{c} {v}0 {i}{m} {j}0",
+                    e = c + 2.0 * r,
+                    m = -r,
+                )
+            });
+        prop_oneof![6 => words, 1 => arc]
+    }
+
+    fn program() -> impl Strategy<Value = String> {
+        proptest::collection::vec(line(), 0..40).prop_map(|lines| lines.join("\n"))
     }
 
     fn flavor() -> impl Strategy<Value = Flavor> {
@@ -606,22 +647,46 @@ mod tests {
         }
     }
 
-    /// The property's programs do take the fast lane (a test that the comparison above
-    /// compares something).
+    /// Plain lines do take the fast lane, arcs with good radii among them, and lines
+    /// it must not run go the reference way (a test that the comparison above compares
+    /// something).
     #[test]
     fn plain_lines_take_the_fast_lane() {
-        let text = "G21 G90\nG0 X1 Y2\nG1 X3 F100\nN10 y4.5 z-1.\nX5\nG2 X0 Y0 I1 J1\n";
-        let mut plain = 0;
-        for line in Lines::new(text.as_bytes()) {
-            if let Some(p) = plain_motion(line.bytes) {
-                plain += 1;
-                assert!(p.axes != 0, "{:?}", line.bytes);
-            }
+        let plain = |text: &str| plain_motion(text.as_bytes()).expect(text);
+        for text in [
+            "G1 X1 F1",
+            "n10 y4.5 z-1.",
+            "X5",
+            "G2 X0 Y0 I1 J1",
+            "G03X1Y2I3K4",
+        ] {
+            plain(text);
         }
-        assert_eq!(plain, 4);
-        assert_eq!(
-            events(text, Flavor::Fadal, None, true),
-            events(text, Flavor::Fadal, None, false)
-        );
+        for text in [
+            "G1 X1 E2",
+            "G1 X1 (c)",
+            "G4 X1",
+            "G1 X1 X2",
+            "G1 X1 R2",
+            "X1 S100",
+        ] {
+            assert_eq!(plain_motion(text.as_bytes()), None, "{text}");
+        }
+        let mut interp = Interpreter::new(Options::default());
+        let mut events = Vec::new();
+        let mut block = Block::empty(1, 0);
+        parse_str_with("G21 G90 G17 F100", 1, 0, &mut block, false).expect("parses");
+        interp.block(&block, &mut |e| events.push(e)).expect("runs");
+        let mut run = |text: &str| interp.plain_motion(&plain(text), 2, &mut |e| events.push(e));
+        assert!(run("G0 X1 Y0"));
+        assert!(run("G2 X-1 Y0 I-1 J0"));
+        // The reference path's: a radius mismatch, a centre word on a straight move, a
+        // centre word off the plane, an arc with no centre.
+        assert!(!run("G2 X0 Y0 I5 J5"));
+        assert!(!run("G1 X1 I1"));
+        assert!(!run("G2 X1 Y0 I1 K1"));
+        assert!(!run("G2 X3 Y0"));
+        assert!(run("G1 X2"));
+        assert_eq!(events.len(), 3);
     }
 }
