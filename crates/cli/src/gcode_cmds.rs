@@ -5,9 +5,9 @@ use std::io::Write;
 use lampost_gcode::fixed;
 use lampost_gcode::DETECT_BYTES;
 use lampost_gcode::{
-    parse_line_with, Block, Diagnostic, Dialect, EWord, EmitOptions, Emitter, ErrorKind, Event,
-    Flavor, LineReader, Move, MoveKind, Options, Order, ProgramReader, Resolved, Severity, Stream,
-    Units, AXES,
+    comment_not_utf8, parse_line_lenient, Block, Diagnostic, Dialect, EWord, EmitOptions, Emitter,
+    ErrorKind, Event, Flavor, LineReader, Move, MoveKind, Options, Order, ProgramReader, Resolved,
+    Severity, Stream, Units, AXES,
 };
 
 use crate::io::{display_name, open_seekable, Output};
@@ -198,13 +198,29 @@ pub fn fmt(
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
     let mut errors = 0usize;
+    let mut warned_comment_utf8 = false;
     {
         let mut em = Emitter::new(out.writer(), opts);
         while let Some(line) = reader.next_line().map_err(|e| io_err(&name, e))? {
+            let mut scratch = None;
             let mut b = Block::empty(line.number, line.offset);
             let parsed = match line.too_long() {
                 Some(d) => Err(d),
-                None => parse_line_with(line.bytes, line.number, line.offset, &mut b, exponents),
+                None => parse_line_lenient(
+                    line.bytes,
+                    line.number,
+                    line.offset,
+                    &mut b,
+                    exponents,
+                    &mut scratch,
+                )
+                .map(|lenient| {
+                    if lenient && !warned_comment_utf8 {
+                        warned_comment_utf8 = true;
+                        let d = comment_not_utf8(line.bytes, line.number, line.offset);
+                        eprint!("{}", report::render(&name, &d));
+                    }
+                }),
             };
             let refused = match parsed {
                 Ok(()) => match em.block(&b) {

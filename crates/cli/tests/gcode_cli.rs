@@ -210,3 +210,51 @@ fn snapshot_fmt_fadal_of_probe_fixture() {
     assert!(o.status.success(), "{}", stderr(&o));
     insta::assert_snapshot!("fmt_fadal_probe", String::from_utf8_lossy(&o.stdout));
 }
+
+/// Comments in another encoding (Latin-1 from an older CAM system: `(Ø 6 mm Fräser)`) are
+/// no reason to refuse a program a control runs: check, trace, fmt and post read it with
+/// one warning, the bytes as `?`; a byte outside a comment is still refused, located.
+#[test]
+fn latin1_comments_are_read_with_one_warning() {
+    let dir = tempdir("latin1");
+    let p = dir.join("latin1.nc");
+    std::fs::write(
+        &p,
+        b"%\n(\xd8 6 mm Fr\xe4ser)\nG21 G90 G17\nG0 X0 Y0 Z5 ; Sicherheitsh\xf6he\nG1 Z-1 F100 (Tiefe \xb1 0.1)\nG1 X10\nG2 X20 Y0 I5 J0\nM30\n%\n",
+    )
+    .expect("write");
+    let ps = p.to_str().expect("utf8");
+    let o = lampost(&["check", ps]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.matches("not UTF-8").count(), 1, "{err}");
+    assert!(err.contains(":2:2"), "{err}");
+    let o = lampost(&["trace", "--json", ps]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trace: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let moves = trace["moves"].as_array().expect("moves");
+    assert_eq!(moves.len(), 4);
+    assert_eq!(axis(&moves[3]["end"], "X"), 20.0);
+    let o = lampost(&["fmt", ps]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).expect("fmt writes UTF-8");
+    assert!(text.contains("(? 6 mm Fr?ser)"), "{text}");
+    let out = dir.join("latin1.posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        ps,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.exists());
+    // Outside a comment the byte is refused where it stands.
+    let bad = dir.join("bad.nc");
+    std::fs::write(&bad, b"G0 X0 Y0 (\xe4)\nG1 X1 F\xb110\n").expect("write");
+    let o = lampost(&["check", bad.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains(":2:8") && err.contains("not UTF-8"), "{err}");
+}

@@ -101,6 +101,10 @@ pub enum ErrorKind {
     /// positions.
     #[error("G90 while M83 holds: E is read as relative from here on, as Marlin 1, Prusa's firmware and RepRapFirmware read it; Marlin 2 reads E as positions after G90")]
     EModeAfterG90,
+    /// Bytes that are not UTF-8 inside comments only (Latin-1 or Windows-1252 text from
+    /// an older CAM system): read as `?`, since a control skips comments.
+    #[error("a comment holds bytes that are not UTF-8 (another encoding, such as Latin-1); they are read as `?` (reported once)")]
+    CommentNotUtf8,
     /// An arc centre word (I, J, K) on a straight move (G0, G1): no G2/G3 uses it.
     #[error("{0} word with no G2 or G3 to use it: the straight move ignores it")]
     CentreWordWithoutArc(char),
@@ -279,6 +283,7 @@ impl ErrorKind {
             ErrorKind::ArcZeroRadius => "check I/J/K or R",
             ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
             ErrorKind::ArcNormalCentreZero(_) => "remove it: LinuxCNC (`--flavor linuxcnc`) refuses a centre word off the active plane",
+            ErrorKind::CommentNotUtf8 => "nothing to do for the motion; save the file as UTF-8 to keep the comments' text",
             ErrorKind::EModeAfterG90 => "for Marlin 2, put M83 after the G90 (or post with --flavor reprap for RepRapFirmware, where G90 and G91 never change E)",
             ErrorKind::CentreWordWithoutArc(_) => "a missing G2/G3? give the arc's code, or remove the word (LinuxCNC and grbl refuse it; `--flavor linuxcnc` does too)",
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",

@@ -48,6 +48,9 @@ pub use interp::{
 pub use lines::{Line, LineReader, Lines, CHECKED_CHUNK, MAX_NUL_RUN};
 pub use modal::{FeedMode, Modal, Plane, Position, Units, AXES};
 pub use ngc::MAX_BLOCKS;
-pub use parse::{parse_line, parse_line_into, parse_line_with, parse_str_with, MAX_LINE_BYTES};
+pub use parse::{
+    comment_not_utf8, comments_made_utf8, parse_line, parse_line_into, parse_line_lenient,
+    parse_line_with, parse_str_with, MAX_LINE_BYTES,
+};
 pub use program::{Order, ProgramReader};
 pub use stream::{check, LineSource, Stream};

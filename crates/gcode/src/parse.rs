@@ -301,6 +301,80 @@ pub fn parse_line_with<'a>(
     parse_text(text, line_no, offset, block, exponents)
 }
 
+/// A line that is not UTF-8 only inside its comments (`(…)`, and `;` to the end), as
+/// text with each byte of every bad sequence there read as `?`: the same length, so every
+/// column stays where it was. `None` when the line is UTF-8, or when a byte outside a
+/// comment is not ASCII (then the line is refused as it is). A control skips comments,
+/// and older CAM systems write them in Latin-1 or Windows-1252.
+pub fn comments_made_utf8(line: &[u8]) -> Option<String> {
+    if std::str::from_utf8(line).is_ok() {
+        return None;
+    }
+    let mut text = line.to_vec();
+    let mut i = 0;
+    while i < text.len() {
+        let end = match text[i] {
+            b'(' => memchr::memchr(b')', &text[i..]).map_or(text.len(), |r| i + r),
+            b';' => text.len(),
+            c if c.is_ascii() => {
+                i += 1;
+                continue;
+            }
+            _ => return None,
+        };
+        let mut at = i;
+        while let Err(e) = std::str::from_utf8(&text[at..end]) {
+            let bad_start = at + e.valid_up_to();
+            let bad_end = e.error_len().map_or(end, |n| bad_start + n);
+            text[bad_start..bad_end].fill(b'?');
+            at = bad_end;
+        }
+        i = end + 1;
+    }
+    String::from_utf8(text).ok()
+}
+
+/// [`parse_line_with`], except that a line that is not UTF-8 only inside its comments is
+/// read with those bytes as `?` ([`comments_made_utf8`], the text kept in `scratch`):
+/// `Ok(true)` then, and the caller reports [`comment_not_utf8`] (once a program is enough).
+pub fn parse_line_lenient<'a>(
+    line: &'a [u8],
+    line_no: u32,
+    offset: usize,
+    block: &mut Block<'a>,
+    exponents: bool,
+    scratch: &'a mut Option<String>,
+) -> Result<bool, Diagnostic> {
+    match parse_line_with(line, line_no, offset, block, exponents) {
+        Err(d) if matches!(d.kind, ErrorKind::InvalidUtf8) => match comments_made_utf8(line) {
+            Some(text) => {
+                let text: &'a str = scratch.insert(text);
+                parse_str_with(text, line_no, offset, block, exponents).map(|()| true)
+            }
+            None => Err(d),
+        },
+        r => r.map(|()| false),
+    }
+}
+
+/// The warning for a line whose comments are not UTF-8 (see [`parse_line_lenient`]), at
+/// its first such byte.
+pub fn comment_not_utf8(line: &[u8], line_no: u32, offset: usize) -> Diagnostic {
+    let (at, len) = match std::str::from_utf8(line) {
+        Ok(_) => (0, line.len()),
+        Err(e) => (e.valid_up_to(), e.error_len().unwrap_or(1)),
+    };
+    Diagnostic::at(
+        Severity::Warning,
+        ErrorKind::CommentNotUtf8,
+        line_no,
+        offset,
+        line,
+        at,
+        at + len,
+    )
+}
+
 /// [`parse_line_with`] of a line its source has already found to be UTF-8 (see
 /// [`crate::Line::text`]): the same block or error, without checking the text again.
 pub fn parse_str_with<'a>(
@@ -990,6 +1064,62 @@ mod tests {
                 Just("XR1"), Just("X R1"), Just("X 1"), Just("\t"), Just("é"),
             ].prop_map(str::to_string),
         ]
+    }
+
+    #[test]
+    fn comments_in_another_encoding_read_as_question_marks() {
+        let fixed = |b: &[u8]| comments_made_utf8(b);
+        assert_eq!(fixed(b"G1 X1 (Fr\xe4ser)"), Some("G1 X1 (Fr?ser)".into()));
+        assert_eq!(
+            fixed(b"G1 X1 ; H\xf6he \xb1"),
+            Some("G1 X1 ; H?he ?".into())
+        );
+        // Valid UTF-8 in the same comment stays; an unclosed comment runs to the end.
+        assert_eq!(fixed("(é \u{e9})".as_bytes()), None);
+        assert_eq!(fixed(b"(\xc3\xa9 \xe9)X1 (\xff"), Some("(é ?)X1 (?".into()));
+        // A bad byte outside a comment, and a line that is UTF-8: nothing to read leniently.
+        assert_eq!(fixed(b"G1 X\xff1 (\xe4)"), None);
+        assert_eq!(fixed(b"G1 X1 (ok)"), None);
+        let mut scratch = None;
+        let mut block = Block::empty(3, 40);
+        let line = b"G1 X2 (\xd8 6)";
+        assert_eq!(
+            parse_line_lenient(line, 3, 40, &mut block, false, &mut scratch),
+            Ok(true)
+        );
+        assert_eq!(block.words().count(), 2);
+        let d = comment_not_utf8(line, 3, 40);
+        assert_eq!((d.severity, d.line), (Severity::Warning, 3));
+    }
+
+    proptest::proptest! {
+        /// Only bytes inside comments change, and the length stays.
+        #[test]
+        fn comments_made_utf8_changes_only_comment_bytes(bytes in proptest::collection::vec(
+            proptest::prop_oneof![
+                proptest::strategy::Just(b'('), proptest::strategy::Just(b')'),
+                proptest::strategy::Just(b';'), proptest::strategy::Just(b'X'),
+                proptest::strategy::Just(b'1'), proptest::strategy::Just(b' '),
+                0x80u8..=0xff,
+            ],
+            0..24,
+        )) {
+            if let Some(text) = comments_made_utf8(&bytes) {
+                proptest::prop_assert_eq!(text.len(), bytes.len());
+                let mut in_comment = false;
+                let mut rest = false;
+                for (&a, &b) in bytes.iter().zip(text.as_bytes()) {
+                    if !in_comment && !rest {
+                        proptest::prop_assert_eq!(a, b);
+                        in_comment = a == b'(';
+                        rest = a == b';';
+                    } else {
+                        proptest::prop_assert!(a == b || b == b'?');
+                        in_comment &= a != b')';
+                    }
+                }
+            }
+        }
     }
 
     proptest::proptest! {

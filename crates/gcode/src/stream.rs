@@ -8,7 +8,9 @@ use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
-use crate::parse::{parse_line_with, parse_str_with, plain_motion, MAX_LINE_BYTES};
+use crate::parse::{
+    comment_not_utf8, parse_line_lenient, parse_str_with, plain_motion, MAX_LINE_BYTES,
+};
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
@@ -83,13 +85,15 @@ pub struct Stream<S> {
     stopped: bool,
     finished: bool,
     any_content: bool,
-    /// Numbers may have exponents (E is extrusion: see [`parse_line_with`]).
+    /// Numbers may have exponents (E is extrusion: see [`crate::parse_line_with`]).
     exponents: bool,
     /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
     params: Option<Box<Params>>,
     /// Plain straight moves take the fast lane ([`plain_motion`]); off only in the test
     /// that compares the two.
     fast_lane: bool,
+    /// A comment that is not UTF-8 has been reported (once a program).
+    warned_comment_utf8: bool,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -115,6 +119,7 @@ impl<S: LineSource> Stream<S> {
             exponents: opts.e_word == EWord::Extrusion,
             params,
             fast_lane: true,
+            warned_comment_utf8: false,
         }
     }
 
@@ -210,6 +215,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 }
                 false
             } else {
+                let mut scratch = None;
                 let mut block = Block::empty(line.number, line.offset);
                 let mut parsed = match line.too_long() {
                     Some(d) => Err(d),
@@ -221,13 +227,27 @@ impl<S: LineSource> Iterator for Stream<S> {
                             &mut block,
                             self.exponents,
                         ),
-                        None => parse_line_with(
+                        None => match parse_line_lenient(
                             line.bytes,
                             line.number,
                             line.offset,
                             &mut block,
                             self.exponents,
-                        ),
+                            &mut scratch,
+                        ) {
+                            Ok(lenient) => {
+                                if lenient && !self.warned_comment_utf8 {
+                                    self.warned_comment_utf8 = true;
+                                    queue.push_back(Event::Diagnostic(comment_not_utf8(
+                                        line.bytes,
+                                        line.number,
+                                        line.offset,
+                                    )));
+                                }
+                                Ok(())
+                            }
+                            Err(d) => Err(d),
+                        },
                     },
                 };
                 // A printer (slicer) program's line that is no G-code but a firmware's
