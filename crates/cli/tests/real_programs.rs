@@ -10,7 +10,7 @@
 //!   `lampost check` reports (each was read by hand: see `SOURCES.md`).
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
-//! superslicer) are traced with `--e-word extrusion` and posted with
+//! superslicer, icesl, mattercontrol) are traced with `--e-word extrusion` and posted with
 //! `post --machine nrc-lc --e-extrusion`; the verdict then says `post R runs` when the
 //! post deposits the extruding length (relative difference ≤ 1e-9) with one laser-on per
 //! extruding run, or `post refused L: …`. Their start code's homing (`G28`) and bed
@@ -28,7 +28,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 7] = [
+const SLICERS: [&str; 9] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -36,6 +36,8 @@ const SLICERS: [&str; 7] = [
     "kisslicer",
     "simplify3d",
     "superslicer",
+    "icesl",
+    "mattercontrol",
 ];
 
 /// The first error `lampost check` reports, as `L:C message`.
