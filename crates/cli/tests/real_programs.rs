@@ -10,9 +10,9 @@
 //!   `lampost check` reports (each was read by hand: see `SOURCES.md`).
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
-//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban) are traced with
-//! `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the verdict
-//! then says `post R runs` when the post deposits the extruding length (relative
+//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker) are traced
+//! with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
+//! verdict then says `post R runs` when the post deposits the extruding length (relative
 //! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
 //! start code's homing (`G28`) and bed levelling (`G29`) lines are left out of the posted
 //! input: a move to the printer's home cannot be placed on the part (the post refuses it,
@@ -28,7 +28,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 11] = [
+const SLICERS: [&str; 12] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -40,6 +40,7 @@ const SLICERS: [&str; 11] = [
     "mattercontrol",
     "orcaslicer",
     "snapmaker-luban",
+    "ideamaker",
 ];
 
 /// The first error `lampost check` reports, as `L:C message`.
