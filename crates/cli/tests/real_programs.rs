@@ -10,14 +10,14 @@
 //!   `lampost check` reports (each was read by hand: see `SOURCES.md`).
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
-//! superslicer) are traced with `--e-word extrusion` and posted with
-//! `post --machine nrc-lc --e-extrusion`; the verdict then says `post R runs` when the
-//! post deposits the extruding length (relative difference ≤ 1e-9) with one laser-on per
-//! extruding run, or `post refused L: …`. Their start code's homing (`G28`) and bed
-//! levelling (`G29`) lines are left out of the posted input: a move to the printer's home
-//! cannot be placed on the part (the post refuses it, see docs/post.md), and nothing else
-//! is changed. Each must also be read as a slicer's program by `--flavor auto` (`marlin`
-//! or `reprap` in `check --json`).
+//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker) are traced
+//! with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
+//! verdict then says `post R runs` when the post deposits the extruding length (relative
+//! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
+//! start code's homing (`G28`) and bed levelling (`G29`) lines are left out of the posted
+//! input: a move to the printer's home cannot be placed on the part (the post refuses it,
+//! see docs/post.md), and nothing else is changed. Each must also be read as a slicer's
+//! program by `--flavor auto` (`marlin` or `reprap` in `check --json`).
 //!
 //! A verdict that changes fails the test: an improvement is recorded by running it with
 //! `LAMPOST_UPDATE_VERDICTS=1` and reviewing the diff of `VERDICTS`.
@@ -28,7 +28,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 7] = [
+const SLICERS: [&str; 12] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -36,6 +36,11 @@ const SLICERS: [&str; 7] = [
     "kisslicer",
     "simplify3d",
     "superslicer",
+    "icesl",
+    "mattercontrol",
+    "orcaslicer",
+    "snapmaker-luban",
+    "ideamaker",
 ];
 
 /// The first error `lampost check` reports, as `L:C message`.
