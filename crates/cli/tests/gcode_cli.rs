@@ -258,3 +258,51 @@ fn latin1_comments_are_read_with_one_warning() {
     let err = stderr(&o);
     assert!(err.contains(":2:8") && err.contains("not UTF-8"), "{err}");
 }
+
+/// Line ends as Windows tools write them (`\r\r\n`, PyCAM through a Windows editor), a
+/// byte-order mark, and text after M30 (a CAM system's timing note) are read as the
+/// controls read them; bare CR line ends are refused by name.
+#[test]
+fn stray_carriage_returns_byte_order_marks_and_text_after_the_end() {
+    let dir = tempdir("crlf");
+    let crcr = dir.join("crcr.nc");
+    std::fs::write(
+        &crcr,
+        b"\xef\xbb\xbf(PyCAM)\r\r\nG21 G90\r\r\nG0 X0 Y0 Z5\r\r\nG1 Z-1 F100\r\r\nG1 X10\r\r\nM30\r\r\nPost Process Timed at; 32 Min, 50.0 sec\r\r\n",
+    )
+    .expect("write");
+    let s = crcr.to_str().expect("utf8");
+    let o = lampost(&["check", s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains(":7:1") && err.contains("after the program's end"),
+        "{err}"
+    );
+    let o = lampost(&["trace", "--json", s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trace: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(trace["moves"].as_array().map(Vec::len), Some(3));
+    // Streamed (standard input) the same.
+    let bytes = std::fs::read(&crcr).expect("read");
+    let o = lampost_stdin(&["trace", "--json", "-"], &bytes);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let piped: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(piped["moves"], trace["moves"]);
+    // Bare CRs: one line, refused at the first CR, by name.
+    let cr = dir.join("cr.nc");
+    std::fs::write(&cr, b"G21\rG0 X1\rM2\r").expect("write");
+    let o = lampost(&["check", cr.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains(":1:4") && err.contains("carriage return"),
+        "{err}"
+    );
+    // Before the end, unreadable text is an error as ever.
+    let mid = dir.join("mid.nc");
+    std::fs::write(&mid, "G21\nPost Process\nG0 X1\nM30\n").expect("write");
+    assert!(!lampost(&["check", mid.to_str().expect("utf8")])
+        .status
+        .success());
+}

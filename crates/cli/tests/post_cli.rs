@@ -435,3 +435,50 @@ fn a_machine_file_cannot_inject_motion() {
         assert!(left.is_empty(), "temporary files left: {left:?}");
     }
 }
+
+/// A CAM post for a machine with a fourth axis writes `A0.` in a 3-axis job's first
+/// block: no rotation, so the program posts (with a note); an A that leaves 0 is refused
+/// at its line.
+#[test]
+fn a_rotary_word_at_zero_is_no_rotation() {
+    let dir = tempdir("post-a0");
+    let a0 = dir.join("a0.nc");
+    std::fs::write(
+        &a0,
+        "%\nO0001\nG21\nG0 G17 G40 G49 G80 G90\nG0 G90 G54 X0. Y0. A0. S5000 M3\nG1 Z-1. F100.\nX10.\nG0 Z5.\nM30\n%\n",
+    )
+    .expect("write");
+    let out = dir.join("a0.posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        a0.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("a0.nc:5: the program names axis A at 0"),
+        "{}",
+        stderr(&o)
+    );
+    let a5 = dir.join("a5.nc");
+    std::fs::write(&a5, "G21 G90\nG0 X0 Y0 Z5 A0\nG1 Z0 F100\nG1 X10 A5\nM30\n").expect("write");
+    let out5 = dir.join("a5.posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        a5.to_str().expect("utf8"),
+        "-o",
+        out5.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("a5.nc:4: the input puts its A axis at 5"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out5.exists());
+}

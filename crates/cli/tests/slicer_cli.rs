@@ -237,3 +237,48 @@ fn klipper_settings_are_reported_once_and_macros_refused() {
     );
     assert!(!out2.exists());
 }
+
+/// Firmware retraction (Cura's, PrusaSlicer's and OrcaSlicer's option, standard with
+/// Klipper and RepRapFirmware): `G10` retracts and `G11` unretracts the filament inside
+/// the firmware; neither moves the head nor switches deposition, and the post takes them
+/// (it refused the unknown `G11` before).
+#[test]
+fn firmware_retraction_moves_nothing_and_posts() {
+    let src = ";FLAVOR:Marlin\nG21\nG90\nM82\nG92 E0\nG0 X0 Y0 Z0.3 F1200\nG1 X10 E1\nG10\n\
+               G0 X20 Y20\nG11\nG1 X30 Y20 E2\nG10\nG0 X0 Y0\nM30\n";
+    let dir = tempdir("slicer-g10-g11");
+    let inp = dir.join("fw-retract.gcode");
+    std::fs::write(&inp, src).expect("writes");
+    let inp_s = inp.to_str().expect("utf-8");
+    let o = lampost(&["check", inp_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("0 warning(s)"), "{}", stderr(&o));
+    let out_path = dir.join("fw-retract.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--e-extrusion",
+        inp_s,
+        "-o",
+        out_path.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let nc = std::fs::read_to_string(&out_path).expect("posted");
+    let (runs, extruding) = extruding_runs(src);
+    assert_eq!((runs, extruding), (2, 20.0));
+    let (ons, deposited) = posted_deposition(&nc);
+    assert_eq!(ons, 2, "{nc}");
+    assert!((deposited - 20.0).abs() <= 20.0 * 1e-9, "{deposited}\n{nc}");
+    // Outside a printer program G11 is no G-code.
+    let mill = dir.join("mill.nc");
+    std::fs::write(&mill, "G21 G90\nG0 X0 Y0\nG11\nM30\n").expect("writes");
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        mill.to_str().expect("utf-8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(":3:1"), "{}", stderr(&o));
+}

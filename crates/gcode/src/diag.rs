@@ -29,7 +29,7 @@ pub enum ErrorKind {
     #[error("number `{0}` has no address letter")]
     NumberWithoutLetter(String),
     /// A character that cannot start a word or comment.
-    #[error("unexpected character `{0}`")]
+    #[error("unexpected character {}", shown_char(*.0))]
     UnexpectedCharacter(char),
     /// A `(` inside a `(` comment: comments do not nest.
     #[error("a comment holds `(`: comments do not nest, so it ends at the first `)`")]
@@ -101,6 +101,10 @@ pub enum ErrorKind {
     /// positions.
     #[error("G90 while M83 holds: E is read as relative from here on, as Marlin 1, Prusa's firmware and RepRapFirmware read it; Marlin 2 reads E as positions after G90")]
     EModeAfterG90,
+    /// Text after the program's end (M2, M30) that is no G-code: never read by the
+    /// control.
+    #[error("text after the program's end (M2/M30) that is no G-code is not read, as the control stops there (reported once)")]
+    TextAfterEnd,
     /// Bytes that are not UTF-8 inside comments only (Latin-1 or Windows-1252 text from
     /// an older CAM system): read as `?`, since a control skips comments.
     #[error("a comment holds bytes that are not UTF-8 (another encoding, such as Latin-1); they are read as `?` (reported once)")]
@@ -269,6 +273,8 @@ impl ErrorKind {
             ErrorKind::UnterminatedComment => "add `)` at the end of the comment",
             ErrorKind::LetterWithoutNumber(_) => "give the word a value, e.g. `X0`, or remove the letter",
             ErrorKind::NumberWithoutLetter(_) => "put the address letter in front of the number, e.g. `X1.5`",
+            ErrorKind::UnexpectedCharacter('\r') => "the file's line ends are a bare carriage return (old Mac): convert them to LF or CR LF",
+            ErrorKind::UnexpectedCharacter(c) if c.is_control() || *c == '\u{feff}' => "remove the invisible character (an editor that shows control characters finds it)",
             ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
             ErrorKind::NestedComment => "remove the inner parentheses or write `[ ]` instead (LinuxCNC refuses nested comments too)",
             ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
@@ -283,6 +289,7 @@ impl ErrorKind {
             ErrorKind::ArcZeroRadius => "check I/J/K or R",
             ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
             ErrorKind::ArcNormalCentreZero(_) => "remove it: LinuxCNC (`--flavor linuxcnc`) refuses a centre word off the active plane",
+            ErrorKind::TextAfterEnd => "nothing to do for the motion; remove the text, or put it in a comment, to keep the file clean",
             ErrorKind::CommentNotUtf8 => "nothing to do for the motion; save the file as UTF-8 to keep the comments' text",
             ErrorKind::EModeAfterG90 => "for Marlin 2, put M83 after the G90 (or post with --flavor reprap for RepRapFirmware, where G90 and G91 never change E)",
             ErrorKind::CentreWordWithoutArc(_) => "a missing G2/G3? give the arc's code, or remove the word (LinuxCNC and grbl refuse it; `--flavor linuxcnc` does too)",
@@ -432,4 +439,17 @@ fn make_snippet(line: &[u8], start: usize, end: usize) -> Snippet {
         text.push('…');
     }
     Snippet { text, caret, width }
+}
+
+/// A character as an error message shows it: printable ones between backquotes, control
+/// and invisible ones by name and code point (a carriage return, a byte-order mark).
+fn shown_char(c: char) -> String {
+    match c {
+        '\r' => "`\\r` (a carriage return, U+000D)".to_string(),
+        '\u{feff}' => "U+FEFF (a byte-order mark)".to_string(),
+        c if c.is_control() || c.is_whitespace() && c != ' ' => {
+            format!("U+{:04X} (an invisible character)", u32::from(c))
+        }
+        c => format!("`{c}`"),
+    }
 }

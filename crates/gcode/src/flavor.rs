@@ -226,7 +226,7 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
     let text = String::from_utf8_lossy(head);
     let mut weak: Option<(Flavor, String)> = None;
     for (n, raw) in text.lines().enumerate() {
-        let line = raw.trim();
+        let line = raw.trim_start_matches('\u{feff}').trim();
         if line.is_empty() {
             continue;
         }

@@ -202,6 +202,8 @@ pub struct Interpreter {
     warned_normal_centre: bool,
     /// G90 under M83 has been warned about (see [`ErrorKind::EModeAfterG90`]).
     warned_e_mode: bool,
+    /// The thread motion in force is LinuxCNC's rigid tap `G33.1` (it returns to its start).
+    rigid_tap: bool,
     /// Inside a LinuxCNC `G5.2` … `G5.3` NURBS block (control points, not moves).
     nurbs: bool,
     /// A skipped macro block set the feed rate from a value lampost does not know: later
@@ -333,6 +335,7 @@ impl Interpreter {
             warned_macro: false,
             warned_normal_centre: false,
             warned_e_mode: false,
+            rigid_tap: false,
             nurbs: false,
             feed_from_macro: false,
             offset_cache: [0.0; 9],
@@ -1037,6 +1040,7 @@ impl Interpreter {
         // Motion mode change: the block's motion code other than G80 (at most one: see
         // `collect`), else its G80.
         if let Some((gw, c)) = w.g_in(GGroup::Motion) {
+            self.rigid_tap = c == 331;
             let m = &mut self.modal;
             m.motion = match c {
                 0 => Motion::Rapid,
@@ -1636,7 +1640,22 @@ impl Interpreter {
                 self.emit(b.line, MoveKind::Rapid, target, 0.0, origin, out);
                 Ok(())
             }
-            Motion::Linear | Motion::Thread | Motion::Probe => {
+            Motion::Thread => {
+                // Spindle-synchronised (G33, rigid tap G33.1): the feed is the pitch K
+                // times the spindle speed, no F needed; a rigid tap returns to where it
+                // started (the spindle reverses out), as LinuxCNC runs it.
+                let feed = match w.get(b'K') {
+                    Some(k) if k != 0.0 && self.modal.speed > 0.0 => k.abs() * self.modal.speed,
+                    _ => self.feed_for(b, w)?,
+                };
+                let start = self.pos;
+                self.emit(b.line, MoveKind::Linear, target, feed, origin, out);
+                if self.rigid_tap {
+                    self.emit(b.line, MoveKind::Linear, start, feed, origin, out);
+                }
+                Ok(())
+            }
+            Motion::Linear | Motion::Probe => {
                 if self.modal.motion == Motion::Linear {
                     self.centre_words_unused(b, w, out)?;
                 }

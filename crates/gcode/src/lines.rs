@@ -56,15 +56,21 @@ impl Line<'_> {
     }
 }
 
+/// A line without its ending: a final `\n` and every `\r` before it (`\r\r\n`, as some
+/// Windows tools write, is one line end; rs274 and grbl read it so). A `\r` inside a line
+/// (a file whose line ends are bare CRs) stays, and the parser refuses it by name.
 fn strip_eol(mut b: &[u8]) -> &[u8] {
     if let Some(rest) = b.strip_suffix(b"\n") {
         b = rest;
     }
-    if let Some(rest) = b.strip_suffix(b"\r") {
+    while let Some(rest) = b.strip_suffix(b"\r") {
         b = rest;
     }
     b
 }
+
+/// The UTF-8 byte-order mark some Windows editors put at the start of a file: skipped.
+const BOM: &[u8] = b"\xef\xbb\xbf";
 
 /// The lines of an in-memory input.
 #[derive(Debug, Clone)]
@@ -84,7 +90,7 @@ impl<'a> Lines<'a> {
     pub fn new(input: &'a [u8]) -> Self {
         Lines {
             input,
-            pos: 0,
+            pos: if input.starts_with(BOM) { BOM.len() } else { 0 },
             number: 0,
             checked: None,
             checked_start: 0,
@@ -241,7 +247,8 @@ impl<R: BufRead> LineReader<R> {
         if total == 0 {
             return Ok(None);
         }
-        // As `strip_eol`: a final `\n`, then a `\r` before it.
+        // As `strip_eol`: a final `\n`, then a `\r` before it (and any more `\r`s the
+        // held bytes show before that).
         let mut len = total;
         let mut cr = last;
         if newline {
@@ -250,8 +257,19 @@ impl<R: BufRead> LineReader<R> {
         }
         if len > 0 && cr == b'\r' {
             len -= 1;
+            while len > 0 && len <= self.buf.len() && self.buf[len - 1] == b'\r' {
+                len -= 1;
+            }
         }
-        self.start = self.pos;
+        // A byte-order mark at the start of the input is skipped.
+        let bom = if self.pos == 0 && len >= BOM.len() && self.buf.starts_with(BOM) {
+            self.buf.drain(..BOM.len());
+            BOM.len()
+        } else {
+            0
+        };
+        self.start = self.pos + bom;
+        let len = len - bom;
         self.len = len;
         self.pos += total;
         self.number = self.number.saturating_add(1);
@@ -315,6 +333,31 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(a.len(), 4);
         assert_eq!(a[1], (2, 7, b"G1 Y2".to_vec()));
+    }
+
+    /// A byte-order mark at the start is skipped and `\r\r\n` is one line end, the
+    /// same way by both splitters at every buffer size; a bare `\r` inside a line stays.
+    #[test]
+    fn byte_order_marks_and_doubled_carriage_returns() {
+        let text = b"\xef\xbb\xbfG21\r\r\nG0 X1\r\r\r\n\r\nX2\rY3\n\xef\xbb\xbfM2";
+        let a: Vec<_> = Lines::new(text)
+            .map(|l| (l.number, l.offset, l.len, l.bytes.to_vec()))
+            .collect();
+        assert_eq!(
+            a,
+            vec![
+                (1, 3, 3, b"G21".to_vec()),
+                (2, 9, 5, b"G0 X1".to_vec()),
+                (3, 18, 0, Vec::new()),
+                (4, 20, 5, b"X2\rY3".to_vec()),
+                // Only at the start of the input.
+                (5, 26, 5, b"\xef\xbb\xbfM2".to_vec()),
+            ]
+        );
+        for cap in [1, 2, 3, 5, 64] {
+            assert_eq!(streamed(text, cap), a, "buffer of {cap}");
+        }
+        assert_eq!(Lines::new(b"\xef\xbb\xbf").count(), 0);
     }
 
     /// Every line of `text` read through a reader of `cap` bytes at a time.

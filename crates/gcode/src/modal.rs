@@ -346,7 +346,10 @@ pub fn g_group(code: u16) -> Option<GGroup> {
 pub enum OtherCode {
     /// A setting of the control that leaves the path alone: look-ahead and smoothing
     /// (Fanuc `G05 P10000`, `G05.1 Q1`, `G08 P1`, Haas `G103 P1`, `G187 P1 E.01`), radius
-    /// mode (LinuxCNC `G8`), modal macro cancel (`G67`). The block's words are its own.
+    /// mode (LinuxCNC `G8`), modal macro cancel (`G67`), a printer firmware's unretract
+    /// `G11` (firmware retraction: the firmware moves the filament, never the head; its
+    /// retract `G10` without L is read as G10's tool data, which leaves the path alone
+    /// too). The block's words are its own.
     Setting,
     /// A code whose words are its own and that changes the path in a way lampost does not
     /// simulate (macro calls, pocket cycles, tilted planes, tool centre point): a
@@ -371,7 +374,9 @@ pub fn other_code(code: u16) -> Option<OtherCode> {
         52 => Nurbs(true),
         53 => Nurbs(false),
         70 => DiameterMode,
-        80 | 670 | 1030 | 1870 => Setting,
+        // G11 is no G-code of the machining controls: only a printer program (where an
+        // unknown code is the firmware's) reaches here with it.
+        80 | 110 | 670 | 1030 | 1870 => Setting,
         120 | 130 => Unsimulated("circular pocket milling"),
         434 | 435 => Unsimulated("tool centre point control"),
         531 => Unsimulated("tool axis to the tilted work plane (moves the rotaries)"),

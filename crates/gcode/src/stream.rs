@@ -94,6 +94,8 @@ pub struct Stream<S> {
     fast_lane: bool,
     /// A comment that is not UTF-8 has been reported (once a program).
     warned_comment_utf8: bool,
+    /// Text after the program's end has been reported (once a program).
+    warned_text_after_end: bool,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -120,6 +122,7 @@ impl<S: LineSource> Stream<S> {
             params,
             fast_lane: true,
             warned_comment_utf8: false,
+            warned_text_after_end: false,
         }
     }
 
@@ -267,6 +270,26 @@ impl<S: LineSource> Iterator for Stream<S> {
                         block = Block::empty(line.number, line.offset);
                         parsed = Ok(());
                     }
+                }
+                // Text after the program's end (M2, M30) that is no G-code (a CAM system's
+                // note, `Post Process Timed at; 32 Min`): the control never reads it, so
+                // one warning, and an empty block (the next `O` program, read in file
+                // order, starts afresh).
+                if parsed.is_err() && self.interp.ended() {
+                    if !self.warned_text_after_end {
+                        self.warned_text_after_end = true;
+                        queue.push_back(Event::Diagnostic(Diagnostic::at(
+                            Severity::Warning,
+                            ErrorKind::TextAfterEnd,
+                            line.number,
+                            line.offset,
+                            line.bytes,
+                            0,
+                            line.bytes.len(),
+                        )));
+                    }
+                    block = Block::empty(line.number, line.offset);
+                    parsed = Ok(());
                 }
                 // Macro lines only: the flavour's evaluation (plain lines never come here;
                 // under Macro B also lines the parser refuses and G65 blocks).

@@ -5,8 +5,8 @@ use std::io::{Read, Seek};
 use std::path::PathBuf;
 
 use lampost_gcode::{
-    EWord, ErrorKind, Event, MoveKind, Options, Order, Origin, ProgramReader, Severity, Stream,
-    Units,
+    EWord, ErrorKind, Event, Move, MoveKind, Options, Order, Origin, ProgramReader, Severity,
+    Stream, Units,
 };
 use lampost_kinematics::{Machine, Units as MUnits};
 use nalgebra::Vector3;
@@ -208,7 +208,12 @@ pub struct Intended<'a> {
     notes: Vec<String>,
     /// The section's warnings so far, one note per kind: (kind, first line, how many).
     warned: Vec<(std::mem::Discriminant<ErrorKind>, u32, usize)>,
+    /// A rotary or extra axis word at zero has been noted (see `extra_axes_at_zero`).
+    noted_zero_axes: bool,
 }
+
+/// The axes past X, Y, Z (A, B, C, U, V, W), as bits of [`lampost_gcode::AXES`].
+const EXTRA_AXES: u16 = 0b1_1111_1000;
 
 impl std::fmt::Debug for Intended<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -243,7 +248,40 @@ impl<'a> Intended<'a> {
             retract_z: None,
             notes: Vec::new(),
             warned: Vec::new(),
+            noted_zero_axes: false,
         }
+    }
+
+    /// A move of a program that names a rotary or extra axis: posted only while every such
+    /// axis stays at 0 (CAM posts for a machine with a fourth axis write `A0.` in the
+    /// first block of a 3-axis job), which is no rotation of the part; noted once. Any
+    /// other value is refused at its line: the post places a planar program itself.
+    fn extra_axes_at_zero(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
+        let named: Vec<char> = (3..lampost_gcode::AXES.len())
+            .filter(|&a| m.axes_named & (1 << a) != 0)
+            .map(|a| char::from(lampost_gcode::AXES[a]))
+            .collect();
+        let moved = (3..lampost_gcode::AXES.len()).find(|&a| m.start[a] != 0.0 || m.end[a] != 0.0);
+        if let Some(a) = moved {
+            return Err(PostError::Unsupported {
+                file: file.to_string(),
+                line: m.line,
+                what: format!(
+                    "the input puts its {} axis at {} (not 0): a rotary or extra axis of the program's own machine; give a planar (X Y Z) program, the post chooses the rotaries",
+                    char::from(lampost_gcode::AXES[a]),
+                    if m.end[a] != 0.0 { m.end[a] } else { m.start[a] }
+                ),
+            });
+        }
+        if !self.noted_zero_axes {
+            self.noted_zero_axes = true;
+            let names: String = named.iter().collect();
+            self.notes.push(format!(
+                "{file}:{}: the program names axis {names} at 0 (no rotation of the part): ignored",
+                m.line
+            ));
+        }
+        Ok(())
     }
 
     /// Notes for the report, so far: each section whose program gave no G20/G21, with the
@@ -399,13 +437,8 @@ impl<'a> Intended<'a> {
                 }
                 Event::Move(m) => m,
             };
-            if m.axes_named & 0b1_1111_1000 != 0 {
-                return Err(PostError::Unsupported {
-                    file: sec.name.clone(),
-                    line: m.line,
-                    what: "the input names rotary or extra axes; give a planar (X Y Z) program"
-                        .into(),
-                });
+            if m.axes_named & EXTRA_AXES != 0 {
+                self.extra_axes_at_zero(&sec.name, &m)?;
             }
             if let Some(step) = self.machine_coordinate_move(&m)? {
                 self.moves_in_section += 1;

@@ -171,6 +171,7 @@ fn canon_calls(text: &str) -> Result<Vec<Canon>, String> {
             "STRAIGHT_FEED",
             "ARC_FEED",
             "STRAIGHT_PROBE",
+            "RIGID_TAP",
         ] {
             if let Some(pos) = l.find(&format!("{kind}(")) {
                 let inner = &l[pos + kind.len() + 1..l.rfind(')').unwrap_or(l.len())];
@@ -220,11 +221,44 @@ pub fn compare_with_rs274(
     canon: &[Canon],
 ) -> Result<(usize, usize), String> {
     let moves = doc["moves"].as_array().ok_or("no moves")?;
-    if moves.len() != canon.len() {
-        return Err(format!("{} moves, rs274 {}", moves.len(), canon.len()));
+    // A rigid tap (G33.1) is one call of rs274's and two moves of lampost's: down to
+    // its end, and back to where it started.
+    let taps = canon.iter().filter(|c| c.kind == "RIGID_TAP").count();
+    if moves.len() != canon.len() + taps {
+        return Err(format!(
+            "{} moves, rs274 {} (with {taps} rigid taps, two moves each)",
+            moves.len(),
+            canon.len()
+        ));
     }
     let (mut total, mut exact) = (0, 0);
-    for (m, c) in moves.iter().zip(canon) {
+    let mut ours_iter = moves.iter().enumerate();
+    for c in canon {
+        let Some((i, m)) = ours_iter.next() else {
+            break;
+        };
+        if c.kind == "RIGID_TAP" {
+            let Some((_, back)) = ours_iter.next() else {
+                return Err("a rigid tap without its return".into());
+            };
+            let start = i
+                .checked_sub(1)
+                .and_then(|p| moves.get(p))
+                .map(|p| &p["end"]);
+            for (k, a) in ["X", "Y", "Z"].iter().enumerate() {
+                let there = axis(&m["end"], a);
+                let home = start.map_or(f64::NAN, |s| axis(s, a));
+                let returned = axis(&back["end"], a);
+                if (there - c.args[k]).abs() > RS274_TOL || (returned - home).abs() > 1e-9 {
+                    return Err(format!(
+                        "source line {}: rigid tap {a} to {there} and back to {returned}, rs274 to {} from {home}",
+                        m["line"], c.args[k]
+                    ));
+                }
+            }
+            total += 3;
+            continue;
+        }
         let end = &m["end"];
         let g = m["g"].as_str().unwrap_or("");
         let (ours, theirs): (Vec<f64>, Vec<f64>) = match c.kind.as_str() {
