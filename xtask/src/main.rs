@@ -279,8 +279,14 @@ const ROBOT_CHUNK: usize = 4000;
 fn robot_plate(
     mesh: &lampost_mesh::Mesh,
     layer: f64,
+    split: &mut RobotSplit,
 ) -> Result<(usize, usize, Vec<usize>), String> {
     use lampost_robot::{chunk, plan};
+    let mut t = Instant::now();
+    let mut lap = |slot: &mut Duration| {
+        *slot += t.elapsed();
+        t = Instant::now();
+    };
     let s = lampost_plan::slice(
         mesh,
         &lampost_plan::SliceOptions {
@@ -324,8 +330,11 @@ fn robot_plate(
         })
         .collect();
     let arm = lampost_robot::Arm::builtin("puma-lens").ok_or("puma-lens")?;
+    lap(&mut split.path);
     let samples = plan::resample(&path, arm.spacing).map_err(|e| e.to_string())?;
+    lap(&mut split.resample);
     let poses = plan::plan(&arm, &samples, arm.config).map_err(|e| e.to_string())?;
+    lap(&mut split.poses);
     let ranges = chunk::chunk_ranges(&samples, ROBOT_CHUNK).map_err(|e| e.to_string())?;
     let files: Vec<chunk::ChunkFile> = ranges
         .iter()
@@ -345,12 +354,43 @@ fn robot_plate(
             ),
         })
         .collect();
+    lap(&mut split.text);
     chunk::verify(&arm, &samples, arm.config, &files, arm.tolerance).map_err(|e| e.to_string())?;
+    lap(&mut split.verify);
     Ok((
         path.len(),
         samples.len(),
         files.iter().map(|f| f.count + 2).collect(),
     ))
+}
+
+/// Wall time of each stage of [`robot_plate`], summed over runs.
+#[derive(Debug, Default)]
+struct RobotSplit {
+    /// Slicing and `lampost_plan::plan` (perimeters, rasters).
+    path: Duration,
+    /// Resampling to the arm's spacing.
+    resample: Duration,
+    /// Poses: the turn about the beam, IK, the first turn's look-ahead.
+    poses: Duration,
+    /// Chunk cuts and the location files' text.
+    text: Duration,
+    /// The in-process verification (reading the text back, FK).
+    verify: Duration,
+}
+
+impl RobotSplit {
+    fn show(&self, runs: usize) -> String {
+        let ms = |d: Duration| d.as_secs_f64() * 1e3 / runs.max(1) as f64;
+        format!(
+            "split (wall, mean): path planning {:.0} ms, resampling {:.0} ms, poses (IK, turn about the beam, look-ahead) {:.0} ms, chunks and text {:.0} ms, verification {:.0} ms",
+            ms(self.path),
+            ms(self.resample),
+            ms(self.poses),
+            ms(self.text),
+            ms(self.verify)
+        )
+    }
 }
 
 fn bench_robot() -> Result<(), String> {
@@ -360,9 +400,10 @@ fn bench_robot() -> Result<(), String> {
         let mut wall = Duration::MAX;
         let c0 = crate::plan::cpu_seconds();
         let mut last = None;
+        let mut split = RobotSplit::default();
         for _ in 0..runs {
             let t = Instant::now();
-            last = Some(robot_plate(&mesh, layer)?);
+            last = Some(robot_plate(&mesh, layer, &mut split)?);
             wall = wall.min(t.elapsed());
         }
         let cpu = (crate::plan::cpu_seconds() - c0) / runs as f64;
@@ -375,6 +416,7 @@ fn bench_robot() -> Result<(), String> {
             cpu * 1e3,
             cpu * 1e6 / locations.max(1) as f64
         );
+        println!("  {}", split.show(runs));
     }
     println!("\n== lampost post/verify --machine puma-lens (the binary, files written) on the plate planned at --layer 20, against the Robotics Toolbox's ikine_a on the same poses, same run");
     let mut c = cargo();
