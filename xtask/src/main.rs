@@ -282,10 +282,12 @@ fn robot_plate(
     split: &mut RobotSplit,
 ) -> Result<(usize, usize, Vec<usize>), String> {
     use lampost_robot::{chunk, plan};
-    let mut t = Instant::now();
-    let mut lap = |slot: &mut Duration| {
-        *slot += t.elapsed();
-        t = Instant::now();
+    let mut t = (Instant::now(), crate::plan::cpu_seconds());
+    let mut lap = |slot: &mut (Duration, f64)| {
+        let cpu = crate::plan::cpu_seconds();
+        slot.0 += t.0.elapsed();
+        slot.1 += cpu - t.1;
+        t = (Instant::now(), cpu);
     };
     let s = lampost_plan::slice(
         mesh,
@@ -336,24 +338,14 @@ fn robot_plate(
     let poses = plan::plan(&arm, &samples, arm.config).map_err(|e| e.to_string())?;
     lap(&mut split.poses);
     let ranges = chunk::chunk_ranges(&samples, ROBOT_CHUNK).map_err(|e| e.to_string())?;
-    let files: Vec<chunk::ChunkFile> = ranges
-        .iter()
-        .enumerate()
-        .map(|(k, r)| chunk::ChunkFile {
-            name: format!("chunk-{:03}.loc", k + 1),
-            first: r.start,
-            count: r.len(),
-            text: chunk::write_chunk(
-                &arm,
-                arm.config,
-                &samples,
-                &poses,
-                r.clone(),
-                k + 1,
-                ranges.len(),
-            ),
-        })
-        .collect();
+    let files = chunk::chunk_files(
+        &arm,
+        arm.config,
+        &samples,
+        &poses,
+        &ranges,
+        chunk::default_threads(),
+    );
     lap(&mut split.text);
     chunk::verify(&arm, &samples, arm.config, &files, arm.tolerance).map_err(|e| e.to_string())?;
     lap(&mut split.verify);
@@ -364,31 +356,34 @@ fn robot_plate(
     ))
 }
 
-/// Wall time of each stage of [`robot_plate`], summed over runs.
+/// Wall and CPU time (seconds) of each stage of [`robot_plate`], summed over runs.
 #[derive(Debug, Default)]
 struct RobotSplit {
     /// Slicing and `lampost_plan::plan` (perimeters, rasters).
-    path: Duration,
+    path: (Duration, f64),
     /// Resampling to the arm's spacing.
-    resample: Duration,
+    resample: (Duration, f64),
     /// Poses: the turn about the beam, IK, the first turn's look-ahead.
-    poses: Duration,
+    poses: (Duration, f64),
     /// Chunk cuts and the location files' text.
-    text: Duration,
+    text: (Duration, f64),
     /// The in-process verification (reading the text back, FK).
-    verify: Duration,
+    verify: (Duration, f64),
 }
 
 impl RobotSplit {
     fn show(&self, runs: usize) -> String {
-        let ms = |d: Duration| d.as_secs_f64() * 1e3 / runs.max(1) as f64;
+        let ms = |d: &(Duration, f64)| {
+            let n = runs.max(1) as f64;
+            format!("{:.0}/{:.0}", d.0.as_secs_f64() * 1e3 / n, d.1 * 1e3 / n)
+        };
         format!(
-            "split (wall, mean): path planning {:.0} ms, resampling {:.0} ms, poses (IK, turn about the beam, look-ahead) {:.0} ms, chunks and text {:.0} ms, verification {:.0} ms",
-            ms(self.path),
-            ms(self.resample),
-            ms(self.poses),
-            ms(self.text),
-            ms(self.verify)
+            "split, ms wall/CPU (mean): path planning {}, resampling {}, poses (IK, turn about the beam, look-ahead) {}, chunks and text {}, verification {}",
+            ms(&self.path),
+            ms(&self.resample),
+            ms(&self.poses),
+            ms(&self.text),
+            ms(&self.verify)
         )
     }
 }

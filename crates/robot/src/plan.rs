@@ -619,3 +619,78 @@ fn unreachable(arm: &Arm, s: &Sample, i: usize, fails: &[NoReach]) -> RobotError
         ),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sequential rule of [`plan_threads`] on one thread: the nearest plan, then the
+    /// tries in order, a later one taken when it keeps strictly farther from trouble,
+    /// stopping at the first clear one.
+    fn sequential(margins: &[Option<f64>]) -> Option<usize> {
+        let mut best: Option<(usize, f64)> = None;
+        for (order, m) in margins.iter().enumerate() {
+            let Some(m) = *m else {
+                continue;
+            };
+            if order == 0 && m >= CLEAR {
+                return Some(0);
+            }
+            if best.is_none_or(|b| m > b.1) {
+                best = Some((order, m));
+            }
+            if order > 0 && m >= CLEAR {
+                break;
+            }
+        }
+        best.map(|b| b.0)
+    }
+
+    /// [`Tried::beats`] takes, in any order of finishing, the plan the sequential rule
+    /// takes (ties, clear plans after the first clear one and failed tries included).
+    #[test]
+    fn the_plan_taken_does_not_depend_on_the_order_of_finishing() {
+        let picks = [
+            None,
+            Some(0.01),
+            Some(0.05),
+            Some(0.05),
+            Some(CLEAR),
+            Some(0.3),
+        ];
+        let mut seed = 12345u64;
+        for _ in 0..20_000 {
+            let mut next = || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed
+            };
+            let n = 1 + (next() % 5) as usize;
+            let margins: Vec<Option<f64>> = (0..n).map(|_| picks[(next() % 6) as usize]).collect();
+            let mut order: Vec<usize> = (0..n).collect();
+            for i in (1..n).rev() {
+                order.swap(i, (next() % (i as u64 + 1)) as usize);
+            }
+            let mut best: Option<Tried> = None;
+            for &k in &order {
+                let Some(margin) = margins[k] else {
+                    continue;
+                };
+                let t = Tried {
+                    order: k,
+                    margin,
+                    located: Vec::new(),
+                };
+                if best.as_ref().is_none_or(|b| t.beats(b)) {
+                    best = Some(t);
+                }
+            }
+            assert_eq!(
+                best.map(|b| b.order),
+                sequential(&margins),
+                "{margins:?} {order:?}"
+            );
+        }
+    }
+}
