@@ -231,13 +231,6 @@ fn round_even(x: f64) -> f64 {
     }
 }
 
-/// `y.atan2(x)` by the kinematics crate's inlined polynomial (within 3e-14° of the C
-/// library's, `lampost_kinematics::trig`): the fast closed form's six arctangents.
-#[inline]
-fn atan2(y: f64, x: f64) -> f64 {
-    lampost_kinematics::trig::atan2_deg(y, x).to_radians()
-}
-
 /// A validated arm.
 #[derive(Debug, Clone)]
 pub struct Arm {
@@ -585,9 +578,10 @@ impl Arm {
 
     /// [`Arm::inverse_closed`] with fewer transcendental functions: the sines and cosines
     /// of θ1, θ2 and θ2 + θ3 that the wrist needs come from the wrist centre's coordinates
-    /// by the angle-sum formulas instead of `atan2`, `acos` and `sin_cos` (six arctangents,
-    /// by the kinematics crate's inlined polynomial, and four square roots in all), and
-    /// the frame constants are the arm's, worked out once. Agrees with the reference to 1e-12 rad (`tests/kinematics.rs`, proptest);
+    /// by the angle-sum formulas instead of `atan2`, `acos` and `sin_cos` (six `atan2`
+    /// and four square roots in all), and the frame constants are the arm's, worked out
+    /// once. (The C library's `atan2` measured faster here than the kinematics crate's
+    /// polynomial, which pays off in its four-lane batch.) Agrees with the reference to 1e-12 rad (`tests/kinematics.rs`, proptest);
     /// planning uses it.
     pub fn inverse_closed_fast(&self, flange: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
         self.inverse_wrist(&flange.mul(&self.fast.e_inv), c, wrist)
@@ -645,9 +639,9 @@ impl Arm {
         let n = (xx * xx + yy * yy).sqrt();
         let (cf, sf) = self.fast.phi;
         let (c23, s23) = ((xx * cf + yy * sf) / n, (yy * cf - xx * sf) / n);
-        let t1 = atan2(s1, c1);
-        let t2 = atan2(s2, c2);
-        let t3 = atan2(s23, c23) - t2;
+        let t1 = s1.atan2(c1);
+        let t2 = s2.atan2(c2);
+        let t3 = s23.atan2(c23) - t2;
         // m = R03ᵀ · R = Rz(θ4) · Ry(−θ5) · Rz(θ6), with R03 = Rz(θ1) Rx(90°) Rz(θ2 + θ3)
         // Rx(−90°): columns (c1 c23, s1 c23, s23), (−s1, c1, 0), (−c1 s23, −s1 s23, c23).
         let r = &tp.r;
@@ -665,16 +659,16 @@ impl Arm {
             if m22 > 0.0 {
                 b = 0.0;
                 t4 = w;
-                t6 = atan2(m10, m00) - w;
+                t6 = m10.atan2(m00) - w;
             } else {
                 b = PI;
                 t4 = w;
-                t6 = w - atan2(-m10, -m00);
+                t6 = w - (-m10).atan2(-m00);
             }
         } else {
-            let bb = atan2(sb, m22);
-            let a4 = atan2(m12, m02);
-            let a6 = atan2(m21, -m20);
+            let bb = sb.atan2(m22);
+            let a4 = m12.atan2(m02);
+            let a6 = m21.atan2(-m20);
             if c.flip {
                 b = -bb;
                 t4 = a4 + PI;
