@@ -12,7 +12,8 @@
 //!   the whole plan of paper 001's twisted plate (`plan.rs`; `bench plan-plate` alone).
 //! - `cargo xtask bench robot`: paper 001's twisted plate at full size planned (`--layer
 //!   20` and `--layer 2`, `--approach build`) and posted for puma-lens in this process
-//!   (wall and CPU); then `lampost post --machine puma-lens` and `lampost verify` on the
+//!   (wall and CPU, and both split by stage: path planning, resampling, poses, chunks and
+//!   text, verification); then `lampost post --machine puma-lens` and `lampost verify` on the
 //!   `--layer 20` path, against the Robotics Toolbox's `ikine_a` solving the same poses
 //!   (`.tools/py-rtb`), same run.
 //! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
