@@ -266,7 +266,8 @@ pub struct Arm {
     pub approx: Option<Box<Arm>>,
     /// The file it came from.
     pub def: ArmDef,
-    /// Constants of the fast closed form, worked out once ([`Arm::new`]).
+    /// Constants of the fast closed form, worked out once by [`Arm::new`] from `links`,
+    /// `base`, `holder` and `head` (build a new arm rather than change those).
     fast: Fast,
 }
 
