@@ -12,7 +12,8 @@
 //!   the whole plan of paper 001's twisted plate (`plan.rs`; `bench plan-plate` alone).
 //! - `cargo xtask bench robot`: paper 001's twisted plate at full size planned (`--layer
 //!   20` and `--layer 2`, `--approach build`) and posted for puma-lens in this process
-//!   (wall and CPU); then `lampost post --machine puma-lens` and `lampost verify` on the
+//!   (wall and CPU, and both split by stage: path planning, resampling, poses, chunks and
+//!   text, verification); then `lampost post --machine puma-lens` and `lampost verify` on the
 //!   `--layer 20` path, against the Robotics Toolbox's `ikine_a` solving the same poses
 //!   (`.tools/py-rtb`), same run.
 //! - `cargo xtask accuracy`: the four-point sphere method against the N-point fit, then
@@ -279,8 +280,16 @@ const ROBOT_CHUNK: usize = 4000;
 fn robot_plate(
     mesh: &lampost_mesh::Mesh,
     layer: f64,
+    split: &mut RobotSplit,
 ) -> Result<(usize, usize, Vec<usize>), String> {
     use lampost_robot::{chunk, plan};
+    let mut t = (Instant::now(), crate::plan::cpu_seconds());
+    let mut lap = |slot: &mut (Duration, f64)| {
+        let cpu = crate::plan::cpu_seconds();
+        slot.0 += t.0.elapsed();
+        slot.1 += cpu - t.1;
+        t = (Instant::now(), cpu);
+    };
     let s = lampost_plan::slice(
         mesh,
         &lampost_plan::SliceOptions {
@@ -324,33 +333,60 @@ fn robot_plate(
         })
         .collect();
     let arm = lampost_robot::Arm::builtin("puma-lens").ok_or("puma-lens")?;
+    lap(&mut split.path);
     let samples = plan::resample(&path, arm.spacing).map_err(|e| e.to_string())?;
+    lap(&mut split.resample);
     let poses = plan::plan(&arm, &samples, arm.config).map_err(|e| e.to_string())?;
+    lap(&mut split.poses);
     let ranges = chunk::chunk_ranges(&samples, ROBOT_CHUNK).map_err(|e| e.to_string())?;
-    let files: Vec<chunk::ChunkFile> = ranges
-        .iter()
-        .enumerate()
-        .map(|(k, r)| chunk::ChunkFile {
-            name: format!("chunk-{:03}.loc", k + 1),
-            first: r.start,
-            count: r.len(),
-            text: chunk::write_chunk(
-                &arm,
-                arm.config,
-                &samples,
-                &poses,
-                r.clone(),
-                k + 1,
-                ranges.len(),
-            ),
-        })
-        .collect();
+    let files = chunk::chunk_files(
+        &arm,
+        arm.config,
+        &samples,
+        &poses,
+        &ranges,
+        chunk::default_threads(),
+    );
+    lap(&mut split.text);
     chunk::verify(&arm, &samples, arm.config, &files, arm.tolerance).map_err(|e| e.to_string())?;
+    lap(&mut split.verify);
     Ok((
         path.len(),
         samples.len(),
         files.iter().map(|f| f.count + 2).collect(),
     ))
+}
+
+/// Wall and CPU time (seconds) of each stage of [`robot_plate`], summed over runs.
+#[derive(Debug, Default)]
+struct RobotSplit {
+    /// Slicing and `lampost_plan::plan` (perimeters, rasters).
+    path: (Duration, f64),
+    /// Resampling to the arm's spacing.
+    resample: (Duration, f64),
+    /// Poses: the turn about the beam, IK, the first turn's look-ahead.
+    poses: (Duration, f64),
+    /// Chunk cuts and the location files' text.
+    text: (Duration, f64),
+    /// The in-process verification (reading the text back, FK).
+    verify: (Duration, f64),
+}
+
+impl RobotSplit {
+    fn show(&self, runs: usize) -> String {
+        let ms = |d: &(Duration, f64)| {
+            let n = runs.max(1) as f64;
+            format!("{:.0}/{:.0}", d.0.as_secs_f64() * 1e3 / n, d.1 * 1e3 / n)
+        };
+        format!(
+            "split, ms wall/CPU (mean): path planning {}, resampling {}, poses (IK, turn about the beam, look-ahead) {}, chunks and text {}, verification {}",
+            ms(&self.path),
+            ms(&self.resample),
+            ms(&self.poses),
+            ms(&self.text),
+            ms(&self.verify)
+        )
+    }
 }
 
 fn bench_robot() -> Result<(), String> {
@@ -360,9 +396,10 @@ fn bench_robot() -> Result<(), String> {
         let mut wall = Duration::MAX;
         let c0 = crate::plan::cpu_seconds();
         let mut last = None;
+        let mut split = RobotSplit::default();
         for _ in 0..runs {
             let t = Instant::now();
-            last = Some(robot_plate(&mesh, layer)?);
+            last = Some(robot_plate(&mesh, layer, &mut split)?);
             wall = wall.min(t.elapsed());
         }
         let cpu = (crate::plan::cpu_seconds() - c0) / runs as f64;
@@ -375,6 +412,7 @@ fn bench_robot() -> Result<(), String> {
             cpu * 1e3,
             cpu * 1e6 / locations.max(1) as f64
         );
+        println!("  {}", split.show(runs));
     }
     println!("\n== lampost post/verify --machine puma-lens (the binary, files written) on the plate planned at --layer 20, against the Robotics Toolbox's ikine_a on the same poses, same run");
     let mut c = cargo();

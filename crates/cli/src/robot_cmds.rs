@@ -145,10 +145,6 @@ fn read_path(
     Ok((name, text, samples))
 }
 
-fn chunk_name(k: usize) -> String {
-    format!("chunk-{k:03}.loc")
-}
-
 fn werr(e: std::io::Error) -> CliError {
     CliError::write(&e)
 }
@@ -207,15 +203,14 @@ pub fn post(
     let poses = plan::plan(arm, &samples, cfg).map_err(located)?;
     let ranges = chunk::chunk_ranges(&samples, chunk_points).map_err(located)?;
     let total = ranges.len();
-    let mut files = Vec::with_capacity(total);
-    for (k, r) in ranges.iter().enumerate() {
-        files.push(ChunkFile {
-            name: chunk_name(k + 1),
-            first: r.start,
-            count: r.len(),
-            text: chunk::write_chunk(arm, cfg, &samples, &poses, r.clone(), k + 1, total),
-        });
-    }
+    let files = chunk::chunk_files(
+        arm,
+        cfg,
+        &samples,
+        &poses,
+        &ranges,
+        chunk::default_threads(),
+    );
     // Verify what is about to be written, as `lampost verify` reads it.
     let rep = chunk::verify(arm, &samples, cfg, &files, arm.tolerance).map_err(|e| {
         CliError::failed(format!(
@@ -271,7 +266,7 @@ pub fn post(
     }
     // Chunks of an earlier, longer run are stale.
     for k in total + 1.. {
-        let stale = Path::new(dir).join(chunk_name(k));
+        let stale = Path::new(dir).join(chunk::file_name(k));
         if std::fs::remove_file(&stale).is_err() {
             break;
         }

@@ -208,13 +208,26 @@ pub struct NoReach {
 
 /// Wrap an angle into (−π, π].
 pub fn wrap(a: f64) -> f64 {
-    let w = a - TAU * (a / TAU).round();
+    const INV_TAU: f64 = 1.0 / TAU;
+    let w = a - TAU * round_even(a * INV_TAU);
     if w <= -PI {
         w + TAU
     } else if w > PI {
         w - TAU
     } else {
         w
+    }
+}
+
+/// `x` rounded to a whole number, halves to even: adding and taking away 1.5 · 2⁵² leaves
+/// no fraction bits (the FPU's rounding does it), where `f64::round` is a library call
+/// on x86-64's baseline. Beyond 2⁵¹ `f64::round` (every such value is whole anyway).
+fn round_even(x: f64) -> f64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2⁵²
+    if x.abs() < 2_251_799_813_685_248.0 {
+        (x + MAGIC) - MAGIC
+    } else {
+        x.round()
     }
 }
 
@@ -253,6 +266,47 @@ pub struct Arm {
     pub approx: Option<Box<Arm>>,
     /// The file it came from.
     pub def: ArmDef,
+    /// Constants of the fast closed form, worked out once by [`Arm::new`] from `links`,
+    /// `base`, `holder` and `head` (build a new arm rather than change those).
+    fast: Fast,
+}
+
+/// What [`Arm::inverse_closed_fast`] and [`Arm::inverse_in_work`] take from the arm
+/// file once rather than at every solve.
+#[derive(Debug, Clone, Copy)]
+struct Fast {
+    /// `base⁻¹ · head`: the working frame in the arm's base frame.
+    work: Frame,
+    /// `holder⁻¹ · E⁻¹`, where `E = Tz(d6) · Tx(a6) · Rx(α6)` is A6's fixed part: the
+    /// part frame to the wrist frame `T05 · Rz(θ6)`.
+    to_wrist: Frame,
+    /// `E⁻¹` alone (flange to wrist frame).
+    e_inv: Frame,
+    /// cos and sin of φ = atan2(d4, a3), the forearm's angle.
+    phi: (f64, f64),
+}
+
+impl Fast {
+    fn new(links: &[Link; 6], base: &Frame, holder: &Frame, head: &Frame) -> Fast {
+        let l = &links[5];
+        let e = Frame {
+            r: Matrix3::new(1.0, 0.0, 0.0, 0.0, l.ca, -l.sa, 0.0, l.sa, l.ca),
+            t: Vector3::new(l.a, 0.0, l.d),
+        };
+        let e_inv = e.inverse();
+        let (a3, d4) = (links[2].a, links[3].d);
+        let l3 = a3.hypot(d4);
+        Fast {
+            work: base.inverse().mul(head),
+            to_wrist: holder.inverse().mul(&e_inv),
+            e_inv,
+            phi: if l3 > 0.0 {
+                (a3 / l3, d4 / l3)
+            } else {
+                (1.0, 0.0)
+            },
+        }
+    }
 }
 
 impl Arm {
@@ -320,13 +374,19 @@ impl Arm {
                 a.closed_form.then(|| Box::new(a))
             })
             .flatten();
+        let (base, holder, head) = (
+            Frame::from_def(&def.base),
+            Frame::from_def(&def.holder),
+            Frame::from_def(&def.head),
+        );
         Arm {
             approx,
             name: def.name.clone(),
             units: def.units,
-            base: Frame::from_def(&def.base),
-            holder: Frame::from_def(&def.holder),
-            head: Frame::from_def(&def.head),
+            fast: Fast::new(&links, &base, &holder, &head),
+            base,
+            holder,
+            head,
             safe: std::array::from_fn(|i| r(def.cell.safe[i])),
             config: Config::parse(&def.cell.config).unwrap_or(Config {
                 right: false,
@@ -517,6 +577,113 @@ impl Arm {
         Ok(std::array::from_fn(|k| wrap(th[k] - l[k].offset)))
     }
 
+    /// [`Arm::inverse_closed`] with fewer transcendental functions: the sines and cosines
+    /// of θ1, θ2 and θ2 + θ3 that the wrist needs come from the wrist centre's coordinates
+    /// by the angle-sum formulas instead of `atan2`, `acos` and `sin_cos` (six `atan2`
+    /// and four square roots in all), and the frame constants are the arm's, worked out
+    /// once. (The C library's `atan2` measured faster here than the kinematics crate's
+    /// polynomial, which pays off in its four-lane batch.) Agrees with the reference to 1e-12 rad (`tests/kinematics.rs`, proptest);
+    /// planning uses it.
+    pub fn inverse_closed_fast(&self, flange: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+        self.inverse_wrist(&flange.mul(&self.fast.e_inv), c, wrist)
+    }
+
+    /// The fast closed form for the part frame at `part` in the working frame (the
+    /// flange that puts it there, `base⁻¹ · head · part · holder⁻¹`, with A6's fixed part
+    /// stripped, in one product of the arm's constant frames).
+    pub fn inverse_in_work(&self, part: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+        let tp = self.fast.work.mul(part).mul(&self.fast.to_wrist);
+        self.inverse_wrist(&tp, c, wrist)
+    }
+
+    /// The closed form from the wrist frame `T05 · Rz(θ6)` (base frame).
+    fn inverse_wrist(&self, tp: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+        let l = &self.links;
+        let (d1, a2, a3, d3, d4) = (l[0].d, l[1].a, l[2].a, l[2].d, l[3].d);
+        let p = tp.t;
+        let r2 = p.x * p.x + p.y * p.y;
+        if r2 < d3 * d3 || r2 == 0.0 {
+            return Err(NoReach {
+                joint: 0,
+                why: format!(
+                    "the wrist centre is {:.3} from the waist axis, inside the shoulder offset {:.3}",
+                    r2.sqrt(),
+                    d3.abs()
+                ),
+            });
+        }
+        let xr = (r2 - d3 * d3).sqrt();
+        let x = if c.right { xr } else { -xr };
+        // θ1 = atan2(py, px) + atan2(d3, x), and x² + d3² = r2.
+        let (c1, s1) = ((p.x * x - p.y * d3) / r2, (p.y * x + p.x * d3) / r2);
+        let y = p.z - d1;
+        let l3sq = a3 * a3 + d4 * d4;
+        let rr = (x * x + y * y).sqrt();
+        let cpsi = (a2 * a2 - l3sq + x * x + y * y) / (2.0 * a2 * rr);
+        if !cpsi.is_finite() || cpsi.abs() > 1.0 + 1e-12 {
+            let (lo, hi) = ((a2.abs() - l3sq.sqrt()).abs(), a2.abs() + l3sq.sqrt());
+            return Err(NoReach {
+                joint: 2,
+                why: format!(
+                    "the wrist centre is {rr:.3} from the shoulder; the elbow reaches {lo:.3} to {hi:.3}"
+                ),
+            });
+        }
+        // θ2 = atan2(y, x) ± ψ, cos ψ = cpsi, sin ψ ≥ 0.
+        let cp = cpsi.clamp(-1.0, 1.0);
+        let sp = ((1.0 - cp) * (1.0 + cp)).sqrt();
+        let n2 = if c.up == c.right { 1.0 } else { -1.0 };
+        let (cx, sy) = (x / rr, y / rr);
+        let (c2, s2) = (cx * cp - sy * n2 * sp, sy * cp + cx * n2 * sp);
+        // θ2 + θ3 = atan2(y − a2 s2, x − a2 c2) − φ.
+        let (xx, yy) = (x - a2 * c2, y - a2 * s2);
+        let n = (xx * xx + yy * yy).sqrt();
+        let (cf, sf) = self.fast.phi;
+        let (c23, s23) = ((xx * cf + yy * sf) / n, (yy * cf - xx * sf) / n);
+        let t1 = s1.atan2(c1);
+        let t2 = s2.atan2(c2);
+        let t3 = s23.atan2(c23) - t2;
+        // m = R03ᵀ · R = Rz(θ4) · Ry(−θ5) · Rz(θ6), with R03 = Rz(θ1) Rx(90°) Rz(θ2 + θ3)
+        // Rx(−90°): columns (c1 c23, s1 c23, s23), (−s1, c1, 0), (−c1 s23, −s1 s23, c23).
+        let r = &tp.r;
+        let row =
+            |a: f64, b: f64, cc: f64, j: usize| a * r[(0, j)] + b * r[(1, j)] + cc * r[(2, j)];
+        let (u0, u1, u2) = (c1 * c23, s1 * c23, s23);
+        let (w0, w1, w2) = (-c1 * s23, -s1 * s23, c23);
+        let (m00, m02) = (row(u0, u1, u2, 0), row(u0, u1, u2, 2));
+        let (m10, m12) = (row(-s1, c1, 0.0, 0), row(-s1, c1, 0.0, 2));
+        let (m20, m21, m22) = (row(w0, w1, w2, 0), row(w0, w1, w2, 1), row(w0, w1, w2, 2));
+        let sb = (m02 * m02 + m12 * m12).sqrt();
+        let (t4, b, t6);
+        if sb < 1e-10 {
+            let w = wrist + l[3].offset;
+            if m22 > 0.0 {
+                b = 0.0;
+                t4 = w;
+                t6 = m10.atan2(m00) - w;
+            } else {
+                b = PI;
+                t4 = w;
+                t6 = w - (-m10).atan2(-m00);
+            }
+        } else {
+            let bb = sb.atan2(m22);
+            let a4 = m12.atan2(m02);
+            let a6 = m21.atan2(-m20);
+            if c.flip {
+                b = -bb;
+                t4 = a4 + PI;
+                t6 = a6 + PI;
+            } else {
+                b = bb;
+                t4 = a4;
+                t6 = a6;
+            }
+        }
+        let th = [t1, t2, t3, t4, -b, t6];
+        Ok(std::array::from_fn(|k| wrap(th[k] - l[k].offset)))
+    }
+
     /// Damped-least-squares inverse from `seed`: joint values that put the flange at
     /// `flange` (base frame) to 1e-12 (relative to the arm's size), or `None` when 500 steps do not get there.
     pub fn inverse_dls(&self, flange: &Frame, seed: &Q) -> Option<Q> {
@@ -576,9 +743,16 @@ impl Arm {
         if !self.closed_form {
             return None;
         }
+        self.config_of_chain(q, &self.chain(q))
+    }
+
+    /// [`Arm::config_of`] given `frames = self.chain(q)` (verification has them).
+    pub fn config_of_chain(&self, q: &Q, frames: &[Frame; 7]) -> Option<ConfigOf> {
+        if !self.closed_form {
+            return None;
+        }
         let l = &self.links;
         let th: [f64; 6] = std::array::from_fn(|k| q[k] + l[k].offset);
-        let frames = self.chain(q);
         // The wrist centre: o3 + d4 · z3.
         let p = frames[3].t + frames[3].r.column(2) * l[3].d;
         let (s1, c1) = th[0].sin_cos();

@@ -104,6 +104,13 @@ pub fn from_zyz(e: [f64; 3]) -> Matrix3<f64> {
     Frame::rot_z(e[0]) * ry * Frame::rot_z(e[2])
 }
 
+/// ` value` to `decimals` places by the G-code emitter's fixed-point writer (one rounding
+/// of an integer, `-0` written `0`), a fraction of the cost of `format!`.
+fn push_num(out: &mut String, value: f64, decimals: usize) {
+    out.push(' ');
+    out.push_str(&lampost_gcode::fixed(value, decimals));
+}
+
 #[allow(clippy::too_many_arguments)]
 fn row(
     out: &mut String,
@@ -117,20 +124,20 @@ fn row(
 ) {
     use std::fmt::Write;
     let e = zyz(&part.r);
-    let idx = index.map_or("-".to_string(), |i| i.to_string());
-    let _ = write!(
-        out,
-        "{n} {kind} {idx} {dt:.6} {:.6} {:.6} {:.6} {:.7} {:.7} {:.7} {}",
-        part.t.x,
-        part.t.y,
-        part.t.z,
-        e[0].to_degrees(),
-        e[1].to_degrees(),
-        e[2].to_degrees(),
-        u8::from(laser)
-    );
+    let _ = match index {
+        Some(i) => write!(out, "{n} {kind} {i}"),
+        None => write!(out, "{n} {kind} -"),
+    };
+    push_num(out, dt, 6);
+    for v in [part.t.x, part.t.y, part.t.z] {
+        push_num(out, v, 6);
+    }
+    for v in e {
+        push_num(out, v.to_degrees(), 7);
+    }
+    out.push_str(if laser { " 1" } else { " 0" });
     for v in q {
-        let _ = write!(out, " {:.7}", v.to_degrees());
+        push_num(out, v.to_degrees(), 7);
     }
     out.push('\n');
 }
@@ -181,6 +188,73 @@ pub fn write_chunk(
     s
 }
 
+/// The name of chunk `k` (from 1): `chunk-001.loc`, ….
+pub fn file_name(k: usize) -> String {
+    format!("chunk-{k:03}.loc")
+}
+
+/// The number of threads the chunked work takes by default: two where the machine has
+/// them (the work is split by chunks; the result does not depend on it).
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get().min(2))
+}
+
+/// `f(0) … f(n − 1)` in order, worked out on up to `threads` threads, each taking the
+/// next index as it finishes one.
+pub(crate) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let threads = threads.clamp(1, n.max(1));
+    if threads == 1 {
+        return (0..n).map(f).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let work = || {
+        let mut done = Vec::new();
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if i >= n {
+                break done;
+            }
+            done.push((i, f(i)));
+        }
+    };
+    let mut all: Vec<(usize, T)> = std::thread::scope(|s| {
+        let others: Vec<_> = (1..threads).map(|_| s.spawn(work)).collect();
+        let mut all = work();
+        for h in others {
+            // A worker only panics if `f` does; the panic goes on here.
+            match h.join() {
+                Ok(v) => all.extend(v),
+                Err(p) => std::panic::resume_unwind(p),
+            }
+        }
+        all
+    });
+    all.sort_unstable_by_key(|x| x.0);
+    all.into_iter().map(|x| x.1).collect()
+}
+
+/// Every chunk's location file ([`write_chunk`]) named by [`file_name`], the chunks
+/// written on up to `threads` threads (the text is the same on any number).
+pub fn chunk_files(
+    arm: &Arm,
+    cfg: Config,
+    samples: &[Sample],
+    located: &[Located],
+    ranges: &[Range<usize>],
+    threads: usize,
+) -> Vec<ChunkFile> {
+    par_map(ranges.len(), threads, |k| {
+        let r = &ranges[k];
+        ChunkFile {
+            name: file_name(k + 1),
+            first: r.start,
+            count: r.len(),
+            text: write_chunk(arm, cfg, samples, located, r.clone(), k + 1, ranges.len()),
+        }
+    })
+}
+
 /// A chunk as the manifest lists it, with its file's text.
 #[derive(Debug, Clone)]
 pub struct ChunkFile {
@@ -220,6 +294,7 @@ fn verr(file: &str, line: usize, message: String) -> RobotError {
 /// the focus (within `tol`) with the approach along the beam (within 0.01°), the written
 /// pose equal to it, the laser and times as planned, no joint too fast, the safe
 /// location at both ends of every chunk, and every path location in exactly one chunk.
+/// The chunks are read on up to two threads ([`verify_threads`]).
 pub fn verify(
     arm: &Arm,
     samples: &[Sample],
@@ -227,212 +302,36 @@ pub fn verify(
     chunks: &[ChunkFile],
     tol: f64,
 ) -> Result<Report, RobotError> {
+    verify_threads(arm, samples, cfg, chunks, tol, default_threads())
+}
+
+/// [`verify`] with the chunks read on up to `threads` threads (each chunk is checked on
+/// its own; the error reported is the first in chunk order, as one thread finds it).
+pub fn verify_threads(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    chunks: &[ChunkFile],
+    tol: f64,
+    threads: usize,
+) -> Result<Report, RobotError> {
+    let per = par_map(chunks.len(), threads, |k| {
+        verify_chunk(arm, samples, cfg, chunks, k, tol)
+    });
     let mut rep = Report {
         chunks: chunks.len(),
         ..Report::default()
     };
     let mut next = 0usize;
-    let safe_part = part_of(arm, &arm.safe);
-    for (k, c) in chunks.iter().enumerate() {
-        let f = c.name.as_str();
+    for (c, r) in chunks.iter().zip(per) {
         if c.first != next {
             let (a, b) = (next.min(c.first), next.max(c.first));
-            return Err(verr(f, 0, gap(samples, a, b)));
+            return Err(verr(&c.name, 0, gap(samples, a, b)));
         }
-        let mut header = Vec::new();
-        let mut rows: Vec<(usize, Vec<&str>)> = Vec::new();
-        for (i, line) in c.text.lines().enumerate() {
-            if let Some(h) = line.strip_prefix('#') {
-                header.push((i + 1, h.trim()));
-            } else if !line.trim().is_empty() {
-                rows.push((i + 1, line.split_whitespace().collect()));
-            }
-        }
-        let want = [
-            FORMAT.to_string(),
-            format!("machine {}", arm.name),
-            format!("chunk {} of {}", k + 1, chunks.len()),
-            format!("config {}", cfg.letters()),
-        ];
-        for (w, (line, h)) in want
-            .iter()
-            .zip(header.iter().chain(std::iter::repeat(&(0, ""))))
-        {
-            if h != w {
-                return Err(verr(f, *line, format!("header says `{h}`, expected `{w}`")));
-            }
-        }
-        if c.count.checked_add(2) != Some(rows.len()) {
-            return Err(verr(
-                f,
-                0,
-                format!(
-                    "{} rows; the manifest gives {} path locations plus two safe ones",
-                    rows.len(),
-                    c.count
-                ),
-            ));
-        }
-        let mut prev: Option<Q> = None;
-        for (r, (line, fields)) in rows.iter().enumerate() {
-            let line = *line;
-            if fields.len() != 17 {
-                return Err(verr(
-                    f,
-                    line,
-                    format!("{} fields; a location row has 17", fields.len()),
-                ));
-            }
-            let num = |k: usize| -> Result<f64, RobotError> {
-                fields[k]
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| verr(f, line, format!("`{}` is not a finite number", fields[k])))
-            };
-            if fields[0] != (r + 1).to_string() {
-                return Err(verr(
-                    f,
-                    line,
-                    format!("row number `{}`, expected {}", fields[0], r + 1),
-                ));
-            }
-            let q: Q =
-                [num(11)?, num(12)?, num(13)?, num(14)?, num(15)?, num(16)?].map(f64::to_radians);
-            if let Some(j) = arm.within_limits(&q) {
-                return Err(verr(
-                    f,
-                    line,
-                    format!(
-                        "{} = {}° is outside its limits [{:.1}°, {:.1}°]",
-                        arm.joint_name(j),
-                        fields[11 + j],
-                        arm.links[j].lo.to_degrees(),
-                        arm.links[j].hi.to_degrees()
-                    ),
-                ));
-            }
-            let part = part_of(arm, &q);
-            let pos = Vector3::new(num(4)?, num(5)?, num(6)?);
-            let rot = from_zyz([num(7)?, num(8)?, num(9)?].map(f64::to_radians));
-            let dpos = (pos - part.t).norm();
-            let drot = rot_angle(&rot, &part.r);
-            if dpos > 1e-4 || drot > 1e-6 {
-                return Err(verr(f, line, format!(
-                    "the written pose is not where the joints put the part ({dpos:.2e} away, {:.2e}° turned)",
-                    drot.to_degrees()
-                )));
-            }
-            let is_safe = r == 0 || r == rows.len() - 1;
-            let laser = match fields[10] {
-                "0" => false,
-                "1" => true,
-                other => return Err(verr(f, line, format!("laser `{other}`: 0 or 1"))),
-            };
-            if is_safe {
-                let off = q
-                    .iter()
-                    .zip(&arm.safe)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max);
-                if fields[1] != "safe" || fields[2] != "-" || off > 1e-8 || laser {
-                    return Err(verr(
-                        f,
-                        line,
-                        "a chunk starts and ends at the safe location, laser off".into(),
-                    ));
-                }
-                let _ = safe_part;
-                prev = None;
-                continue;
-            }
-            let i = c.first.saturating_add(r - 1);
-            if fields[1] != "path" || fields[2] != i.to_string() {
-                return Err(verr(
-                    f,
-                    line,
-                    format!("`{} {}`, expected `path {i}`", fields[1], fields[2]),
-                ));
-            }
-            let Some(s) = samples.get(i) else {
-                return Err(verr(
-                    f,
-                    line,
-                    format!(
-                        "location {i} is beyond the path's {} locations",
-                        samples.len()
-                    ),
-                ));
-            };
-            let first_row = r == 1;
-            let want_laser = !first_row && s.deposit;
-            if first_row && i > 0 && s.deposit {
-                return Err(verr(
-                    f,
-                    line,
-                    "the chunk starts inside a laser-on run".into(),
-                ));
-            }
-            if laser != want_laser {
-                return Err(verr(
-                    f,
-                    line,
-                    format!(
-                        "laser {}, the path has it {}",
-                        u8::from(laser),
-                        u8::from(want_laser)
-                    ),
-                ));
-            }
-            let dt = num(3)?;
-            let want_dt = if first_row { 0.0 } else { s.dt };
-            if (dt - want_dt).abs() > 1e-6 * want_dt.max(1.0) {
-                return Err(verr(
-                    f,
-                    line,
-                    format!("dt {dt}, the path's feed gives {want_dt:.6}"),
-                ));
-            }
-            // The focus on the path, the approach along the beam.
-            let focus = part.apply(&s.tip).norm();
-            let axis = part.r * s.axis;
-            let ang = axis.cross(&Vector3::z()).norm().atan2(axis.z).to_degrees();
-            if focus > tol {
-                return Err(verr(
-                    f,
-                    line,
-                    format!(
-                        "the focus is {focus:.4} from the path point of line {} (tolerance {tol})",
-                        s.line
-                    ),
-                ));
-            }
-            if ang > AXIS_TOLERANCE_DEG {
-                return Err(verr(f, line, format!(
-                    "the approach is {ang:.4}° off the beam at the path point of line {} (tolerance {AXIS_TOLERANCE_DEG}°)",
-                    s.line
-                )));
-            }
-            if let Some(co) = arm.config_of(&q) {
-                if !co.fits(cfg) {
-                    return Err(verr(f, line, format!(
-                        "the joints are not in configuration {} (shoulder {}, elbow {}, wrist {}): a configuration flip inside the chunk",
-                        cfg.letters(),
-                        co.right.map_or("either", |r| if r { "right" } else { "left" }),
-                        co.up.map_or("either", |u| if u { "up" } else { "down" }),
-                        co.flip.map_or("either", |x| if x { "flipped" } else { "not flipped" }),
-                    )));
-                }
-            }
-            if let Some(p) = prev {
-                check_speed(arm, &Sample { dt: want_dt, ..*s }, &p, &q)
-                    .map_err(|e| verr(f, line, e.to_string()))?;
-            }
-            rep.max_focus_error = rep.max_focus_error.max(focus);
-            rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
-            rep.locations += 1;
-            prev = Some(q);
-        }
+        let r = r?;
+        rep.locations += r.locations;
+        rep.max_focus_error = rep.max_focus_error.max(r.max_focus_error);
+        rep.max_axis_error_deg = rep.max_axis_error_deg.max(r.max_axis_error_deg);
         next = c.first.saturating_add(c.count);
     }
     if next != samples.len() {
@@ -443,6 +342,234 @@ pub fn verify(
         ));
     }
     Ok(rep)
+}
+
+/// Chunk `k` alone: its header, rows and locations (everything but the chunks' order).
+fn verify_chunk(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    chunks: &[ChunkFile],
+    k: usize,
+    tol: f64,
+) -> Result<Report, RobotError> {
+    let mut rep = Report::default();
+    let Some(c) = chunks.get(k) else {
+        return Ok(rep);
+    };
+    let head_inv = arm.head.inverse();
+    let f = c.name.as_str();
+    let mut header = Vec::new();
+    let mut rows: Vec<(usize, &str)> = Vec::new();
+    for (i, line) in c.text.lines().enumerate() {
+        if let Some(h) = line.strip_prefix('#') {
+            header.push((i + 1, h.trim()));
+        } else if !line.trim().is_empty() {
+            rows.push((i + 1, line));
+        }
+    }
+    let want = [
+        FORMAT.to_string(),
+        format!("machine {}", arm.name),
+        format!("chunk {} of {}", k + 1, chunks.len()),
+        format!("config {}", cfg.letters()),
+    ];
+    for (w, (line, h)) in want
+        .iter()
+        .zip(header.iter().chain(std::iter::repeat(&(0, ""))))
+    {
+        if h != w {
+            return Err(verr(f, *line, format!("header says `{h}`, expected `{w}`")));
+        }
+    }
+    if c.count.checked_add(2) != Some(rows.len()) {
+        return Err(verr(
+            f,
+            0,
+            format!(
+                "{} rows; the manifest gives {} path locations plus two safe ones",
+                rows.len(),
+                c.count
+            ),
+        ));
+    }
+    let mut prev: Option<Q> = None;
+    for (r, &(line, text)) in rows.iter().enumerate() {
+        let mut fields = [""; 17];
+        let mut count = 0;
+        for w in text.split_whitespace() {
+            if let Some(x) = fields.get_mut(count) {
+                *x = w;
+            }
+            count += 1;
+        }
+        if count != 17 {
+            return Err(verr(
+                f,
+                line,
+                format!("{count} fields; a location row has 17"),
+            ));
+        }
+        let num = |k: usize| -> Result<f64, RobotError> {
+            fields[k]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| verr(f, line, format!("`{}` is not a finite number", fields[k])))
+        };
+        if !is_decimal(fields[0], r + 1) {
+            return Err(verr(
+                f,
+                line,
+                format!("row number `{}`, expected {}", fields[0], r + 1),
+            ));
+        }
+        let q: Q =
+            [num(11)?, num(12)?, num(13)?, num(14)?, num(15)?, num(16)?].map(f64::to_radians);
+        if let Some(j) = arm.within_limits(&q) {
+            return Err(verr(
+                f,
+                line,
+                format!(
+                    "{} = {}° is outside its limits [{:.1}°, {:.1}°]",
+                    arm.joint_name(j),
+                    fields[11 + j],
+                    arm.links[j].lo.to_degrees(),
+                    arm.links[j].hi.to_degrees()
+                ),
+            ));
+        }
+        // One chain for the pose and the configuration.
+        let frames = arm.chain(&q);
+        let part = head_inv.mul(&arm.base.mul(&frames[6]).mul(&arm.holder));
+        let pos = Vector3::new(num(4)?, num(5)?, num(6)?);
+        let rot = from_zyz([num(7)?, num(8)?, num(9)?].map(f64::to_radians));
+        let dpos = (pos - part.t).norm();
+        let drot = rot_angle(&rot, &part.r);
+        if dpos > 1e-4 || drot > 1e-6 {
+            return Err(verr(f, line, format!(
+                "the written pose is not where the joints put the part ({dpos:.2e} away, {:.2e}° turned)",
+                drot.to_degrees()
+            )));
+        }
+        let is_safe = r == 0 || r == rows.len() - 1;
+        let laser = match fields[10] {
+            "0" => false,
+            "1" => true,
+            other => return Err(verr(f, line, format!("laser `{other}`: 0 or 1"))),
+        };
+        if is_safe {
+            let off = q
+                .iter()
+                .zip(&arm.safe)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if fields[1] != "safe" || fields[2] != "-" || off > 1e-8 || laser {
+                return Err(verr(
+                    f,
+                    line,
+                    "a chunk starts and ends at the safe location, laser off".into(),
+                ));
+            }
+            prev = None;
+            continue;
+        }
+        let i = c.first.saturating_add(r - 1);
+        if fields[1] != "path" || !is_decimal(fields[2], i) {
+            return Err(verr(
+                f,
+                line,
+                format!("`{} {}`, expected `path {i}`", fields[1], fields[2]),
+            ));
+        }
+        let Some(s) = samples.get(i) else {
+            return Err(verr(
+                f,
+                line,
+                format!(
+                    "location {i} is beyond the path's {} locations",
+                    samples.len()
+                ),
+            ));
+        };
+        let first_row = r == 1;
+        let want_laser = !first_row && s.deposit;
+        if first_row && i > 0 && s.deposit {
+            return Err(verr(
+                f,
+                line,
+                "the chunk starts inside a laser-on run".into(),
+            ));
+        }
+        if laser != want_laser {
+            return Err(verr(
+                f,
+                line,
+                format!(
+                    "laser {}, the path has it {}",
+                    u8::from(laser),
+                    u8::from(want_laser)
+                ),
+            ));
+        }
+        let dt = num(3)?;
+        let want_dt = if first_row { 0.0 } else { s.dt };
+        if (dt - want_dt).abs() > 1e-6 * want_dt.max(1.0) {
+            return Err(verr(
+                f,
+                line,
+                format!("dt {dt}, the path's feed gives {want_dt:.6}"),
+            ));
+        }
+        // The focus on the path, the approach along the beam.
+        let focus = part.apply(&s.tip).norm();
+        let axis = part.r * s.axis;
+        let ang = axis.cross(&Vector3::z()).norm().atan2(axis.z).to_degrees();
+        if focus > tol {
+            return Err(verr(
+                f,
+                line,
+                format!(
+                    "the focus is {focus:.4} from the path point of line {} (tolerance {tol})",
+                    s.line
+                ),
+            ));
+        }
+        if ang > AXIS_TOLERANCE_DEG {
+            return Err(verr(f, line, format!(
+                "the approach is {ang:.4}° off the beam at the path point of line {} (tolerance {AXIS_TOLERANCE_DEG}°)",
+                s.line
+            )));
+        }
+        if let Some(co) = arm.config_of_chain(&q, &frames) {
+            if !co.fits(cfg) {
+                return Err(verr(f, line, format!(
+                    "the joints are not in configuration {} (shoulder {}, elbow {}, wrist {}): a configuration flip inside the chunk",
+                    cfg.letters(),
+                    co.right.map_or("either", |r| if r { "right" } else { "left" }),
+                    co.up.map_or("either", |u| if u { "up" } else { "down" }),
+                    co.flip.map_or("either", |x| if x { "flipped" } else { "not flipped" }),
+                )));
+            }
+        }
+        if let Some(p) = prev {
+            check_speed(arm, &Sample { dt: want_dt, ..*s }, &p, &q)
+                .map_err(|e| verr(f, line, e.to_string()))?;
+        }
+        rep.max_focus_error = rep.max_focus_error.max(focus);
+        rep.max_axis_error_deg = rep.max_axis_error_deg.max(ang);
+        rep.locations += 1;
+        prev = Some(q);
+    }
+    Ok(rep)
+}
+
+/// Whether `field` is `n` written in decimal as `n.to_string()` writes it (no sign, no
+/// leading zero).
+fn is_decimal(field: &str, n: usize) -> bool {
+    field.bytes().all(|b| b.is_ascii_digit())
+        && (field.len() == 1 || !field.starts_with('0'))
+        && field.parse::<usize>() == Ok(n)
 }
 
 fn gap(samples: &[Sample], a: usize, b: usize) -> String {
@@ -457,4 +584,26 @@ fn gap(samples: &[Sample], a: usize, b: usize) -> String {
         line(a),
         line(b.saturating_sub(1))
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimal_fields_are_read_as_to_string_writes_them() {
+        for n in [0usize, 1, 9, 10, 4000, 367_810] {
+            assert!(is_decimal(&n.to_string(), n));
+            for bad in [
+                format!("0{n}"),
+                format!("+{n}"),
+                format!("{n} "),
+                format!("{}", n + 1),
+            ] {
+                assert!(!is_decimal(&bad, n), "{bad}");
+            }
+        }
+        assert!(!is_decimal("", 0));
+        assert!(!is_decimal("-0", 0));
+    }
 }

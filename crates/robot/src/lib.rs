@@ -12,7 +12,9 @@
 //! - `nalgebra`: small matrices;
 //! - `serde` + `toml`: arm files with line/column errors;
 //! - `thiserror`: the typed [`RobotError`];
-//! - `lampost-kinematics`: the shared `Units`.
+//! - `lampost-kinematics`: the shared `Units`;
+//! - `lampost-gcode`: the emitter's fixed-point number writer (`fixed`) for the location
+//!   files.
 
 mod arm;
 pub mod chunk;

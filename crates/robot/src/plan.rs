@@ -215,11 +215,11 @@ fn solve_at(
     fresh: bool,
 ) -> Result<(Q, Frame), NoReach> {
     let part = part_in_work(&s.tip, &s.axis, u, psi);
-    let world = arm.head.mul(&part);
-    let flange = arm.flange_for(&world);
     let raw = if arm.closed_form {
-        arm.inverse_closed(&flange, cfg, prev[3])?
+        arm.inverse_in_work(&part, cfg, prev[3])?
     } else {
+        let world = arm.head.mul(&part);
+        let flange = arm.flange_for(&world);
         // The first location (or one after a blocked turn) starts from the near-PUMA
         // closed form in the asked configuration where there is one; then each location
         // from the last.
@@ -342,34 +342,122 @@ const TRIES: usize = 4;
 /// that plan fails or brings a location within [`CLEAR`] of a joint limit or the elbow's
 /// stretch, up to four more are tried in [`first_turns`]'s order, and the plan that keeps
 /// farthest from trouble is taken (the first clear one). Errors (the nearest turn's) name
-/// the input line and the joint.
+/// the input line and the joint. The tried turns are planned on up to two threads
+/// ([`plan_threads`]); the result is the same on any number.
 pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, RobotError> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+    plan_threads(arm, samples, cfg, threads)
+}
+
+/// A finished plan and how far it keeps from trouble, in the order the plans are tried
+/// (0: from the turn nearest the safe location).
+struct Tried {
+    order: usize,
+    margin: f64,
+    located: Vec<Located>,
+}
+
+impl Tried {
+    /// Whether `self` is taken over `other` when both are planned: one clear of trouble
+    /// over one not, the first of two clear ones (planning stops there), else the one
+    /// keeping farther from trouble, the first of equals.
+    fn beats(&self, other: &Tried) -> bool {
+        match (self.margin >= CLEAR, other.margin >= CLEAR) {
+            (true, true) => self.order < other.order,
+            (true, false) => true,
+            (false, true) => false,
+            (false, false) => {
+                self.margin > other.margin
+                    || (self.margin == other.margin && self.order < other.order)
+            }
+        }
+    }
+}
+
+/// [`plan`] with the tried first turns planned on `threads` threads (1: one after the
+/// other, stopping at the first clear plan). Each try is a whole plan, independent of the
+/// others; the one taken is the one the sequential rule takes (the first clear one, else
+/// the first keeping farthest from trouble), so the result does not depend on `threads`.
+pub fn plan_threads(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    threads: usize,
+) -> Result<Vec<Located>, RobotError> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
     let refs = references(samples);
     let worst = |l: &[Located]| {
         l.iter()
             .map(|x| arm.margin(&x.q))
             .fold(f64::INFINITY, f64::min)
     };
-    let mut best = track(arm, samples, &refs, cfg, None).map(|l| (worst(&l), l));
-    if matches!(&best, Ok((m, _)) if *m >= CLEAR) {
-        return best.map(|b| b.1);
+    let nearest = track(arm, samples, &refs, cfg, None).map(|l| Tried {
+        order: 0,
+        margin: worst(&l),
+        located: l,
+    });
+    if let Ok(n) = &nearest {
+        if n.margin >= CLEAR {
+            return nearest.map(|n| n.located);
+        }
     }
-    for psi in first_turns(arm, samples, &refs, cfg)
+    let turns: Vec<f64> = first_turns(arm, samples, &refs, cfg)
         .into_iter()
         .take(TRIES)
-    {
-        let Ok(l) = track(arm, samples, &refs, cfg, Some(psi)) else {
-            continue;
+        .collect();
+    // The order of the first clear plan found (planning stops there: a later try is not
+    // needed), the next try to take, and the plan taken so far.
+    let clear_at = AtomicUsize::new(usize::MAX);
+    let next = AtomicUsize::new(0);
+    let best: Mutex<Option<Tried>> = Mutex::new(None);
+    let work = || loop {
+        let k = next.fetch_add(1, Ordering::Relaxed);
+        let Some(&psi) = turns.get(k) else {
+            break;
         };
-        let m = worst(&l);
-        if best.as_ref().map_or(true, |b| m > b.0) {
-            best = Ok((m, l));
-        }
-        if m >= CLEAR {
+        let order = k + 1;
+        if clear_at.load(Ordering::Relaxed) < order {
             break;
         }
+        let Ok(located) = track(arm, samples, &refs, cfg, Some(psi)) else {
+            continue;
+        };
+        let tried = Tried {
+            order,
+            margin: worst(&located),
+            located,
+        };
+        if tried.margin >= CLEAR {
+            clear_at.fetch_min(order, Ordering::Relaxed);
+        }
+        let mut b = best
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if b.as_ref().is_none_or(|b| tried.beats(b)) {
+            *b = Some(tried);
+        }
+    };
+    let threads = threads.clamp(1, turns.len().max(1));
+    if threads == 1 {
+        work();
+    } else {
+        std::thread::scope(|s| {
+            for _ in 1..threads {
+                s.spawn(work);
+            }
+            work();
+        });
     }
-    best.map(|b| b.1)
+    let tried = best
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    match (nearest, tried) {
+        (Ok(n), Some(t)) => Ok(if t.beats(&n) { t } else { n }.located),
+        (Ok(n), None) => Ok(n.located),
+        (Err(_), Some(t)) => Ok(t.located),
+        (Err(e), None) => Err(e),
+    }
 }
 
 /// The plan from a first turn about the beam (`None`: the one nearest the safe location).
@@ -529,5 +617,80 @@ fn unreachable(arm: &Arm, s: &Sample, i: usize, fails: &[NoReach]) -> RobotError
             s.tip.y,
             s.tip.z
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sequential rule of [`plan_threads`] on one thread: the nearest plan, then the
+    /// tries in order, a later one taken when it keeps strictly farther from trouble,
+    /// stopping at the first clear one.
+    fn sequential(margins: &[Option<f64>]) -> Option<usize> {
+        let mut best: Option<(usize, f64)> = None;
+        for (order, m) in margins.iter().enumerate() {
+            let Some(m) = *m else {
+                continue;
+            };
+            if order == 0 && m >= CLEAR {
+                return Some(0);
+            }
+            if best.is_none_or(|b| m > b.1) {
+                best = Some((order, m));
+            }
+            if order > 0 && m >= CLEAR {
+                break;
+            }
+        }
+        best.map(|b| b.0)
+    }
+
+    /// [`Tried::beats`] takes, in any order of finishing, the plan the sequential rule
+    /// takes (ties, clear plans after the first clear one and failed tries included).
+    #[test]
+    fn the_plan_taken_does_not_depend_on_the_order_of_finishing() {
+        let picks = [
+            None,
+            Some(0.01),
+            Some(0.05),
+            Some(0.05),
+            Some(CLEAR),
+            Some(0.3),
+        ];
+        let mut seed = 12345u64;
+        for _ in 0..20_000 {
+            let mut next = || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed
+            };
+            let n = 1 + (next() % 5) as usize;
+            let margins: Vec<Option<f64>> = (0..n).map(|_| picks[(next() % 6) as usize]).collect();
+            let mut order: Vec<usize> = (0..n).collect();
+            for i in (1..n).rev() {
+                order.swap(i, (next() % (i as u64 + 1)) as usize);
+            }
+            let mut best: Option<Tried> = None;
+            for &k in &order {
+                let Some(margin) = margins[k] else {
+                    continue;
+                };
+                let t = Tried {
+                    order: k,
+                    margin,
+                    located: Vec::new(),
+                };
+                if best.as_ref().is_none_or(|b| t.beats(b)) {
+                    best = Some(t);
+                }
+            }
+            assert_eq!(
+                best.map(|b| b.order),
+                sequential(&margins),
+                "{margins:?} {order:?}"
+            );
+        }
     }
 }

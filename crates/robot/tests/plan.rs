@@ -1,10 +1,12 @@
 //! Path to poses: resampling, the planned joints (focus on the point, approach along the
 //! beam, one configuration, limits), chunk cuts, and the location files' pose angles.
 
-use lampost_robot::chunk::{chunk_ranges, from_zyz, part_of, zyz};
-use lampost_robot::plan::{plan, resample, PathPoint, Sample, MAX_TURN};
+use lampost_robot::chunk::{
+    chunk_files, chunk_ranges, from_zyz, part_of, verify_threads, zyz, ChunkFile,
+};
+use lampost_robot::plan::{plan, plan_threads, resample, PathPoint, Sample, CLEAR, MAX_TURN};
 use lampost_robot::RobotError;
-use lampost_robot::{Arm, Q};
+use lampost_robot::{Arm, ArmDef, Q};
 use nalgebra::Vector3;
 use proptest::prelude::*;
 
@@ -135,11 +137,9 @@ proptest! {
 /// stretch: J3 had to turn 0.68° for the first 0.06 mm (116°/s at 600 mm/min). Chosen for
 /// the whole path, the turn keeps every location well away from the stretch and the
 /// limits, and every joint well within its speed.
-#[test]
-fn the_first_turn_about_the_beam_keeps_the_whole_path_away_from_the_elbow_stretch() {
-    let arm = arm();
+fn plate_end() -> Vec<PathPoint> {
     let up = [0.0, 0.0, 1.0];
-    let path = [
+    vec![
         pt(-299.301970, 1.143362, 1.0, up, false, 3),
         pt(-299.360139, 1.141525, 1.0, up, true, 4),
         pt(-300.0, 1.12132, 1.0, up, true, 5),
@@ -147,8 +147,13 @@ fn the_first_turn_about_the_beam_keeps_the_whole_path_away_from_the_elbow_stretc
         pt(300.0, -1.12132, 1.0, up, true, 7),
         pt(300.0, 1.12132, 200.0, up, false, 8),
         pt(-300.0, 1.12132, 200.0, up, true, 9),
-    ];
-    let s = resample(&path, 1.0).unwrap_or_else(|e| panic!("{e}"));
+    ]
+}
+
+#[test]
+fn the_first_turn_about_the_beam_keeps_the_whole_path_away_from_the_elbow_stretch() {
+    let arm = arm();
+    let s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
     let located = plan(&arm, &s, arm.config).unwrap_or_else(|e| panic!("{e}"));
     // The elbow 20° or more from its stretch, every joint 2° or more within its limits.
     let stretch = -(431.8f64.atan2(20.3));
@@ -219,4 +224,84 @@ proptest! {
         let arm = arm();
         prop_assert_eq!(arm.fit_limits(&q, &near), fit_limits_reference(&arm, &q, &near));
     }
+}
+
+/// The tried first turns planned on threads give the plan one thread gives: the first
+/// clear one (the plate's end on puma-lens), and, on an arm whose J1 limits hug the
+/// path so that no plan is clear, the one keeping farthest from the limits.
+#[test]
+fn planning_on_threads_takes_the_plan_one_thread_takes() {
+    let s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let puma = arm();
+    let one = plan_threads(&puma, &s, puma.config, 1).unwrap_or_else(|e| panic!("{e}"));
+    for threads in [2, 4] {
+        assert_eq!(
+            plan_threads(&puma, &s, puma.config, threads),
+            Ok(one.clone())
+        );
+    }
+    // J1 within 12° of the range it sweeps, so every plan comes within 10° of a limit.
+    let (lo, hi) = one
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), l| {
+            (a.min(l.q[0]), b.max(l.q[0]))
+        });
+    let mut def = ArmDef::builtin("puma-lens").unwrap_or_else(|| panic!("built-in"));
+    def.joint[0].limits = [lo.to_degrees() - 12.0, hi.to_degrees() + 3.0];
+    let tight = Arm::new(def);
+    let one = plan_threads(&tight, &s, tight.config, 1).unwrap_or_else(|e| panic!("{e}"));
+    let worst = one
+        .iter()
+        .map(|l| tight.margin(&l.q))
+        .fold(f64::INFINITY, f64::min);
+    assert!(worst < CLEAR, "{}", worst.to_degrees());
+    for threads in [2, 4] {
+        assert_eq!(
+            plan_threads(&tight, &s, tight.config, threads),
+            Ok(one.clone())
+        );
+    }
+}
+
+/// Chunk files written on threads are the same text, verified on threads the same
+/// figures; with two chunks spoiled, the error named is the first chunk's, as one
+/// thread finds it.
+#[test]
+fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
+    let puma = arm();
+    let mut s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    // The laser off every 50 locations, so that chunks may be cut there.
+    for x in s.iter_mut().step_by(50) {
+        x.deposit = false;
+    }
+    let located = plan(&puma, &s, puma.config).unwrap_or_else(|e| panic!("{e}"));
+    let ranges = chunk_ranges(&s, 200).unwrap_or_else(|e| panic!("{e}"));
+    assert!(ranges.len() >= 4, "{}", ranges.len());
+    let one = chunk_files(&puma, puma.config, &s, &located, &ranges, 1);
+    let two = chunk_files(&puma, puma.config, &s, &located, &ranges, 2);
+    let text = |f: &[ChunkFile]| -> Vec<(String, usize, usize, String)> {
+        f.iter()
+            .map(|c| (c.name.clone(), c.first, c.count, c.text.clone()))
+            .collect()
+    };
+    assert_eq!(text(&one), text(&two));
+    assert_eq!(one[0].name, "chunk-001.loc");
+    let verify = |f: &[ChunkFile], threads| {
+        verify_threads(&puma, &s, puma.config, f, puma.tolerance, threads)
+    };
+    let rep = verify(&one, 1).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rep.locations, s.len());
+    assert_eq!(verify(&one, 2), Ok(rep));
+    // Spoil the second and the last chunk: the second's error, on any number of threads.
+    let mut bad = one.clone();
+    let spoil = |c: &mut ChunkFile| c.text = c.text.replacen(" path ", " path x", 1);
+    spoil(&mut bad[1]);
+    let last = bad.len() - 1;
+    spoil(&mut bad[last]);
+    let e1 = verify(&bad, 1);
+    assert!(
+        matches!(&e1, Err(RobotError::Verify { file, .. }) if file == "chunk-002.loc"),
+        "{e1:?}"
+    );
+    assert_eq!(verify(&bad, 2), e1);
 }
