@@ -519,6 +519,8 @@ impl Interpreter {
     /// otherwise nothing changes and `false` sends the line to the reference path,
     /// which also gives any error or warning. The two agree (property-tested in
     /// `stream.rs`, and compared by the fuzz's `gcode` target).
+    // Not inlined, like `parse::plain_motion` (see there).
+    #[inline(never)]
     pub(crate) fn plain_motion(
         &mut self,
         p: &PlainMotion,
