@@ -528,7 +528,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(400))]
+        #![proptest_config(ProptestConfig::with_cases(150))]
         /// Every query, batched, gives exactly the scalar `inverse` result (the same bits,
         /// or the same error), and `forward_into` exactly `forward`: random reachable
         /// poses, axes along rotary axes (singular), zero and non-finite input, far

@@ -275,7 +275,7 @@ fn random_joints(m: &Machine, u: [f64; 5]) -> Joints {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(3000))]
+    #![proptest_config(ProptestConfig::with_cases(1000))]
 
     /// FK(IK(tip, axis)) = (tip, axis) to 1e-9 for every returned solution, and the
     /// pose's own joints are among them (up to whole turns of a continuous axis).

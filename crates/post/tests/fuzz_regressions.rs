@@ -280,9 +280,9 @@ fn on_segment_agrees_with_a_search_over_the_fraction() {
     for (ta, tb, aa, ab) in cases {
         let a = point(ta, aa, 1);
         let b = point(tb, ab, 2);
-        for k in 0..400 {
+        for k in 0..150 {
             // Poses near the path: a fraction, a sideways offset, an axis tilt.
-            let f = k as f64 / 399.0;
+            let f = k as f64 / 149.0;
             let t0 = (f * 1.4 - 0.2).clamp(-0.2, 1.2);
             let side = Vector3::new(
                 0.013 * (k as f64 * 0.7).sin(),
