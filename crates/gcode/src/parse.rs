@@ -267,17 +267,21 @@ pub fn parse_line_into<'a>(
     parse_line_with(line, line_no, offset, block, false)
 }
 
-/// [`parse_line_into`], reading number exponents when `exponents` is set (slicer
-/// programs, where E is extrusion): a lower-case `e` directly after a number's digits,
-/// with an optional sign and digits, is that number's exponent (`X1e-05`). An upper-case
-/// `E` always starts a word (`X1E-5` is X1 and E-5), and without `exponents` so does a
-/// lower-case one (E is a FADAL fixture offset there: `X1e5` is X1 E5).
+/// [`parse_line_into`], with a printer firmware's reading when `slicer` is set (slicer
+/// programs, where E is extrusion):
+/// - number exponents: a lower-case `e` directly after a number's digits, with an
+///   optional sign and digits, is that number's exponent (`X1e-05`). An upper-case `E`
+///   always starts a word (`X1E-5` is X1 and E-5), and without `slicer` so does a
+///   lower-case one (E is a FADAL fixture offset there: `X1e5` is X1 E5);
+/// - a line that starts with `(`, holds a `)` and cannot be read otherwise is one
+///   comment, parentheses inside it too (a firmware reads no command from it;
+///   Skeinforge's settings lines).
 pub fn parse_line_with<'a>(
     line: &'a [u8],
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    exponents: bool,
+    slicer: bool,
 ) -> Result<(), Diagnostic> {
     reset(block, line_no, offset, line.len());
     if line.len() > MAX_LINE_BYTES {
@@ -298,7 +302,7 @@ pub fn parse_line_with<'a>(
             ));
         }
     };
-    parse_text(text, line_no, offset, block, exponents)
+    parse_text(text, line_no, offset, block, slicer)
 }
 
 /// A line that is not UTF-8 only inside its comments (`(…)`, and `;` to the end), as
@@ -342,14 +346,14 @@ pub fn parse_line_lenient<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    exponents: bool,
+    slicer: bool,
     scratch: &'a mut Option<String>,
 ) -> Result<bool, Diagnostic> {
-    match parse_line_with(line, line_no, offset, block, exponents) {
+    match parse_line_with(line, line_no, offset, block, slicer) {
         Err(d) if matches!(d.kind, ErrorKind::InvalidUtf8) => match comments_made_utf8(line) {
             Some(text) => {
                 let text: &'a str = scratch.insert(text);
-                parse_str_with(text, line_no, offset, block, exponents).map(|()| true)
+                parse_str_with(text, line_no, offset, block, slicer).map(|()| true)
             }
             None => Err(d),
         },
@@ -382,13 +386,13 @@ pub fn parse_str_with<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    exponents: bool,
+    slicer: bool,
 ) -> Result<(), Diagnostic> {
     reset(block, line_no, offset, text.len());
     if text.len() > MAX_LINE_BYTES {
         return Err(too_long(text.as_bytes(), line_no, offset));
     }
-    parse_text(text, line_no, offset, block, exponents)
+    parse_text(text, line_no, offset, block, slicer)
 }
 
 /// The block of an empty line at `line_no`, spanning `len` bytes from `offset`.
@@ -421,14 +425,14 @@ fn parse_text<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    exponents: bool,
+    slicer: bool,
 ) -> Result<(), Diagnostic> {
     block.raw = text;
-    if simple_words(text, offset, exponents, &mut block.items) {
+    if simple_words(text, offset, slicer, &mut block.items) {
         return Ok(());
     }
     block.items.clear();
-    words_reference(text, line_no, offset, block, exponents)
+    words_reference(text, line_no, offset, block, slicer)
 }
 
 /// The fast path of the parser, for the lines programs are mostly made of: words whose
@@ -442,7 +446,7 @@ fn parse_text<'a>(
 fn simple_words<'a>(
     text: &'a str,
     offset: usize,
-    exponents: bool,
+    slicer: bool,
     items: &mut smallvec::SmallVec<[Item<'a>; 8]>,
 ) -> bool {
     let bytes = text.as_bytes();
@@ -467,7 +471,7 @@ fn simple_words<'a>(
                     return false;
                 };
                 let end = i + 1 + len;
-                if exponents && bytes.get(end) == Some(&b'e') {
+                if slicer && bytes.get(end) == Some(&b'e') {
                     return false;
                 }
                 match letter {
@@ -647,9 +651,21 @@ fn words_reference<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    exponents: bool,
+    slicer: bool,
 ) -> Result<(), Diagnostic> {
-    words_reference_items(text, line_no, offset, block, exponents).map_err(|e| {
+    let read = words_reference_items(text, line_no, offset, block, slicer);
+    if read.is_err() && slicer {
+        if let Some(c) = whole_line_comment(text, offset) {
+            // A printer firmware reads no command from a line that starts with `(`: where
+            // the line cannot be read otherwise, it is one comment, parentheses inside it
+            // too (Skeinforge writes `(<setting> comb Running_Jump_Space_(mm): 2.0
+            // </setting>)`).
+            block.items.clear();
+            block.items.push(Item::Comment(c));
+            return Ok(());
+        }
+    }
+    read.map_err(|e| {
         let nested = block.items.iter().find_map(|item| match item {
             Item::Comment(c) if c.style == CommentStyle::Paren && c.span.start < e.span.start => {
                 // The comment's text starts one byte after its `(`.
@@ -672,12 +688,29 @@ fn words_reference<'a>(
     })
 }
 
+/// The whole line as one `(` comment, when it starts (after blanks) with `(` and holds a
+/// `)`: the text between the `(` and a `)` that ends the line (or the line's end).
+fn whole_line_comment(text: &str, offset: usize) -> Option<Comment<'_>> {
+    let start = text.len() - text.trim_start_matches([' ', '\t']).len();
+    let rest = &text[start..];
+    if !rest.starts_with('(') || !rest.contains(')') {
+        return None;
+    }
+    let body = &rest[1..];
+    let body = body.trim_end().strip_suffix(')').unwrap_or(body);
+    Some(Comment {
+        text: body,
+        style: CommentStyle::Paren,
+        span: Span::new(offset + start, offset + text.len()),
+    })
+}
+
 fn words_reference_items<'a>(
     text: &'a str,
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    exponents: bool,
+    slicer: bool,
 ) -> Result<(), Diagnostic> {
     let line = text.as_bytes();
     let err = |kind: ErrorKind, start: usize, end: usize| {
@@ -884,7 +917,7 @@ fn words_reference_items<'a>(
                     },
                 };
                 let scanned = match scanned {
-                    Ok((end, value)) if exponents => match exponent_end(bytes, end) {
+                    Ok((end, value)) if slicer => match exponent_end(bytes, end) {
                         Some(e) => text[j..e]
                             .parse::<f64>()
                             .ok()
@@ -1139,7 +1172,7 @@ mod tests {
             joins in proptest::collection::vec(proptest::prop_oneof![
                 proptest::strategy::Just(""), proptest::strategy::Just(" "), proptest::strategy::Just("  ")
             ], 8),
-            exponents in proptest::bool::ANY,
+            slicer in proptest::bool::ANY,
         ) {
             let mut line = String::new();
             for (t, j) in tokens.iter().zip(&joins) {
@@ -1147,11 +1180,11 @@ mod tests {
                 line.push_str(j);
             }
             let mut fast = smallvec::SmallVec::new();
-            if simple_words(&line, 7, exponents, &mut fast) {
+            if simple_words(&line, 7, slicer, &mut fast) {
                 let mut reference = Block::empty(1, 7);
                 reset(&mut reference, 1, 7, line.len());
                 reference.raw = &line;
-                let r = words_reference(&line, 1, 7, &mut reference, exponents);
+                let r = words_reference(&line, 1, 7, &mut reference, slicer);
                 proptest::prop_assert!(r.is_ok(), "{line:?}: {r:?}");
                 proptest::prop_assert_eq!(reference.kind, BlockKind::Words);
                 proptest::prop_assert!(!reference.block_delete);
@@ -1205,8 +1238,8 @@ mod tests {
             "o100 sub",
         ] {
             items.clear();
-            let exponents = s.contains('e');
-            assert!(!simple_words(s, 0, exponents, &mut items), "{s}");
+            let slicer = s.contains('e');
+            assert!(!simple_words(s, 0, slicer, &mut items), "{s}");
         }
     }
 

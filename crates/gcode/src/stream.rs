@@ -85,8 +85,9 @@ pub struct Stream<S> {
     stopped: bool,
     finished: bool,
     any_content: bool,
-    /// Numbers may have exponents (E is extrusion: see [`crate::parse_line_with`]).
-    exponents: bool,
+    /// A printer firmware's reading: E is extrusion, numbers may have exponents (see
+    /// [`crate::parse_line_with`]).
+    slicer: bool,
     /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
     params: Option<Box<Params>>,
     /// Plain straight moves take the fast lane ([`plain_motion`]); off only in the test
@@ -118,7 +119,7 @@ impl<S: LineSource> Stream<S> {
             stopped: false,
             finished: false,
             any_content: false,
-            exponents: opts.e_word == EWord::Extrusion,
+            slicer: opts.e_word == EWord::Extrusion,
             params,
             fast_lane: true,
             warned_comment_utf8: false,
@@ -223,19 +224,15 @@ impl<S: LineSource> Iterator for Stream<S> {
                 let mut parsed = match line.too_long() {
                     Some(d) => Err(d),
                     None => match line.text {
-                        Some(text) => parse_str_with(
-                            text,
-                            line.number,
-                            line.offset,
-                            &mut block,
-                            self.exponents,
-                        ),
+                        Some(text) => {
+                            parse_str_with(text, line.number, line.offset, &mut block, self.slicer)
+                        }
                         None => match parse_line_lenient(
                             line.bytes,
                             line.number,
                             line.offset,
                             &mut block,
-                            self.exponents,
+                            self.slicer,
                             &mut scratch,
                         ) {
                             Ok(lenient) => {
@@ -254,9 +251,9 @@ impl<S: LineSource> Iterator for Stream<S> {
                     },
                 };
                 // A printer (slicer) program's line that is no G-code but a firmware's
-                // extended command (`exponents`: E is extrusion, the program is a printer's):
+                // extended command (`slicer`: E is extrusion, the program is a printer's):
                 // a warning naming it, and an empty block.
-                if parsed.is_err() && self.exponents {
+                if parsed.is_err() && self.slicer {
                     if let Some((kind, len)) = firmware_command(line.bytes) {
                         queue.push_back(Event::Diagnostic(Diagnostic::at(
                             Severity::Warning,

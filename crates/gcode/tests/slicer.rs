@@ -286,3 +286,35 @@ fn e_mode_across_g90_and_g91_follows_the_flavour() {
     let (e, _) = extruded(g91, slicer());
     assert_eq!(e, [Some(1.0), Some(2.0)], "Marlin: G91 makes E relative");
 }
+
+#[test]
+fn a_whole_line_paren_comment_may_hold_parentheses_in_a_slicer_program() {
+    // Skeinforge 12.01.13's settings lines (fixtures/real-programs/skeinforge).
+    let line = b"(<setting> comb Running_Jump_Space_(mm): 2.0 </setting>)";
+    let mut b = Block::empty(1, 0);
+    parse_line_with(line, 1, 0, &mut b, true).expect("a firmware skips the line");
+    let comments: Vec<&str> = b
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Comment(c) => Some(c.text),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        comments,
+        ["<setting> comb Running_Jump_Space_(mm): 2.0 </setting>"]
+    );
+    assert!(b.word(b'G').is_none() && b.word(b'X').is_none());
+    // Elsewhere comments do not nest, as on the controls.
+    let e = parse_line(line, 1, 0).map(|_| ()).expect_err("nested");
+    assert_eq!(e.kind, ErrorKind::NestedComment);
+    // A line that reads as G-code keeps its reading: the comment, then the move.
+    let (m, errors) = run("G1 X0 Y0 F600\n(note) G1 X1 E1\n(a (b) c)\nG1 X2 E2\n");
+    assert!(errors.is_empty(), "{errors:?}");
+    assert_eq!(m.len(), 3);
+    assert_eq!(m[1].end[0], 1.0);
+    // A `(` that never closes is still refused.
+    let (_, errors) = run("(open (comment\n");
+    assert_eq!(errors.len(), 1, "{errors:?}");
+}

@@ -384,6 +384,28 @@ pub fn plan_threads(
     cfg: Config,
     threads: usize,
 ) -> Result<Vec<Located>, RobotError> {
+    plan_tries(arm, samples, cfg, threads, true)
+}
+
+/// [`plan_threads`] with every try planned to its end (no try stops early where it can no
+/// longer be taken): the reference the early stop is tested against.
+#[doc(hidden)]
+pub fn plan_every_try_to_its_end(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    threads: usize,
+) -> Result<Vec<Located>, RobotError> {
+    plan_tries(arm, samples, cfg, threads, false)
+}
+
+fn plan_tries(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    threads: usize,
+    stop_early: bool,
+) -> Result<Vec<Located>, RobotError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
     let refs = references(samples);
@@ -392,16 +414,24 @@ pub fn plan_threads(
             .map(|x| arm.margin(&x.q))
             .fold(f64::INFINITY, f64::min)
     };
-    let nearest = track(arm, samples, &refs, cfg, None).map(|l| Tried {
-        order: 0,
-        margin: worst(&l),
-        located: l,
+    // Without a floor a plan is never dropped: `None` cannot come back.
+    let nearest = track(arm, samples, &refs, cfg, None, None).map(|l| {
+        let l = l.unwrap_or_default();
+        Tried {
+            order: 0,
+            margin: worst(&l),
+            located: l,
+        }
     });
     if let Ok(n) = &nearest {
         if n.margin >= CLEAR {
             return nearest.map(|n| n.located);
         }
     }
+    // A try whose locations come nearer trouble than the plan taken so far (or than
+    // CLEAR, while a clear plan of a lower order may still come) cannot be taken: it
+    // stops there. This saves work only; the plan taken is the same.
+    let floor = Floor::new(nearest.as_ref().map_or(f64::NEG_INFINITY, |n| n.margin));
     let turns: Vec<f64> = first_turns(arm, samples, &refs, cfg)
         .into_iter()
         .take(TRIES)
@@ -420,7 +450,8 @@ pub fn plan_threads(
         if clear_at.load(Ordering::Relaxed) < order {
             break;
         }
-        let Ok(located) = track(arm, samples, &refs, cfg, Some(psi)) else {
+        let stop_below = stop_early.then_some(&floor);
+        let Ok(Some(located)) = track(arm, samples, &refs, cfg, Some(psi), stop_below) else {
             continue;
         };
         let tried = Tried {
@@ -435,6 +466,7 @@ pub fn plan_threads(
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         if b.as_ref().is_none_or(|b| tried.beats(b)) {
+            floor.raise(tried.margin.min(CLEAR));
             *b = Some(tried);
         }
     };
@@ -460,14 +492,38 @@ pub fn plan_threads(
     }
 }
 
+/// The least margin ([`Arm::margin`]) a try must keep all along to be taken over the plan
+/// taken so far: an `f64` shared by the threads, only ever raised.
+struct Floor(std::sync::atomic::AtomicU64);
+
+impl Floor {
+    fn new(v: f64) -> Floor {
+        Floor(std::sync::atomic::AtomicU64::new(v.to_bits()))
+    }
+
+    fn get(&self) -> f64 {
+        f64::from_bits(self.0.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    fn raise(&self, v: f64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let _ = self.0.fetch_update(Relaxed, Relaxed, |b| {
+            (v > f64::from_bits(b)).then_some(v.to_bits())
+        });
+    }
+}
+
 /// The plan from a first turn about the beam (`None`: the one nearest the safe location).
+/// With a floor, `Ok(None)` when a location's margin falls below it: the plan cannot be
+/// taken and is left unfinished.
 fn track(
     arm: &Arm,
     samples: &[Sample],
     refs: &[Vector3<f64>],
     cfg: Config,
     start: Option<f64>,
-) -> Result<Vec<Located>, RobotError> {
+    floor: Option<&Floor>,
+) -> Result<Option<Vec<Located>>, RobotError> {
     let mut out: Vec<Located> = Vec::with_capacity(samples.len());
     let mut prev = arm.safe;
     let mut psi_prev = start.unwrap_or(0.0);
@@ -554,11 +610,14 @@ fn track(
         if i > 0 {
             check_speed(arm, s, &prev, &q)?;
         }
+        if floor.is_some_and(|f| arm.margin(&q) < f.get()) {
+            return Ok(None);
+        }
         out.push(Located { q, part, psi });
         prev = q;
         psi_prev = psi;
     }
-    Ok(out)
+    Ok(Some(out))
 }
 
 /// The joint speeds of the move from `from` to `to` in `s.dt` seconds.

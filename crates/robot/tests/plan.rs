@@ -4,7 +4,9 @@
 use lampost_robot::chunk::{
     chunk_files, chunk_ranges, from_zyz, part_of, verify_threads, zyz, ChunkFile,
 };
-use lampost_robot::plan::{plan, plan_threads, resample, PathPoint, Sample, CLEAR, MAX_TURN};
+use lampost_robot::plan::{
+    plan, plan_every_try_to_its_end, plan_threads, resample, PathPoint, Sample, CLEAR, MAX_TURN,
+};
 use lampost_robot::RobotError;
 use lampost_robot::{Arm, ArmDef, Q};
 use nalgebra::Vector3;
@@ -258,6 +260,13 @@ fn planning_on_threads_takes_the_plan_one_thread_takes() {
     for threads in [2, 4] {
         assert_eq!(
             plan_threads(&tight, &s, tight.config, threads),
+            Ok(one.clone())
+        );
+    }
+    // Tries that stop once they cannot be taken leave the plan taken as it is.
+    for threads in [1, 2] {
+        assert_eq!(
+            plan_every_try_to_its_end(&tight, &s, tight.config, threads),
             Ok(one.clone())
         );
     }
