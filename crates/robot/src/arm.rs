@@ -116,6 +116,18 @@ impl Link {
     }
 }
 
+/// The wrist centre in the upper arm's plane ([`Arm::reach`]): its signed distance `x`
+/// from the waist axis past the shoulder offset (negative for a left shoulder) and height
+/// `y` above the shoulder, `r2` its squared distance from the waist axis, `rr` from the
+/// shoulder, and the cosine of the shoulder's angle in the elbow's triangle.
+struct Reach {
+    x: f64,
+    y: f64,
+    r2: f64,
+    rr: f64,
+    cpsi: f64,
+}
+
 /// An arm configuration: shoulder, elbow, wrist.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Config {
@@ -495,7 +507,7 @@ impl Arm {
     /// (θ5 = 0 or π) θ4 is kept at `wrist` (the last value) and θ6 takes the rest.
     pub fn inverse_closed(&self, flange: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
         let l = &self.links;
-        let (d1, a2, a3, d3, d4) = (l[0].d, l[1].a, l[2].a, l[2].d, l[3].d);
+        let (a2, a3, d3, d4) = (l[1].a, l[2].a, l[2].d, l[3].d);
         // Strip A6's fixed part: T' = T06 · (Tz(d6) Tx(a6) Rx(α6))⁻¹ = T05 · Rz(θ6).
         let e = Frame {
             r: {
@@ -506,33 +518,8 @@ impl Arm {
         };
         let tp = flange.mul(&e.inverse());
         let p = tp.t;
-        let r2 = p.x * p.x + p.y * p.y;
-        if r2 < d3 * d3 || r2 == 0.0 {
-            return Err(NoReach {
-                joint: 0,
-                why: format!(
-                    "the wrist centre is {:.3} from the waist axis, inside the shoulder offset {:.3}",
-                    r2.sqrt(),
-                    d3.abs()
-                ),
-            });
-        }
-        let xr = (r2 - d3 * d3).sqrt();
-        let x = if c.right { xr } else { -xr };
+        let Reach { x, y, cpsi, .. } = self.reach(&p, c)?;
         let t1 = p.y.atan2(p.x) + d3.atan2(x);
-        let y = p.z - d1;
-        let l3sq = a3 * a3 + d4 * d4;
-        let rr = (x * x + y * y).sqrt();
-        let cpsi = (a2 * a2 - l3sq + x * x + y * y) / (2.0 * a2 * rr);
-        if !cpsi.is_finite() || cpsi.abs() > 1.0 + 1e-12 {
-            let (lo, hi) = ((a2.abs() - l3sq.sqrt()).abs(), a2.abs() + l3sq.sqrt());
-            return Err(NoReach {
-                joint: 2,
-                why: format!(
-                    "the wrist centre is {rr:.3} from the shoulder; the elbow reaches {lo:.3} to {hi:.3}"
-                ),
-            });
-        }
         let psi = cpsi.clamp(-1.0, 1.0).acos();
         let n2 = if c.up == c.right { 1.0 } else { -1.0 };
         let t2 = y.atan2(x) + n2 * psi;
@@ -596,11 +583,12 @@ impl Arm {
         self.inverse_wrist(&tp, c, wrist)
     }
 
-    /// The closed form from the wrist frame `T05 · Rz(θ6)` (base frame).
-    fn inverse_wrist(&self, tp: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+    /// Where the wrist centre `p` (base frame) lies for the closed forms, in the plane of
+    /// the upper arm for shoulder configuration `c`; `Err` naming the waist when it lies
+    /// inside the shoulder offset, the elbow when beyond the arm's reach.
+    fn reach(&self, p: &Vector3<f64>, c: Config) -> Result<Reach, NoReach> {
         let l = &self.links;
         let (d1, a2, a3, d3, d4) = (l[0].d, l[1].a, l[2].a, l[2].d, l[3].d);
-        let p = tp.t;
         let r2 = p.x * p.x + p.y * p.y;
         if r2 < d3 * d3 || r2 == 0.0 {
             return Err(NoReach {
@@ -614,8 +602,6 @@ impl Arm {
         }
         let xr = (r2 - d3 * d3).sqrt();
         let x = if c.right { xr } else { -xr };
-        // θ1 = atan2(py, px) + atan2(d3, x), and x² + d3² = r2.
-        let (c1, s1) = ((p.x * x - p.y * d3) / r2, (p.y * x + p.x * d3) / r2);
         let y = p.z - d1;
         let l3sq = a3 * a3 + d4 * d4;
         let rr = (x * x + y * y).sqrt();
@@ -629,6 +615,17 @@ impl Arm {
                 ),
             });
         }
+        Ok(Reach { x, y, r2, rr, cpsi })
+    }
+
+    /// The closed form from the wrist frame `T05 · Rz(θ6)` (base frame).
+    fn inverse_wrist(&self, tp: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+        let l = &self.links;
+        let (a2, d3) = (l[1].a, l[2].d);
+        let p = tp.t;
+        let Reach { x, y, r2, rr, cpsi } = self.reach(&p, c)?;
+        // θ1 = atan2(py, px) + atan2(d3, x), and x² + d3² = r2.
+        let (c1, s1) = ((p.x * x - p.y * d3) / r2, (p.y * x + p.x * d3) / r2);
         // θ2 = atan2(y, x) ± ψ, cos ψ = cpsi, sin ψ ≥ 0.
         let cp = cpsi.clamp(-1.0, 1.0);
         let sp = ((1.0 - cp) * (1.0 + cp)).sqrt();
