@@ -306,3 +306,62 @@ fn stray_carriage_returns_byte_order_marks_and_text_after_the_end() {
         .status
         .success());
 }
+
+/// Programs in other languages (a Heidenhain or Sinumerik program, APT CL data, a KUKA
+/// robot program) are refused at their first line that is not G-code, naming the
+/// language, and nothing is posted.
+#[test]
+fn programs_in_other_languages_are_named() {
+    let dir = tempdir("foreign");
+    for (name, text, line, language) in [
+        (
+            "part.h",
+            "0 BEGIN PGM 1001 MM\n1 BLK FORM 0.1 Z X+0 Y+0 Z-20\n2 TOOL CALL 1 Z S3000\n3 L X+10 Y+5 R0 FMAX M3\n4 END PGM 1001 MM\n",
+            1,
+            "Heidenhain",
+        ),
+        (
+            "part.mpf",
+            "; Sinumerik\nN10 G17 G90 G54 G71\nN20 T=\"MILL_10\" D1\nN30 M6\nN40 G0 X0 Y0 Z5\nN50 G1 Z-1 F200\nN60 CYCLE81(10,0,1,-5)\nN70 M30\n",
+            3,
+            "Sinumerik",
+        ),
+        (
+            "part.cl",
+            "PARTNO TEST\nCUTTER/10.0\nGOTO/1.0,2.0,3.0\nFINI\n",
+            1,
+            "APT",
+        ),
+        (
+            "part.src",
+            "&ACCESS RVP\nDEF part()\nPTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\nLIN {X 100,Y 0,Z 50}\nEND\n",
+            1,
+            "KUKA",
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, text).expect("write");
+        let s = p.to_str().expect("utf8");
+        let o = lampost(&["check", s]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        let first = err.lines().next().unwrap_or("");
+        assert!(
+            first.contains(language) && first.contains("not G-code"),
+            "{name}: {err}"
+        );
+        assert!(err.contains(&format!("{name}:{line}:")), "{name}: {err}");
+        let out = dir.join(format!("{name}.posted.nc"));
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            s,
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
+        assert!(stderr(&o).contains(language), "{name}: {}", stderr(&o));
+        assert!(!out.exists(), "{name}: nothing written");
+    }
+}

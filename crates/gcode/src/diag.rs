@@ -263,6 +263,10 @@ pub enum ErrorKind {
     /// travel alone (reported at its first feed move, or its first move).
     #[error("E is read as extrusion ({0}), but no move of the program extrudes: E never grows along a move, so the post would write travel alone")]
     NoExtrusion(&'static str),
+    /// A line that is not G-code but has the shape of another language's (Heidenhain
+    /// Klartext, Sinumerik, APT CL data, a robot language): see [`crate::foreign_language`].
+    #[error("this line is {}, not G-code", .0.name)]
+    ForeignLanguage(crate::Foreign),
 }
 
 impl ErrorKind {
@@ -323,6 +327,7 @@ impl ErrorKind {
             ErrorKind::LineTooLong(_) => "split the line; controllers take lines of a few hundred characters",
             ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
             ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
+            ErrorKind::ForeignLanguage(f) => f.hint,
             ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin or reprap) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83)",
         }
     }

@@ -26,6 +26,7 @@ mod diag;
 mod emit;
 mod expr;
 mod flavor;
+mod foreign;
 pub mod generate;
 mod interp;
 mod lines;
@@ -41,6 +42,7 @@ pub use diag::{Diagnostic, ErrorKind, Severity, Snippet};
 pub use emit::{fixed, out_of_range, round_half_away, Dialect, EmitOptions, Emitter};
 pub use expr::{sets_feed, Params};
 pub use flavor::{detect, Flavor, Resolved, DETECT_BYTES};
+pub use foreign::{foreign_language, Foreign};
 pub use interp::{
     Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin, ARC_RADIUS_TOLERANCE,
     ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE,

@@ -665,6 +665,21 @@ fn words_reference<'a>(
             return Ok(());
         }
     }
+    if read.is_err() {
+        if let Some(f) = crate::foreign_language(text) {
+            // Name the language rather than a stray letter of it.
+            let start = text.len() - text.trim_start().len();
+            return Err(Diagnostic::at(
+                Severity::Error,
+                ErrorKind::ForeignLanguage(f),
+                line_no,
+                offset,
+                text.as_bytes(),
+                start,
+                text.trim_end().len().max(start + 1).min(text.len()),
+            ));
+        }
+    }
     read.map_err(|e| {
         let nested = block.items.iter().find_map(|item| match item {
             Item::Comment(c) if c.style == CommentStyle::Paren && c.span.start < e.span.start => {

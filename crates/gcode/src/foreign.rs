@@ -1,0 +1,175 @@
+//! Programs in another language than G-code: a line that does not read as G-code is
+//! checked against the shapes of the languages CAM systems and robot controllers also
+//! write, so the error names the language instead of a stray letter (`the letter T has no
+//! number after it` on a Sinumerik `T="MILL_10"`).
+
+/// A language that is not G-code, and what to do about it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Foreign {
+    /// The language, as the message names it.
+    pub name: &'static str,
+    /// What the user can do.
+    pub hint: &'static str,
+}
+
+const HEIDENHAIN: Foreign = Foreign {
+    name: "Heidenhain conversational (Klartext)",
+    hint: "post the job from the CAM system for an ISO G-code control (Fanuc, LinuxCNC or FADAL); lampost reads no Klartext",
+};
+const SINUMERIK: Foreign = Foreign {
+    name: "Siemens Sinumerik syntax",
+    hint: "post the job for an ISO G-code control (Fanuc, LinuxCNC or FADAL), without Sinumerik cycles, `NAME=` values and `T=\"…\"` tools",
+};
+const APT: Foreign = Foreign {
+    name: "APT cutter-location (CL) data, a CAM system's output before posting",
+    hint: "post the CL file in the CAM system for a G-code control, then give lampost the G-code",
+};
+const KRL: Foreign = Foreign {
+    name: "KUKA robot language (KRL)",
+    hint: "give lampost the path (a G-code program or a per-point CSV), not a robot program",
+};
+const RAPID: Foreign = Foreign {
+    name: "ABB RAPID",
+    hint: "give lampost the path (a G-code program or a per-point CSV), not a robot program",
+};
+const FANUC_TP: Foreign = Foreign {
+    name: "a FANUC robot teach-pendant program",
+    hint: "give lampost the path (a G-code program or a per-point CSV), not a robot program",
+};
+
+/// The language `line` is written in, when it has the shape of a line of a language
+/// other than G-code (only asked of lines that do not read as G-code).
+pub fn foreign_language(line: &str) -> Option<Foreign> {
+    let t = line.trim();
+    let upper = t.to_ascii_uppercase();
+    let u = upper.as_str();
+    // Heidenhain: every block starts with its number and a space, then a keyword.
+    let digits = u.bytes().take_while(u8::is_ascii_digit).count();
+    if digits > 0 && u[digits..].starts_with(' ') {
+        let rest = u[digits..].trim_start();
+        const KEYS: [&str; 18] = [
+            "BEGIN PGM",
+            "END PGM",
+            "BLK FORM",
+            "TOOL CALL",
+            "TOOL DEF",
+            "CYCL DEF",
+            "CYCL CALL",
+            "LBL ",
+            "CALL LBL",
+            "CALL PGM",
+            "FN ",
+            "L ",
+            "LP ",
+            "CC ",
+            "CR ",
+            "CT ",
+            "APPR",
+            "DEP",
+        ];
+        if KEYS.iter().any(|k| rest.starts_with(k)) {
+            return Some(HEIDENHAIN);
+        }
+    }
+    if u.starts_with("BEGIN PGM") || u.starts_with("END PGM") {
+        return Some(HEIDENHAIN);
+    }
+    // APT: a major word and a slash (`GOTO/1.0,2.0,3.0`, `FEDRAT/500`), or one of the
+    // words that stand alone.
+    let word: &str = u.split([' ', '/', ',']).next().unwrap_or("");
+    if word.len() >= 4
+        && word.bytes().all(|c| c.is_ascii_uppercase())
+        && u[word.len()..].trim_start().starts_with('/')
+        || matches!(u, "RAPID" | "FINI" | "END")
+        || u.starts_with("PARTNO")
+    {
+        return Some(APT);
+    }
+    // Robot languages.
+    if u.starts_with("&ACCESS")
+        || u.starts_with("&REL")
+        || u.starts_with("$VEL")
+        || u.starts_with("$APO")
+        || u.starts_with("BAS(")
+        || ["PTP ", "LIN ", "CIRC ", "PTP_REL ", "LIN_REL "]
+            .iter()
+            .any(|k| u.starts_with(k))
+        || u.starts_with("DEF ") && u.contains("()")
+        || u.contains("{X ")
+        || u.contains("{A1 ")
+    {
+        return Some(KRL);
+    }
+    if [
+        "MODULE ",
+        "ENDMODULE",
+        "PROC ",
+        "ENDPROC",
+        "MOVEL ",
+        "MOVEJ ",
+        "MOVEC ",
+        "MOVEABSJ ",
+    ]
+    .iter()
+    .any(|k| u.starts_with(k))
+        || u.contains("ROBTARGET")
+    {
+        return Some(RAPID);
+    }
+    if u.starts_with("/PROG")
+        || u.starts_with("/MN")
+        || u.starts_with("/POS")
+        || u.starts_with("/ATTR")
+    {
+        return Some(FANUC_TP);
+    }
+    // Sinumerik: its cycles, messages, tool names, `NAME=` values and frame statements.
+    let code = u.split(';').next().unwrap_or("");
+    const SIN: [&str; 24] = [
+        "CYCLE", "MSG(", "MSG (", "T=\"", "=AC(", "=IC(", "=DC(", "=ACP(", "=ACN(", "CR=", "AP=",
+        "RP=", "TURN=", "SUPA", "TRANS", "AROT", "TRAORI", "ORIWKS", "CFTCP", "GOTOF", "GOTOB",
+        "MCALL", "STOPRE", "SPOS=",
+    ];
+    if SIN.iter().any(|k| code.contains(k))
+        || code.starts_with("DEF REAL")
+        || code.starts_with("DEF INT")
+    {
+        return Some(SINUMERIK);
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn languages_are_named() {
+        for (line, want) in [
+            ("0 BEGIN PGM 1001 MM", Some(HEIDENHAIN)),
+            ("12 L X+10 Y+5 R0 FMAX M3", Some(HEIDENHAIN)),
+            ("3 TOOL CALL 1 Z S3000", Some(HEIDENHAIN)),
+            ("N20 T=\"MILL_10\" D1", Some(SINUMERIK)),
+            ("N70 G2 X10 Y0 CR=5", Some(SINUMERIK)),
+            ("N80 CYCLE81(10,0,1,-5)", Some(SINUMERIK)),
+            ("MSG(\"ROUGHING\")", Some(SINUMERIK)),
+            ("GOTO/ 1.0000, 2.0000, 3.0000", Some(APT)),
+            ("FEDRAT/MMPM,500.0", Some(APT)),
+            ("RAPID", Some(APT)),
+            ("PTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}", Some(KRL)),
+            ("LIN {X 100,Y 0,Z 50} C_DIS", Some(KRL)),
+            ("&ACCESS RVP", Some(KRL)),
+            ("MoveL p10, v100, fine, tool0;", Some(RAPID)),
+            ("MODULE MainModule", Some(RAPID)),
+            ("/PROG  WELD1", Some(FANUC_TP)),
+            // G-code lines with faults are not another language.
+            ("G1 X", None),
+            ("G0 X1 Y2 ; rapid", None),
+            ("N10 G1 X1 Y", None),
+            ("12 X1", None),
+            ("SET_VELOCITY_LIMIT ACCEL=5000", None),
+        ] {
+            assert_eq!(foreign_language(line), want, "{line}");
+        }
+    }
+}
