@@ -158,6 +158,10 @@ pub enum ErrorKind {
     /// A subprogram call not followed.
     #[error("{0}: subprogram calls are not followed; the trace continues after the call")]
     SubprogramNotFollowed(String),
+    /// An L word outside G10, a canned cycle and a call (LinuxCNC refuses it; only FADAL
+    /// calls a subroutine with L).
+    #[error("{0}: LinuxCNC reads L only with G10, a canned cycle or a call's repeat count")]
+    StrayL(String),
     /// A call to a program number the file does not hold.
     #[error("M98 P{0}: this file holds no program O{0}")]
     UnknownProgram(u32),
@@ -309,6 +313,7 @@ impl ErrorKind {
             ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
+            ErrorKind::StrayL(_) => "remove the L word (a typo, most likely), or read the program with --flavor fadal if it calls a FADAL subroutine",
             ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",
             ErrorKind::DuplicateProgram { .. } => "give every program in the file its own O number",
             ErrorKind::NotASubprogram { .. } => "end the subprogram with M99, or correct P",
@@ -328,7 +333,7 @@ impl ErrorKind {
             ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
             ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
             ErrorKind::ForeignLanguage(f) => f.hint,
-            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin or reprap) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83)",
+            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin or reprap) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values",
         }
     }
 }

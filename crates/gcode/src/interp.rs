@@ -1011,6 +1011,20 @@ impl Interpreter {
                     matches!(c, 730 | 740 | 760 | 810..=890)
                 });
             if !canned_block && !w.has_g(100) {
+                // G41.1/G42.1's L is a lathe tool's orientation.
+                if self.opts.flavor == crate::flavor::Flavor::LinuxCnc
+                    && !w.has_g(411)
+                    && !w.has_g(421)
+                {
+                    // RS274NGC has no L outside G10, canned cycles and M98's count: rs274
+                    // refuses the block.
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::StrayL(l.display()),
+                        Some(l.span),
+                    ));
+                }
                 self.warn(
                     b,
                     out,

@@ -308,3 +308,29 @@ fn haas_m97_calls_a_local_subprogram_by_its_n_label() {
         "{d:?}"
     );
 }
+
+#[test]
+fn a_stray_l_word_is_refused_as_rs274_refuses_it() {
+    use lampost_gcode::{check, ErrorKind, Flavor, Options};
+    let opts = Flavor::LinuxCnc.options(Options::default(), None);
+    let d = check(b"G21\nG1 X1 F100\ng1 l20\n", opts);
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert!(matches!(d[0].kind, ErrorKind::StrayL(_)), "{d:?}");
+    assert_eq!((d[0].line, d[0].column), (3, 4));
+    // L where LinuxCNC reads it: G10, a canned cycle's repeat count, G76.
+    let d = check(
+        b"G21\nG10 L2 P1 X0\nG0 X0 Y0 Z5\nG91 G81 X1 Z-1 R1 L3 F100\nG80 G90\n",
+        opts,
+    );
+    assert!(
+        d.iter().all(|x| !matches!(x.kind, ErrorKind::StrayL(_))),
+        "{d:?}"
+    );
+    // FADAL's reading: a subroutine call, warned.
+    let opts = Flavor::Fadal.options(Options::default(), None);
+    let d = check(b"G1 X1 F100\nG1 L20\n", opts);
+    assert!(
+        matches!(d[0].kind, ErrorKind::SubprogramNotFollowed(_)),
+        "{d:?}"
+    );
+}
