@@ -73,6 +73,8 @@ pub enum FlavorArg {
     Marlin,
     /// RepRapFirmware (slicer programs: E is extrusion).
     Reprap,
+    /// MakerBot/Sailfish (slicer programs: the extruder is the A or B word).
+    Makerbot,
 }
 
 impl FlavorArg {
@@ -88,6 +90,7 @@ impl FlavorArg {
             FlavorArg::Mach3 => F::Mach3,
             FlavorArg::Marlin => F::Marlin,
             FlavorArg::Reprap => F::RepRap,
+            FlavorArg::Makerbot => F::MakerBot,
         }
     }
 }

@@ -10,15 +10,15 @@
 //!   `lampost check` reports (each was read by hand: see `SOURCES.md`).
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
-//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker, skeinforge)
-//! are traced
+//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker, skeinforge,
+//! miracle-grue) are traced
 //! with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
 //! verdict then says `post R runs` when the post deposits the extruding length (relative
 //! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
 //! start code's homing (`G28`) and bed levelling (`G29`) lines are left out of the posted
 //! input: a move to the printer's home cannot be placed on the part (the post refuses it,
 //! see docs/post.md), and nothing else is changed. Each must also be read as a slicer's
-//! program by `--flavor auto` (`marlin` or `reprap` in `check --json`).
+//! program by `--flavor auto` (`marlin`, `reprap` or `makerbot` in `check --json`).
 //!
 //! A verdict that changes fails the test: an improvement is recorded by running it with
 //! `LAMPOST_UPDATE_VERDICTS=1` and reviewing the diff of `VERDICTS`.
@@ -29,7 +29,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 13] = [
+const SLICERS: [&str; 14] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -43,6 +43,7 @@ const SLICERS: [&str; 13] = [
     "snapmaker-luban",
     "ideamaker",
     "skeinforge",
+    "miracle-grue",
 ];
 
 /// The first error `lampost check` reports, as `L:C message`.
@@ -124,7 +125,13 @@ fn post_verdict(path: &Path, work: &Path) -> String {
         };
     }
     let nc = std::fs::read_to_string(&out_path).expect("posted");
-    let (runs, extruding) = extruding_runs(&input);
+    // MakerBot programs name the extruder A (or B).
+    let makerbot = path.to_string_lossy().contains("miracle-grue");
+    let (runs, extruding) = if makerbot {
+        extruding_runs_with(&input, &['A', 'B', 'E'])
+    } else {
+        extruding_runs(&input)
+    };
     let (ons, deposited) = posted_deposition(&nc);
     assert_eq!(ons, runs, "{name}: laser-on events vs extruding runs");
     let rel = (deposited - extruding).abs() / extruding.max(f64::MIN_POSITIVE);
@@ -216,7 +223,7 @@ fn real_programs_against_their_verdicts() {
         };
         if slicer {
             let f = auto_flavor(path);
-            if !matches!(f.as_str(), "marlin" | "reprap") {
+            if !matches!(f.as_str(), "marlin" | "reprap" | "makerbot") {
                 misread.push(format!("{gen}/{name}: {f}"));
             }
         }

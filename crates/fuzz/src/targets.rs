@@ -14,7 +14,7 @@ use lampost_gcode::{
 use lampost_mesh as mesh;
 
 /// Every resolved flavour (`auto` is resolved before a program is read).
-const FLAVORS: [Flavor; 7] = [
+const FLAVORS: [Flavor; 8] = [
     Flavor::Fadal,
     Flavor::LinuxCnc,
     Flavor::Fanuc,
@@ -22,6 +22,7 @@ const FLAVORS: [Flavor; 7] = [
     Flavor::Mach3,
     Flavor::Marlin,
     Flavor::RepRap,
+    Flavor::MakerBot,
 ];
 use lampost_kinematics::{Joints, Machine, MachineDef, Vector3};
 use lampost_post::safety::WorkBounds;

@@ -333,7 +333,7 @@ impl ErrorKind {
             ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
             ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
             ErrorKind::ForeignLanguage(f) => f.hint,
-            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin or reprap) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values",
+            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin, reprap or makerbot) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values",
         }
     }
 }

@@ -808,7 +808,25 @@ impl Interpreter {
                 l => match word.register {
                     Some(r) => w.registers[usize::from(r)] = Some(word),
                     None => {
+                        // MakerBot: the A or B word is the extruder, read as E.
+                        let extruder = self.opts.flavor.extruder_is_a_or_b()
+                            && matches!(l, b'A' | b'B' | b'E');
+                        let l = if extruder { b'E' } else { l };
                         let i = usize::from(l - b'A');
+                        if extruder {
+                            if let Some(first) = w.by_letter[i] {
+                                return Err(diag(
+                                    b,
+                                    Severity::Error,
+                                    ErrorKind::DuplicateWord(format!(
+                                        "the extruder ({} and {}: MakerBot's A, B and E all drive it; lampost follows one head)",
+                                        first.display(),
+                                        word.display()
+                                    )),
+                                    Some(word.span),
+                                ));
+                            }
+                        }
                         w.by_letter[i] = Some(word);
                         w.axes |= AXIS_BITS[i];
                     }

@@ -90,8 +90,9 @@ pub struct Stream<S> {
     slicer: bool,
     /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
     params: Option<Box<Params>>,
-    /// Plain straight moves take the fast lane ([`plain_motion`]); off only in the test
-    /// that compares the two.
+    /// Plain straight moves take the fast lane ([`plain_motion`]); off in the test that
+    /// compares the two, and for MakerBot programs (where A and B are the extruder, not
+    /// axes, which only the reference path reads).
     fast_lane: bool,
     /// A comment that is not UTF-8 has been reported (once a program).
     warned_comment_utf8: bool,
@@ -121,7 +122,7 @@ impl<S: LineSource> Stream<S> {
             any_content: false,
             slicer: opts.e_word == EWord::Extrusion,
             params,
-            fast_lane: true,
+            fast_lane: !opts.flavor.extruder_is_a_or_b(),
             warned_comment_utf8: false,
             warned_text_after_end: false,
         }

@@ -318,3 +318,36 @@ fn a_whole_line_paren_comment_may_hold_parentheses_in_a_slicer_program() {
     let (_, errors) = run("(open (comment\n");
     assert_eq!(errors.len(), 1, "{errors:?}");
 }
+
+#[test]
+fn makerbot_extrudes_with_a_or_b() {
+    let opts = lampost_gcode::Flavor::MakerBot.options(Options::default(), None);
+    let moves = |src: &str| -> (Vec<Move>, Vec<ErrorKind>) {
+        let mut m = Vec::new();
+        let mut d = Vec::new();
+        for ev in Stream::from_bytes(src.as_bytes(), opts, false) {
+            match ev.expect("in memory") {
+                Event::Move(mv) => m.push(mv),
+                Event::Diagnostic(x) => d.push(x.kind),
+            }
+        }
+        (m, d)
+    };
+    // Miracle-Grue: A is the extruder, absolute; an A-only move (a squirt) moves nothing.
+    let (m, d) = moves(
+        "G21\nG1 X-15 Y-11 Z0.6 F6000\nG1 F1200 A1 (squirt)\nG1 X15 Y-11 Z0.6 F1800 A7.096 (d: 30)\nG1 X15 Y-13 A7.489\nG92 A0\nG1 X0 Y0 B0.5\n",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(m.len(), 4, "{m:?}");
+    assert_eq!(m[1].extrusion, Some(7.096));
+    assert_eq!(m[2].extrusion, Some(7.489));
+    assert_eq!(m[3].extrusion, Some(0.5));
+    // Every move stays at A = B = 0: they are no axes here.
+    assert!(m.iter().all(|mv| mv.end[3] == 0.0 && mv.end[4] == 0.0));
+    // Two extruder words in one block are refused.
+    let (_, d) = moves("G21\nG1 X1 Y1 F100 A1 B1\n");
+    assert!(
+        matches!(d.as_slice(), [ErrorKind::DuplicateWord(_)]),
+        "{d:?}"
+    );
+}
