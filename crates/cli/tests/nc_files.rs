@@ -48,7 +48,9 @@ fn linuxcnc_sample_programs_against_rs274() {
         std::fs::create_dir_all(&own).expect("folder");
         let prog = own.join(&name);
         std::fs::write(&prog, prepare(&text)).expect("write");
-        let verdict = match rs274_try(&prog, &own) {
+        // rs274 now and then writes no output for a program it runs (under load, seen
+        // on a few of these): a failure is tried once more before it counts.
+        let verdict = match rs274_try(&prog, &own).or_else(|_| rs274_try(&prog, &own)) {
             Err(_) => "rs274-fails".to_string(),
             Ok(canon) => {
                 let out = lampost(&["trace", "--json", prog.to_str().expect("utf8")]);

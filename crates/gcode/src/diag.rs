@@ -158,10 +158,18 @@ pub enum ErrorKind {
     /// A subprogram call not followed.
     #[error("{0}: subprogram calls are not followed; the trace continues after the call")]
     SubprogramNotFollowed(String),
-    /// An L word outside G10, a canned cycle and a call (LinuxCNC refuses it; only FADAL
-    /// calls a subroutine with L).
-    #[error("{0}: LinuxCNC reads L only with G10, a canned cycle or a call's repeat count")]
-    StrayL(String),
+    /// A word LinuxCNC reads only with certain codes, in a block without them (rs274
+    /// refuses the block): L outside G10, canned cycles and G41.1/G42.1 (FADAL calls a
+    /// subroutine with L), E outside G76 (FADAL's fixture offset).
+    #[error("{word}: LinuxCNC reads {letter} only with {with}")]
+    StrayWord {
+        /// The word as written.
+        word: String,
+        /// Its letter.
+        letter: char,
+        /// The codes that read it.
+        with: &'static str,
+    },
     /// A call to a program number the file does not hold.
     #[error("M98 P{0}: this file holds no program O{0}")]
     UnknownProgram(u32),
@@ -313,7 +321,7 @@ impl ErrorKind {
             ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
-            ErrorKind::StrayL(_) => "remove the L word (a typo, most likely), or read the program with --flavor fadal if it calls a FADAL subroutine",
+            ErrorKind::StrayWord { .. } => "remove the word (a typo, most likely), or read the program with --flavor fadal if it was written for a FADAL (L: a subroutine call, E: a fixture offset)",
             ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",
             ErrorKind::DuplicateProgram { .. } => "give every program in the file its own O number",
             ErrorKind::NotASubprogram { .. } => "end the subprogram with M99, or correct P",

@@ -737,6 +737,13 @@ impl Interpreter {
                         )
                     })?;
                     let group = match g_group(code) {
+                        // LinuxCNC's lathe roughing and finishing cycles (elsewhere
+                        // G70/G71 are units).
+                        _ if self.opts.flavor == crate::flavor::Flavor::LinuxCnc
+                            && crate::modal::is_lathe_cycle(code) =>
+                        {
+                            GGroup::Other
+                        }
                         Some(g) => g,
                         // In a firmware (slicer) program an unknown G-code is the
                         // firmware's own (Bambu `G380`, `G392`): named in a warning.
@@ -903,6 +910,16 @@ impl Interpreter {
     ) -> Res<()> {
         self.pending_e = 0.0;
         if settings {
+            // The words are the setting codes' own, but the block's other G-codes still
+            // set their modes (`G18 G8`: the plane; `G90 G67`: absolute distances).
+            if let Some((_, c)) = w.g_in(GGroup::FeedMode) {
+                self.modal.feed_mode = match c {
+                    930 => FeedMode::InverseTime,
+                    950 => FeedMode::PerRevolution,
+                    _ => FeedMode::PerMinute,
+                };
+            }
+            self.modal_groups(b, w, out)?;
             return self.settings(w);
         }
         if w.word(b'O').is_some() && crate::program::program_number(b).is_some() {
@@ -999,6 +1016,21 @@ impl Interpreter {
         // E word.
         if let Some(e) = w.word(b'E') {
             match self.opts.e_word {
+                // LinuxCNC: E is G76's taper, nothing else (no fixture offsets).
+                EWord::FixtureOffset if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
+                    if !w.has_g(760) {
+                        return Err(diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::StrayWord {
+                                word: e.display(),
+                                letter: 'E',
+                                with: "G76 (a thread's taper)",
+                            },
+                            Some(e.span),
+                        ));
+                    }
+                }
                 EWord::FixtureOffset => {
                     if e.value < 0.0 || e.value > 48.0 || e.value.fract() != 0.0 {
                         return Err(diag(
@@ -1029,26 +1061,30 @@ impl Interpreter {
                     matches!(c, 730 | 740 | 760 | 810..=890)
                 });
             if !canned_block && !w.has_g(100) {
-                // G41.1/G42.1's L is a lathe tool's orientation.
-                if self.opts.flavor == crate::flavor::Flavor::LinuxCnc
-                    && !w.has_g(411)
-                    && !w.has_g(421)
-                {
-                    // RS274NGC has no L outside G10, canned cycles and M98's count: rs274
-                    // refuses the block.
-                    return Err(diag(
+                if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+                    // G41.1/G42.1's L is a lathe tool's orientation.
+                    if !w.has_g(411) && !w.has_g(421) {
+                        // RS274NGC has no L outside G10, canned cycles and M98's count:
+                        // rs274 refuses the block.
+                        return Err(diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::StrayWord {
+                                word: l.display(),
+                                letter: 'L',
+                                with: "G10, a canned cycle, G41.1/G42.1 or a call's repeat count",
+                            },
+                            Some(l.span),
+                        ));
+                    }
+                } else {
+                    self.warn(
                         b,
-                        Severity::Error,
-                        ErrorKind::StrayL(l.display()),
+                        out,
+                        ErrorKind::SubprogramNotFollowed(l.display()),
                         Some(l.span),
-                    ));
+                    );
                 }
-                self.warn(
-                    b,
-                    out,
-                    ErrorKind::SubprogramNotFollowed(l.display()),
-                    Some(l.span),
-                );
             }
         }
         let m = &mut self.modal;

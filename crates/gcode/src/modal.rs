@@ -366,6 +366,12 @@ pub enum OtherCode {
     DiameterMode,
 }
 
+/// LinuxCNC's lathe roughing and finishing cycles: G70, G71, G71.1, G71.2, G72, G72.1,
+/// G72.2 (ten times their number). Elsewhere G70 and G71 set inch and millimetre units.
+pub fn is_lathe_cycle(code: u16) -> bool {
+    matches!(code, 700 | 710..=712 | 720..=722)
+}
+
 /// What a code of [`GGroup::Other`] is (`None` for any other code).
 pub fn other_code(code: u16) -> Option<OtherCode> {
     use OtherCode::*;
@@ -378,6 +384,8 @@ pub fn other_code(code: u16) -> Option<OtherCode> {
         // unknown code is the firmware's) reaches here with it.
         80 | 110 | 670 | 1030 | 1870 => Setting,
         120 | 130 => Unsimulated("circular pocket milling"),
+        // Only LinuxCNC's reading brings these here (elsewhere G70/G71 set the units).
+        700 | 710..=712 | 720..=722 => Unsimulated("lathe roughing or finishing cycle"),
         434 | 435 => Unsimulated("tool centre point control"),
         531 => Unsimulated("tool axis to the tilted work plane (moves the rotaries)"),
         541 | 1540 => ExtendedOffset,

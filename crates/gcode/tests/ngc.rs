@@ -315,7 +315,7 @@ fn a_stray_l_word_is_refused_as_rs274_refuses_it() {
     let opts = Flavor::LinuxCnc.options(Options::default(), None);
     let d = check(b"G21\nG1 X1 F100\ng1 l20\n", opts);
     assert_eq!(d.len(), 1, "{d:?}");
-    assert!(matches!(d[0].kind, ErrorKind::StrayL(_)), "{d:?}");
+    assert!(matches!(d[0].kind, ErrorKind::StrayWord { .. }), "{d:?}");
     assert_eq!((d[0].line, d[0].column), (3, 4));
     // L where LinuxCNC reads it: G10, a canned cycle's repeat count, G76.
     let d = check(
@@ -323,7 +323,8 @@ fn a_stray_l_word_is_refused_as_rs274_refuses_it() {
         opts,
     );
     assert!(
-        d.iter().all(|x| !matches!(x.kind, ErrorKind::StrayL(_))),
+        d.iter()
+            .all(|x| !matches!(x.kind, ErrorKind::StrayWord { .. })),
         "{d:?}"
     );
     // FADAL's reading: a subroutine call, warned.
@@ -333,4 +334,51 @@ fn a_stray_l_word_is_refused_as_rs274_refuses_it() {
         matches!(d[0].kind, ErrorKind::SubprogramNotFollowed(_)),
         "{d:?}"
     );
+}
+
+/// A block whose words belong to a setting code (LinuxCNC's G8, Fanuc's G67) still sets
+/// the modes of its other G-codes: the plane of `G18 G8` (LinuxCNC's `lathe_pawn.ngc`),
+/// the absolute distances of `G90 G67`.
+#[test]
+fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
+    use lampost_gcode::{check, Event, Flavor, Options, Stream};
+    let opts = Flavor::LinuxCnc.options(Options::default(), None);
+    let d = check(b"G21\nG18 G8\nG0 X1 Z0\nG3 X0 Z1 I-1 K0 F10\nM2\n", opts);
+    assert!(d.is_empty(), "{d:?}");
+    let opts = Flavor::Fanuc.options(Options::default(), None);
+    let ends: Vec<f64> = Stream::from_bytes(b"G21 G91\nG90 G67\nG0 X1\nG0 X2\n", opts, false)
+        .filter_map(|e| match e.expect("in memory") {
+            Event::Move(m) => Some(m.end[0]),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(ends, [1.0, 2.0]);
+}
+
+/// LinuxCNC's lathe cycles G70–G72 (not units there) are warned about and draw no move;
+/// E is G76's taper, and a stray E is refused, as rs274 refuses it.
+#[test]
+fn linuxcnc_lathe_cycles_and_e() {
+    use lampost_gcode::{check, ErrorKind, Flavor, Options, Severity};
+    let opts = Flavor::LinuxCnc.options(Options::default(), None);
+    let d = check(
+        b"G21 G18\nG0 X15 Z4\nG71 Q100 X15 Z4 D1 I1 R0.3\nG70 Q100 X15 Z4 D1 P1\nG1 X1 F100\nM2\n",
+        opts,
+    );
+    assert_eq!(d.len(), 2, "{d:?}");
+    assert!(d.iter().all(|x| x.severity == Severity::Warning
+        && matches!(&x.kind, ErrorKind::NotSimulated(w) if w.contains("lathe"))));
+    let d = check(
+        b"G21 G18\nG0 X1 Z1\nG76 P0.05 Z-1 I-.075 J0.008 R1 K0.045 Q29.5 H2 L2 E0.045\nM2\n",
+        opts,
+    );
+    assert!(d.iter().all(|x| x.severity == Severity::Warning), "{d:?}");
+    let d = check(b"G21\nG0 X1 E0.5\n", opts);
+    assert!(
+        matches!(d[0].kind, ErrorKind::StrayWord { letter: 'E', .. }),
+        "{d:?}"
+    );
+    // Elsewhere G70/G71 are still units (FADAL).
+    let opts = Flavor::Fadal.options(Options::default(), None);
+    assert!(check(b"G70\nG0 X1\nG71\nG0 X2\n", opts).is_empty());
 }
