@@ -291,6 +291,7 @@ impl ErrorKind {
             ErrorKind::NumberWithoutLetter(_) => "put the address letter in front of the number, e.g. `X1.5`",
             ErrorKind::UnexpectedCharacter('\r') => "the file's line ends are a bare carriage return (old Mac): convert them to LF or CR LF",
             ErrorKind::UnexpectedCharacter(c) if c.is_control() || *c == '\u{feff}' => "remove the invisible character (an editor that shows control characters finds it)",
+            ErrorKind::UnexpectedCharacter('@' | '^') => "LinuxCNC's polar coordinates (`@` radius, `^` angle) are not read by lampost: give the point's X and Y",
             ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
             ErrorKind::NestedComment => "remove the inner parentheses or write `[ ]` instead (LinuxCNC refuses nested comments too)",
             ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
