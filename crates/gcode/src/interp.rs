@@ -638,7 +638,10 @@ impl Interpreter {
     /// never positions): settings, macro calls, pocket cycles, firmware codes.
     fn own_words(&self, w: &Words<'_, '_>, code: u16) -> bool {
         match other_code(code) {
-            None | Some(OtherCode::Setting | OtherCode::Unsimulated(_)) => true,
+            None | Some(OtherCode::Unsimulated(_)) => true,
+            // A setting's arguments are its own (`G187 P1 E.002`), but a move in its
+            // block is a move (`G103 P1 G1 X1 F100`).
+            Some(OtherCode::Setting) => w.g_in(GGroup::Motion).is_none() && !w.has_axes(),
             // Fanuc `G05 P10000` and `G05.1 Q1` are settings; LinuxCNC's splines have
             // axis or I/J words.
             Some(OtherCode::Spline) => !Self::is_spline(w),

@@ -353,6 +353,21 @@ fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
         })
         .collect();
     assert_eq!(ends, [1.0, 2.0]);
+    // A move in a setting code's block is a move (Haas `G103 P1 G1 X1 F100` was dropped
+    // with its feed); the setting's own arguments stay its own (`G187 P1 E.002`).
+    let opts = Flavor::Haas.options(Options::default(), None);
+    let src = b"G21 G90\nG0 X0 Y0\nG103 P1 G1 X1 F100\nG187 P1 E.002\nG1 X2 Y1 G187 P2\nM30\n";
+    let mut ends = Vec::new();
+    for e in Stream::from_bytes(src, opts, false) {
+        match e.expect("in memory") {
+            Event::Move(m) => ends.push([m.end[0], m.end[1], m.feed]),
+            Event::Diagnostic(d) => panic!("{d:?}"),
+        }
+    }
+    assert_eq!(
+        ends,
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 100.0], [2.0, 1.0, 100.0]]
+    );
 }
 
 /// LinuxCNC's lathe cycles G70–G72 (not units there) are warned about and draw no move;
