@@ -8,7 +8,8 @@
 //!   subroutines and codes not supported yet, issue 12);
 //! - `differs`: both run and the moves differ (the first difference is printed);
 //! - `rs274-fails`: rs274 itself does not run the program to its end standalone (it needs
-//!   a machine configuration, remaps, or user M-codes).
+//!   a machine configuration, remaps, or user M-codes, or stops with an error on the way:
+//!   NURBS outside the XY plane, a probe move standalone).
 //!
 //! A verdict that changes fails the test: an improvement is recorded by running it with
 //! `LAMPOST_UPDATE_VERDICTS=1` and reviewing the diff of `VERDICTS`.
@@ -50,7 +51,7 @@ fn linuxcnc_sample_programs_against_rs274() {
         std::fs::write(&prog, prepare(&text)).expect("write");
         // rs274 now and then writes no output for a program it runs (under load, seen
         // on a few of these): a failure is tried once more before it counts.
-        let verdict = match rs274_try(&prog, &own).or_else(|_| rs274_try(&prog, &own)) {
+        let verdict = match rs274_to_end(&prog, &own).or_else(|_| rs274_to_end(&prog, &own)) {
             Err(_) => "rs274-fails".to_string(),
             Ok(canon) => {
                 let out = lampost(&["trace", "--json", prog.to_str().expect("utf8")]);
