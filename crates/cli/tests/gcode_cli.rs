@@ -345,7 +345,10 @@ fn programs_in_other_languages_are_named() {
         let o = lampost(&["check", s]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{name}: {err}");
-        let first = err.lines().next().unwrap_or("");
+        let first = err
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or("");
         assert!(
             first.contains(language) && first.contains("not G-code"),
             "{name}: {err}"
