@@ -302,6 +302,13 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
                 }
             }
         }
+        // A line of another language (Heidenhain, Sinumerik, APT, a robot's): no flavour
+        // reads it; FADAL's reading keeps the codes such programs share with it (G70/G71
+        // as units), so the first error is that line, named.
+        let code_part = line.split([';', '(']).next().unwrap_or("");
+        if let Some(f) = crate::foreign_language(code_part) {
+            return (Flavor::Fadal, at(&format!("a line of {}, not G-code", f.name)));
+        }
         let w = first_word(line);
         let wb = w.as_bytes();
         if wb.first().is_some_and(|c| matches!(c, b'o' | b'O'))
