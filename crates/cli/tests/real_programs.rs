@@ -10,8 +10,8 @@
 //!   `lampost check` reports (each was read by hand: see `SOURCES.md`).
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
-//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker, skeinforge)
-//! are traced
+//! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker, skeinforge,
+//! arcwelder, marlin-kfactor) are traced
 //! with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
 //! verdict then says `post R runs` when the post deposits the extruding length (relative
 //! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
@@ -29,7 +29,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 13] = [
+const SLICERS: [&str; 15] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -43,6 +43,8 @@ const SLICERS: [&str; 13] = [
     "snapmaker-luban",
     "ideamaker",
     "skeinforge",
+    "arcwelder",
+    "marlin-kfactor",
 ];
 
 /// The first error `lampost check` reports, as `L:C message`.
