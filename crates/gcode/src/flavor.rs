@@ -307,7 +307,10 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
         // as units), so the first error is that line, named.
         let code_part = line.split([';', '(']).next().unwrap_or("");
         if let Some(f) = crate::foreign_language(code_part) {
-            return (Flavor::Fadal, at(&format!("a line of {}, not G-code", f.name)));
+            return (
+                Flavor::Fadal,
+                at(&format!("a line of {}, not G-code", f.name)),
+            );
         }
         let w = first_word(line);
         let wb = w.as_bytes();

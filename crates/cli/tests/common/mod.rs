@@ -115,19 +115,29 @@ fn rs274_exec(program: &Path, work: &Path) -> (Output, String) {
     let out_path = work.join("canon.txt");
     // Never read an earlier program's output when rs274 writes none.
     let _ = std::fs::remove_file(&out_path);
-    // rs274 keeps files in its working folder: give each run its own.
-    let out = Command::new(bin)
-        .current_dir(work)
-        .env("LD_LIBRARY_PATH", libs)
-        .arg("-t")
-        .arg(&tbl)
-        .arg(program)
-        .arg(&out_path)
-        .stdin(std::process::Stdio::null())
-        .output()
-        .expect("rs274 runs");
-    let text = std::fs::read_to_string(&out_path).unwrap_or_default();
-    (out, text)
+    // rs274 keeps files in its working folder: give each run its own. Under load it has
+    // been seen to end with no output (killed, or its output not written): such a run is
+    // made again, up to three times in all, so a verdict never rests on it.
+    let mut tries = 0;
+    loop {
+        let _ = std::fs::remove_file(&out_path);
+        let out = Command::new(&bin)
+            .current_dir(work)
+            .env("LD_LIBRARY_PATH", &libs)
+            .arg("-t")
+            .arg(&tbl)
+            .arg(program)
+            .arg(&out_path)
+            .stdin(std::process::Stdio::null())
+            .output()
+            .expect("rs274 runs");
+        let text = std::fs::read_to_string(&out_path).unwrap_or_default();
+        tries += 1;
+        let lost = out.status.code().is_none() || text.trim().is_empty();
+        if !lost || tries == 3 {
+            return (out, text);
+        }
+    }
 }
 
 /// Run rs274 on `program`: its motion calls, or why it did not run to the end.
@@ -416,11 +426,13 @@ pub fn extruding_runs_with(src: &str, letters: &[char]) -> (usize, f64) {
             ('G', "91") => (incremental, e_relative) = (true, true),
             ('G', "92") => {
                 for &(l, v) in &w[1..] {
-                    assert!(
-                        letters.contains(&l),
-                        "G92 of axes is not read by this test: {line}"
-                    );
-                    e = num(v);
+                    match l {
+                        // Setting an axis moves nothing (positions here are the
+                        // program's own, so the axis simply reads that value).
+                        'X' | 'Y' | 'Z' => pos[(l as u8 - b'X') as usize] = num(v),
+                        l if letters.contains(&l) => e = num(v),
+                        _ => panic!("G92 of {l} is not read by this test: {line}"),
+                    }
                 }
             }
             ('G', "0" | "1" | "2" | "3") => motion = code.as_bytes()[0] - b'0',
