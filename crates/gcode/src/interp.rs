@@ -1736,7 +1736,15 @@ impl Interpreter {
                 self.emit(b.line, MoveKind::Linear, target, feed, origin, out);
                 Ok(())
             }
-            Motion::ArcCw | Motion::ArcCcw => self.arc(b, w, target, out),
+            Motion::ArcCw | Motion::ArcCcw => {
+                let arc = self.arc(b, w, target, out);
+                if arc.is_err() {
+                    // A refused arc still ends where it was programmed to: the next
+                    // block is read from there and not blamed for this one's fault.
+                    self.pos = target;
+                }
+                arc
+            }
             Motion::Canned(c) => self.canned_cycle(b, w, c, out),
         }
     }

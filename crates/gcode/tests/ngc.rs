@@ -397,3 +397,20 @@ fn linuxcnc_lathe_cycles_and_e() {
     let opts = Flavor::Fadal.options(Options::default(), None);
     assert!(check(b"G70\nG0 X1\nG71\nG0 X2\n", opts).is_empty());
 }
+
+/// A refused arc ends where it was programmed to: the next arc is judged from there
+/// (gcode-preview's `mach3.gcode`: the second R arc was blamed for the first's fault).
+#[test]
+fn a_refused_arc_does_not_blame_the_next() {
+    use lampost_gcode::{check, ErrorKind, Options};
+    let d = check(
+        b"G20 G90\nG0 X3.59 Y1.745\nG02 X4.1 Y2.255 R0.255 F10\nG02 X3.59 Y1.745 R0.255\n",
+        Options::default(),
+    );
+    assert_eq!(d.len(), 2, "{d:?}");
+    assert!(
+        d.iter()
+            .all(|x| matches!(x.kind, ErrorKind::ArcRadiusTooSmall { .. })),
+        "{d:?}"
+    );
+}
