@@ -999,6 +999,19 @@ impl Interpreter {
                 970 if self.calls == Calls::Followed => {
                     self.open_programs = self.open_programs.saturating_add(m97_runs(w));
                 }
+                // RepRapFirmware's macro file (`M98 P"/macros/purge.g"`): not followed.
+                980 if w.word(b'P').is_none() && w.first_text.is_some() => {
+                    let file = w.first_text.map_or("", |t| t.text);
+                    out(Event::Diagnostic(diag(
+                        b,
+                        Severity::Warning,
+                        ErrorKind::SubprogramNotFollowed(format!(
+                            "{} {file} (a macro file)",
+                            mw.display_code()
+                        )),
+                        Some(mw.span),
+                    )));
+                }
                 970 | 980 if self.calls == Calls::NotFollowed => {
                     let mut what = mw.display_code();
                     for word in [w.word(b'P'), w.word(b'L')].into_iter().flatten() {

@@ -995,6 +995,9 @@ fn words_reference_items<'a>(
                                 // Homing and bed levelling take bare flags (`G28 X`,
                                 // Marlin and Bambu `G29 A`).
                                 (b'G', Some(c)) => matches!(c, 280 | 290 | 300 | 1610 | 1620),
+                                // RepRapFirmware's macro call takes a file name:
+                                // `M98 P"/macros/purge.g"`.
+                                (b'M', Some(980)) => slicer,
                                 (b'M', Some(c)) => !crate::modal::m_known(c),
                                 _ => false,
                             };

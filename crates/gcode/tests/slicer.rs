@@ -351,3 +351,23 @@ fn makerbot_extrudes_with_a_or_b() {
         "{d:?}"
     );
 }
+
+#[test]
+fn a_reprapfirmware_macro_file_call_is_named_not_refused() {
+    let src = "M83\nM98 P\"/macros/purge.g\"\nG1 X10 Y10 E.5 F1800\n";
+    let mut d = Vec::new();
+    let mut moves = 0;
+    for ev in Stream::from_bytes(src.as_bytes(), slicer(), false) {
+        match ev.expect("in memory") {
+            Event::Move(_) => moves += 1,
+            Event::Diagnostic(x) => d.push(x),
+        }
+    }
+    assert_eq!(moves, 1);
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert!(
+        matches!(&d[0].kind, ErrorKind::SubprogramNotFollowed(w) if w.contains("/macros/purge.g")),
+        "{d:?}"
+    );
+    assert_eq!(d[0].severity, lampost_gcode::Severity::Warning);
+}
