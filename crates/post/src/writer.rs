@@ -824,12 +824,23 @@ fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
 }
 
 /// [`feed_writable`] for a feed of a move from input line `line`: refused at that line.
+/// (Called for every feed point written: the test is inlined, the error made apart.)
+#[inline]
 fn located_feed(f: f64, file: &str, line: u32) -> Result<(), PostError> {
-    feed_writable(f).map_err(|e| PostError::OutOfRange {
+    if rounds_to_f0(f) {
+        return Err(located_f0(f, file, line));
+    }
+    Ok(())
+}
+
+#[cold]
+#[inline(never)]
+fn located_f0(f: f64, file: &str, line: u32) -> PostError {
+    PostError::OutOfRange {
         file: file.to_string(),
         line,
-        what: e.to_string(),
-    })
+        what: f0_error(f).to_string(),
+    }
 }
 
 /// A feed is written with 5 decimals: one that rounds to `F0` (a feed of 1e-300 in the
@@ -837,12 +848,24 @@ fn located_feed(f: f64, file: &str, line: u32) -> Result<(), PostError> {
 /// controller refuses or runs at no feed, and `verify` refuses it (found by `cargo xtask
 /// fuzz`). Refused before it is written.
 fn feed_writable(f: f64) -> Result<(), PostError> {
-    if f.is_finite() && round_half_away(f.abs() * 1e5) == 0.0 {
-        return Err(PostError::Options(format!(
-            "a feed of {f:e} would be written as F0 (feeds have 5 decimals): give a feed of at least 0.00001 units per minute"
-        )));
+    if rounds_to_f0(f) {
+        return Err(f0_error(f));
     }
     Ok(())
+}
+
+/// A finite feed whose 5 decimals round to zero: `round_half_away(|f|·10⁵) == 0`, which
+/// holds exactly when `|f|·10⁵ < 0.5` (the rounding is zero only for a value whose
+/// whole part is zero and whose fraction is below one half; tested to agree).
+#[inline]
+fn rounds_to_f0(f: f64) -> bool {
+    f.is_finite() && f.abs() * 1e5 < 0.5
+}
+
+fn f0_error(f: f64) -> PostError {
+    PostError::Options(format!(
+        "a feed of {f:e} would be written as F0 (feeds have 5 decimals): give a feed of at least 0.00001 units per minute"
+    ))
 }
 
 #[cfg(test)]
@@ -933,5 +956,44 @@ mod tests {
                 .to_bits()
         );
         assert_eq!(w.safe.to_bits(), check.at(&[105.0, -25.0]).to_bits());
+    }
+
+    /// The F0 test as the writer makes it agrees with its definition (the feed as the
+    /// emitter rounds it to 5 decimals is zero) on random feeds of every magnitude and on
+    /// the values around the boundary.
+    #[test]
+    fn the_f0_test_agrees_with_rounding() {
+        let reference = |f: f64| f.is_finite() && round_half_away(f.abs() * 1e5) == 0.0;
+        let mut cases = vec![
+            0.0,
+            -0.0,
+            5e-6,
+            -5e-6,
+            4.999_999_999_999_999e-6,
+            5.000_000_000_000_001e-6,
+            1e-5,
+            1e-300,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1200.0,
+        ];
+        for k in -200..200 {
+            let b = 5e-6f64.to_bits();
+            let near = f64::from_bits(b.wrapping_add_signed(k));
+            cases.extend([near, -near, near * 0.5, near * 2.0]);
+        }
+        let mut rng = lampost_testkit::SplitMix::new(11);
+        for _ in 0..200_000 {
+            // Every bit pattern: all magnitudes, NaNs and infinities.
+            let z = rng.next_u64();
+            let f = f64::from_bits(z);
+            cases.extend([f, f * 1e-300, (z >> 11) as f64 * 1e-21]);
+        }
+        for f in cases {
+            assert_eq!(rounds_to_f0(f), reference(f), "{f:e}");
+        }
     }
 }
