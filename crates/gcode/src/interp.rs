@@ -534,22 +534,23 @@ impl Interpreter {
             Some(_) => Motion::ArcCcw,
             None => self.modal.motion,
         };
-        let modal_feed = p.feed.unwrap_or(self.modal.feed);
+        let modal_feed = p.feed().unwrap_or(self.modal.feed);
         let runs_plainly = !self.ended
             && !self.nurbs
-            && p.axes != 0
+            && p.axes() != 0
             && self.modal.feed_mode != FeedMode::InverseTime
-            && p.feed.is_none_or(|f| f >= 0.0)
+            && p.feed().is_none_or(|f| f >= 0.0)
             && match motion {
-                Motion::Rapid => p.centres == 0,
-                Motion::Linear => p.centres == 0 && (modal_feed > 0.0 || self.feed_from_macro),
+                Motion::Rapid => p.centres() == 0,
+                Motion::Linear => p.centres() == 0 && (modal_feed > 0.0 || self.feed_from_macro),
                 Motion::ArcCw | Motion::ArcCcw => modal_feed > 0.0 || self.feed_from_macro,
                 _ => false,
             };
         if !runs_plainly {
             return false;
         }
-        let target = self.target_of(|a| (p.axes & (1 << a) != 0).then_some(p.values[a]), false);
+        let axes = p.axes();
+        let target = self.target_of(|a| (axes & (1 << a) != 0).then_some(p.axis(a)), false);
         let (kind, feed) = match motion {
             Motion::Rapid => (MoveKind::Rapid, 0.0),
             Motion::Linear => (MoveKind::Linear, modal_feed),
@@ -557,10 +558,11 @@ impl Interpreter {
                 let plane = self.modal.plane;
                 let (u, v, n) = plane.axes();
                 // Centre words in the plane only, one at least.
-                if p.centres & (1 << n) != 0 || p.centres & (1 << u | 1 << v) == 0 {
+                let centres = p.centres();
+                if centres & (1 << n) != 0 || centres & (1 << u | 1 << v) == 0 {
                     return false;
                 }
-                let Ok((cu, cv)) = self.centre_of(p.centre[u], p.centre[v], &target) else {
+                let Ok((cu, cv)) = self.centre_of(p.centre(u), p.centre(v), &target) else {
                     return false;
                 };
                 let mut center = [self.pos[0], self.pos[1], self.pos[2]];
@@ -577,8 +579,8 @@ impl Interpreter {
         };
         // As `block` and `execute` run it: the block's axes, E unchanged, F, the motion
         // mode (a named one ends any canned cycle's parameters), then the move.
-        self.block_axes = p.axes;
-        self.axes_named |= p.axes;
+        self.block_axes = axes;
+        self.axes_named |= axes;
         self.pending_e = 0.0;
         self.modal.feed = modal_feed;
         if p.motion.is_some() {
