@@ -515,18 +515,13 @@ impl Interpreter {
     /// run the common way (a program not ended, no NURBS block open, G0 to G3 in force
     /// or named, feed per minute with a feed rate for a feed move, F not negative), it
     /// has an axis word, centre words only on an arc and in its plane, and an arc passes
-    /// the checks of its radius. Then its move goes to `out` and `true` is returned;
-    /// otherwise nothing changes and `false` sends the line to the reference path,
-    /// which also gives any error or warning. The two agree (property-tested in
+    /// the checks of its radius. Then its move is returned; otherwise nothing changes
+    /// and `None` sends the line to the reference path, which also gives any error or
+    /// warning. The two agree (property-tested in
     /// `stream.rs`, and compared by the fuzz's `gcode` target).
     // Not inlined, like `parse::plain_motion` (see there).
     #[inline(never)]
-    pub(crate) fn plain_motion(
-        &mut self,
-        p: &PlainMotion,
-        line: u32,
-        out: &mut impl FnMut(Event),
-    ) -> bool {
+    pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
         let motion = match p.motion {
             Some(0) => Motion::Rapid,
             Some(10) => Motion::Linear,
@@ -547,7 +542,7 @@ impl Interpreter {
                 _ => false,
             };
         if !runs_plainly {
-            return false;
+            return None;
         }
         let axes = p.axes();
         let target = self.target_of(|a| (axes & (1 << a) != 0).then_some(p.axis(a)), false);
@@ -560,10 +555,10 @@ impl Interpreter {
                 // Centre words in the plane only, one at least.
                 let centres = p.centres();
                 if centres & (1 << n) != 0 || centres & (1 << u | 1 << v) == 0 {
-                    return false;
+                    return None;
                 }
                 let Ok((cu, cv)) = self.centre_of(p.centre(u), p.centre(v), &target) else {
-                    return false;
+                    return None;
                 };
                 let mut center = [self.pos[0], self.pos[1], self.pos[2]];
                 center[u] = cu;
@@ -587,8 +582,7 @@ impl Interpreter {
             self.modal.motion = motion;
             self.canned = CannedParams::default();
         }
-        self.emit(line, kind, target, feed, Origin::Block, out);
-        true
+        Some(self.make_move(line, kind, target, feed, Origin::Block))
     }
 
     /// A line that is no G-code block: a grbl console command (`$H`, `$$`, `$32=1`, `?`).
