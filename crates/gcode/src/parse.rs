@@ -1097,12 +1097,30 @@ mod tests {
 
     proptest::proptest! {
         #[test]
-        fn fast_number_agrees_with_nom_grammar(s in "[+-]?[0-9]{0,9}(\\.[0-9]{0,9})?[ XYG]?") {
+        fn fast_number_agrees_with_nom_grammar(
+            s in "[+-]?[0-9]{0,17}(\\.[0-9]{0,17})?[ XYG/:.\\x7f\\x00é0-9]{0,9}"
+        ) {
             if let Some((len, v)) = fast_number(s.as_bytes()) {
                 let (rest, text) = number(&s).expect("nom accepts what the fast path accepts");
                 proptest::prop_assert_eq!(s.len() - rest.len(), len);
                 proptest::prop_assert_eq!(parse_number(text), Some(v));
             }
+            // And it answers exactly for the common spelling (at most 15 digits).
+            let b = s.as_bytes();
+            let sign = usize::from(matches!(b.first(), Some(b'+' | b'-')));
+            let run = |from: usize| b[from..].iter().take_while(|c| c.is_ascii_digit()).count();
+            let int = run(sign);
+            let (end, digits) = match b.get(sign + int) {
+                Some(b'.') => {
+                    let frac = run(sign + int + 1);
+                    (sign + int + 1 + frac, int + frac)
+                }
+                _ => (sign + int, int),
+            };
+            let expected = (1..=15)
+                .contains(&digits)
+                .then(|| (end, s[..end].parse::<f64>().expect("a number")));
+            proptest::prop_assert_eq!(fast_number(b), expected);
         }
     }
 
