@@ -108,21 +108,25 @@ fn scan_number(b: &[u8]) -> Option<(usize, f64)> {
     // The digits' value (wrapping: a number of more than 15 digits is refused below,
     // before its value is used).
     let mut mantissa: u64 = 0;
-    let mut i = start;
-    while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
-        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    let int_digits = i - start;
+    let mut digits_of = |mut rest: &[u8]| {
+        let len = rest.len();
+        while let [c, tail @ ..] = rest {
+            let d = c.wrapping_sub(b'0');
+            if d >= 10 {
+                break;
+            }
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+            rest = tail;
+        }
+        len - rest.len()
+    };
+    let int_digits = digits_of(&b[start..]);
+    let mut i = start + int_digits;
     let mut decimals = 0usize;
     if b.get(i) == Some(&b'.') {
         i += 1;
-        let frac_start = i;
-        while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-            i += 1;
-        }
-        decimals = i - frac_start;
+        decimals = digits_of(&b[i..]);
+        i += decimals;
     }
     let digits = int_digits + decimals;
     if digits == 0 || digits > 15 {
