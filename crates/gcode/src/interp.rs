@@ -515,18 +515,13 @@ impl Interpreter {
     /// run the common way (a program not ended, no NURBS block open, G0 to G3 in force
     /// or named, feed per minute with a feed rate for a feed move, F not negative), it
     /// has an axis word, centre words only on an arc and in its plane, and an arc passes
-    /// the checks of its radius. Then its move goes to `out` and `true` is returned;
-    /// otherwise nothing changes and `false` sends the line to the reference path,
-    /// which also gives any error or warning. The two agree (property-tested in
+    /// the checks of its radius. Then its move is returned; otherwise nothing changes
+    /// and `None` sends the line to the reference path, which also gives any error or
+    /// warning. The two agree (property-tested in
     /// `stream.rs`, and compared by the fuzz's `gcode` target).
     // Not inlined, like `parse::plain_motion` (see there).
     #[inline(never)]
-    pub(crate) fn plain_motion(
-        &mut self,
-        p: &PlainMotion,
-        line: u32,
-        out: &mut impl FnMut(Event),
-    ) -> bool {
+    pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
         let motion = match p.motion {
             Some(0) => Motion::Rapid,
             Some(10) => Motion::Linear,
@@ -534,22 +529,23 @@ impl Interpreter {
             Some(_) => Motion::ArcCcw,
             None => self.modal.motion,
         };
-        let modal_feed = p.feed.unwrap_or(self.modal.feed);
+        let modal_feed = p.feed().unwrap_or(self.modal.feed);
         let runs_plainly = !self.ended
             && !self.nurbs
-            && p.axes != 0
+            && p.axes() != 0
             && self.modal.feed_mode != FeedMode::InverseTime
-            && p.feed.is_none_or(|f| f >= 0.0)
+            && p.feed().is_none_or(|f| f >= 0.0)
             && match motion {
-                Motion::Rapid => p.centres == 0,
-                Motion::Linear => p.centres == 0 && (modal_feed > 0.0 || self.feed_from_macro),
+                Motion::Rapid => p.centres() == 0,
+                Motion::Linear => p.centres() == 0 && (modal_feed > 0.0 || self.feed_from_macro),
                 Motion::ArcCw | Motion::ArcCcw => modal_feed > 0.0 || self.feed_from_macro,
                 _ => false,
             };
         if !runs_plainly {
-            return false;
+            return None;
         }
-        let target = self.target_of(|a| (p.axes & (1 << a) != 0).then_some(p.values[a]), false);
+        let axes = p.axes();
+        let target = self.target_of(|a| (axes & (1 << a) != 0).then_some(p.axis(a)), false);
         let (kind, feed) = match motion {
             Motion::Rapid => (MoveKind::Rapid, 0.0),
             Motion::Linear => (MoveKind::Linear, modal_feed),
@@ -557,11 +553,12 @@ impl Interpreter {
                 let plane = self.modal.plane;
                 let (u, v, n) = plane.axes();
                 // Centre words in the plane only, one at least.
-                if p.centres & (1 << n) != 0 || p.centres & (1 << u | 1 << v) == 0 {
-                    return false;
+                let centres = p.centres();
+                if centres & (1 << n) != 0 || centres & (1 << u | 1 << v) == 0 {
+                    return None;
                 }
-                let Ok((cu, cv)) = self.centre_of(p.centre[u], p.centre[v], &target) else {
-                    return false;
+                let Ok((cu, cv)) = self.centre_of(p.centre(u), p.centre(v), &target) else {
+                    return None;
                 };
                 let mut center = [self.pos[0], self.pos[1], self.pos[2]];
                 center[u] = cu;
@@ -577,16 +574,15 @@ impl Interpreter {
         };
         // As `block` and `execute` run it: the block's axes, E unchanged, F, the motion
         // mode (a named one ends any canned cycle's parameters), then the move.
-        self.block_axes = p.axes;
-        self.axes_named |= p.axes;
+        self.block_axes = axes;
+        self.axes_named |= axes;
         self.pending_e = 0.0;
         self.modal.feed = modal_feed;
         if p.motion.is_some() {
             self.modal.motion = motion;
             self.canned = CannedParams::default();
         }
-        self.emit(line, kind, target, feed, Origin::Block, out);
-        true
+        Some(self.make_move(line, kind, target, feed, Origin::Block))
     }
 
     /// A line that is no G-code block: a grbl console command (`$H`, `$$`, `$32=1`, `?`).

@@ -100,35 +100,45 @@ fn scan_number(b: &[u8]) -> Option<(usize, f64)> {
     const POW10: [f64; 16] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
     ];
-    let mut i = usize::from(matches!(b.first(), Some(b'-' | b'+')));
-    let negative = i == 1 && b[0] == b'-';
+    let (negative, start) = match b.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
+    };
     // The digits' value (wrapping: a number of more than 15 digits is refused below,
     // before its value is used).
     let mut mantissa: u64 = 0;
-    let int_start = i;
-    while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
-        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    let int_digits = i - int_start;
+    let mut digits_of = |mut rest: &[u8]| {
+        let len = rest.len();
+        while let [c, tail @ ..] = rest {
+            let d = c.wrapping_sub(b'0');
+            if d >= 10 {
+                break;
+            }
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+            rest = tail;
+        }
+        len - rest.len()
+    };
+    let int_digits = digits_of(&b[start..]);
+    let mut i = start + int_digits;
     let mut decimals = 0usize;
     if b.get(i) == Some(&b'.') {
         i += 1;
-        let frac_start = i;
-        while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-            i += 1;
-        }
-        decimals = i - frac_start;
+        decimals = digits_of(&b[i..]);
+        i += decimals;
     }
     let digits = int_digits + decimals;
     if digits == 0 || digits > 15 {
         return None;
     }
-    // Whole numbers (`G1`, `F1200.`) need no division (by 1: the same value).
+    // At most 15 digits: the mantissa is below 2^53, exact as an `i64` and as an `f64`
+    // (the signed conversion is one instruction). Whole numbers (`G1`, `F1200.`) need
+    // no division (by 1: the same value). The sign goes on last, so `-0` is -0.0.
+    let m = mantissa as i64 as f64;
     let v = match decimals {
-        0 => mantissa as f64,
-        d => mantissa as f64 / POW10[d],
+        0 => m,
+        d => m / POW10[d],
     };
     Some((i, if negative { -v } else { v }))
 }
@@ -537,16 +547,38 @@ pub(crate) struct PlainMotion {
     /// `G0`, `G1`, `G2` or `G3` (as codes in tenths: 0, 10, 20, 30), when the line
     /// names one.
     pub motion: Option<u16>,
+    /// The words given, bit `s` for slot `s` (see [`PLAIN_LETTERS`]).
+    words: u16,
+    /// The words' values by slot (0 where `words` has no bit): the axes first, by index
+    /// in `AXES`, then I, J and K.
+    values: [f64; PLAIN_SLOTS],
+}
+
+impl PlainMotion {
     /// The axes with a word, bit `i` for `AXES[i]`.
-    pub axes: u16,
-    /// The axis words' values, by index in `AXES` (0 where `axes` has no bit).
-    pub values: [f64; 9],
-    /// The F word's value.
-    pub feed: Option<f64>,
+    pub fn axes(&self) -> u16 {
+        self.words & ((1 << PLAIN_I) - 1)
+    }
+
+    /// Axis `i`'s word (`AXES[i]`), 0 where [`PlainMotion::axes`] has no bit.
+    pub fn axis(&self, i: usize) -> f64 {
+        self.values[i]
+    }
+
     /// The centre words I, J, K given, bit `i` for `IJK[i]`.
-    pub centres: u8,
-    /// Their values, by index (0 where `centres` has no bit).
-    pub centre: [f64; 3],
+    pub fn centres(&self) -> u8 {
+        ((self.words >> PLAIN_I) & 0b111) as u8
+    }
+
+    /// Centre word `i` (`IJK[i]`), 0 where [`PlainMotion::centres`] has no bit.
+    pub fn centre(&self, i: usize) -> f64 {
+        self.values[usize::from(PLAIN_I) + i]
+    }
+
+    /// The F word's value.
+    pub fn feed(&self) -> Option<f64> {
+        (self.words & (1 << PLAIN_F) != 0).then_some(self.values[usize::from(PLAIN_F)])
+    }
 }
 
 /// The fast lane's reading of a line (see [`crate::stream`]): the common move of CAM
@@ -556,16 +588,17 @@ pub(crate) struct PlainMotion {
 /// reference path ([`parse_line_with`], then [`crate::Interpreter::block`]) reads; where
 /// this answers, the two give the same events (property-tested in `stream.rs`).
 const NOT_PLAIN: u8 = 255;
-const PLAIN_G: u8 = 254;
-const PLAIN_F: u8 = 253;
-const PLAIN_N: u8 = 252;
-/// I, J and K, in order.
+/// Slots of [`PlainMotion`]'s values: the axes (0 to 8), I, J and K (9 to 11), then
+/// G, F and N.
 const PLAIN_I: u8 = 9;
-const PLAIN_K: u8 = 11;
+const PLAIN_G: u8 = 12;
+const PLAIN_F: u8 = 13;
+const PLAIN_N: u8 = 14;
+const PLAIN_SLOTS: usize = 15;
 
-/// What each letter (`A` first) is to [`plain_motion`]: an axis (its index in `AXES`),
-/// a centre word (`PLAIN_I` + its index in `IJK`), G, F, N, or a letter that sends the
-/// line to the reference path.
+/// What each letter (`A` first) is to [`plain_motion`]: its slot (an axis by its index
+/// in `AXES`, a centre word by `PLAIN_I` + its index in `IJK`, G, F, N), or a letter that
+/// sends the line to the reference path.
 const PLAIN_LETTERS: [u8; 26] = {
     let mut kinds = [NOT_PLAIN; 26];
     let mut i = 0;
@@ -573,12 +606,12 @@ const PLAIN_LETTERS: [u8; 26] = {
         kinds[(crate::modal::AXES[i] - b'A') as usize] = i as u8;
         i += 1;
     }
+    kinds[(b'I' - b'A') as usize] = PLAIN_I;
+    kinds[(b'J' - b'A') as usize] = PLAIN_I + 1;
+    kinds[(b'K' - b'A') as usize] = PLAIN_I + 2;
     kinds[(b'G' - b'A') as usize] = PLAIN_G;
     kinds[(b'F' - b'A') as usize] = PLAIN_F;
     kinds[(b'N' - b'A') as usize] = PLAIN_N;
-    kinds[(b'I' - b'A') as usize] = PLAIN_I;
-    kinds[(b'J' - b'A') as usize] = PLAIN_I + 1;
-    kinds[(b'K' - b'A') as usize] = PLAIN_K;
     kinds
 };
 
@@ -586,15 +619,10 @@ const PLAIN_LETTERS: [u8; 26] = {
 // slower (`cargo xtask bench gcode`).
 #[inline(never)]
 pub(crate) fn plain_motion(bytes: &[u8]) -> Option<PlainMotion> {
-    let mut p = PlainMotion {
-        motion: None,
-        axes: 0,
-        values: [0.0; 9],
-        feed: None,
-        centres: 0,
-        centre: [0.0; 3],
-    };
-    let mut seen: u32 = 0;
+    // Each word's value goes to its letter's slot, with no branch on the letter; what
+    // the words mean is read once, after the line.
+    let mut values = [0.0; PLAIN_SLOTS];
+    let mut words: u16 = 0;
     let mut i = 0;
     while i < bytes.len() {
         let c = bytes[i];
@@ -604,40 +632,36 @@ pub(crate) fn plain_motion(bytes: &[u8]) -> Option<PlainMotion> {
         }
         // Letters (either case) only, and each once.
         let index = (c | 0x20).wrapping_sub(b'a');
-        let kind = *PLAIN_LETTERS.get(usize::from(index))?;
-        let bit = 1u32 << index;
-        if kind == NOT_PLAIN || seen & bit != 0 {
+        let slot = *PLAIN_LETTERS.get(usize::from(index))?;
+        // `NOT_PLAIN` is no slot.
+        let value = values.get_mut(usize::from(slot))?;
+        let bit = 1u16 << slot;
+        if words & bit != 0 {
             return None;
         }
-        seen |= bit;
-        let (len, value) = scan_number(&bytes[i + 1..])?;
-        match kind {
-            // G0 to G3 exactly (any other spelling `Word::code_of` reads as one of them,
-            // `G1.0000001`, goes the reference way).
-            PLAIN_G => {
-                p.motion = Some(match value {
-                    0.0 => 0,
-                    1.0 => 10,
-                    2.0 => 20,
-                    3.0 => 30,
-                    _ => return None,
-                })
-            }
-            PLAIN_F => p.feed = Some(value),
-            PLAIN_N => {}
-            PLAIN_I..=PLAIN_K => {
-                let i = usize::from(kind - PLAIN_I);
-                p.centres |= 1 << i;
-                p.centre[i] = value;
-            }
-            axis => {
-                p.axes |= 1 << axis;
-                p.values[usize::from(axis)] = value;
-            }
-        }
+        words |= bit;
+        let (len, v) = scan_number(&bytes[i + 1..])?;
+        *value = v;
         i += 1 + len;
     }
-    Some(p)
+    // G0 to G3 exactly (any other spelling `Word::code_of` reads as one of them,
+    // `G1.0000001`, goes the reference way).
+    let motion = if words & (1 << PLAIN_G) != 0 {
+        Some(match values[usize::from(PLAIN_G)] {
+            0.0 => 0,
+            1.0 => 10,
+            2.0 => 20,
+            3.0 => 30,
+            _ => return None,
+        })
+    } else {
+        None
+    };
+    Some(PlainMotion {
+        motion,
+        words,
+        values,
+    })
 }
 
 /// The parser's reference path: every line [`simple_words`] does not take (and, in the
@@ -1095,12 +1119,30 @@ mod tests {
 
     proptest::proptest! {
         #[test]
-        fn fast_number_agrees_with_nom_grammar(s in "[+-]?[0-9]{0,9}(\\.[0-9]{0,9})?[ XYG]?") {
+        fn fast_number_agrees_with_nom_grammar(
+            s in "[+-]?[0-9]{0,17}(\\.[0-9]{0,17})?[ XYG/:.\\x7f\\x00é0-9]{0,9}"
+        ) {
             if let Some((len, v)) = fast_number(s.as_bytes()) {
                 let (rest, text) = number(&s).expect("nom accepts what the fast path accepts");
                 proptest::prop_assert_eq!(s.len() - rest.len(), len);
                 proptest::prop_assert_eq!(parse_number(text), Some(v));
             }
+            // And it answers exactly for the common spelling (at most 15 digits).
+            let b = s.as_bytes();
+            let sign = usize::from(matches!(b.first(), Some(b'+' | b'-')));
+            let run = |from: usize| b[from..].iter().take_while(|c| c.is_ascii_digit()).count();
+            let int = run(sign);
+            let (end, digits) = match b.get(sign + int) {
+                Some(b'.') => {
+                    let frac = run(sign + int + 1);
+                    (sign + int + 1 + frac, int + frac)
+                }
+                _ => (sign + int, int),
+            };
+            let expected = (1..=15)
+                .contains(&digits)
+                .then(|| (end, s[..end].parse::<f64>().expect("a number")));
+            proptest::prop_assert_eq!(fast_number(b), expected);
         }
     }
 

@@ -197,23 +197,22 @@ impl<S: LineSource> Iterator for Stream<S> {
             // the way out costs more than the queue.)
             let mut control = None;
             let mut call = None;
-            let mut direct = None;
             // The fast lane: a plain move, read and run without a `Block`. Where nothing
             // follows up its move (no parameters to update, no diagnostic from the
             // source), the move is handed out at once.
-            let plain = self.fast_lane && line.len <= MAX_LINE_BYTES && {
-                match plain_motion(line.bytes) {
-                    Some(p) if self.params.is_none() => {
-                        let direct = &mut direct;
-                        self.interp
-                            .plain_motion(&p, line.number, &mut |e| *direct = Some(e))
-                    }
-                    Some(p) => self
-                        .interp
-                        .plain_motion(&p, line.number, &mut |e| queue.push_back(e)),
-                    None => false,
+            let mut direct = None;
+            if self.fast_lane && line.len <= MAX_LINE_BYTES {
+                if let Some(p) = plain_motion(line.bytes) {
+                    direct = self.interp.plain_motion(&p, line.number);
                 }
-            };
+            }
+            let plain = direct.is_some();
+            if self.params.is_some() {
+                // Parameters follow the move up (below): it goes through the queue.
+                if let Some(m) = direct.take() {
+                    queue.push_back(Event::Move(m));
+                }
+            }
             let failed = if plain {
                 if let Some(params) = self.params.as_deref_mut() {
                     after_moves(params, queue);
@@ -383,12 +382,12 @@ impl<S: LineSource> Iterator for Stream<S> {
                     }
                 }
             }
-            if let Some(event) = direct {
+            if let Some(m) = direct {
                 match self.src.take_diagnostic() {
-                    None => return Some(Ok(event)),
+                    None => return Some(Ok(Event::Move(m))),
                     Some(d) => {
                         failed |= d.is_error();
-                        self.queue.push_back(event);
+                        self.queue.push_back(Event::Move(m));
                         self.queue.push_back(Event::Diagnostic(d));
                     }
                 }
@@ -718,7 +717,13 @@ mod tests {
         let mut block = Block::empty(1, 0);
         parse_str_with("G21 G90 G17 F100", 1, 0, &mut block, false).expect("parses");
         interp.block(&block, &mut |e| events.push(e)).expect("runs");
-        let mut run = |text: &str| interp.plain_motion(&plain(text), 2, &mut |e| events.push(e));
+        let mut run = |text: &str| match interp.plain_motion(&plain(text), 2) {
+            Some(m) => {
+                events.push(Event::Move(m));
+                true
+            }
+            None => false,
+        };
         assert!(run("G0 X1 Y0"));
         assert!(run("G2 X-1 Y0 I-1 J0"));
         // The reference path's: a radius mismatch, a centre word on a straight move, a
