@@ -569,7 +569,8 @@ impl Arm {
     /// by the angle-sum formulas instead of `atan2`, `acos` and `sin_cos` (six `atan2`
     /// and four square roots in all), and the frame constants are the arm's, worked out
     /// once. (The C library's `atan2` measured faster here than the kinematics crate's
-    /// polynomial, which pays off in its four-lane batch.) Agrees with the reference to 1e-12 rad (`tests/kinematics.rs`, proptest);
+    /// polynomial, which pays off in its four-lane batch.) Agrees with the reference to 1e-12 rad, more where the elbow's triangle is
+    /// ill-conditioned (`tests/kinematics.rs`, proptest);
     /// planning uses it.
     pub fn inverse_closed_fast(&self, flange: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
         self.inverse_wrist(&flange.mul(&self.fast.e_inv), c, wrist)

@@ -81,8 +81,15 @@ proptest! {
             for fast in [arm.inverse_closed_fast(&t, c, wrist), arm.inverse_in_work(&part, c, wrist)] {
                 match (&reference, &fast) {
                     (Ok(r), Ok(f)) => {
+                        // The two forms round differently where the elbow's triangle is
+                        // ill-conditioned (the forearm nearly stretched or folded: ψ from
+                        // acos against from its sine): 1e-12 rad scaled by 1/sin of the
+                        // elbow's distance from its stretch, at most 1e-9.
+                        let l = &arm.links;
+                        let w = wrap(r[2] + l[2].offset + l[3].d.atan2(l[2].a)).abs();
+                        let tol = (1e-12 / w.sin().abs().max(1e-3)).max(1e-12);
                         for j in 0..6 {
-                            prop_assert!(wrap(r[j] - f[j]).abs() < 1e-12, "config {} joint {j}: {} vs {}", c.letters(), r[j], f[j]);
+                            prop_assert!(wrap(r[j] - f[j]).abs() < tol, "config {} joint {j}: {} vs {} (tolerance {tol:e})", c.letters(), r[j], f[j]);
                         }
                     }
                     (Err(r), Err(f)) => prop_assert_eq!(r.joint, f.joint),
