@@ -24,17 +24,20 @@ const APT: Foreign = Foreign {
     name: "APT cutter-location (CL) data, a CAM system's output before posting",
     hint: "post the CL file in the CAM system for a G-code control, then give lampost the G-code",
 };
+/// What to do with a robot program.
+const ROBOT_HINT: &str =
+    "give lampost the path (a G-code program or a per-point CSV), not a robot program";
 const KRL: Foreign = Foreign {
     name: "KUKA robot language (KRL)",
-    hint: "give lampost the path (a G-code program or a per-point CSV), not a robot program",
+    hint: ROBOT_HINT,
 };
 const RAPID: Foreign = Foreign {
     name: "ABB RAPID",
-    hint: "give lampost the path (a G-code program or a per-point CSV), not a robot program",
+    hint: ROBOT_HINT,
 };
 const FANUC_TP: Foreign = Foreign {
     name: "a FANUC robot teach-pendant program",
-    hint: "give lampost the path (a G-code program or a per-point CSV), not a robot program",
+    hint: ROBOT_HINT,
 };
 
 /// The language `line` is written in, when it has the shape of a line of a language
