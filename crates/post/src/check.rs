@@ -20,13 +20,14 @@ pub(crate) struct FeedCheck {
     pub(crate) fk_cache: ([f64; 2], Affine),
     /// The tool axis (part frame) at the written rotary, with `fk_cache`.
     pub(crate) fk_axis: Vector3<f64>,
-    /// The current section's orientation rule and its layer's program +Z.
-    pub(crate) orient: Orient,
-    pub(crate) program_z: Vector3<f64>,
-    /// The intended tool axis for the current orientation: (orientation, axis).
-    pub(crate) want_axis: Option<(Orient, Vector3<f64>)>,
-    /// The last tool-axis comparison: (written axis, intended axis, angle in degrees).
-    pub(crate) axis_err: Option<(Vector3<f64>, Vector3<f64>, f64)>,
+    /// The current section's orientation rule and its layer's program +Z (set with
+    /// [`FeedCheck::set_orientation`]).
+    orient: Orient,
+    program_z: Vector3<f64>,
+    /// The angle (degrees) between the written tool axis and the intended one: it
+    /// changes only with the rotaries (`fk_cache`) or the orientation, and is worked
+    /// out again (`None`) whenever either is set.
+    axis_err: Option<f64>,
     /// The largest distance a written point may have from the intended path.
     pub(crate) tol: f64,
     /// A point planned on the reading thread: (joints, is the step's end, its check).
@@ -41,11 +42,26 @@ impl FeedCheck {
             fk_axis: Vector3::z(),
             orient: Orient::ToolAxis,
             program_z: Vector3::z(),
-            want_axis: None,
             axis_err: None,
             tol: cfg.verify_tolerance,
             planned_check: None,
         }
+    }
+
+    /// The orientation rule of the section and the program +Z of the layer being
+    /// written.
+    pub(crate) fn set_orientation(&mut self, orient: Orient, program_z: Vector3<f64>) {
+        self.orient = orient;
+        self.program_z = program_z;
+        self.axis_err = None;
+    }
+
+    pub(crate) fn orient(&self) -> Orient {
+        self.orient
+    }
+
+    pub(crate) fn program_z(&self) -> Vector3<f64> {
+        self.program_z
     }
 
     /// Check a written feed point: the joints as the text gives them (rounded to the
@@ -61,12 +77,7 @@ impl FeedCheck {
         x: &[f64; 3],
         is_end: bool,
     ) -> Result<(), PostError> {
-        // The fields used, not the whole step (a copy of it costs as much as the check).
-        let Some((line, orient, program_z)) = self
-            .step
-            .as_ref()
-            .map(|s| (s.line, self.orient, self.program_z))
-        else {
+        let Some(line) = self.step.as_ref().map(|s| s.line) else {
             return Ok(());
         };
         let rot = *rot;
@@ -75,6 +86,7 @@ impl FeedCheck {
             self.fk_cache = (rot, m.tip_map(&inv, head));
             self.fk_axis = m.machine_to_part_sc(&inv, &m.tool_axis)
                 - m.machine_to_part_sc(&inv, &Vector3::zeros());
+            self.axis_err = None;
         }
         let err = match self.planned_check {
             // Worked out on the reading thread, for these very joints (with the same
@@ -96,13 +108,11 @@ impl FeedCheck {
                 line, tip.x, tip.y, tip.z, self.tol
             )));
         }
-        let axis = self.fk_axis;
-        let want = match self.want_axis {
-            Some((o, a)) if o == orient && (matches!(o, Orient::Index(_)) || a == program_z) => a,
-            _ => {
-                self.axis_err = None;
-                let a = match orient {
-                    Orient::ToolAxis => program_z.normalize(),
+        let ang = match self.axis_err {
+            Some(e) => e,
+            None => {
+                let want = match self.orient {
+                    Orient::ToolAxis => self.program_z.normalize(),
                     Orient::Index(r) => {
                         m.forward(
                             &lampost_kinematics::Joints {
@@ -114,16 +124,9 @@ impl FeedCheck {
                         .axis
                     }
                 };
-                self.want_axis = Some((orient, a));
-                a
-            }
-        };
-        // The axis error changes only with the rotaries or the intended axis.
-        let ang = match self.axis_err {
-            Some((a, w, e)) if a == axis && w == want => e,
-            _ => {
+                let axis = self.fk_axis;
                 let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
-                self.axis_err = Some((axis, want, e));
+                self.axis_err = Some(e);
                 e
             }
         };

@@ -449,13 +449,13 @@ pub(crate) fn post_steps<W: Write>(
             let key = (step.section, step.layer);
             if cur_key != Some(key) {
                 cur_key = Some(key);
-                w.feed_check.orient = step.orient(sections);
-                w.feed_check.program_z = step.program_z(sections);
+                w.feed_check
+                    .set_orientation(step.orient(sections), step.program_z(sections));
                 let near = w.rot.unwrap_or(cfg.near);
                 let (rot, branch) = crate::orient::rotaries(
                     machine,
-                    w.feed_check.orient,
-                    &w.feed_check.program_z,
+                    w.feed_check.orient(),
+                    &w.feed_check.program_z(),
                     &near,
                     w.branch,
                     file,
@@ -482,7 +482,7 @@ pub(crate) fn post_steps<W: Write>(
             };
             // Planned for the step's own index: usable when that is where the table is.
             let planned =
-                planned.filter(|_| matches!(w.feed_check.orient, Orient::Index(r) if r == rot));
+                planned.filter(|_| matches!(w.feed_check.orient(), Orient::Index(r) if r == rot));
             let end = match planned {
                 Some(p) => p.joints,
                 None => joints(&jm, &step.end),

@@ -92,6 +92,12 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) rot_snap: [Option<f64>; 2],
     /// The bound on the program's size (bytes).
     pub(crate) max_bytes: u64,
+    /// The linear axes' travel as [`Writer::check`] compares with it (1e-9 of slack
+    /// included), read once from the machine.
+    lin_within: [(f64, f64); 3],
+    /// The last rotary values [`Writer::check`] found within travel (they change only
+    /// at an index, so most points need not compare them again).
+    rot_within: std::cell::Cell<Option<[f64; 2]>>,
 }
 
 impl<'m, W: Write> Writer<'m, W> {
@@ -141,6 +147,15 @@ impl<'m, W: Write> Writer<'m, W> {
                 let r = machine.rotary[k].resolution;
                 (r * 1e3 > 1.0 + 1e-9).then_some(r)
             }),
+            lin_within: [0, 1, 2].map(|k| {
+                machine
+                    .linear
+                    .get(k)
+                    .map_or((f64::INFINITY, f64::NEG_INFINITY), |l| {
+                        (l.limits.0 - 1e-9, l.limits.1 + 1e-9)
+                    })
+            }),
+            rot_within: std::cell::Cell::new(None),
         })
     }
 
@@ -587,9 +602,15 @@ impl<'m, W: Write> Writer<'m, W> {
     #[inline]
     pub(crate) fn note_limits(&mut self, joints: &[f64; 5]) {
         for (k, v) in joints.iter().enumerate() {
+            // Comparisons, not `min`/`max` (whose NaN handling costs more): a NaN is
+            // skipped either way.
             let e = &mut self.report.limits_used[k];
-            e.1 = e.1.min(*v);
-            e.2 = e.2.max(*v);
+            if *v < e.1 {
+                e.1 = *v;
+            }
+            if *v > e.2 {
+                e.2 = *v;
+            }
         }
     }
 
@@ -601,6 +622,14 @@ impl<'m, W: Write> Writer<'m, W> {
         x: &[f64; 3],
         rot: &[f64; 2],
     ) -> Result<(), PostError> {
+        // The common case in a few comparisons; the axis at fault is found below.
+        let linear_ok = x
+            .iter()
+            .zip(&self.lin_within)
+            .all(|(&v, &(lo, hi))| v.is_finite() && v >= lo && v <= hi);
+        if linear_ok && self.m.linear.len() == 3 {
+            return self.check_rotary(file, line, rot);
+        }
         for (l, &v) in self.m.linear.iter().zip(x) {
             if !v.is_finite() || v < l.limits.0 - 1e-9 || v > l.limits.1 + 1e-9 {
                 return Err(PostError::Limit {
@@ -612,6 +641,15 @@ impl<'m, W: Write> Writer<'m, W> {
                     hi: l.limits.1,
                 });
             }
+        }
+        self.check_rotary(file, line, rot)
+    }
+
+    /// The rotaries within their travel.
+    #[inline]
+    fn check_rotary(&self, file: &str, line: u32, rot: &[f64; 2]) -> Result<(), PostError> {
+        if self.rot_within.get() == Some(*rot) {
+            return Ok(());
         }
         for (r, &v) in self.m.rotary.iter().zip(rot) {
             if !v.is_finite() || !r.within(v) {
@@ -626,6 +664,7 @@ impl<'m, W: Write> Writer<'m, W> {
                 });
             }
         }
+        self.rot_within.set(Some(*rot));
         Ok(())
     }
 
