@@ -360,8 +360,10 @@ impl Composed {
         Some(())
     }
 
-    fn text(&self) -> &[u8] {
-        &self.buf[..self.len]
+    /// Append the line to `out`.
+    #[inline(always)]
+    fn append_to(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.buf[..self.len]);
     }
 }
 
@@ -1011,7 +1013,7 @@ impl<W: Write> Emitter<W> {
                 if !words.is_empty() {
                     self.advance_number();
                 }
-                self.line.extend_from_slice(line.text());
+                line.append_to(&mut self.line);
                 return self.flush_line();
             }
         }
@@ -1086,7 +1088,7 @@ impl<W: Write> Emitter<W> {
         let code = round_half_away(g * 10.0) as i64;
         if let Some(line) = self.compose_motion(g, code, axes, scale, feed) {
             self.commit_motion(code, feed);
-            self.line.extend_from_slice(line.text());
+            line.append_to(&mut self.line);
             return self.flush_line();
         }
         if self.opts.renumber.is_some() {
