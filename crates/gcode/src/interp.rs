@@ -1777,10 +1777,8 @@ impl Interpreter {
     /// cycle's.
     fn is_threading(&self, w: &Words<'_, '_>) -> bool {
         self.opts.flavor == crate::flavor::Flavor::LinuxCnc
-            && w.g_in(GGroup::Motion).map_or(
-                self.modal.motion == Motion::Canned(760),
-                |(_, c)| c == 760,
-            )
+            && w.g_in(GGroup::Motion)
+                .map_or(self.modal.motion == Motion::Canned(760), |(_, c)| c == 760)
     }
 
     /// LinuxCNC's G76 threading cycle (`lathe.rs`): the block refused where rs274 refuses

@@ -92,7 +92,11 @@ fn integer(letter: u8, v: f64) -> Result<f64, ThreadError> {
 impl Thread {
     /// The moves of the cycle from `start` to the block's end `end` (X, Y, Z, in one
     /// frame), checked as rs274 checks the block, every coordinate finite.
-    pub(crate) fn moves(&self, start: [f64; 3], end: [f64; 3]) -> Result<Vec<ThreadMove>, ThreadError> {
+    pub(crate) fn moves(
+        &self,
+        start: [f64; 3],
+        end: [f64; 3],
+    ) -> Result<Vec<ThreadMove>, ThreadError> {
         // rs274 marks a missing P with -1, so `P-1` reads as no P at all.
         let pitch = match self.p {
             Some(p) if p != -1.0 => p,
@@ -122,13 +126,22 @@ impl Thread {
             return Err(fault(Some(b'L'), "the taper ends L cannot be negative"));
         }
         if i == 0.0 {
-            return Err(fault(Some(b'I'), "I (the thread peaks' offset) must not be 0"));
+            return Err(fault(
+                Some(b'I'),
+                "I (the thread peaks' offset) must not be 0",
+            ));
         }
         if j <= 0.0 {
-            return Err(fault(Some(b'J'), "J (the first cut's depth) must be greater than 0"));
+            return Err(fault(
+                Some(b'J'),
+                "J (the first cut's depth) must be greater than 0",
+            ));
         }
         if k <= j {
-            return Err(fault(Some(b'K'), "K (the full thread depth) must be greater than J"));
+            return Err(fault(
+                Some(b'K'),
+                "K (the full thread depth) must be greater than J",
+            ));
         }
         let boring = i > 0.0;
         let safe_x = start[0];
@@ -165,16 +178,26 @@ impl Thread {
         let tan = angle.tan();
         let target_z = end[2] + k.abs() * tan;
 
-        // The cutting passes' depths, counted before any move is made.
+        // The passes at the full depth (H spring passes after the first; none for
+        // H-1), then the cutting passes' depths, counted before any move is made.
+        let spring_runs = spring + 1.0;
+        if spring_runs > f64::from(MAX_THREAD_PASSES) {
+            return Err(fault(
+                Some(b'H'),
+                format!("more than {MAX_THREAD_PASSES} passes: H asks for {spring} spring passes"),
+            ));
+        }
+        let spring_runs = spring_runs as usize;
+        let room = MAX_THREAD_PASSES as usize - spring_runs;
         let mut depths = Vec::new();
         let mut depth = start_depth;
         let mut pass = 1u32;
         while depth < end_depth {
-            if depths.len() >= MAX_THREAD_PASSES as usize {
+            if depths.len() >= room {
                 return Err(fault(
                     Some(b'J'),
                     format!(
-                        "more than {MAX_THREAD_PASSES} passes: make J (the first cut) larger or R (the degression) smaller"
+                        "more than {MAX_THREAD_PASSES} passes (with {spring_runs} at the full depth): make J (the first cut) larger or R (the degression) smaller"
                     ),
                 ));
             }
@@ -182,14 +205,7 @@ impl Thread {
             pass += 1;
             depth = full_dia_depth + cut_increment * f64::from(pass).powf(1.0 / degression);
         }
-        let spring_runs = spring + 1.0;
-        if spring_runs + depths.len() as f64 > f64::from(MAX_THREAD_PASSES) {
-            return Err(fault(
-                Some(b'H'),
-                format!("more than {MAX_THREAD_PASSES} passes with the spring passes H"),
-            ));
-        }
-        depths.extend(std::iter::repeat_n(end_depth, spring_runs as usize));
+        depths.extend(std::iter::repeat_n(end_depth, spring_runs));
 
         let [_, y, start_z] = start;
         let mut out = Vec::with_capacity(depths.len() * 6 + 1);
@@ -266,16 +282,165 @@ mod tests {
         }
     }
 
+    /// Within half a unit of rs274's fourth decimal.
+    fn near(got: [f64; 2], want: [f64; 2]) -> bool {
+        (got[0] - want[0]).abs() <= 0.5e-4 + 1e-12 && (got[1] - want[1]).abs() <= 0.5e-4 + 1e-12
+    }
+
     #[test]
-    fn passes_follow_the_degression() {
+    fn constant_depth_passes() {
         // R 1: every pass J deeper (0.083, 0.091, … 0.115), then the full depth 0.12.
         let t = thread(0.05, -0.075, 0.008, 0.045);
         let m = t.moves([0.2, 0.0, 0.2], [0.2, 0.0, -0.5]).expect("runs");
         assert_eq!(m.len(), 6 * 4 + 1);
-        let cuts: Vec<f64> = m.iter().filter(|s| s.pitch.is_some()).map(|s| s.to[0]).collect();
+        let cuts: Vec<f64> = m
+            .iter()
+            .filter(|s| s.pitch.is_some())
+            .map(|s| s.to[0])
+            .collect();
         let want = [0.117, 0.109, 0.101, 0.093, 0.085, 0.08];
         for (c, w) in cuts.iter().zip(want) {
             assert!((c - w).abs() < 1e-12, "{cuts:?}");
         }
+    }
+
+    /// LinuxCNC's `nc_files/g76.ngc` (a 1/4-20 thread), as rs274 prints it: constant
+    /// area (R2), a 29.5° compound angle, 3 spring passes, the exit tapered.
+    #[test]
+    fn g76_ngc_as_rs274_runs_it() {
+        let t = Thread {
+            q: Some(29.5),
+            r: Some(2.0),
+            h: Some(3.0),
+            e: Some(0.05),
+            l: Some(2.0),
+            ..thread(0.05, -0.075, 0.008, 0.045)
+        };
+        let m = t.moves([0.2, 0.0, 0.2], [0.2, 0.0, -0.5]).expect("runs");
+        // 31 cuts (0.075 + 0.008·√n below 0.12) and 4 at the full depth, 5 moves each.
+        assert_eq!(m.len(), 35 * 5 + 1);
+        let taper = 0.05 * 0.05f64.hypot(0.045) / 0.05;
+        let want: [([f64; 2], Option<f64>); 10] = [
+            ([0.2370, 0.1955], None),
+            ([0.1170, 0.1955], None),
+            ([0.1170, -0.4291], Some(0.05)),
+            ([0.1620, -0.4791], Some(taper)),
+            ([0.2370, -0.4791], None),
+            ([0.2337, 0.1936], None),
+            ([0.1137, 0.1936], None),
+            ([0.1137, -0.4309], Some(0.05)),
+            ([0.1587, -0.4809], Some(taper)),
+            ([0.2337, -0.4809], None),
+        ];
+        for (got, (xz, pitch)) in m.iter().zip(want) {
+            assert!(near([got.to[0], got.to[2]], xz), "{got:?} vs {xz:?}");
+            assert_eq!(got.pitch, pitch);
+        }
+        assert!((taper - 0.067268).abs() < 0.5e-6);
+        // The last pass's exit and the end.
+        let tail: Vec<[f64; 2]> = m[m.len() - 3..]
+            .iter()
+            .map(|s| [s.to[0], s.to[2]])
+            .collect();
+        for (got, want) in tail.iter().zip([[0.1250, -0.5], [0.2, -0.5], [0.2, -0.5]]) {
+            assert!(near(*got, want), "{tail:?}");
+        }
+    }
+
+    /// An inside thread (I > 0) cut towards +Z with both ends tapered: depths go +X, the
+    /// compound angle and the taper turn with the direction (rs274's numbers).
+    #[test]
+    fn inside_thread_towards_plus_z() {
+        let t = Thread {
+            q: Some(30.0),
+            e: Some(1.0),
+            l: Some(3.0),
+            ..thread(1.5, 0.5, 0.3, 0.9)
+        };
+        let m = t.moves([10.0, 0.0, -20.0], [10.0, 0.0, 0.0]).expect("runs");
+        // Depths 0.8, 0.5 + 0.3·2 = 1.1, then 1.4 (the full depth): 3 passes of 6.
+        assert_eq!(m.len(), 3 * 6 + 1);
+        let tan30 = (30.0f64).to_radians().tan();
+        let first: Vec<[f64; 2]> = m[..6].iter().map(|s| [s.to[0], s.to[2]]).collect();
+        // Back to 10 + 0.8 − 1.4, the crest 10 + 0.8 − 0.9, down the taper to the depth
+        // 1 mm further (+Z), the cut to Z 0 − 0.9·tan 30° less the pass's offset, up.
+        let zoff = -0.3 * tan30;
+        let target = 0.0 - 0.9 * tan30;
+        let want = [
+            [9.4, -20.0 - zoff],
+            [9.9, -20.0 - zoff],
+            [10.8, -20.0 - zoff + 1.0],
+            [10.8, target - zoff - 1.0],
+            [9.9, target - zoff],
+            [9.4, target - zoff],
+        ];
+        for (g, w) in first.iter().zip(want) {
+            assert!(
+                (g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12,
+                "{first:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn refusals_name_their_word() {
+        let ok = thread(1.0, -1.0, 0.1, 0.5);
+        let at = |t: Thread| {
+            t.moves([5.0, 0.0, 0.0], [5.0, 0.0, -10.0])
+                .err()
+                .map(|e| e.letter)
+        };
+        assert_eq!(at(ok), None);
+        assert_eq!(at(Thread { p: None, ..ok }), Some(None));
+        assert_eq!(
+            at(Thread {
+                p: Some(-1.0),
+                ..ok
+            }),
+            Some(None)
+        );
+        assert_eq!(at(Thread { p: Some(0.0), ..ok }), Some(Some(b'P')));
+        assert_eq!(at(Thread { k: None, ..ok }), Some(None));
+        assert_eq!(at(Thread { i: Some(0.0), ..ok }), Some(Some(b'I')));
+        assert_eq!(
+            at(Thread {
+                j: Some(-0.1),
+                ..ok
+            }),
+            Some(Some(b'J'))
+        );
+        assert_eq!(at(Thread { k: Some(0.1), ..ok }), Some(Some(b'K')));
+        assert_eq!(at(Thread { h: Some(0.5), ..ok }), Some(Some(b'H')));
+        assert_eq!(
+            at(Thread {
+                h: Some(-2.0),
+                ..ok
+            }),
+            Some(Some(b'H'))
+        );
+        assert_eq!(
+            at(Thread {
+                l: Some(-1.0),
+                ..ok
+            }),
+            Some(Some(b'L'))
+        );
+        // Within 0.0001 of a whole number is that number (rs274's integer words).
+        assert_eq!(
+            at(Thread {
+                h: Some(2.99995),
+                l: Some(1.00004),
+                ..ok
+            }),
+            None
+        );
+        // A compound angle whose tangent is beyond any number leaves no finite position.
+        let huge = Thread {
+            q: Some(89.999_999_999),
+            j: Some(5e299),
+            k: Some(1e300),
+            ..ok
+        };
+        assert_eq!(at(huge), Some(None));
     }
 }
