@@ -330,7 +330,11 @@ fn g76_auto_feeds_warning_and_post_refusal() {
     // out), the move to the start and the one to the block's end.
     assert_eq!(moves.len(), 1 + 7 * 6 + 1);
     // G76's H is its spring passes, never a tool length offset.
-    assert!(moves[1]["modal"]["tool_length"].is_null(), "{}", moves[1]["modal"]);
+    assert!(
+        moves[1]["modal"]["tool_length"].is_null(),
+        "{}",
+        moves[1]["modal"]
+    );
     let feeds: Vec<f64> = moves[1..7]
         .iter()
         .map(|m| m["feed"].as_f64().unwrap_or(f64::NAN))
