@@ -140,6 +140,10 @@ pub enum ErrorKind {
     /// A feature that is read but not simulated.
     #[error("{0} is not simulated: the trace shows the programmed path without it")]
     NotSimulated(String),
+    /// A LinuxCNC G76 threading cycle that cannot run (rs274 refuses it too), or one
+    /// with more passes than lampost expands (`lathe.rs`).
+    #[error("G76 threading cycle: {0}")]
+    ThreadingCycle(String),
     /// A canned cycle passed through, not expanded.
     #[error("canned cycle G{0} is passed through, not expanded into moves")]
     CannedCyclePassedThrough(String),
@@ -317,6 +321,7 @@ impl ErrorKind {
             ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its Z depth and R plane (and Q for peck cycles)",
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
+            ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
             ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
             ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",

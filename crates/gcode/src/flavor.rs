@@ -181,6 +181,12 @@ struct Codes {
     /// An E word whose number has digits after its point (`E.0234`, `E-0.8`): a
     /// slicer's extrusion (FADAL's fixture offsets are whole).
     e_fraction: bool,
+    /// `G76`.
+    g76: bool,
+    /// A J word and a K word: with G76, LinuxCNC's threading cycle (a mill's G76 is
+    /// fine boring, with no J or K; Fanuc's lathe G76 has no J).
+    j: bool,
+    k: bool,
 }
 
 impl Codes {
@@ -201,6 +207,11 @@ impl Codes {
                 i += 1;
                 continue;
             }
+            let numeric = b
+                .get(i + 1)
+                .is_some_and(|d| d.is_ascii_digit() || matches!(d, b'.' | b'-' | b'+'));
+            c.j |= letter == b'J' && numeric;
+            c.k |= letter == b'K' && numeric;
             if letter == b'E' {
                 let num = b[i + 1..].strip_prefix(b"-").unwrap_or(&b[i + 1..]);
                 let int = num.iter().take_while(|d| d.is_ascii_digit()).count();
@@ -222,6 +233,7 @@ impl Codes {
                     (b'M', 82 | 83) => c.m82_83 = true,
                     (b'M', 97) => c.m97 = true,
                     (b'G', 0 | 1) => c.g0_1 = true,
+                    (b'G', 76) => c.g76 = true,
                     _ => {}
                 }
             }
@@ -375,6 +387,12 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
         if c.m97 {
             return (Flavor::Haas, at("an M97 local subprogram call"));
         }
+        if c.g76 && c.j && c.k {
+            return (
+                Flavor::LinuxCnc,
+                at("a G76 threading cycle with J and K (LinuxCNC's)"),
+            );
+        }
         // Weak evidence: the first of the strongest kind decides, when nothing decisive
         // comes in the head.
         let found = if c.e_move() {
@@ -462,6 +480,12 @@ mod tests {
             ("G1X1\nG92E0\n", Flavor::Marlin),
             ("G0 X1\nM830\nM8.3 G650\n", Flavor::Fadal),
             ("G20\no100 sub\nG0 X1\no100 endsub\n", Flavor::LinuxCnc),
+            (
+                "G18\nM3 S800\nN20 G76 P.05 Z-.5 I-.075 J.008 K.045\n",
+                Flavor::LinuxCnc,
+            ),
+            // A mill's fine boring G76 (FADAL, Haas) has no J and K.
+            ("G0 X1 Y1\nG76 Z-1 R.1 Q.01 I1 J0 F10\n", Flavor::Fadal),
             ("O<probe> call\n", Flavor::LinuxCnc),
             ("#<depth> = 2\nG1 Z-#<depth>\n", Flavor::LinuxCnc),
             ("G0 X0\n#1 = 2\nG1 X#1\n", Flavor::LinuxCnc),

@@ -924,6 +924,7 @@ impl Interpreter {
         if w.word(b'O').is_some() && crate::program::program_number(b).is_some() {
             self.open_programs = self.open_programs.saturating_add(1);
         }
+        let threading = self.is_threading(w);
         let m = &mut self.modal;
         // Feed mode, F, S, T.
         if let Some((_, c)) = w.g_in(GGroup::FeedMode) {
@@ -971,6 +972,15 @@ impl Interpreter {
         let mut stop_after = false;
         for &(mw, code) in &w.ms {
             match code {
+                // LinuxCNC stops the spindle for a tool change (as rs274 does, and a
+                // machine unless its TOOL_CHANGE_WITH_SPINDLE_ON is set); M3/M4 in the
+                // block start it after the change.
+                60 if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
+                    m.tool = m.selected_tool;
+                    if !w.ms.iter().any(|&(_, c)| c == 30 || c == 40) {
+                        m.spindle = Spindle::Off;
+                    }
+                }
                 60 => m.tool = m.selected_tool,
                 610 => {
                     if let Some(q) = w.get(b'Q') {
@@ -1030,7 +1040,7 @@ impl Interpreter {
             match self.opts.e_word {
                 // LinuxCNC: E is G76's taper, nothing else (no fixture offsets).
                 EWord::FixtureOffset if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
-                    if !w.has_g(760) {
+                    if !threading {
                         return Err(diag(
                             b,
                             Severity::Error,
@@ -1106,8 +1116,9 @@ impl Interpreter {
             } else {
                 Some(w.get(b'H').map_or(m.tool, |h| h.max(0.0) as u32))
             };
-        } else if let Some(h) = w.get(b'H') {
-            // FADAL: an H word alone applies that length offset.
+        } else if let Some(h) = w.get(b'H').filter(|_| !threading) {
+            // FADAL: an H word alone applies that length offset (G76's H is its spring
+            // passes).
             m.tool_length = if h == 0.0 {
                 None
             } else {
@@ -1754,8 +1765,107 @@ impl Interpreter {
                 }
                 arc
             }
+            Motion::Canned(760) if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
+                self.threading(b, w, target, out)
+            }
             Motion::Canned(c) => self.canned_cycle(b, w, c, out),
         }
+    }
+
+    /// True when the block runs LinuxCNC's G76 threading cycle (named in the block, or
+    /// in force with no motion code in it): its E, H, I, J, K, L, P, Q and R are the
+    /// cycle's.
+    fn is_threading(&self, w: &Words<'_, '_>) -> bool {
+        self.opts.flavor == crate::flavor::Flavor::LinuxCnc
+            && w.g_in(GGroup::Motion)
+                .map_or(self.modal.motion == Motion::Canned(760), |(_, c)| c == 760)
+    }
+
+    /// LinuxCNC's G76 threading cycle (`lathe.rs`): the block refused where rs274 refuses
+    /// it, else its passes as moves, rapids and spindle-synchronised feeds (traced as G1
+    /// moves at the pitch times the spindle speed, as G33 is) ending at the block's X, Y
+    /// and Z.
+    fn threading(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        target: Position,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        let code = w.g_in(GGroup::Motion).map(|(gw, _)| gw);
+        let fail = |letter: Option<u8>, why: String| {
+            let span = letter
+                .and_then(|l| w.word(l))
+                .or(code)
+                .map(|word| word.span);
+            diag(b, Severity::Error, ErrorKind::ThreadingCycle(why), span)
+        };
+        if !w.has_axes() {
+            return Err(fail(None, "no axis word: Z gives the thread's end".into()));
+        }
+        if !matches!(self.modal.spindle, Spindle::Cw | Spindle::Ccw) {
+            return Err(fail(
+                None,
+                "the spindle is not turning (M3 or M4 before G76; a tool change M6 stops it)"
+                    .into(),
+            ));
+        }
+        if let Some(a) = (3..AXES.len()).find(|&a| target[a] != self.pos[a]) {
+            return Err(fail(
+                Some(AXES[a]),
+                format!("{} moves: G76 moves X and Z only", char::from(AXES[a])),
+            ));
+        }
+        if self.modal.cutter_comp != CutterComp::Off {
+            return Err(fail(
+                None,
+                "cutter radius compensation is on (G40 before G76)".into(),
+            ));
+        }
+        let thread = crate::lathe::Thread {
+            p: w.get(b'P'),
+            i: w.get(b'I'),
+            j: w.get(b'J'),
+            k: w.get(b'K'),
+            q: w.get(b'Q'),
+            r: w.get(b'R'),
+            h: w.get(b'H'),
+            e: w.get(b'E'),
+            l: w.get(b'L'),
+        };
+        let xyz = |p: &Position| [p[0], p[1], p[2]];
+        let moves = thread
+            .moves(xyz(&self.pos), xyz(&target))
+            .map_err(|e| fail(e.letter, e.why))?;
+        let speed = self.modal.speed.abs();
+        if moves
+            .iter()
+            .any(|m| m.pitch.is_some_and(|p| !(p * speed).is_finite()))
+        {
+            return Err(fail(
+                Some(b'P'),
+                "the pitch times the spindle speed is beyond any number".into(),
+            ));
+        }
+        self.warn(
+            b,
+            out,
+            ErrorKind::NotSimulated(format!(
+                "spindle synchronisation of {} (threading cycle)",
+                code.map_or_else(|| "G76".to_string(), |c| c.display_code())
+            )),
+            code.map(|c| c.span),
+        );
+        for m in moves {
+            let mut to = self.pos;
+            to[..3].copy_from_slice(&m.to);
+            let (kind, feed) = match m.pitch {
+                None => (MoveKind::Rapid, 0.0),
+                Some(p) => (MoveKind::Linear, p * speed),
+            };
+            self.emit(b.line, kind, to, feed, Origin::CannedCycle, out);
+        }
+        Ok(())
     }
 
     /// An arc centre word (I, J, K) on a straight move: a missing G2/G3, most likely.

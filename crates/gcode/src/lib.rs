@@ -29,6 +29,7 @@ mod flavor;
 mod foreign;
 pub mod generate;
 mod interp;
+mod lathe;
 mod lines;
 mod macrob;
 mod modal;

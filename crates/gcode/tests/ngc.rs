@@ -371,7 +371,7 @@ fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
 }
 
 /// LinuxCNC's lathe cycles G70–G72 (not units there) are warned about and draw no move;
-/// E is G76's taper, and a stray E is refused, as rs274 refuses it.
+/// G76 is expanded; E is G76's taper, and a stray E is refused, as rs274 refuses it.
 #[test]
 fn linuxcnc_lathe_cycles_and_e() {
     use lampost_gcode::{check, ErrorKind, Flavor, Options, Severity};
@@ -383,11 +383,20 @@ fn linuxcnc_lathe_cycles_and_e() {
     assert_eq!(d.len(), 2, "{d:?}");
     assert!(d.iter().all(|x| x.severity == Severity::Warning
         && matches!(&x.kind, ErrorKind::NotSimulated(w) if w.contains("lathe"))));
-    let d = check(
-        b"G21 G18\nG0 X1 Z1\nG76 P0.05 Z-1 I-.075 J0.008 R1 K0.045 Q29.5 H2 L2 E0.045\nM2\n",
-        opts,
+    // G76 is expanded (`lathe.rs`); its spindle synchronisation is warned about, as
+    // G33's is. Without the spindle turning rs274 refuses it, and so does lampost.
+    let g76 = b"G0 X1 Z1\nG76 P0.05 Z-1 I-.075 J0.008 R1 K0.045 Q29.5 H2 L2 E0.045\nM2\n";
+    let d = check(&[&b"G21 G18\nM3 S500\n"[..], g76].concat(), opts);
+    assert!(
+        d.len() == 1
+            && matches!(&d[0].kind, ErrorKind::NotSimulated(w) if w.contains("spindle synchronisation of G76")),
+        "{d:?}"
     );
-    assert!(d.iter().all(|x| x.severity == Severity::Warning), "{d:?}");
+    let d = check(&[&b"G21 G18\n"[..], g76].concat(), opts);
+    assert!(
+        d.len() == 1 && matches!(&d[0].kind, ErrorKind::ThreadingCycle(w) if w.contains("spindle")),
+        "{d:?}"
+    );
     let d = check(b"G21\nG0 X1 E0.5\n", opts);
     assert!(
         matches!(d[0].kind, ErrorKind::StrayWord { letter: 'E', .. }),
