@@ -66,7 +66,10 @@ impl FeedCheck {
 
     /// Check a written feed point: the joints as the text gives them (rounded to the
     /// output resolution), through forward kinematics, against the intended move.
+    /// (The common path: a point the reading thread planned, under a table position
+    /// and orientation already seen; the rest is in the out-of-line helpers below.)
     #[allow(clippy::too_many_arguments)]
+    #[inline]
     pub(crate) fn point(
         &mut self,
         m: &Machine,
@@ -80,55 +83,21 @@ impl FeedCheck {
         let Some(line) = self.step.as_ref().map(|s| s.line) else {
             return Ok(());
         };
-        let rot = *rot;
-        if self.fk_cache.0 != rot {
-            let (_, inv) = written_rotary(&rot);
-            self.fk_cache = (rot, m.tip_map(&inv, head));
-            self.fk_axis = m.machine_to_part_sc(&inv, &m.tool_axis)
-                - m.machine_to_part_sc(&inv, &Vector3::zeros());
-            self.axis_err = None;
+        if self.fk_cache.0 != *rot {
+            self.turn_to(m, head, rot);
         }
         let err = match self.planned_check {
             // Worked out on the reading thread, for these very joints (with the same
             // end-or-path rule).
             Some((j, end, e)) if end == is_end && j == *x => e,
-            _ => {
-                let tip = written_tip(&self.fk_cache.1, scale, x);
-                match &self.step {
-                    Some(step) if is_end => (tip - step.end).norm(),
-                    Some(step) => crate::verify::dist_to(step, &tip),
-                    None => 0.0,
-                }
-            }
+            _ => self.distance(scale, x, is_end),
         };
         if err > self.tol {
-            let tip = written_tip(&self.fk_cache.1, scale, x);
-            return Err(PostError::Verify(format!(
-                "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
-                line, tip.x, tip.y, tip.z, self.tol
-            )));
+            return Err(self.off_path(scale, x, line, err));
         }
         let ang = match self.axis_err {
             Some(e) => e,
-            None => {
-                let want = match self.orient {
-                    Orient::ToolAxis => self.program_z.normalize(),
-                    Orient::Index(r) => {
-                        m.forward(
-                            &lampost_kinematics::Joints {
-                                linear: [0.0; 3],
-                                rotary: r,
-                            },
-                            head,
-                        )
-                        .axis
-                    }
-                };
-                let axis = self.fk_axis;
-                let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
-                self.axis_err = Some(e);
-                e
-            }
+            None => self.axis_angle(m, head),
         };
         let v = report;
         v.compared += 1;
@@ -136,13 +105,70 @@ impl FeedCheck {
             v.max_position_error = err;
             v.worst_line = line;
         }
-        v.max_axis_error_deg = v.max_axis_error_deg.max(ang);
+        if ang > v.max_axis_error_deg {
+            v.max_axis_error_deg = ang;
+        }
         if ang > 0.01 {
             return Err(PostError::Verify(format!(
-                "input line {}: the tool axis is {ang:.4}° off",
-                line
+                "input line {line}: the tool axis is {ang:.4}° off"
             )));
         }
         Ok(())
+    }
+
+    /// The tip map and tool axis of the written rotaries `rot`.
+    #[inline(never)]
+    fn turn_to(&mut self, m: &Machine, head: usize, rot: &[f64; 2]) {
+        let (_, inv) = written_rotary(rot);
+        self.fk_cache = (*rot, m.tip_map(&inv, head));
+        self.fk_axis = m.machine_to_part_sc(&inv, &m.tool_axis)
+            - m.machine_to_part_sc(&inv, &Vector3::zeros());
+        self.axis_err = None;
+    }
+
+    /// How far the written point `x` lands from the step: from its end when `is_end`,
+    /// else from its path (a point not planned on the reading thread).
+    #[inline(never)]
+    fn distance(&self, scale: f64, x: &[f64; 3], is_end: bool) -> f64 {
+        let tip = written_tip(&self.fk_cache.1, scale, x);
+        match &self.step {
+            Some(step) if is_end => (tip - step.end).norm(),
+            Some(step) => crate::verify::dist_to(step, &tip),
+            None => 0.0,
+        }
+    }
+
+    /// The angle (degrees) between the written tool axis and the intended one, kept
+    /// until the table position or the orientation changes.
+    #[inline(never)]
+    fn axis_angle(&mut self, m: &Machine, head: usize) -> f64 {
+        let want = match self.orient {
+            Orient::ToolAxis => self.program_z.normalize(),
+            Orient::Index(r) => {
+                m.forward(
+                    &lampost_kinematics::Joints {
+                        linear: [0.0; 3],
+                        rotary: r,
+                    },
+                    head,
+                )
+                .axis
+            }
+        };
+        let axis = self.fk_axis;
+        let e = axis.cross(&want).norm().atan2(axis.dot(&want)).to_degrees();
+        self.axis_err = Some(e);
+        e
+    }
+
+    /// The error for a written point `err` from the intended path.
+    #[cold]
+    #[inline(never)]
+    fn off_path(&self, scale: f64, x: &[f64; 3], line: u32, err: f64) -> PostError {
+        let tip = written_tip(&self.fk_cache.1, scale, x);
+        PostError::Verify(format!(
+            "input line {}: a written point ({:.5}, {:.5}, {:.5}) is {err:.3e} from the intended path (tolerance {:.1e})",
+            line, tip.x, tip.y, tip.z, self.tol
+        ))
     }
 }
