@@ -62,6 +62,44 @@ fn auto_says_what_it_chose() {
     assert_eq!(doc["flavor"]["auto"], false);
 }
 
+/// A printer program's vendor lines (WEEDO's preview image: `W221`, `W220 <hex>`) are no
+/// commands printer firmware runs: a warning once per code, no move (after a G1, `W221`
+/// was traced as a W-axis move), and the post takes the program. In a CNC flavour W
+/// stays an axis.
+#[test]
+fn vendor_lines_in_printer_programs_move_nothing() {
+    let text = ";FLAVOR:Marlin\nG21 G90\nM82\nG92 E0\nG1 X1 Y1 E1 F600\nW221\nW220 ffd8ffe000104a46\nW220 0a28a2800a28\nW222\nG1 X2 Y2 E2\n";
+    let doc = trace_json(&[], text);
+    assert_eq!(doc["flavor"]["flavor"], "marlin");
+    let m = doc["moves"].as_array().expect("moves");
+    assert_eq!(m.len(), 2, "{doc}");
+    assert_eq!(axis(&m[1]["end"], "X"), 2.0);
+    assert!(m.iter().all(|mv| mv["end"].get("W").is_none_or(|w| w == 0.0)), "{doc}");
+    let o = lampost_stdin(&["check", "-"], text.as_bytes());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.matches("is no command a printer's firmware runs").count(), 3, "{err}");
+    assert!(err.contains("W220 …"), "{err}");
+    // The post deposits the program's one extruding run.
+    let dir = tempdir("vendor-lines");
+    let input = dir.join("weedo.gcode");
+    std::fs::write(&input, text).expect("write");
+    let out = dir.join("weedo.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--e-extrusion",
+        input.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // LinuxCNC: W is an axis.
+    let doc = trace_json(&["--flavor", "linuxcnc"], "G21 G90 G1 X1 F600\nW2\n");
+    assert_eq!(axis(&doc["moves"][1]["end"], "W"), 2.0);
+}
+
 #[test]
 fn slicer_flavours_read_e_as_extrusion() {
     let text = ";FLAVOR:Marlin\nG21 G90\nM83\nG1 X1e-05 Y5 E.5 F1200\nG1 X10 E1\n";

@@ -11,7 +11,7 @@
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
 //! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker, skeinforge,
-//! miracle-grue, arcwelder, marlin-kfactor, kcalibrator) are traced
+//! miracle-grue, arcwelder, marlin-kfactor, kcalibrator, weedo) are traced
 //! with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
 //! verdict then says `post R runs` when the post deposits the extruding length (relative
 //! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
@@ -29,7 +29,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 17] = [
+const SLICERS: [&str; 18] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -47,6 +47,7 @@ const SLICERS: [&str; 17] = [
     "arcwelder",
     "marlin-kfactor",
     "kcalibrator",
+    "weedo",
 ];
 
 /// The first error `lampost check` reports, as `L:C message`.

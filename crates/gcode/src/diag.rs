@@ -152,6 +152,11 @@ pub enum ErrorKind {
     /// `EXCLUDE_OBJECT_START NAME=part`): ignored.
     #[error("{0} is a firmware setting (Klipper): no motion, ignored")]
     FirmwareSetting(String),
+    /// In a printer (slicer) program, a line whose command letter is none a printer's
+    /// firmware runs (G, M, T): a vendor's line such as WEEDO's `W221`; ignored, as the
+    /// firmwares do.
+    #[error("{0} is no command a printer's firmware runs (its letter is not G, M or T): a vendor's line, no motion, ignored")]
+    VendorCommand(String),
     /// In a printer (slicer) program, a firmware's macro or extended command that may
     /// move (Klipper's `START_PRINT`, `PRINT_END`, `SET_GCODE_OFFSET`): not simulated.
     #[error("{0} is a firmware macro or command (Klipper): its moves, if any, are not known and not simulated")]
@@ -324,6 +329,7 @@ impl ErrorKind {
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
             ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
+            ErrorKind::VendorCommand(_) => "nothing to do: a vendor's line (WEEDO's W221 and W220 carry the preview image) moves nothing",
             ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",

@@ -98,6 +98,8 @@ pub struct Stream<S> {
     warned_comment_utf8: bool,
     /// Text after the program's end has been reported (once a program).
     warned_text_after_end: bool,
+    /// The vendor commands (`W221`) warned about: each once.
+    warned_vendor: Vec<String>,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -125,6 +127,7 @@ impl<S: LineSource> Stream<S> {
             fast_lane: !opts.flavor.extruder_is_a_or_b(),
             warned_comment_utf8: false,
             warned_text_after_end: false,
+            warned_vendor: Vec::new(),
         }
     }
 
@@ -201,7 +204,13 @@ impl<S: LineSource> Iterator for Stream<S> {
             // follows up its move (no parameters to update, no diagnostic from the
             // source), the move is handed out at once.
             let mut direct = None;
-            if self.fast_lane && line.len <= MAX_LINE_BYTES {
+            // A printer program's vendor line (`W221`) is never a move: not fast.
+            let vendor = if self.slicer {
+                vendor_command(line.bytes)
+            } else {
+                None
+            };
+            if self.fast_lane && line.len <= MAX_LINE_BYTES && vendor.is_none() {
                 if let Some(p) = plain_motion(line.bytes) {
                     direct = self.interp.plain_motion(&p, line.number);
                 }
@@ -250,6 +259,38 @@ impl<S: LineSource> Iterator for Stream<S> {
                         },
                     },
                 };
+                // A printer (slicer) program's line whose command letter is none a
+                // printer's firmware runs (see [`vendor_command`]): a warning naming it,
+                // and an empty block, however its words would read as G-code.
+                if let Some(len) = vendor {
+                    // Named by its code (`W220`), once for each code.
+                    let start = line.bytes.len() - line.bytes.trim_ascii_start().len();
+                    let text = &line.bytes[start..len];
+                    let code_len = text
+                        .iter()
+                        .position(|c| c.is_ascii_whitespace())
+                        .unwrap_or(text.len());
+                    let code = String::from_utf8_lossy(&text[..code_len]).into_owned();
+                    if !self.warned_vendor.contains(&code) {
+                        let shown = if code_len < text.len() {
+                            format!("{code} …")
+                        } else {
+                            code.clone()
+                        };
+                        self.warned_vendor.push(code);
+                        queue.push_back(Event::Diagnostic(Diagnostic::at(
+                            Severity::Warning,
+                            ErrorKind::VendorCommand(shown),
+                            line.number,
+                            line.offset,
+                            line.bytes,
+                            start,
+                            start + code_len,
+                        )));
+                    }
+                    block = Block::empty(line.number, line.offset);
+                    parsed = Ok(());
+                }
                 // A printer (slicer) program's line that is no G-code but a firmware's
                 // extended command (`slicer`: E is extrusion, the program is a printer's):
                 // a warning naming it, and an empty block.
@@ -524,6 +565,29 @@ const FIRMWARE_SETTINGS: &[&str] = &[
     "SET_VELOCITY_LIMIT",
     "TEMPERATURE_WAIT",
 ];
+
+/// A printer program's line whose command letter is none a printer's firmware runs:
+/// Marlin, RepRapFirmware and Klipper take a line's command from its first letter, G, M
+/// or T (after an N line number), and report any other as an unknown command. Vendors
+/// put their own lines there (WEEDO's `W221`, and `W220 ffd8…`, the preview image in
+/// hex). A line that starts with a letter other than G, M, T and N, and other than the
+/// axis words X, Y, Z, E and F (lampost reads a bare axis line as the motion in force),
+/// followed by a number: the end of its text (before any `;` comment).
+fn vendor_command(line: &[u8]) -> Option<usize> {
+    let start = line.len() - line.trim_ascii_start().len();
+    let letter = line.get(start)?.to_ascii_uppercase();
+    let number = line
+        .get(start + 1)
+        .is_some_and(|c| c.is_ascii_digit() || matches!(c, b'-' | b'+' | b'.'));
+    if !letter.is_ascii_uppercase()
+        || matches!(letter, b'G' | b'M' | b'T' | b'N' | b'X' | b'Y' | b'Z' | b'E' | b'F')
+        || !number
+    {
+        return None;
+    }
+    let end = line.iter().position(|&c| c == b';').unwrap_or(line.len());
+    Some(start + line[start..end].trim_ascii_end().len())
+}
 
 /// A firmware's extended command (Klipper: `START_PRINT BED=60`, `SET_PRESSURE_ADVANCE
 /// ADVANCE=0.05`, `_ON_LAYER_CHANGE`): a first token of letters, digits and
