@@ -251,7 +251,7 @@ impl Codes {
 ///
 /// Without any of those, weaker evidence decides, the strongest kind found first: a G0
 /// or G1 with a fractional E word (a slicer's extrusion): Marlin; numbered parameters
-/// (`#1 = …`) or `[…]` expressions: LinuxCNC; a `;` comment, which FADAL programs do not
+/// (`#1 = …`), `[…]` expressions or polar coordinates (`@`, `^`): LinuxCNC; a `;` comment, which FADAL programs do not
 /// hold (grbl, Mach3 and hobby CAM write them): LinuxCNC, whose reading is ISO's.
 pub fn detect(head: &[u8]) -> (Flavor, String) {
     let mut head = &head[..head.len().min(DETECT_BYTES)];
@@ -381,6 +381,8 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             Some((3, Flavor::Marlin, "a move with a fractional E (extrusion)"))
         } else if code.contains('#') || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
+        } else if code.contains(['@', '^']) {
+            Some((2, Flavor::LinuxCnc, "a polar coordinate (`@`, `^`)"))
         } else if semicolon_comment(line) {
             // FADAL's comments are `(…)` and, in macros, `'…`; a `;` comment is ISO's
             // (grbl, LinuxCNC, Mach3, most hobby CAM).
@@ -531,6 +533,17 @@ mod tests {
             ("(SET X; Y)\nG0 X1\n", Flavor::Fadal, "no evidence"),
             // A parameter outranks a `;` comment.
             ("G0 X1 ;a\nG1 X#1\n", Flavor::LinuxCnc, "a parameter"),
+            // LinuxCNC's polar coordinates, in a program with no other evidence.
+            (
+                "G20 G0 X2 Y0\nG0 @1 ^90\n",
+                Flavor::LinuxCnc,
+                "a polar coordinate",
+            ),
+            (
+                "(HOLES)\nG81 R.1 Z-.5 ^60 L6\n",
+                Flavor::LinuxCnc,
+                "a polar coordinate",
+            ),
             // Skeinforge's header.
             (
                 "(<setting> comb Running_Jump_Space_(mm): 2.0 </setting>)\nG1 X1\n",
