@@ -1488,6 +1488,59 @@ mod tests {
     }
 
     #[test]
+    fn polar_words_are_read_only_when_asked() {
+        let polar = Reading {
+            slicer: false,
+            polar: true,
+        };
+        let mut b = Block::empty(1, 0);
+        parse_line_with(b"G1 @ 1.5 ^-30 (c) F10", 1, 0, &mut b, polar).expect("parses");
+        let w: Vec<_> = b.words().map(|w| (w.letter, w.value, w.text)).collect();
+        assert_eq!(
+            w,
+            [
+                (b'G', 1.0, "1"),
+                (b'@', 1.5, "1.5"),
+                (b'^', -30.0, "-30"),
+                (b'F', 10.0, "10")
+            ]
+        );
+        assert_eq!(b.words().nth(1).map(Word::display).as_deref(), Some("@1.5"));
+        // A value from a parameter or an expression makes a macro line, as for letters.
+        for s in ["G0 ^[360/17]", "G0 @#1", "G0 @-[1]"] {
+            parse_line_with(s.as_bytes(), 1, 0, &mut b, polar).expect(s);
+            assert_eq!(
+                b.kind,
+                BlockKind::Macro(MacroKind::LinuxCncExpression),
+                "{s}"
+            );
+        }
+        // Each once; a number after each (column of the error).
+        for (s, col, kind) in [
+            ("G0 @1 @2", 7, ErrorKind::DuplicateWord("@".into())),
+            ("G0 ^1 X1 ^2", 10, ErrorKind::DuplicateWord("^".into())),
+            ("G0 @", 4, ErrorKind::LetterWithoutNumber('@')),
+            ("G0 ^X1", 4, ErrorKind::LetterWithoutNumber('^')),
+        ] {
+            let e = parse_line_with(s.as_bytes(), 1, 0, &mut b, polar).expect_err(s);
+            assert_eq!((e.column, e.kind), (col, kind), "{s}");
+        }
+        // Without the reading (every flavour but LinuxCNC's), an unexpected character.
+        for s in ["G0 @1", "G0 ^1", "X1 @ 2"] {
+            let e = parse_line_with(s.as_bytes(), 1, 0, &mut b, false).expect_err(s);
+            assert!(
+                matches!(e.kind, ErrorKind::UnexpectedCharacter('@' | '^')),
+                "{s}"
+            );
+            assert_eq!(
+                e.column,
+                s.find(['@', '^']).map_or(0, |c| c as u32 + 1),
+                "{s}"
+            );
+        }
+    }
+
+    #[test]
     fn a_lone_block_delete_is_an_empty_block() {
         // Found by `cargo xtask fuzz`: `/` alone ran past the end of the line.
         for s in ["/", "  /", "/ "] {
