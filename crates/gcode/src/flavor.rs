@@ -381,7 +381,7 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             Some((3, Flavor::Marlin, "a move with a fractional E (extrusion)"))
         } else if code.contains('#') || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
-        } else if code.contains(['@', '^']) {
+        } else if polar_word(code) {
             Some((2, Flavor::LinuxCnc, "a polar coordinate (`@`, `^`)"))
         } else if semicolon_comment(line) {
             // FADAL's comments are `(…)` and, in macros, `'…`; a `;` comment is ISO's
@@ -408,6 +408,22 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
 /// Comments that name RepRapFirmware (Cura's `;FLAVOR:RepRap`, PrusaSlicer's config
 /// block `; gcode_flavor = reprapfirmware`).
 const REPRAP: [&str; 3] = ["FLAVOR:RepRap", "RepRapFirmware", "gcode_flavor = reprap"];
+
+/// An `@` or `^` with a value after it (a number, a parameter or an expression; blanks
+/// allowed): LinuxCNC's polar coordinates (`@1.5`, `^ -30`, `^[360/17]`), not a character
+/// of a message (`M117 Hi @ home`).
+fn polar_word(code: &str) -> bool {
+    let b = code.as_bytes();
+    b.iter().enumerate().any(|(i, c)| {
+        matches!(c, b'@' | b'^')
+            && b[i + 1..]
+                .iter()
+                .find(|c| !matches!(c, b' ' | b'\t'))
+                .is_some_and(|c| {
+                    c.is_ascii_digit() || matches!(c, b'.' | b'+' | b'-' | b'[' | b'#')
+                })
+    })
+}
 
 /// A `;` outside `(…)` comments: a `;` comment.
 fn semicolon_comment(line: &str) -> bool {
@@ -544,6 +560,9 @@ mod tests {
                 Flavor::LinuxCnc,
                 "a polar coordinate",
             ),
+            ("G0 ^ -30\n", Flavor::LinuxCnc, "a polar coordinate"),
+            // A character of a message is none.
+            ("M117 Hi @ home ^_^\nG0 X1\n", Flavor::Fadal, "no evidence"),
             // Skeinforge's header.
             (
                 "(<setting> comb Running_Jump_Space_(mm): 2.0 </setting>)\nG1 X1\n",
