@@ -1750,6 +1750,17 @@ impl Interpreter {
         [self.pos[0] - off[0], self.pos[1] - off[1]]
     }
 
+    /// A point of the work system in force (X, Y) in the machine frame; as it is when
+    /// every offset is zero (a polar point's `-0.0` stays: rs274 takes the angle of
+    /// `(-0.0, 0.0)` as 180°).
+    fn machine_xy(&self, p: [f64; 2]) -> [f64; 2] {
+        if self.offset_zero {
+            return p;
+        }
+        let off = self.offset();
+        [p[0] + off[0], p[1] + off[1]]
+    }
+
     /// `p` (machine frame) in the coordinates of the work system in force.
     fn to_program(&self, p: Position) -> Position {
         if self.offset_zero {
@@ -1833,12 +1844,10 @@ impl Interpreter {
             // A canned cycle places its holes itself (`canned_cycle`).
             if probe || !matches!(self.modal.motion, Motion::Canned(_)) {
                 let incremental = self.modal.distance == Distance::Incremental;
-                let [x, y] = p.end(self.program_xy(), incremental).map_err(|why| {
+                let end = p.end(self.program_xy(), incremental).map_err(|why| {
                     diag(b, Severity::Error, ErrorKind::Polar(why), w.polar_span())
                 })?;
-                let off = self.offset();
-                target[0] = x + off[0];
-                target[1] = y + off[1];
+                [target[0], target[1]] = self.machine_xy(end);
             }
         }
         let origin = if g53 {
@@ -2291,8 +2300,7 @@ impl Interpreter {
                     // Checked above: the same steps succeed again.
                     hole = p.cycle_step(hole).unwrap_or(hole);
                 }
-                xy[0] = hole[0] + off[0];
-                xy[1] = hole[1] + off[1];
+                [xy[0], xy[1]] = self.machine_xy(hole);
             }
             for a in [0usize, 1] {
                 if let Some(v) = w.get(AXES[a]) {

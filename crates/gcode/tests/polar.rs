@@ -129,6 +129,10 @@ fn canned_cycles_place_their_holes_by_polar_words() {
     assert!(d.is_empty(), "{d:?}");
     assert_eq!(xy(&m)[1], [2.0, 0.0]);
     assert!(xy(&m)[6..].iter().all(|p| *p == [0.0, 0.0]), "{m:?}");
+    // `@0` at 153°: the point is (-0, 0), whose angle rs274 takes as 180°.
+    let (m, d) = run("G20 G90 G0 X-1 Y0.5 Z1\nG1 @0 F10\nG81 @2 R.1 Z-.5\nM2\n");
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(xy(&m)[2], [-2.0, 0.0]);
     // A zero increment is no step, even at the origin (rs274 skips it).
     let (m, d) = run("G20 G90 G0 X0 Y0 Z1\nG91 G81 @0 R.1 Z-.5 F60 L2\nM2\n");
     assert!(d.is_empty(), "{d:?}");
