@@ -103,6 +103,9 @@ fn arcs_probes_and_feed_moves_end_at_the_polar_point() {
         ]
     );
     assert_eq!(m[4][2], -1.0);
+    // A rigid tap to the polar point and back (rs274: RIGID_TAP(0, 1, -1)), a thread.
+    let (m, _) = run("G20 G90 G0 X1 Y0 F10 S100 M3\nG33.1 @1 ^90 Z-1 K.1\nG33 @2 ^0 Z-1 K.1\nM2\n");
+    assert_eq!(xy(&m), [[1.0, 0.0], [0.0, 1.0], [1.0, 0.0], [2.0, 0.0]]);
 }
 
 #[test]
