@@ -167,6 +167,17 @@ fn polar_coordinates_are_linuxcnc_only_and_refused_where_rs274_refuses_them() {
             );
         }
     }
+    // fmt writes them back as read with the LinuxCNC flavour, and refuses them in others.
+    let src = b"G20 G0 X2 Y0\nG0 @1 ^90\nG91 G81 R.1 Z-.5 ^[360/17] L17 F10\n";
+    let o = lampost_stdin(&["fmt", "--flavor", "linuxcnc", "-"], src);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.stdout, src);
+    let o = lampost_stdin(&["fmt", "--flavor", "fadal", "-"], src);
+    assert!(
+        !o.status.success() && stderr(&o).contains("<stdin>:2:4"),
+        "{}",
+        stderr(&o)
+    );
     // LinuxCNC's refusals, located at the word that makes the block wrong.
     for (text, at, what) in [
         ("G20 G0 X0 Y0\nG0 @1\n", ":2:4", "the angle is unknown"),
