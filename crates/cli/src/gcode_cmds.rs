@@ -6,8 +6,8 @@ use lampost_gcode::fixed;
 use lampost_gcode::DETECT_BYTES;
 use lampost_gcode::{
     comment_not_utf8, parse_line_lenient, Block, Diagnostic, Dialect, EWord, EmitOptions, Emitter,
-    ErrorKind, Event, Flavor, LineReader, Move, MoveKind, Options, Order, ProgramReader, Resolved,
-    Severity, Stream, Units, AXES,
+    ErrorKind, Event, Flavor, LineReader, Move, MoveKind, Options, Order, ProgramReader, Reading,
+    Resolved, Severity, Stream, Units, AXES,
 };
 
 use crate::io::{display_name, open_seekable, Output};
@@ -193,7 +193,11 @@ pub fn fmt(
     };
     let mut src = open_seekable(file)?;
     let flavor = resolve(flavor, &mut src).map_err(|e| io_err(&name, e))?;
-    let exponents = flavor.flavor.is_slicer();
+    // A slicer's numbers may have exponents; LinuxCNC reads its polar words `@` and `^`.
+    let reading = Reading {
+        slicer: flavor.flavor.is_slicer(),
+        polar: flavor.flavor == Flavor::LinuxCnc,
+    };
     let mut reader = LineReader::new(std::io::BufReader::with_capacity(1 << 16, src));
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);
@@ -211,7 +215,7 @@ pub fn fmt(
                     line.number,
                     line.offset,
                     &mut b,
-                    exponents,
+                    reading,
                     &mut scratch,
                 )
                 .map(|lenient| {

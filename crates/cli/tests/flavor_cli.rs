@@ -175,6 +175,73 @@ fn bad_input_is_a_located_error() {
 }
 
 #[test]
+fn polar_coordinates_are_linuxcnc_only_and_refused_where_rs274_refuses_them() {
+    // `auto` takes `@` and `^` as LinuxCNC's.
+    let doc = trace_json(&[], "G20 G0 X2 Y0\nG0 @1 ^90\nG91 G0 ^90\n");
+    assert_eq!(doc["flavor"]["flavor"], "linuxcnc", "{doc}");
+    let ys: Vec<f64> = doc["moves"]
+        .as_array()
+        .expect("moves")
+        .iter()
+        .map(|m| axis(&m["end"], "Y"))
+        .collect();
+    assert!(
+        (xs(&doc)[2] + 1.0).abs() < 1e-12 && (ys[1] - 1.0).abs() < 1e-12,
+        "{doc}"
+    );
+    // Every other flavour: the character, located, with a hint naming the flavour.
+    for flavor in ["fadal", "fanuc", "haas", "mach3", "marlin"] {
+        for cmd in ["trace", "check"] {
+            let o = lampost_stdin(&[cmd, "--flavor", flavor, "-"], b"G0 X1 Y0\nG0 @1 ^90\n");
+            let e = stderr(&o);
+            assert!(!o.status.success(), "{cmd} {flavor}: {e}");
+            assert!(
+                e.contains("<stdin>:2:4") && e.contains("unexpected character `@`"),
+                "{cmd} {flavor}: {e}"
+            );
+            assert!(
+                e.contains("G0 @1 ^90") && e.contains("--flavor linuxcnc"),
+                "{e}"
+            );
+        }
+    }
+    // fmt writes them back as read with the LinuxCNC flavour, and refuses them in others.
+    let src = b"G20 G0 X2 Y0\nG0 @1 ^90\nG91 G81 R.1 Z-.5 ^[360/17] L17 F10\n";
+    let o = lampost_stdin(&["fmt", "--flavor", "linuxcnc", "-"], src);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.stdout, src);
+    let o = lampost_stdin(&["fmt", "--flavor", "fadal", "-"], src);
+    assert!(
+        !o.status.success() && stderr(&o).contains("<stdin>:2:4"),
+        "{}",
+        stderr(&o)
+    );
+    // LinuxCNC's refusals, located at the word that makes the block wrong.
+    for (text, at, what) in [
+        ("G20 G0 X0 Y0\nG0 @1\n", ":2:4", "the angle is unknown"),
+        ("G20 G0 X0 Y0\nG91 G0 ^30\n", ":2:8", "has no direction"),
+        ("G20 G0 X1 Y1\nG0 @1 Y2\n", ":2:7", "cannot have X or Y"),
+        ("G20 G18 G0 X1 Y1\nG17 G0 @1\n", ":2:8", "XY plane only"),
+        ("G20 G0 X1 Y1\nG53 G0 @1\n", ":2:1", "G53"),
+        ("G20 G0 X1 Y1\nG92 @1\n", ":2:1", "motion only"),
+    ] {
+        for cmd in ["trace", "check"] {
+            let o = lampost_stdin(&[cmd, "--flavor", "linuxcnc", "-"], text.as_bytes());
+            let e = stderr(&o);
+            assert!(!o.status.success(), "{cmd} {text}: {e}");
+            assert!(
+                e.contains(&format!("<stdin>{at}")) && e.contains(what),
+                "{cmd} {text}: {e}"
+            );
+            assert!(
+                e.contains("polar coordinates") && e.contains("help:"),
+                "{e}"
+            );
+        }
+    }
+}
+
+#[test]
 fn pcb2gcode_autolevel_subroutines_equal_rs274() {
     // The example: 39 moves traced in place before; rs274 runs every call.
     let Some(shared) = shared() else {

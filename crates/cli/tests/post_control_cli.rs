@@ -295,3 +295,40 @@ fn a_macro_b_bolt_hole_circle_traces_and_posts() {
     assert!(!posted.contains('#') && !posted.contains("G65") && !posted.contains("WHILE"));
     assert_eq!(posted.matches("Z-3.").count(), 6, "{posted}");
 }
+
+/// LinuxCNC's polar coordinates (`@`, `^`; absolute and incremental, arcs, a spiral in a
+/// repeat loop): the trace equals rs274's, the post writes plain X and Y that rs274 reads
+/// to the same feed path, and verify passes.
+#[test]
+fn a_polar_program_traces_posts_and_verifies() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let dir = tempdir("post-control-polar");
+    let input = root().join("fixtures/programs/polar.ngc");
+    let p = input.to_str().expect("utf-8");
+    let o = lampost(&["trace", "--json", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["flavor"]["flavor"], "linuxcnc");
+    let a = rs274_to_end(&input, &dir).expect("rs274 runs the input");
+    compare_with_rs274(&doc, &a).expect("the trace equals rs274");
+    assert_eq!(feeds(&a).len(), 1 + 2 + 1 + 36 + 1, "{a:?}");
+    let out = post_iso(&dir, &input, &[]);
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    assert!(!posted.contains(['@', '^']), "{posted}");
+    let b = rs274_to_end(&out, &dir).expect("rs274 runs the posted program");
+    same_feed_path(&a, &b);
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        "--process",
+        "machine",
+        p,
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -179,6 +179,10 @@ pub enum ErrorKind {
         /// The codes that read it.
         with: &'static str,
     },
+    /// LinuxCNC's polar coordinates (`@` radius, `^` angle) where LinuxCNC refuses them
+    /// (rs274's own conditions), or where lampost would have to guess.
+    #[error("polar coordinates (`@` radius, `^` angle): {0}")]
+    Polar(&'static str),
     /// A call to a program number the file does not hold.
     #[error("M98 P{0}: this file holds no program O{0}")]
     UnknownProgram(u32),
@@ -300,7 +304,7 @@ impl ErrorKind {
             ErrorKind::NumberWithoutLetter(_) => "put the address letter in front of the number, e.g. `X1.5`",
             ErrorKind::UnexpectedCharacter('\r') => "the file's line ends are a bare carriage return (old Mac): convert them to LF or CR LF",
             ErrorKind::UnexpectedCharacter(c) if c.is_control() || *c == '\u{feff}' => "remove the invisible character (an editor that shows control characters finds it)",
-            ErrorKind::UnexpectedCharacter('@' | '^') => "LinuxCNC's polar coordinates (`@` radius, `^` angle) are not read by lampost: give the point's X and Y",
+            ErrorKind::UnexpectedCharacter('@' | '^') => "`@` (radius) and `^` (angle) are LinuxCNC's polar coordinates, read with --flavor linuxcnc only (or auto choosing it): read the program as LinuxCNC's, or give the point's X and Y",
             ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
             ErrorKind::NestedComment => "remove the inner parentheses or write `[ ]` instead (LinuxCNC refuses nested comments too)",
             ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
@@ -334,6 +338,7 @@ impl ErrorKind {
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
             ErrorKind::StrayWord { .. } => "remove the word (a typo, most likely), or read the program with --flavor fadal if it was written for a FADAL (L: a subroutine call, E: a fixture offset)",
+            ErrorKind::Polar(_) => "LinuxCNC reads `@` and `^` in place of X and Y on moves (G0-G3, G33, G38.x) and canned cycles in G17, about the origin of the work system in force; give the point's X and Y where that does not hold",
             ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",
             ErrorKind::DuplicateProgram { .. } => "give every program in the file its own O number",
             ErrorKind::NotASubprogram { .. } => "end the subprogram with M99, or correct P",

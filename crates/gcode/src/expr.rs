@@ -1171,7 +1171,9 @@ pub fn eval_line<'a>(
                 }
                 sets.push((p, (!vacant).then_some(v)));
             }
-            b'a'..=b'z' | b'A'..=b'Z' => {
+            // Words; in LinuxCNC's reading also its polar coordinates, `@` (radius) and
+            // `^` (angle).
+            b'a'..=b'z' | b'A'..=b'Z' | b'@' | b'^' if c.is_ascii_alphabetic() || !macro_b => {
                 let letter = c.to_ascii_uppercase();
                 let mut ev = Eval::new(text, i + 1, params);
                 ev.skip();
@@ -1184,7 +1186,7 @@ pub fn eval_line<'a>(
                     continue;
                 }
                 if letter != b'G' && letter != b'M' {
-                    let bit = 1u32 << (letter - b'A');
+                    let bit = crate::parse::letter_bit(letter);
                     if seen & bit != 0 {
                         return Err(Diagnostic::at(
                             Severity::Error,

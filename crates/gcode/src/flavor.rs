@@ -263,7 +263,7 @@ impl Codes {
 ///
 /// Without any of those, weaker evidence decides, the strongest kind found first: a G0
 /// or G1 with a fractional E word (a slicer's extrusion): Marlin; numbered parameters
-/// (`#1 = …`) or `[…]` expressions: LinuxCNC; a `;` comment, which FADAL programs do not
+/// (`#1 = …`), `[…]` expressions or polar coordinates (`@`, `^`): LinuxCNC; a `;` comment, which FADAL programs do not
 /// hold (grbl, Mach3 and hobby CAM write them): LinuxCNC, whose reading is ISO's.
 pub fn detect(head: &[u8]) -> (Flavor, String) {
     let mut head = &head[..head.len().min(DETECT_BYTES)];
@@ -399,6 +399,8 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             Some((3, Flavor::Marlin, "a move with a fractional E (extrusion)"))
         } else if code.contains('#') || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
+        } else if polar_word(code) {
+            Some((2, Flavor::LinuxCnc, "a polar coordinate (`@`, `^`)"))
         } else if semicolon_comment(line) {
             // FADAL's comments are `(…)` and, in macros, `'…`; a `;` comment is ISO's
             // (grbl, LinuxCNC, Mach3, most hobby CAM).
@@ -424,6 +426,22 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
 /// Comments that name RepRapFirmware (Cura's `;FLAVOR:RepRap`, PrusaSlicer's config
 /// block `; gcode_flavor = reprapfirmware`).
 const REPRAP: [&str; 3] = ["FLAVOR:RepRap", "RepRapFirmware", "gcode_flavor = reprap"];
+
+/// An `@` or `^` with a value after it (a number, a parameter or an expression; blanks
+/// allowed): LinuxCNC's polar coordinates (`@1.5`, `^ -30`, `^[360/17]`), not a character
+/// of a message (`M117 Hi @ home`).
+fn polar_word(code: &str) -> bool {
+    let b = code.as_bytes();
+    b.iter().enumerate().any(|(i, c)| {
+        matches!(c, b'@' | b'^')
+            && b[i + 1..]
+                .iter()
+                .find(|c| !matches!(c, b' ' | b'\t'))
+                .is_some_and(|c| {
+                    c.is_ascii_digit() || matches!(c, b'.' | b'+' | b'-' | b'[' | b'#')
+                })
+    })
+}
 
 /// A `;` outside `(…)` comments: a `;` comment.
 fn semicolon_comment(line: &str) -> bool {
@@ -555,6 +573,20 @@ mod tests {
             ("(SET X; Y)\nG0 X1\n", Flavor::Fadal, "no evidence"),
             // A parameter outranks a `;` comment.
             ("G0 X1 ;a\nG1 X#1\n", Flavor::LinuxCnc, "a parameter"),
+            // LinuxCNC's polar coordinates, in a program with no other evidence.
+            (
+                "G20 G0 X2 Y0\nG0 @1 ^90\n",
+                Flavor::LinuxCnc,
+                "a polar coordinate",
+            ),
+            (
+                "(HOLES)\nG81 R.1 Z-.5 ^60 L6\n",
+                Flavor::LinuxCnc,
+                "a polar coordinate",
+            ),
+            ("G0 ^ -30\n", Flavor::LinuxCnc, "a polar coordinate"),
+            // A character of a message is none.
+            ("M117 Hi @ home ^_^\nG0 X1\n", Flavor::Fadal, "no evidence"),
             // Skeinforge's header.
             (
                 "(<setting> comb Running_Jump_Space_(mm): 2.0 </setting>)\nG1 X1\n",

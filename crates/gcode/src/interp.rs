@@ -15,6 +15,7 @@ use crate::ast::{Block, BlockKind, Item, Word};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::modal::*;
 use crate::parse::PlainMotion;
+use crate::polar::Polar;
 
 /// What the E word means.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -165,6 +166,10 @@ struct CannedParams {
     r: Option<f64>,
     q: Option<f64>,
     p: f64,
+    /// LinuxCNC: the Z the tool was at when this series of cycles began (rs274's
+    /// `cycle_il`, the "initial level"; machine frame), kept until a motion other than a
+    /// cycle: G91's R counts from it, and G98 retracts to it.
+    initial_z: Option<f64>,
 }
 
 /// The interpreter. Feed it blocks in order with [`Interpreter::block`].
@@ -231,6 +236,9 @@ struct Words<'b, 'a> {
     first_text: Option<&'b crate::ast::Text<'a>>,
     /// A verbatim text that is not bare axis letters.
     odd_text: bool,
+    /// LinuxCNC's polar words: `@` (radius) and `^` (angle).
+    radius: Option<&'b Word<'a>>,
+    angle: Option<&'b Word<'a>>,
 }
 
 impl<'b, 'a> Words<'b, 'a> {
@@ -251,6 +259,24 @@ impl<'b, 'a> Words<'b, 'a> {
     }
     fn has_axes(&self) -> bool {
         self.axes != 0
+    }
+    /// The block's polar point, when it has `@` or `^`.
+    fn polar(&self) -> Option<Polar> {
+        (self.radius.is_some() || self.angle.is_some()).then(|| Polar {
+            radius: self.radius.map(|w| w.value),
+            angle: self.angle.map(|w| w.value),
+        })
+    }
+    /// Where the block's first polar word stands (for its errors).
+    fn polar_span(&self) -> Option<crate::ast::Span> {
+        match (self.radius, self.angle) {
+            (Some(r), Some(a)) => Some(if r.span.start < a.span.start {
+                r.span
+            } else {
+                a.span
+            }),
+            (r, a) => r.or(a).map(|w| w.span),
+        }
     }
 }
 
@@ -460,6 +486,8 @@ impl Interpreter {
             axes: 0,
             first_text: None,
             odd_text: false,
+            radius: None,
+            angle: None,
         };
         self.collect(b, &mut w)?;
         // A block of an M-code lampost does not act on (a firmware or control setting:
@@ -470,6 +498,9 @@ impl Interpreter {
                 .iter()
                 .any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
             || levelling;
+        if w.polar().is_some() {
+            self.polar_allowed(b, &w, settings)?;
+        }
         if let Some(t) = w.first_text {
             let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
             // Verbatim text stands only where a code may carry it (the parser reads it
@@ -811,6 +842,28 @@ impl Interpreter {
                     }
                     w.ms.push((word, code));
                 }
+                b'@' | b'^' => {
+                    // LinuxCNC's polar words: only its reading gives them (see
+                    // `parse::Reading`); anywhere else the character stays unexpected.
+                    if self.opts.flavor != crate::flavor::Flavor::LinuxCnc {
+                        let at = word.span.start;
+                        return Err(diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::UnexpectedCharacter(word.letter_char()),
+                            Some(crate::ast::Span::new(at, at + 1)),
+                        ));
+                    }
+                    let slot = if word.letter == b'@' {
+                        &mut w.radius
+                    } else {
+                        &mut w.angle
+                    };
+                    *slot = Some(word);
+                    // They give the point's X and Y.
+                    w.axes |=
+                        AXIS_BITS[usize::from(b'X' - b'A')] | AXIS_BITS[usize::from(b'Y' - b'A')];
+                }
                 l => match word.register {
                     Some(r) => w.registers[usize::from(r)] = Some(word),
                     None => {
@@ -842,6 +895,81 @@ impl Interpreter {
         Ok(())
     }
 
+    /// LinuxCNC's polar words (`@`, `^`) stand only where rs274 reads them (its
+    /// `enhance_block` and `find_ends`): in G17 (the plane before the block), without X
+    /// or Y, on motion (not with G53, nor with G10, G28, G30, G52 or G92). Where lampost
+    /// would have to guess (a setting code's block, splines and NURBS, cycles it does not
+    /// trace, G76, a canned cycle outside G17) they are refused too.
+    #[cold]
+    fn polar_allowed(&self, b: &Block<'_>, w: &Words<'_, '_>, settings: bool) -> Res<()> {
+        let refuse = |why: &'static str, span: Option<crate::ast::Span>| {
+            Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::Polar(why),
+                span.or(w.polar_span()),
+            ))
+        };
+        if self.modal.plane != Plane::XY {
+            return refuse(
+                "LinuxCNC reads them in the XY plane only (G17 in force before the block)",
+                None,
+            );
+        }
+        if let Some(xy) = w.word(b'X').or(w.word(b'Y')) {
+            return refuse(
+                "they give the point's X and Y, so a block with them cannot have X or Y",
+                Some(xy.span),
+            );
+        }
+        if settings {
+            return refuse(
+                "in the block of a setting code, whose words are its own: give the move a block of its own",
+                None,
+            );
+        }
+        for &(gw, c, g) in &w.gs {
+            let why = match (g, c) {
+                (_, 530) => "not with G53 (machine coordinates)",
+                (GGroup::NonModal, 100 | 280 | 290 | 300 | 520 | 920 | 1610 | 1620) => {
+                    "they are read on motion only: G10, G28, G30, G52 and G92 do not take them"
+                }
+                (GGroup::Motion, 760) => "not with G76 (threading reads no polar point)",
+                (GGroup::Other, _)
+                    if !matches!(
+                        other_code(c),
+                        Some(
+                            OtherCode::Setting
+                                | OtherCode::DiameterMode
+                                | OtherCode::ExtendedOffset
+                        )
+                    ) =>
+                {
+                    "not with splines, NURBS or a cycle lampost does not trace"
+                }
+                _ => continue,
+            };
+            return refuse(why, Some(gw.span));
+        }
+        if self.nurbs && w.gs.is_empty() {
+            return refuse("not as NURBS control points", None);
+        }
+        let canned = match w.g_in(GGroup::Motion) {
+            Some((_, c)) => matches!(c, 730 | 740 | 810..=890),
+            None => matches!(self.modal.motion, Motion::Canned(_)),
+        };
+        let plane_after = w
+            .g_in(GGroup::Plane)
+            .map_or(self.modal.plane == Plane::XY, |(_, c)| c == 170);
+        if canned && !plane_after {
+            return refuse("a canned cycle takes them in G17 only", None);
+        }
+        if matches!(self.modal.motion, Motion::Canned(760)) && w.g_in(GGroup::Motion).is_none() {
+            return refuse("not with G76 (threading reads no polar point)", None);
+        }
+        Ok(())
+    }
+
     fn warn(
         &self,
         b: &Block<'_>,
@@ -865,7 +993,12 @@ impl Interpreter {
                 .enumerate()
                 .all(|(a, v)| is_rotary(a) || (v * f).is_finite())
         };
-        let canned = [self.canned.z, self.canned.r, self.canned.q];
+        let canned = [
+            self.canned.z,
+            self.canned.r,
+            self.canned.q,
+            self.canned.initial_z,
+        ];
         if !(fits(&self.pos)
             && self.g5x.iter().chain(self.fixture.iter()).all(fits)
             && [self.g92, self.g52, self.home28, self.home30]
@@ -890,9 +1023,14 @@ impl Interpreter {
         scale(&mut self.g52);
         scale(&mut self.home28);
         scale(&mut self.home30);
-        for v in [&mut self.canned.z, &mut self.canned.r, &mut self.canned.q]
-            .into_iter()
-            .flatten()
+        for v in [
+            &mut self.canned.z,
+            &mut self.canned.r,
+            &mut self.canned.q,
+            &mut self.canned.initial_z,
+        ]
+        .into_iter()
+        .flatten()
         {
             *v *= f;
         }
@@ -1616,6 +1754,24 @@ impl Interpreter {
         }
     }
 
+    /// The tool's X and Y in the coordinates of the work system in force (where polar
+    /// points are measured from).
+    fn program_xy(&self) -> [f64; 2] {
+        let off = self.offset();
+        [self.pos[0] - off[0], self.pos[1] - off[1]]
+    }
+
+    /// A point of the work system in force (X, Y) in the machine frame; as it is when
+    /// every offset is zero (a polar point's `-0.0` stays: rs274 takes the angle of
+    /// `(-0.0, 0.0)` as 180°).
+    fn machine_xy(&self, p: [f64; 2]) -> [f64; 2] {
+        if self.offset_zero {
+            return p;
+        }
+        let off = self.offset();
+        [p[0] + off[0], p[1] + off[1]]
+    }
+
     /// `p` (machine frame) in the coordinates of the work system in force.
     fn to_program(&self, p: Position) -> Position {
         if self.offset_zero {
@@ -1694,7 +1850,17 @@ impl Interpreter {
         probe: bool,
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
-        let target = self.target(w, g53);
+        let mut target = self.target(w, g53);
+        if let Some(p) = w.polar() {
+            // A canned cycle places its holes itself (`canned_cycle`).
+            if probe || !matches!(self.modal.motion, Motion::Canned(_)) {
+                let incremental = self.modal.distance == Distance::Incremental;
+                let end = p.end(self.program_xy(), incremental).map_err(|why| {
+                    diag(b, Severity::Error, ErrorKind::Polar(why), w.polar_span())
+                })?;
+                [target[0], target[1]] = self.machine_xy(end);
+            }
+        }
         let origin = if g53 {
             Origin::MachineCoords
         } else {
@@ -2147,8 +2313,15 @@ impl Interpreter {
         };
         let off = self.offset();
         let incremental = self.modal.distance == Distance::Incremental;
+        // The initial level: for LinuxCNC where Z was when this series of cycles began
+        // (rs274's `cycle_il`), elsewhere where Z is now.
+        let initial = if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+            *self.canned.initial_z.get_or_insert(self.pos[Z])
+        } else {
+            self.pos[Z]
+        };
         let (r_abs, bottom) = if incremental {
-            let r = self.pos[Z] + rv;
+            let r = initial + rv;
             (r, r + zv)
         } else {
             (rv + off[Z], zv + off[Z])
@@ -2192,16 +2365,53 @@ impl Interpreter {
         } else {
             self.feed_for(b, w)?
         };
+        // The holes of polar words (program XY): every repeat's, found before any move
+        // is made, so a step that fails refuses the block whole.
+        let polar = w.polar();
+        let mut hole = self.program_xy();
+        if let Some(p) = polar {
+            let refused = |why| diag(b, Severity::Error, ErrorKind::Polar(why), w.polar_span());
+            if incremental {
+                let mut at = hole;
+                for _ in 0..repeats {
+                    at = p.cycle_step(at).map_err(refused)?;
+                }
+            } else {
+                hole = p.cycle_hole(hole).map_err(refused)?;
+            }
+        }
+        let at = |p: Position, z: f64| {
+            let mut q = p;
+            q[Z] = z;
+            q
+        };
+        // As rs274's `CYCLE_MACRO`: below the initial level's R plane, up to it first;
+        // the clearance level is R (G99) or the initial level, raised to R (G98).
+        let mut level = initial;
+        let mut first_z = self.pos[Z];
+        if level < r_abs && !passthrough {
+            let t = at(self.pos, r_abs);
+            self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
+            level = r_abs;
+            first_z = r_abs;
+        }
         let clear = match self.modal.retract {
-            Retract::InitialZ => self.pos[Z].max(r_abs),
+            Retract::InitialZ => level.max(r_abs),
             Retract::RPlane => r_abs,
         };
         let delta = 0.010 * 25.4 / self.modal.units.mm();
         if passthrough {
             self.warn(b, out, ErrorKind::CannedCyclePassedThrough(name), None);
         }
-        for _ in 0..repeats {
+        for k in 0..repeats {
             let mut xy = self.pos;
+            if let Some(p) = polar {
+                if incremental {
+                    // Checked above: the same steps succeed again.
+                    hole = p.cycle_step(hole).unwrap_or(hole);
+                }
+                [xy[0], xy[1]] = self.machine_xy(hole);
+            }
             for a in [0usize, 1] {
                 if let Some(v) = w.get(AXES[a]) {
                     xy[a] = if incremental {
@@ -2216,19 +2426,16 @@ impl Interpreter {
                 self.pos = xy;
                 continue;
             }
-            let at = |p: Position, z: f64| {
-                let mut q = p;
-                q[Z] = z;
-                q
+            // Over the hole: the first at the tool's height when it is above R, else at
+            // the clearance level; then down to R.
+            let over = if k == 0 && first_z > r_abs {
+                first_z
+            } else {
+                clear
             };
-            // Preliminary: up to the R plane if below it.
-            if self.pos[Z] < r_abs {
-                let t = at(self.pos, r_abs);
-                self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
-            }
-            let t = at(xy, self.pos[Z]);
+            let t = at(xy, over);
             self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
-            if self.pos[Z] != r_abs {
+            if over > r_abs {
                 let t = at(self.pos, r_abs);
                 self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
             }

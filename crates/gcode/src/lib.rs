@@ -35,6 +35,7 @@ mod macrob;
 mod modal;
 mod ngc;
 mod parse;
+mod polar;
 mod program;
 mod stream;
 
@@ -53,7 +54,7 @@ pub use modal::{FeedMode, Modal, Plane, Position, Units, AXES};
 pub use ngc::MAX_BLOCKS;
 pub use parse::{
     comment_not_utf8, comments_made_utf8, parse_line, parse_line_into, parse_line_lenient,
-    parse_line_with, parse_str_with, MAX_LINE_BYTES,
+    parse_line_with, parse_str_with, Reading, MAX_LINE_BYTES,
 };
 pub use program::{Order, ProgramReader};
 pub use stream::{check, LineSource, Stream};

@@ -17,6 +17,39 @@ use crate::diag::{Diagnostic, ErrorKind, Severity};
 /// Lines longer than this are refused without being read word by word.
 pub const MAX_LINE_BYTES: usize = 64 * 1024;
 
+/// What a flavour adds to the common reading of a line (see [`parse_line_with`]). A
+/// plain `bool` is the slicer reading alone (`true`: [`Reading::slicer`]), as the
+/// parser's callers have always passed it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Reading {
+    /// A printer firmware's reading (slicer programs, E as extrusion): number exponents
+    /// and whole-line `(` comments.
+    pub slicer: bool,
+    /// LinuxCNC's polar coordinates: `@` (radius) and `^` (angle) are words, with the
+    /// letters `@` and `^` (elsewhere each is an unexpected character).
+    pub polar: bool,
+}
+
+impl From<bool> for Reading {
+    fn from(slicer: bool) -> Self {
+        Reading {
+            slicer,
+            polar: false,
+        }
+    }
+}
+
+/// Bit of a word's letter in a block's set of letters seen (`A` to `Z`, then LinuxCNC's
+/// polar `@` and `^`), for the duplicate check.
+#[inline]
+pub(crate) fn letter_bit(letter: u8) -> u32 {
+    match letter {
+        b'@' => 1 << 26,
+        b'^' => 1 << 27,
+        l => 1u32 << (l.wrapping_sub(b'A') & 31),
+    }
+}
+
 /// A number: optional sign, then digits with an optional decimal part, or a leading dot.
 fn number(i: &str) -> IResult<&str, &str> {
     recognize(tuple((
@@ -256,6 +289,32 @@ fn exponent_end(bytes: &[u8], end: usize) -> Option<usize> {
     (digits > 0).then_some(k + digits)
 }
 
+/// The number of a polar word (`@` or `^` at `at`, its number from `j`): its end and
+/// value, or the error (a bare `@` has no number; a number that cannot be read).
+fn polar_number(
+    text: &str,
+    at: usize,
+    j: usize,
+) -> Result<(usize, f64), (ErrorKind, usize, usize)> {
+    let bytes = text.as_bytes();
+    if let Some((len, value)) = fast_number(&bytes[j..]) {
+        return Ok((j + len, value));
+    }
+    match number(&text[j..]) {
+        Ok((rest, num)) => {
+            let end = bytes.len() - rest.len();
+            parse_number(num)
+                .map(|v| (end, v))
+                .ok_or_else(|| (ErrorKind::BadNumber(num.to_string()), at, end))
+        }
+        Err(_) => Err((
+            ErrorKind::LetterWithoutNumber(char::from(bytes[at])),
+            at,
+            at + 1,
+        )),
+    }
+}
+
 /// Parse one line (without its line ending) into a block.
 ///
 /// `line_no` is 1-based; `offset` is the byte offset of the line's first byte in the
@@ -286,13 +345,17 @@ pub fn parse_line_into<'a>(
 /// - a line that starts with `(`, holds a `)` and cannot be read otherwise is one
 ///   comment, parentheses inside it too (a firmware reads no command from it;
 ///   Skeinforge's settings lines).
+///
+/// With [`Reading::polar`] (the `linuxcnc` flavour) `@` and `^` followed by a number (or
+/// a parameter or `[…]` expression, which makes the line a macro line) are words.
 pub fn parse_line_with<'a>(
     line: &'a [u8],
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    slicer: bool,
+    reading: impl Into<Reading>,
 ) -> Result<(), Diagnostic> {
+    let reading = reading.into();
     reset(block, line_no, offset, line.len());
     if line.len() > MAX_LINE_BYTES {
         return Err(too_long(line, line_no, offset));
@@ -312,7 +375,7 @@ pub fn parse_line_with<'a>(
             ));
         }
     };
-    parse_text(text, line_no, offset, block, slicer)
+    parse_text(text, line_no, offset, block, reading)
 }
 
 /// A line that is not UTF-8 only inside its comments (`(…)`, and `;` to the end), as
@@ -356,14 +419,15 @@ pub fn parse_line_lenient<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    slicer: bool,
+    reading: impl Into<Reading>,
     scratch: &'a mut Option<String>,
 ) -> Result<bool, Diagnostic> {
-    match parse_line_with(line, line_no, offset, block, slicer) {
+    let reading = reading.into();
+    match parse_line_with(line, line_no, offset, block, reading) {
         Err(d) if matches!(d.kind, ErrorKind::InvalidUtf8) => match comments_made_utf8(line) {
             Some(text) => {
                 let text: &'a str = scratch.insert(text);
-                parse_str_with(text, line_no, offset, block, slicer).map(|()| true)
+                parse_str_with(text, line_no, offset, block, reading).map(|()| true)
             }
             None => Err(d),
         },
@@ -396,13 +460,13 @@ pub fn parse_str_with<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    slicer: bool,
+    reading: impl Into<Reading>,
 ) -> Result<(), Diagnostic> {
     reset(block, line_no, offset, text.len());
     if text.len() > MAX_LINE_BYTES {
         return Err(too_long(text.as_bytes(), line_no, offset));
     }
-    parse_text(text, line_no, offset, block, slicer)
+    parse_text(text, line_no, offset, block, reading.into())
 }
 
 /// The block of an empty line at `line_no`, spanning `len` bytes from `offset`.
@@ -435,14 +499,14 @@ fn parse_text<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    slicer: bool,
+    reading: Reading,
 ) -> Result<(), Diagnostic> {
     block.raw = text;
-    if simple_words(text, offset, slicer, &mut block.items) {
+    if simple_words(text, offset, reading.slicer, &mut block.items) {
         return Ok(());
     }
     block.items.clear();
-    words_reference(text, line_no, offset, block, slicer)
+    words_reference(text, line_no, offset, block, reading)
 }
 
 /// The fast path of the parser, for the lines programs are mostly made of: words whose
@@ -675,10 +739,11 @@ fn words_reference<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    slicer: bool,
+    reading: impl Into<Reading>,
 ) -> Result<(), Diagnostic> {
-    let read = words_reference_items(text, line_no, offset, block, slicer);
-    if read.is_err() && slicer {
+    let reading = reading.into();
+    let read = words_reference_items(text, line_no, offset, block, reading);
+    if read.is_err() && reading.slicer {
         if let Some(c) = whole_line_comment(text, offset) {
             // A printer firmware reads no command from a line that starts with `(`: where
             // the line cannot be read otherwise, it is one comment, parentheses inside it
@@ -749,8 +814,9 @@ fn words_reference_items<'a>(
     line_no: u32,
     offset: usize,
     block: &mut Block<'a>,
-    slicer: bool,
+    reading: Reading,
 ) -> Result<(), Diagnostic> {
+    let slicer = reading.slicer;
     let line = text.as_bytes();
     let err = |kind: ErrorKind, start: usize, end: usize| {
         Diagnostic::at(Severity::Error, kind, line_no, offset, line, start, end)
@@ -874,6 +940,41 @@ fn words_reference_items<'a>(
                 block.items.clear();
                 return Ok(());
             }
+            b'@' | b'^' if reading.polar => {
+                // LinuxCNC's polar coordinates: `@` the radius, `^` the angle (degrees).
+                let mut j = i + 1;
+                while j < bytes.len() && (bytes[j] == b' ' || bytes[j] == b'\t') {
+                    j += 1;
+                }
+                let mut k = j;
+                while k < bytes.len() && matches!(bytes[k], b'+' | b'-' | b' ' | b'\t') {
+                    k += 1;
+                }
+                if matches!(bytes.get(k), Some(b'#' | b'[')) {
+                    block.kind = BlockKind::Macro(MacroKind::LinuxCncExpression);
+                    block.items.clear();
+                    return Ok(());
+                }
+                let (end, value) =
+                    polar_number(text, i, j).map_err(|(kind, s, e)| err(kind, s, e))?;
+                let bit = letter_bit(c);
+                if seen & bit != 0 {
+                    return Err(err(
+                        ErrorKind::DuplicateWord(char::from(c).to_string()),
+                        i,
+                        end,
+                    ));
+                }
+                seen |= bit;
+                block.items.push(Item::Word(Word {
+                    letter: c,
+                    register: None,
+                    value,
+                    text: &text[j..end],
+                    span: Span::new(offset + i, offset + end),
+                }));
+                i = end;
+            }
             b'"' if lenient => {
                 let end = string_end(bytes, i);
                 block.items.push(Item::Text(Text {
@@ -982,7 +1083,7 @@ fn words_reference_items<'a>(
                                     d
                                 }
                                 None => {
-                                    let bit = 1u32 << (letter - b'A');
+                                    let bit = letter_bit(letter);
                                     let d = seen & bit != 0;
                                     seen |= bit;
                                     d
@@ -1382,6 +1483,59 @@ mod tests {
                 "{:?}: {}",
                 String::from_utf8_lossy(s),
                 e.kind
+            );
+        }
+    }
+
+    #[test]
+    fn polar_words_are_read_only_when_asked() {
+        let polar = Reading {
+            slicer: false,
+            polar: true,
+        };
+        let mut b = Block::empty(1, 0);
+        parse_line_with(b"G1 @ 1.5 ^-30 (c) F10", 1, 0, &mut b, polar).expect("parses");
+        let w: Vec<_> = b.words().map(|w| (w.letter, w.value, w.text)).collect();
+        assert_eq!(
+            w,
+            [
+                (b'G', 1.0, "1"),
+                (b'@', 1.5, "1.5"),
+                (b'^', -30.0, "-30"),
+                (b'F', 10.0, "10")
+            ]
+        );
+        assert_eq!(b.words().nth(1).map(Word::display).as_deref(), Some("@1.5"));
+        // A value from a parameter or an expression makes a macro line, as for letters.
+        for s in ["G0 ^[360/17]", "G0 @#1", "G0 @-[1]"] {
+            parse_line_with(s.as_bytes(), 1, 0, &mut b, polar).expect(s);
+            assert_eq!(
+                b.kind,
+                BlockKind::Macro(MacroKind::LinuxCncExpression),
+                "{s}"
+            );
+        }
+        // Each once; a number after each (column of the error).
+        for (s, col, kind) in [
+            ("G0 @1 @2", 7, ErrorKind::DuplicateWord("@".into())),
+            ("G0 ^1 X1 ^2", 10, ErrorKind::DuplicateWord("^".into())),
+            ("G0 @", 4, ErrorKind::LetterWithoutNumber('@')),
+            ("G0 ^X1", 4, ErrorKind::LetterWithoutNumber('^')),
+        ] {
+            let e = parse_line_with(s.as_bytes(), 1, 0, &mut b, polar).expect_err(s);
+            assert_eq!((e.column, e.kind), (col, kind), "{s}");
+        }
+        // Without the reading (every flavour but LinuxCNC's), an unexpected character.
+        for s in ["G0 @1", "G0 ^1", "X1 @ 2"] {
+            let e = parse_line_with(s.as_bytes(), 1, 0, &mut b, false).expect_err(s);
+            assert!(
+                matches!(e.kind, ErrorKind::UnexpectedCharacter('@' | '^')),
+                "{s}"
+            );
+            assert_eq!(
+                e.column,
+                s.find(['@', '^']).map_or(0, |c| c as u32 + 1),
+                "{s}"
             );
         }
     }

@@ -9,7 +9,7 @@ use crate::expr::Params;
 use crate::interp::{Calls, EWord, Event, Interpreter, Options};
 use crate::lines::{Line, LineReader, Lines};
 use crate::parse::{
-    comment_not_utf8, parse_line_lenient, parse_str_with, plain_motion, MAX_LINE_BYTES,
+    comment_not_utf8, parse_line_lenient, parse_str_with, plain_motion, Reading, MAX_LINE_BYTES,
 };
 use crate::program::{Order, ProgramReader};
 
@@ -85,9 +85,9 @@ pub struct Stream<S> {
     stopped: bool,
     finished: bool,
     any_content: bool,
-    /// A printer firmware's reading: E is extrusion, numbers may have exponents (see
-    /// [`crate::parse_line_with`]).
-    slicer: bool,
+    /// How lines are read: a printer firmware's reading (E is extrusion, numbers may
+    /// have exponents), LinuxCNC's polar words (see [`crate::parse_line_with`]).
+    reading: Reading,
     /// The parameters, when the flavour evaluates macros (see [`crate::expr`]).
     params: Option<Box<Params>>,
     /// Plain straight moves take the fast lane ([`plain_motion`]); off in the test that
@@ -122,7 +122,10 @@ impl<S: LineSource> Stream<S> {
             stopped: false,
             finished: false,
             any_content: false,
-            slicer: opts.e_word == EWord::Extrusion,
+            reading: Reading {
+                slicer: opts.e_word == EWord::Extrusion,
+                polar: opts.flavor == crate::flavor::Flavor::LinuxCnc,
+            },
             params,
             fast_lane: !opts.flavor.extruder_is_a_or_b(),
             warned_comment_utf8: false,
@@ -234,14 +237,14 @@ impl<S: LineSource> Iterator for Stream<S> {
                     Some(d) => Err(d),
                     None => match line.text {
                         Some(text) => {
-                            parse_str_with(text, line.number, line.offset, &mut block, self.slicer)
+                            parse_str_with(text, line.number, line.offset, &mut block, self.reading)
                         }
                         None => match parse_line_lenient(
                             line.bytes,
                             line.number,
                             line.offset,
                             &mut block,
-                            self.slicer,
+                            self.reading,
                             &mut scratch,
                         ) {
                             Ok(lenient) => {
@@ -294,7 +297,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 // A printer (slicer) program's line that is no G-code but a firmware's
                 // extended command (`slicer`: E is extrusion, the program is a printer's):
                 // a warning naming it, and an empty block.
-                if parsed.is_err() && self.slicer {
+                if parsed.is_err() && self.reading.slicer {
                     if let Some((kind, len)) = firmware_command(line.bytes) {
                         queue.push_back(Event::Diagnostic(Diagnostic::at(
                             Severity::Warning,
@@ -665,7 +668,9 @@ mod tests {
         prop_oneof![
             8 => ("[XYZABCUVWxyzabc]", number.clone()).prop_map(|(l, n)| format!("{l}{n}")),
             3 => ("[FNfn]", number.clone()).prop_map(|(l, n)| format!("{l}{n}")),
-            1 => ("[EIJKRSTHLPQD]", number).prop_map(|(l, n)| format!("{l}{n}")),
+            1 => ("[EIJKRSTHLPQD]", number.clone()).prop_map(|(l, n)| format!("{l}{n}")),
+            // LinuxCNC's polar words (an unexpected character in other flavours).
+            1 => ("[@^]", number).prop_map(|(l, n)| format!("{l}{n}")),
             4 => prop_oneof![
                 Just("G0"), Just("G1"), Just("G00"), Just("G01"), Just("g1"), Just("G1.0"),
                 Just("G-0"), Just("G0.1"), Just("G2"), Just("G3"), Just("G90"), Just("G91"),
@@ -773,6 +778,8 @@ mod tests {
             "G1 X1 X2",
             "G1 X1 R2",
             "X1 S100",
+            "G1 @1 ^30",
+            "G0 ^90",
         ] {
             assert_eq!(plain_motion(text.as_bytes()), None, "{text}");
         }
