@@ -74,11 +74,20 @@ fn vendor_lines_in_printer_programs_move_nothing() {
     let m = doc["moves"].as_array().expect("moves");
     assert_eq!(m.len(), 2, "{doc}");
     assert_eq!(axis(&m[1]["end"], "X"), 2.0);
-    assert!(m.iter().all(|mv| mv["end"].get("W").is_none_or(|w| w == 0.0)), "{doc}");
+    assert!(
+        m.iter()
+            .all(|mv| mv["end"].get("W").is_none_or(|w| w == 0.0)),
+        "{doc}"
+    );
     let o = lampost_stdin(&["check", "-"], text.as_bytes());
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
-    assert_eq!(err.matches("is no command a printer's firmware runs").count(), 3, "{err}");
+    assert_eq!(
+        err.matches("is no command a printer's firmware runs")
+            .count(),
+        3,
+        "{err}"
+    );
     assert!(err.contains("W220 …"), "{err}");
     // The post deposits the program's one extruding run.
     let dir = tempdir("vendor-lines");

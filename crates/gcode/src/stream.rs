@@ -208,7 +208,7 @@ impl<S: LineSource> Iterator for Stream<S> {
             // source), the move is handed out at once.
             let mut direct = None;
             // A printer program's vendor line (`W221`) is never a move: not fast.
-            let vendor = if self.slicer {
+            let vendor = if self.reading.slicer {
                 vendor_command(line.bytes)
             } else {
                 None
@@ -583,7 +583,10 @@ fn vendor_command(line: &[u8]) -> Option<usize> {
         .get(start + 1)
         .is_some_and(|c| c.is_ascii_digit() || matches!(c, b'-' | b'+' | b'.'));
     if !letter.is_ascii_uppercase()
-        || matches!(letter, b'G' | b'M' | b'T' | b'N' | b'X' | b'Y' | b'Z' | b'E' | b'F')
+        || matches!(
+            letter,
+            b'G' | b'M' | b'T' | b'N' | b'X' | b'Y' | b'Z' | b'E' | b'F'
+        )
         || !number
     {
         return None;
