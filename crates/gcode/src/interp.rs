@@ -2337,10 +2337,23 @@ impl Interpreter {
                 w.word(b'Z').map(|z| z.span),
             ));
         }
-        // Pecks per hole, counted before any is made: `depth - q` may round back to
-        // `depth` (a tiny Q at a large depth), so the loop below counts its pecks.
+        // Pecks per hole, counted before any is made, as rs274 makes them: feeds to
+        // R − Q, then Q deeper than the last (each worked out from the last, so rounding
+        // decides as it does there) while above the bottom, then one to the bottom. A Q
+        // below the spacing of numbers at the depth (`depth - q == depth`) never gets
+        // deeper: LinuxCNC would loop without end; here it is over the bound.
         let pecks = if needs_q && !passthrough {
-            let per_hole = ((r_abs - bottom) / q).ceil().max(1.0);
+            let mut per_hole = 1.0;
+            let mut depth = r_abs - q;
+            while depth > bottom && per_hole <= f64::from(MAX_PECKS) {
+                per_hole += 1.0;
+                let next = depth - q;
+                if next >= depth {
+                    per_hole = f64::INFINITY;
+                    break;
+                }
+                depth = next;
+            }
             let total = per_hole * f64::from(repeats);
             if total.is_nan() || total > f64::from(MAX_PECKS) {
                 return Err(diag(
@@ -2607,31 +2620,58 @@ mod tests {
             assert!(diags[0].to_string().contains("more than 10000 pecks"));
             assert_eq!(moves.len(), 2, "the next line is read");
         }
-        // Repeats count: 100 holes of 100 pecks is 10,000; one more hole is refused.
-        let (moves, diags) = run("G91 F10 G83 X1 R0 Z-10 Q0.1 L100\n");
+        // Repeats count: 10 deep in 0.1 pecks is 101 feeds a hole (the hundredth peck
+        // lands a hair above the bottom, so a last short one goes to it, as rs274 makes
+        // them); 99 holes are 9,999 feeds, and one more hole is refused.
+        let (moves, diags) = run("G91 F10 G83 X1 R0 Z-10 Q0.1 L99\n");
         assert!(diags.is_empty(), "{diags:?}");
-        assert!(moves.len() > 20_000);
-        let (_, diags) = run("G91 F10 G73 X1 R0 Z-10 Q0.1 L101\n");
+        let feeds = moves.iter().filter(|m| m.kind == MoveKind::Linear).count();
+        assert_eq!(feeds, 9_999);
+        let (_, diags) = run("G91 F10 G73 X1 R0 Z-10 Q0.1 L100\n");
         assert!(diags[0].to_string().contains("more than 10000 pecks"));
-        // A peck smaller than the spacing of floats at the depth still reaches the
-        // bottom in its counted pecks.
-        let (moves, diags) = run("F10 G73 X0 R1000000000 Z999999999.9999995 Q0.00000001\n");
+        // A peck smaller than the spacing of floats at the depth never gets deeper (rs274
+        // would loop without end): refused.
+        let (_, diags) = run("F10 G73 X0 R1000000000 Z999999999.9999995 Q0.00000001\n");
+        assert!(
+            diags[0].to_string().contains("more than 10000 pecks"),
+            "{diags:?}"
+        );
+        // The pecks are rs274's: each Q below the last, rounding and all. From Z-0.604,
+        // G91 R0.281 Z-0.4 in 0.2 pecks: R is -0.323 (as rounded), the bottom -0.723, and
+        // the second peck lands a hair above the bottom, so a third feed goes to it (as
+        // rs274 writes them; 0.4 / 0.2 would say two).
+        let (moves, diags) = run("F10 G0 X1 Y1 Z-0.604\nG91 G83 Q.2 X0.5 R0.281 Z-0.4\n");
         assert!(diags.is_empty(), "{diags:?}");
         let feeds: Vec<f64> = moves
             .iter()
             .filter(|m| m.kind == MoveKind::Linear)
             .map(|m| m.end[Z])
             .collect();
-        assert!(feeds.len() <= 60, "{}", feeds.len());
-        assert_eq!(feeds.last(), Some(&999_999_999.999_999_5));
-        // Ordinary pecks are unchanged: 0.3 deep in 0.1 pecks.
+        let r = -0.604 + 0.281;
+        let bottom = r + -0.4;
+        let mut want = vec![];
+        let mut d = r - 0.2;
+        while d > bottom {
+            want.push(d);
+            d -= 0.2;
+        }
+        want.push(bottom);
+        assert_eq!(want.len(), 3);
+        assert_eq!(feeds, want);
+        // 0.3 deep in 0.1 pecks: the third peck lands at 0.20000000000000004, above the
+        // bottom, so a fourth short feed goes to 0.2, as rs274 writes them (its
+        // canon: feeds to 0.4, 0.3, 0.2, 0.2, with the rapids to R and 0.01 in above
+        // each between).
         let (moves, _) = run("F10 G0 Z1\nG83 X0 R0.5 Z0.2 Q0.1\n");
         let feeds: Vec<f64> = moves
             .iter()
             .filter(|m| m.kind == MoveKind::Linear)
             .map(|m| m.end[Z])
             .collect();
-        assert_eq!(feeds, [0.5 - 0.1, 0.5 - 0.1 - 0.1, 0.2]);
+        assert_eq!(
+            feeds,
+            [0.5 - 0.1, 0.5 - 0.1 - 0.1, 0.5 - 0.1 - 0.1 - 0.1, 0.2]
+        );
     }
 
     #[test]
