@@ -166,3 +166,34 @@ fn posted_iso_output_reads_the_same_in_rs274() {
     eprintln!("posted programs through rs274: {total} joint coordinates agree");
     assert!(total > 100);
 }
+
+/// Canned cycles where LinuxCNC's reading was not lampost's (found by random programs
+/// against rs274): G84 feeds out all the way to the clearance level (G98: the initial Z)
+/// with no rapid; G83 and G73 pecks are each Q below the last in floating point while
+/// above the bottom, so rounding can add a last short feed. Both equal rs274.
+#[test]
+fn tapping_and_peck_rounding_equal_rs274() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("rs274-cycles");
+    let prog = work.join("cycles.ngc");
+    let text = "G21 G17 G90 G94\nF100 S500 M3\nG0 X0 Y0 Z10\n\
+                G98 G84 X1 Y1 R2 Z-5\nG99 G84 X3 Y1 R2 Z-5\nG80\n\
+                G20\nG0 X0 Y0 Z1\nG98 G83 X0 R0.5 Z0.2 Q0.1\nG80\n\
+                G0 X1 Y1 Z-0.604\nG91 G83 Q.2 X0.5 R0.281 Z-0.4\nG90 G80\n\
+                G0 Z1\nG73 X2 Y2 R0.5 Z0.2 Q0.1\nG80\nM2\n";
+    std::fs::write(&prog, text).expect("write");
+    let canon = rs274_motions(&prog, &work);
+    let o = lampost(&[
+        "trace",
+        "--json",
+        "--flavor",
+        "linuxcnc",
+        prog.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let (moves, _) = compare_with_rs274(&doc, &canon).expect("equal to rs274");
+    assert!(moves > 30, "{moves}");
+}

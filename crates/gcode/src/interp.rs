@@ -2481,6 +2481,14 @@ impl Interpreter {
                     let t = at(self.pos, clear);
                     self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
                 }
+                840 if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
+                    // LinuxCNC's tapping: feed in, then feed all the way out to the
+                    // clearance level (rs274 makes no rapid).
+                    let t = at(self.pos, bottom);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                    let t = at(self.pos, clear);
+                    self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
+                }
                 840 | 850 => {
                     // Feed in, feed out to R, then rapid to the clearance level.
                     let t = at(self.pos, bottom);

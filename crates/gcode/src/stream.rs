@@ -574,8 +574,9 @@ const FIRMWARE_SETTINGS: &[&str] = &[
 /// or T (after an N line number), and report any other as an unknown command. Vendors
 /// put their own lines there (WEEDO's `W221`, and `W220 ffd8…`, the preview image in
 /// hex). A line that starts with a letter other than G, M, T and N, and other than the
-/// axis words X, Y, Z, E and F (lampost reads a bare axis line as the motion in force),
-/// followed by a number: the end of its text (before any `;` comment).
+/// words X, Y, Z, E, F, S and P (lampost reads a bare axis line as the motion in force,
+/// and a bare S or P as the value it sets, as laser programs write them), followed by a
+/// number: the end of its text (before any `;` comment).
 fn vendor_command(line: &[u8]) -> Option<usize> {
     let start = line.len() - line.trim_ascii_start().len();
     let letter = line.get(start)?.to_ascii_uppercase();
@@ -585,7 +586,7 @@ fn vendor_command(line: &[u8]) -> Option<usize> {
     if !letter.is_ascii_uppercase()
         || matches!(
             letter,
-            b'G' | b'M' | b'T' | b'N' | b'X' | b'Y' | b'Z' | b'E' | b'F'
+            b'G' | b'M' | b'T' | b'N' | b'X' | b'Y' | b'Z' | b'E' | b'F' | b'S' | b'P'
         )
         || !number
     {
