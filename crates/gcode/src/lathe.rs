@@ -456,6 +456,10 @@ pub const MAX_PROFILE_PASSES: u64 = 10_000;
 /// The most segments a profile may hold (its subroutine's moves, fillets and chamfers).
 pub const MAX_PROFILE_SEGMENTS: usize = 10_000;
 
+/// The most moves one G70, G71 or G72 block may make (all its passes together): the
+/// block's moves are held until the next line is read.
+pub const MAX_PROFILE_MOVES: usize = 100_000;
+
 /// Steps of the offset and pocket searches one block may take before it is refused (a
 /// bound on the work, far above what the passes above need).
 const MAX_PROFILE_STEPS: u64 = 10_000_000;
@@ -558,6 +562,12 @@ pub(crate) struct ProfileError(pub String);
 
 fn perr(why: impl Into<String>) -> ProfileError {
     ProfileError(why.into())
+}
+
+fn too_many_moves() -> ProfileError {
+    perr(format!(
+        "more than {MAX_PROFILE_MOVES} moves: fewer passes (P), a larger depth of cut (I), or a simpler profile"
+    ))
 }
 
 impl Seg {
@@ -1080,6 +1090,14 @@ impl Profile {
         Ok(())
     }
 
+    /// A step of the pocket search, with the moves made so far bounded.
+    fn guard(&mut self, out: &Sink) -> Result<(), ProfileError> {
+        if out.moves.len() > MAX_PROFILE_MOVES {
+            return Err(too_many_moves());
+        }
+        self.step()
+    }
+
     fn rotate(&mut self) {
         for s in &mut self.segs {
             s.rotate();
@@ -1324,6 +1342,9 @@ impl Profile {
             let mut path = self.clone();
             path.add_distance(distance)?;
             self.steps = path.steps;
+            if out.moves.len() + path.segs.len() + 1 > MAX_PROFILE_MOVES {
+                return Err(too_many_moves());
+            }
             out.rapid(path.segs[0].start);
             out.rapid(path.segs[0].end);
             for s in &path.segs[1..] {
@@ -1385,7 +1406,7 @@ impl Profile {
             let mut x = pocket_starts[pocket_starts.len() - 1].im;
             if cycle == 2 {
                 while p < n {
-                    self.step()?;
+                    self.guard(out)?;
                     if segs[p].dive(&mut loc, -1e9, out, p == 0, &mut is)? {
                         break;
                     }
@@ -1394,9 +1415,9 @@ impl Profile {
                 cycle = 3;
             }
             while p < n {
-                self.step()?;
+                self.guard(out)?;
                 while x - TOL > loc.im {
-                    self.step()?;
+                    self.guard(out)?;
                     x -= delta;
                 }
                 if segs[p].dive(&mut loc, x, out, p == 0, &mut is)? {
@@ -1407,7 +1428,7 @@ impl Profile {
                         }
                     } else {
                         while p < n {
-                            self.step()?;
+                            self.guard(out)?;
                             if segs[p].climb(&mut loc, out)? {
                                 if cycle == 3 {
                                     let last = pocket_starts[pocket_starts.len() - 1];
@@ -1430,7 +1451,7 @@ impl Profile {
                     continue;
                 }
                 for ip in p..n {
-                    self.step()?;
+                    self.guard(out)?;
                     segs[ip].intersection_z(loc.im, &mut is2);
                     if is2.is_empty() {
                         continue;
