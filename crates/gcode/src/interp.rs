@@ -1949,12 +1949,6 @@ impl Interpreter {
                 "Q must be the number of an O-word subroutine".into(),
             ));
         }
-        if let Some(a) = (3..AXES.len()).find(|&a| w.get(AXES[a]).is_some()) {
-            return Err(fail(
-                Some(AXES[a]),
-                format!("{} moves: the cycle moves X and Z only", char::from(AXES[a])),
-            ));
-        }
         if self.modal.feed_mode == FeedMode::InverseTime {
             return Err(fail(None, "inverse time feed (G93): use G94".into()));
         }
@@ -1970,7 +1964,7 @@ impl Interpreter {
         let start = crate::lathe::Pt::new(along(2, w.get(b'Z')), along(0, w.get(b'X')));
         let off = self.offset();
         let mut to = self.pos;
-        for (a, l) in [(0, b'X'), (1, b'Y'), (2, b'Z')] {
+        for (a, &l) in AXES.iter().enumerate() {
             if let Some(v) = w.get(l) {
                 to[a] = v + off[a];
             }

@@ -490,12 +490,23 @@ impl Pt {
             self.re * o.im + self.im * o.re,
         )
     }
+    /// Complex division as rs274's build does it (libgcc's `__divdc3`, Smith's method),
+    /// so that nearly tangent intersections round as rs274's do.
     fn div(self, o: Pt) -> Pt {
-        let n = o.norm();
-        Pt::new(
-            (self.re * o.re + self.im * o.im) / n,
-            (self.im * o.re - self.re * o.im) / n,
-        )
+        let (a, b, c, d) = (self.re, self.im, o.re, o.im);
+        if c.abs() < d.abs() {
+            let ratio = c / d;
+            let denom = c * ratio + d;
+            Pt::new((a * ratio + b) / denom, (b * ratio - a) / denom)
+        } else {
+            let ratio = d / c;
+            let denom = d * ratio + c;
+            Pt::new((b * ratio + a) / denom, (b - a * ratio) / denom)
+        }
+    }
+    /// Each part divided by `k`.
+    fn divr(self, k: f64) -> Pt {
+        Pt::new(self.re / k, self.im / k)
     }
     fn scale(self, k: f64) -> Pt {
         Pt::new(self.re * k, self.im * k)
@@ -648,7 +659,7 @@ impl Seg {
         match self.shape {
             Shape::Line => {
                 let v = self.start.sub(self.end);
-                let d = v.turn().scale(distance / v.abs());
+                let d = Pt::new(-(distance * v.im), distance * v.re).divr(v.abs());
                 self.start = self.start.add(d);
                 self.end = self.end.add(d);
             }
@@ -896,7 +907,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> Result<(), ProfileError> {
     match (p.shape, n.shape) {
         (Shape::Line, Shape::Line) => {
             let d = n.start.sub(n.end);
-            let rot = d.conj().scale(1.0 / d.abs());
+            let rot = d.conj().divr(d.abs());
             let ps = p.start.sub(n.end).mul(rot);
             let pe = p.end.sub(n.end).mul(rot);
             if ps.sub(pe).im == 0.0 {
@@ -912,7 +923,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> Result<(), ProfileError> {
                 return Ok(());
             }
             let d = n.start.sub(n.end);
-            let rot = d.conj().scale(1.0 / d.abs());
+            let rot = d.conj().divr(d.abs());
             let pe = p.end.sub(n.end).mul(rot);
             let pc = center.sub(n.end).mul(rot);
             let is = closer(n.start, pc, pe, rot, n.end);
@@ -924,7 +935,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> Result<(), ProfileError> {
                 return Ok(());
             }
             let d = p.start.sub(p.end);
-            let rot = d.conj().scale(1.0 / d.abs());
+            let rot = d.conj().divr(d.abs());
             let pe = n.end.sub(p.end).mul(rot);
             let pc = center.sub(p.end).mul(rot);
             let is = closer(n.start, pc, pe, rot, p.end);
@@ -938,7 +949,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> Result<(), ProfileError> {
             let cos_b = (c * c + a * a - b * b) / 2.0 / a / c;
             let cos_b2 = (cos_b * cos_b).min(1.0);
             let rot = Pt::new(cos_b, (1.0 - cos_b2).sqrt());
-            let is = rot.mul(pcen.sub(ncen)).scale(a / c).add(ncen);
+            let is = rot.mul(pcen.sub(ncen)).divr(c).scale(a).add(ncen);
             p.end = is;
             n.start = is;
         }
