@@ -382,6 +382,148 @@ mod tests {
         }
     }
 
+    /// The profile of the examples: from the start X12 Z2 to X5 Z0, along Z to Z-10, up
+    /// to X10 Z-15 (points are Z, X).
+    fn steps() -> Profile {
+        let mut p = Profile::default();
+        let pts = [(2.0, 12.0), (0.0, 5.0), (-10.0, 5.0), (-15.0, 10.0)];
+        for w in pts.windows(2) {
+            let (a, b) = (Pt::new(w[0].0, w[0].1), Pt::new(w[1].0, w[1].1));
+            p.push_line(a, b).expect("room");
+        }
+        p
+    }
+
+    fn cycle(cycle: u16, sub: u16) -> ProfileCycle {
+        ProfileCycle {
+            cycle,
+            sub,
+            start: Pt::new(2.0, 12.0),
+            d: 0.0,
+            e: 0.0,
+            i: 1.0,
+            p: 1.0,
+            r: 0.5,
+            u: 0.0,
+            w: 0.0,
+        }
+    }
+
+    fn at(m: &ProfileMove) -> (bool, [f64; 2]) {
+        match *m {
+            ProfileMove::Rapid(p) => (true, [p.re, p.im]),
+            ProfileMove::Feed(p) => (false, [p.re, p.im]),
+            ProfileMove::Arc { to, .. } => (false, [to.re, to.im]),
+        }
+    }
+
+    /// G70 P2 D1: a pass 0.5 out (X 5.5 along Z, the slope moved 0.5 along its normal:
+    /// X + Z = -5 + 0.5·√2 meets X 5.5 at Z -9.7929), then the profile itself; each pass
+    /// a rapid to the start and one to the profile's first point (rs274's numbers).
+    #[test]
+    fn g70_passes_hand_worked() {
+        let c = ProfileCycle {
+            d: 1.0,
+            p: 2.0,
+            ..cycle(70, 0)
+        };
+        let m = steps().moves(&c).expect("runs");
+        let h = 0.5 / 2f64.sqrt();
+        let want = [
+            (true, [2.0, 12.0]),
+            (true, [0.0, 5.5]),
+            (false, [-10.5 + 2.0 * h, 5.5]),
+            (false, [-15.0 + h, 10.0 + h]),
+            (true, [2.0, 12.0]),
+            (true, [0.0, 5.0]),
+            (false, [-10.0, 5.0]),
+            (false, [-15.0, 10.0]),
+        ];
+        assert_eq!(m.len(), want.len());
+        for (got, (rapid, xz)) in m.iter().map(at).zip(want) {
+            assert_eq!(got.0, rapid, "{m:?}");
+            assert!(
+                (got.1[0] - xz[0]).abs() < 1e-9 && (got.1[1] - xz[1]).abs() < 1e-9,
+                "{m:?}"
+            );
+        }
+        assert!((-10.5 + 2.0 * h + 9.7929).abs() < 0.5e-4);
+    }
+
+    /// G71 D0.5 I1 R0.3 (rs274's numbers): the first pass at X 12 feeds along -Z to the
+    /// offset slope, retracts 0.3 in X and Z, goes back to the start Z less 0.3 and to
+    /// the start; the next pass goes down the lead-in to X 11.
+    #[test]
+    fn g71_first_passes_as_rs274() {
+        let c = ProfileCycle {
+            d: 0.5,
+            r: 0.3,
+            ..cycle(71, 0)
+        };
+        let m = steps().moves(&c).expect("runs");
+        let want = [
+            (true, [2.0, 12.0]),
+            (true, [2.0, 12.0]),
+            (false, [-14.6464, 12.0]),
+            (true, [-14.3464, 12.3]),
+            (true, [1.7, 12.3]),
+            (true, [2.0, 12.0]),
+            (true, [1.6923, 11.0]),
+            (false, [-14.6464, 11.0]),
+        ];
+        for (got, (rapid, xz)) in m.iter().map(at).zip(want) {
+            assert_eq!(got.0, rapid, "{m:?}");
+            assert!(
+                (got.1[0] - xz[0]).abs() <= 0.5e-4 && (got.1[1] - xz[1]).abs() <= 0.5e-4,
+                "{got:?} vs {xz:?}"
+            );
+        }
+        // rs274 makes 40 moves of it (after its own rapid to the start), ending up the
+        // offset slope and along it to the start's X.
+        assert_eq!(m.len(), 40);
+        let last = at(&m[m.len() - 1]).1;
+        assert!((last[0] + 14.6464).abs() <= 0.5e-4 && (last[1] - 12.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn profile_refusals() {
+        let run = |p: Profile, c: ProfileCycle| p.moves(&c).err().map(|e| e.0);
+        // Back along Z.
+        let mut back = steps();
+        back.push_line(Pt::new(-15.0, 10.0), Pt::new(-12.0, 11.0))
+            .expect("room");
+        assert_eq!(
+            run(back, cycle(71, 0)).as_deref(),
+            Some("Not monotonic")
+        );
+        // Two pieces in one line: their offsets never meet.
+        let mut p = Profile::default();
+        for (a, b) in [((2.0, 12.0), (0.0, 5.0)), ((0.0, 5.0), (-5.0, 5.0)), ((-5.0, 5.0), (-10.0, 5.0))] {
+            p.push_line(Pt::new(a.0, a.1), Pt::new(b.0, b.1)).expect("room");
+        }
+        let c = ProfileCycle {
+            d: 0.5,
+            ..cycle(71, 0)
+        };
+        assert_eq!(
+            run(p, c).as_deref(),
+            Some("Cannot intersect parallel lines")
+        );
+        let c = ProfileCycle {
+            i: 0.0,
+            ..cycle(71, 0)
+        };
+        assert_eq!(
+            run(steps(), c).as_deref(),
+            Some("I must be greater than zero.")
+        );
+        // A lone lead-in: nothing to cut, no move (as rs274).
+        let mut lone = Profile::default();
+        lone.push_line(Pt::new(2.0, 12.0), Pt::new(0.0, 5.0))
+            .expect("room");
+        assert_eq!(lone.moves(&cycle(70, 0)).map(|m| m.len()), Ok(0));
+    }
+
     #[test]
     fn refusals_name_their_word() {
         let ok = thread(1.0, -1.0, 0.1, 0.5);
@@ -1261,7 +1403,10 @@ impl Profile {
                 self.step()?;
                 if !self.segs[k].monotonic() {
                     if k == 0 {
-                        return Err(perr("Not monotonic"));
+                        // rs274 reads before its list here (and dies).
+                        return Err(perr(
+                            "Not monotonic (the offset profile turns back at its first piece)",
+                        ));
                     }
                     if self.segs[k].radius() < self.segs[k - 1].radius() {
                         self.segs.remove(k);
