@@ -123,11 +123,7 @@ fn random_cycle(r: &mut Rng) -> String {
         n4(r.range(0.0, 1.0))
     );
     if cycle == "G70" {
-        block.push_str(&format!(
-            " E{} P{}",
-            n4(r.range(0.0, 0.3)),
-            1 + r.pick(3)
-        ));
+        block.push_str(&format!(" E{} P{}", n4(r.range(0.0, 0.3)), 1 + r.pick(3)));
     } else {
         block.push_str(&format!(
             " I{} R{}",
@@ -154,7 +150,8 @@ fn g7x_moves_equal_rs274_on_random_profiles() {
     }
     let work = tempdir("g7x-random");
     let mut r = Rng(0x6737_7865_0a11_c0de);
-    let (mut equal, mut refused, mut bounded, mut moves, mut coordinates) = (0, 0, 0, 0, 0);
+    let (mut equal, mut refused, mut crashed, mut bounded) = (0, 0, 0, 0);
+    let (mut moves, mut coordinates) = (0, 0);
     for n in 0..120 {
         let own = work.join(format!("p{n}"));
         std::fs::create_dir_all(&own).expect("folder");
@@ -186,6 +183,7 @@ fn g7x_moves_equal_rs274_on_random_profiles() {
             .or_else(|_| rs274_to_end(&prog, &own))
             .and_then(|c| {
                 if c.is_empty() {
+                    crashed += 1;
                     Err("rs274 wrote no move (it crashed)".to_string())
                 } else {
                     Ok(c)
@@ -211,7 +209,7 @@ fn g7x_moves_equal_rs274_on_random_profiles() {
         }
     }
     eprintln!(
-        "G70-G72: {equal} random profile cycles equal to rs274 ({moves} moves, {coordinates} coordinates), {refused} refused by both, {bounded} stopped at lampost's bound"
+        "G70-G72: {equal} random profile cycles equal to rs274 ({moves} moves, {coordinates} coordinates), {refused} refused by both ({crashed} of them rs274 crashes on), {bounded} stopped at lampost's bound"
     );
     assert!(equal >= 85 && moves > 2_000, "{equal} {moves}");
 }
@@ -345,9 +343,10 @@ fn g7x_passes_are_bounded() {
             err.contains(why) && err.contains(&format!("--> <stdin>:{at}:1\n")),
             "{block}: {err}"
         );
-        assert_eq!(
-            out.stdout.is_empty() || !String::from_utf8_lossy(&out.stdout).contains("\"G1\""),
-            true
+        // None of the refused block's cuts is written.
+        assert!(
+            !String::from_utf8_lossy(&out.stdout).contains("\"G1\""),
+            "{block}"
         );
     }
 }
@@ -401,7 +400,9 @@ fn g7x_auto_warning_post_refusal_and_compensated_g70() {
     );
     assert!(!out_path.exists());
     // G70 under cutter compensation: the warning of old, no move, the sub not run.
-    let comp = format!("G21 G18\nF250\n{PROFILE}G0 X12 Z2\nG42.1 D0.3 L2\nG70 Q100 X12 Z2 D0.5\nG40\nM2\n");
+    let comp = format!(
+        "G21 G18\nF250\n{PROFILE}G0 X12 Z2\nG42.1 D0.3 L2\nG70 Q100 X12 Z2 D0.5\nG40\nM2\n"
+    );
     let out = lampost_stdin(
         &["trace", "--json", "--flavor", "linuxcnc", "-"],
         comp.as_bytes(),

@@ -1932,7 +1932,10 @@ impl Interpreter {
             )
         };
         let Some(q) = w.word(b'Q') else {
-            return Err(fail(None, "Q (the profile's O-word subroutine) is missing".into()));
+            return Err(fail(
+                None,
+                "Q (the profile's O-word subroutine) is missing".into(),
+            ));
         };
         if code != 700 && self.modal.cutter_comp != CutterComp::Off {
             return Err(fail(

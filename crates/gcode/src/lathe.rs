@@ -492,14 +492,16 @@ mod tests {
         let mut back = steps();
         back.push_line(Pt::new(-15.0, 10.0), Pt::new(-12.0, 11.0))
             .expect("room");
-        assert_eq!(
-            run(back, cycle(71, 0)).as_deref(),
-            Some("Not monotonic")
-        );
+        assert_eq!(run(back, cycle(71, 0)).as_deref(), Some("Not monotonic"));
         // Two pieces in one line: their offsets never meet.
         let mut p = Profile::default();
-        for (a, b) in [((2.0, 12.0), (0.0, 5.0)), ((0.0, 5.0), (-5.0, 5.0)), ((-5.0, 5.0), (-10.0, 5.0))] {
-            p.push_line(Pt::new(a.0, a.1), Pt::new(b.0, b.1)).expect("room");
+        for (a, b) in [
+            ((2.0, 12.0), (0.0, 5.0)),
+            ((0.0, 5.0), (-5.0, 5.0)),
+            ((-5.0, 5.0), (-10.0, 5.0)),
+        ] {
+            p.push_line(Pt::new(a.0, a.1), Pt::new(b.0, b.1))
+                .expect("room");
         }
         let c = ProfileCycle {
             d: 0.5,
@@ -679,7 +681,10 @@ impl Pt {
 enum Shape {
     Line,
     /// An arc about `center`, counter-clockwise (G3 in Z-X as rs274 reads it) or not.
-    Arc { ccw: bool, center: Pt },
+    Arc {
+        ccw: bool,
+        center: Pt,
+    },
 }
 
 /// What a corner piece (A: a fillet, C: a chamfer) still has to become.
@@ -1448,7 +1453,7 @@ impl Profile {
         if self.segs.len() <= 1 {
             return Ok(Vec::new());
         }
-        if !(c.i > 0.0) {
+        if c.i.is_nan() || c.i <= 0.0 {
             return Err(perr("I must be greater than zero."));
         }
         let moves = match c.cycle {
@@ -1606,9 +1611,9 @@ impl Profile {
                     p += 1;
                     continue;
                 }
-                for ip in p..n {
+                for (ip, seg) in segs.iter().enumerate().skip(p) {
                     self.guard(out)?;
-                    segs[ip].intersection_z(loc.im, &mut is2);
+                    seg.intersection_z(loc.im, &mut is2);
                     if is2.is_empty() {
                         continue;
                     }
@@ -1620,7 +1625,7 @@ impl Profile {
                     if distance < TOL {
                         if p == ip {
                             continue;
-                        } else if loc.sub(segs[ip].start).abs() < TOL {
+                        } else if loc.sub(seg.start).abs() < TOL {
                             p = ip;
                             break;
                         } else {
@@ -1700,7 +1705,11 @@ impl Recording {
     /// or C a chamfer at its end.
     pub(crate) fn record(&mut self, b: &ProfileWords) -> Result<(), ProfileError> {
         let start = self.at;
-        let mut end = if self.incremental { Pt::default() } else { start };
+        let mut end = if self.incremental {
+            Pt::default()
+        } else {
+            start
+        };
         let mut center = Pt::default();
         if let Some(u) = b.u {
             if self.incremental {

@@ -513,11 +513,14 @@ impl<R: Read + Seek> ProgramReader<R> {
         }
         let ctl = self.ngc.as_mut()?;
         let depth = ctl.depth();
-        Some(ctl.call(label, &[], (self.pos, self.line), params).map(|(pos, line)| {
-            self.pos = pos;
-            self.line = line;
-            depth
-        }))
+        Some(
+            ctl.call(label, &[], (self.pos, self.line), params)
+                .map(|(pos, line)| {
+                    self.pos = pos;
+                    self.line = line;
+                    depth
+                }),
+        )
     }
 
     /// Follow the LinuxCNC O-word line `text` (see [`Self::control`]).

@@ -66,7 +66,11 @@ pub trait LineSource {
     /// cycle of the line just handed out: its lines come next. The call depth before the
     /// call (see [`LineSource::call_depth`]), or why the sub cannot be called; `None`
     /// when this source does not follow calls.
-    fn profile_call(&mut self, _label: &str, _params: &mut Params) -> Option<Result<usize, String>> {
+    fn profile_call(
+        &mut self,
+        _label: &str,
+        _params: &mut Params,
+    ) -> Option<Result<usize, String>> {
         None
     }
 

@@ -370,7 +370,9 @@ fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
     );
 }
 
-/// LinuxCNC's lathe cycles G70–G72 (not units there) are warned about and draw no move;
+/// LinuxCNC's lathe cycles G70–G72 (not units there), read in file order (`check`, where
+/// their subs are not run), are warned about and draw no move (in execution order they
+/// are expanded: `crates/cli/tests/g7x_cli.rs`);
 /// G76 is expanded; E is G76's taper, and a stray E is refused, as rs274 refuses it.
 #[test]
 fn linuxcnc_lathe_cycles_and_e() {
