@@ -2009,6 +2009,13 @@ impl Interpreter {
         self.profile_call.take()
     }
 
+    /// True when a lathe profile cycle has asked for its subroutine or is reading it (the
+    /// stream's one check per line).
+    #[inline]
+    pub(crate) fn profile_pending(&self) -> bool {
+        self.profile.is_some() || self.profile_call.is_some()
+    }
+
     /// True while a lathe profile cycle reads its subroutine.
     pub(crate) fn recording_profile(&self) -> bool {
         self.profile.is_some()

@@ -1381,6 +1381,7 @@ impl Profile {
             }
             let mut k = 0;
             while k < self.segs.len() {
+                self.step()?;
                 self.segs[k].offset(step);
                 if self.segs[k].radius() < 1e-3 {
                     self.segs.remove(k);

@@ -399,7 +399,9 @@ impl<S: LineSource> Iterator for Stream<S> {
                     }
                 }
             }
-            failed |= self.profile_step();
+            if self.interp.profile_pending() {
+                failed |= self.profile_step();
+            }
             if let Some(params) = self.params.as_deref_mut() {
                 if params.is_macro_b() {
                     for _ in 0..self.src.take_returns() {
