@@ -144,6 +144,14 @@ pub enum ErrorKind {
     /// with more passes than lampost expands (`lathe.rs`).
     #[error("G76 threading cycle: {0}")]
     ThreadingCycle(String),
+    /// A LinuxCNC lathe profile cycle (G70, G71, G72 and their .1/.2) that cannot run
+    /// (rs274 refuses it too), or one with more passes than lampost expands (`lathe.rs`).
+    #[error("{0}")]
+    ProfileCycle(String),
+    /// A LinuxCNC lathe profile cycle expanded into the moves rs274 makes of it: a
+    /// lathe's cycle, which the post refuses.
+    #[error("{0} is a lathe cycle: traced as the moves LinuxCNC makes of it on a lathe")]
+    LatheCycle(String),
     /// A canned cycle passed through, not expanded.
     #[error("canned cycle G{0} is passed through, not expanded into moves")]
     CannedCyclePassedThrough(String),
@@ -331,6 +339,8 @@ impl ErrorKind {
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
+            ErrorKind::ProfileCycle(_) => "G70/G71/G72 need Q (the O-word subroutine of the profile, in this file), G18 (the XZ plane), cutter compensation off for G71/G72 (G40), I (the depth of cut) above 0, and a profile that runs one way in X and in Z",
+            ErrorKind::LatheCycle(_) => "a lathe cycle cannot be posted to these machines; write its moves out as G0/G1/G2/G3",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
             ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
             ErrorKind::VendorCommand(_) => "nothing to do: a vendor's line (WEEDO's W221 and W220 carry the preview image) moves nothing",

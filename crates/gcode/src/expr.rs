@@ -239,6 +239,9 @@ enum Param {
     Named(String),
 }
 
+/// LinuxCNC's names of the position parameters `#5420`–`#5428` (`#<_x>` …).
+const POSITION_NAMES: [&str; 9] = ["_x", "_y", "_z", "_a", "_b", "_c", "_u", "_v", "_w"];
+
 impl Params {
     /// The parameters of a Fanuc Macro B program (see Macro B (`macrob.rs`)): `#` numbers are
     /// Fanuc's variables, vacant until set.
@@ -310,6 +313,10 @@ impl Params {
             return Some(0.0);
         }
         if name.starts_with('_') {
+            // `#<_x>` … `#<_w>`: the position, LinuxCNC's aliases of `#5420`–`#5428`.
+            if let Some(i) = POSITION_NAMES.iter().position(|&n| n == name) {
+                return Some(self.numbered[5420 + i]);
+            }
             self.globals.get(&name).copied()
         } else {
             self.locals.last().and_then(|m| m.get(&name)).copied()
@@ -355,6 +362,12 @@ impl Params {
                 self.numbered[5070] = 0.0;
             }
         }
+    }
+
+    /// Note the position (program coordinates) in `#5420`–`#5428`: a lathe profile
+    /// cycle's subroutine sees its profile's current point there (`lathe.rs`).
+    pub(crate) fn note_position(&mut self, p: &crate::modal::Position) {
+        self.numbered[5420..5429].copy_from_slice(p);
     }
 
     /// Enter a subroutine: the caller's `#1`–`#30` are saved, the arguments take their

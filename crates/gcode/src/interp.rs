@@ -217,6 +217,11 @@ pub struct Interpreter {
     offset_cache: Position,
     /// Every offset is zero (the common case): positions need no shifting.
     offset_zero: bool,
+    /// A LinuxCNC lathe profile cycle (G70–G72) reading its subroutine's profile
+    /// (`lathe.rs`): the sub's blocks make the profile and move nothing.
+    profile: Option<Box<crate::lathe::Recording>>,
+    /// The O-word sub a profile cycle asks the line source to call (taken by the stream).
+    profile_call: Option<String>,
 }
 
 /// Words of one block, looked up by letter.
@@ -364,6 +369,8 @@ impl Interpreter {
             rigid_tap: false,
             nurbs: false,
             feed_from_macro: false,
+            profile: None,
+            profile_call: None,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -431,6 +438,9 @@ impl Interpreter {
     pub fn block(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
         if b.block_delete && self.opts.block_delete {
             return Ok(());
+        }
+        if self.profile.is_some() {
+            return self.record_profile(b);
         }
         match b.kind {
             BlockKind::Percent => return Ok(()),
@@ -538,7 +548,13 @@ impl Interpreter {
         if self.other_codes(b, &w, out) {
             return Ok(());
         }
-        self.execute(b, &w, settings, out)
+        match self.profile_cycle(&w) {
+            None => self.execute(b, &w, settings, out),
+            Some(cycle) => {
+                self.execute(b, &w, settings, out)?;
+                self.start_profile(b, &w, cycle, out)
+            }
+        }
     }
 
     /// The fast lane's interpreter (see [`crate::stream`]): a plain move
@@ -553,6 +569,9 @@ impl Interpreter {
     // Not inlined, like `parse::plain_motion` (see there).
     #[inline(never)]
     pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
+        if self.profile.is_some() {
+            return None;
+        }
         let motion = match p.motion {
             Some(0) => Motion::Rapid,
             Some(10) => Motion::Linear,
@@ -698,6 +717,9 @@ impl Interpreter {
                 Some(p) => format!("{name} {}", p.display()),
                 None => name.clone(),
             };
+            if self.profile_cycle(w).is_some_and(|(_, pc)| pc == c) {
+                continue;
+            }
             let kind = match other_code(c) {
                 None => ErrorKind::NotSimulated(format!(
                     "{name} (a firmware code lampost does not know)"
@@ -2031,6 +2053,295 @@ impl Interpreter {
             };
             self.emit(b.line, kind, to, feed, Origin::CannedCycle, out);
         }
+        Ok(())
+    }
+
+    /// The LinuxCNC lathe profile cycle (G70–G72 and their .1/.2) of the block that
+    /// lampost expands: its code word and code. Only where the line source follows calls
+    /// (the cycle runs its Q subroutine), and not a G70 with cutter compensation on
+    /// (rs274 runs it compensated; lampost does not compensate): those keep their warning.
+    fn profile_cycle<'b, 'a>(&self, w: &Words<'b, 'a>) -> Option<(&'b Word<'a>, u16)> {
+        if self.opts.flavor != crate::flavor::Flavor::LinuxCnc
+            || self.calls != Calls::Followed
+            || self.profile.is_some()
+        {
+            return None;
+        }
+        let &(gw, c, _) =
+            w.gs.iter()
+                .find(|g| g.2 == GGroup::Other && crate::modal::is_lathe_cycle(g.1))?;
+        if c == 700 && self.modal.cutter_comp != CutterComp::Off {
+            return None;
+        }
+        Some((gw, c))
+    }
+
+    /// Start a lathe profile cycle (`lathe.rs`): refused where rs274 refuses its block,
+    /// else a rapid to its X and Z, and its Q subroutine is asked for (the stream has the
+    /// source call it; its blocks make the profile, [`Interpreter::finish_profile`] its
+    /// moves when it returns).
+    fn start_profile(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        (gw, code): (&Word<'_>, u16),
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        let name = gw.display_code();
+        let fail = |letter: Option<u8>, why: String| {
+            let span = letter.and_then(|l| w.word(l)).unwrap_or(gw).span;
+            diag(
+                b,
+                Severity::Error,
+                ErrorKind::ProfileCycle(format!("{name}: {why}")),
+                Some(span),
+            )
+        };
+        let Some(q) = w.word(b'Q') else {
+            return Err(fail(
+                None,
+                "Q (the profile's O-word subroutine) is missing".into(),
+            ));
+        };
+        if code != 700 && self.modal.cutter_comp != CutterComp::Off {
+            return Err(fail(
+                None,
+                "cutter radius compensation is on (G40 before G71/G72)".into(),
+            ));
+        }
+        if self.modal.plane != Plane::XZ {
+            return Err(fail(None, "only in the XZ plane (G18)".into()));
+        }
+        if !(q.value >= 0.0 && q.value.fract() == 0.0 && q.value < 1e15) {
+            return Err(fail(
+                Some(b'Q'),
+                "Q must be the number of an O-word subroutine".into(),
+            ));
+        }
+        if self.modal.feed_mode == FeedMode::InverseTime {
+            return Err(fail(None, "inverse time feed (G93): use G94".into()));
+        }
+        // The cycle's start: X and Z of the block, from the position in G91; the rapid
+        // there reads them as absolute (rs274 switches to G90 before it).
+        let here = self.program_position();
+        let incremental = self.modal.distance == Distance::Incremental;
+        let along = |a: usize, v: Option<f64>| match v {
+            Some(v) if incremental => here[a] + v,
+            Some(v) => v,
+            None => here[a],
+        };
+        let start = crate::lathe::Pt::new(along(2, w.get(b'Z')), along(0, w.get(b'X')));
+        let off = self.offset();
+        let mut to = self.pos;
+        for (a, &l) in AXES.iter().enumerate() {
+            if let Some(v) = w.get(l) {
+                to[a] = v + off[a];
+            }
+        }
+        self.emit(b.line, MoveKind::Rapid, to, 0.0, Origin::CannedCycle, out);
+        self.modal.motion = Motion::Rapid;
+        let cycle = crate::lathe::ProfileCycle {
+            cycle: code / 10,
+            sub: code % 10,
+            start,
+            d: w.get(b'D').unwrap_or(0.0),
+            e: w.get(b'E').unwrap_or(0.0),
+            i: w.get(b'I').unwrap_or(1.0),
+            p: w.get(b'P').unwrap_or(1.0),
+            r: w.get(b'R').unwrap_or(0.5),
+            u: w.get(b'U').unwrap_or(0.0),
+            w: w.get(b'W').unwrap_or(0.0),
+        };
+        let (s, e) = (gw.span.start - b.span.start, gw.span.end - b.span.start);
+        self.profile = Some(Box::new(crate::lathe::Recording {
+            cycle,
+            profile: crate::lathe::Profile::default(),
+            at: start,
+            motion: 0,
+            incremental,
+            arc_incremental: self.modal.arc_distance == Distance::Incremental,
+            name,
+            line: b.line,
+            offset: b.span.start,
+            raw: b.raw.to_string(),
+            span: (s, e),
+        }));
+        self.profile_call = Some(format!("{}", q.value as u64));
+        Ok(())
+    }
+
+    /// The O-word subroutine a lathe profile cycle has just asked for (its label), once.
+    pub(crate) fn take_profile_call(&mut self) -> Option<String> {
+        self.profile_call.take()
+    }
+
+    /// True when a lathe profile cycle has asked for its subroutine or is reading it (the
+    /// stream's one check per line).
+    #[inline]
+    pub(crate) fn profile_pending(&self) -> bool {
+        self.profile.is_some() || self.profile_call.is_some()
+    }
+
+    /// True while a lathe profile cycle reads its subroutine.
+    pub(crate) fn recording_profile(&self) -> bool {
+        self.profile.is_some()
+    }
+
+    /// The position a profile's subroutine sees (LinuxCNC's `#5420`…: the profile's
+    /// current point in X and Z), while one is read.
+    pub(crate) fn profile_position(&self) -> Option<Position> {
+        let rec = self.profile.as_ref()?;
+        let mut p = self.program_position();
+        p[0] = rec.at.im;
+        p[2] = rec.at.re;
+        Some(p)
+    }
+
+    /// A block of a profile's subroutine (see [`crate::lathe::Recording::record`]).
+    fn record_profile(&mut self, b: &Block<'_>) -> Res<()> {
+        if b.kind != BlockKind::Words {
+            return Ok(());
+        }
+        let mut pw = crate::lathe::ProfileWords::default();
+        for word in b.words() {
+            let v = Some(word.value);
+            match word.letter {
+                b'G' => {
+                    if let Some(c) = word.code() {
+                        if g_group(c) == Some(GGroup::Motion) || crate::modal::is_lathe_cycle(c) {
+                            pw.motion = Some(c);
+                        }
+                    }
+                }
+                b'X' => pw.x = v,
+                b'Z' => pw.z = v,
+                b'U' => pw.u = v,
+                b'W' => pw.w = v,
+                b'I' => pw.i = v,
+                b'K' => pw.k = v,
+                b'R' => pw.r = v,
+                b'A' => pw.a = v,
+                b'C' => pw.c = v,
+                _ => {}
+            }
+        }
+        let Some(rec) = self.profile.as_mut() else {
+            return Ok(());
+        };
+        rec.record(&pw).map_err(|e| {
+            diag(
+                b,
+                Severity::Error,
+                ErrorKind::ProfileCycle(format!("{} profile: {}", rec.name, e.0)),
+                None,
+            )
+        })
+    }
+
+    /// A profile cycle's subroutine could not be called: the cycle is refused at its block.
+    pub(crate) fn cancel_profile(&mut self, why: &str) -> Option<Diagnostic> {
+        self.profile_call = None;
+        let rec = self.profile.take()?;
+        Some(rec.error(why))
+    }
+
+    /// The profile's subroutine has returned: the cycle's moves (rapids, feeds and arcs
+    /// as rs274 makes them), or its refusal located at the cycle's block.
+    pub(crate) fn finish_profile(&mut self, out: &mut impl FnMut(Event)) -> Res<()> {
+        let Some(rec) = self.profile.take() else {
+            return Ok(());
+        };
+        let moves = rec
+            .profile
+            .clone()
+            .moves(&rec.cycle)
+            .map_err(|e| rec.error(&e.0))?;
+        let feed = self.modal.feed;
+        if moves
+            .iter()
+            .any(|m| !matches!(m, crate::lathe::ProfileMove::Rapid(_)))
+            && feed <= 0.0
+            && !self.feed_from_macro
+        {
+            return Err(rec.error("no feed rate (F) for the cycle's cuts"));
+        }
+        let off = self.offset();
+        let (radius_tol, spiral_tol) = match self.modal.units {
+            Units::Inch => (ARC_RADIUS_TOLERANCE.0, ARC_SPIRAL_TOLERANCE.0),
+            Units::Mm => (ARC_RADIUS_TOLERANCE.1, ARC_SPIRAL_TOLERANCE.1),
+        };
+        let at = |p: crate::lathe::Pt, pos: &Position| {
+            let mut t = *pos;
+            t[0] = p.im + off[0];
+            t[2] = p.re + off[2];
+            t
+        };
+        // The moves are checked whole before any is sent: a refused cycle moves nothing.
+        let mut planned = Vec::with_capacity(moves.len());
+        let mut pos = self.pos;
+        let mut last = None;
+        for m in moves {
+            let (kind, to, f) = match m {
+                crate::lathe::ProfileMove::Rapid(p) => (MoveKind::Rapid, at(p, &pos), 0.0),
+                crate::lathe::ProfileMove::Feed(p) => (MoveKind::Linear, at(p, &pos), feed),
+                crate::lathe::ProfileMove::Arc { ccw, center, to } => {
+                    let t = at(to, &pos);
+                    // rs274 makes no arc to where the tool already is (within 0.0001).
+                    if (t[0] - pos[0]).abs() < 1e-4 && (t[2] - pos[2]).abs() < 1e-4 {
+                        continue;
+                    }
+                    let c = at(center, &pos);
+                    let r1 = (pos[0] - c[0]).hypot(pos[2] - c[2]);
+                    let r2 = (t[0] - c[0]).hypot(t[2] - c[2]);
+                    let diff = (r1 - r2).abs();
+                    if r1 < radius_tol
+                        || r2 < radius_tol
+                        || diff > 100.0 * spiral_tol
+                        || (diff / r1.max(r2) > ARC_SPIRAL_RELATIVE && diff > spiral_tol)
+                    {
+                        return Err(rec.error(&format!(
+                            "an arc of the offset profile has radii {r1:.6} at its start and {r2:.6} at its end"
+                        )));
+                    }
+                    (
+                        MoveKind::Arc {
+                            clockwise: !ccw,
+                            center: [c[0], c[1], c[2]],
+                            plane: Plane::XZ,
+                            turns: 1,
+                        },
+                        t,
+                        feed,
+                    )
+                }
+            };
+            pos = to;
+            last = Some(match kind {
+                MoveKind::Rapid => Motion::Rapid,
+                MoveKind::Arc {
+                    clockwise: true, ..
+                } => Motion::ArcCw,
+                MoveKind::Arc { .. } => Motion::ArcCcw,
+                _ => Motion::Linear,
+            });
+            planned.push((kind, to, f));
+        }
+        let kept = rec.line;
+        let b_warn = rec.warning();
+        out(Event::Diagnostic(b_warn));
+        for (kind, to, f) in planned {
+            self.emit(kept, kind, to, f, Origin::CannedCycle, out);
+        }
+        self.modal.motion = match last {
+            Some(m) => m,
+            None => match rec.motion {
+                0 => Motion::Rapid,
+                10 => Motion::Linear,
+                20 => Motion::ArcCw,
+                30 => Motion::ArcCcw,
+                _ => self.modal.motion,
+            },
+        };
         Ok(())
     }
 

@@ -288,21 +288,6 @@ impl Control {
                 Ok(Some(f.back))
             }
             Kw::Call => {
-                let sub = list
-                    .iter()
-                    .copied()
-                    .find(|&j| self.entries[j].kw == Kw::Sub)
-                    .ok_or_else(|| {
-                        (
-                            format!("no subroutine {} in this file", name("sub")),
-                            0,
-                            len,
-                        )
-                    })?;
-                let sk = list.iter().position(|&j| j == sub).unwrap_or(0);
-                let end = self
-                    .after(&list, sk, |x| x.kw == Kw::EndSub)
-                    .ok_or_else(|| (format!("{} has no endsub", name("sub")), 0, len))?;
                 let mut args = Vec::new();
                 let mut ev = Eval::new(text, rest, params);
                 while ev.peek_value() {
@@ -311,23 +296,9 @@ impl Control {
                     }
                     args.push(ev.value()?);
                 }
-                if self.frames.len() >= MAX_SUB_DEPTH {
-                    return Err((
-                        format!(
-                            "subroutine calls nest more than {MAX_SUB_DEPTH} deep (recursion without end?)"
-                        ),
-                        0,
-                        len,
-                    ));
-                }
-                let (sl, el) = (self.entries[sub].at.1, self.entries[end].at.1);
-                self.count(el, sl, len)?;
-                self.frames.push(Frame {
-                    back: e.next,
-                    repeats_base: self.repeats.len(),
-                });
-                params.enter(&args);
-                Ok(Some(self.entries[sub].next))
+                self.call(&label, &args, e.next, params)
+                    .map(Some)
+                    .map_err(|m| (m, 0, len))
             }
             Kw::If => {
                 if cond(params)? {
@@ -453,6 +424,46 @@ impl Control {
                 }
             }
         }
+    }
+
+    /// Call the subroutine `label` with `args`, reading on at `back` after it returns:
+    /// where its body starts.
+    pub(crate) fn call(
+        &mut self,
+        label: &str,
+        args: &[f64],
+        back: (usize, u32),
+        params: &mut Params,
+    ) -> Result<(usize, u32), String> {
+        let list = self.list(label).to_vec();
+        let name = |kw: &str| format!("o{} {kw}", fmt_label(label));
+        let sub = list
+            .iter()
+            .copied()
+            .find(|&j| self.entries[j].kw == Kw::Sub)
+            .ok_or_else(|| format!("no subroutine {} in this file", name("sub")))?;
+        let sk = list.iter().position(|&j| j == sub).unwrap_or(0);
+        let end = self
+            .after(&list, sk, |x| x.kw == Kw::EndSub)
+            .ok_or_else(|| format!("{} has no endsub", name("sub")))?;
+        if self.frames.len() >= MAX_SUB_DEPTH {
+            return Err(format!(
+                "subroutine calls nest more than {MAX_SUB_DEPTH} deep (recursion without end?)"
+            ));
+        }
+        let (sl, el) = (self.entries[sub].at.1, self.entries[end].at.1);
+        self.count(el, sl, 0).map_err(|(m, _, _)| m)?;
+        self.frames.push(Frame {
+            back,
+            repeats_base: self.repeats.len(),
+        });
+        params.enter(args);
+        Ok(self.entries[sub].next)
+    }
+
+    /// How deep in subroutine calls the reading is.
+    pub(crate) fn depth(&self) -> usize {
+        self.frames.len()
     }
 
     /// After a false `if`/`elseif`: the next `elseif`/`else` (to be taken as a branch) or

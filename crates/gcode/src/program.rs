@@ -491,6 +491,38 @@ impl<R: Read + Seek> ProgramReader<R> {
         self.after_error = true;
     }
 
+    /// Call the LinuxCNC O-word subroutine `label` for a lathe profile cycle (G70–G72,
+    /// `lathe.rs`) in the line just handed out: the sub's lines come next, and reading
+    /// goes on after that line when it returns. The call depth before the call, or why
+    /// the sub cannot be called; `None` when this reader does not follow calls.
+    pub fn profile_call(
+        &mut self,
+        label: &str,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<usize, String>> {
+        if self.order != Order::Execution || params.is_macro_b() {
+            return None;
+        }
+        if self.ngc.is_none() {
+            let at = (self.pos, self.line);
+            match self.index_owords() {
+                Ok(c) => self.ngc = Some(Box::new(c)),
+                Err(e) => return Some(Err(format!("cannot index the O-word lines: {e}"))),
+            }
+            (self.pos, self.line) = at;
+        }
+        let ctl = self.ngc.as_mut()?;
+        let depth = ctl.depth();
+        Some(
+            ctl.call(label, &[], (self.pos, self.line), params)
+                .map(|(pos, line)| {
+                    self.pos = pos;
+                    self.line = line;
+                    depth
+                }),
+        )
+    }
+
     /// Follow the LinuxCNC O-word line `text` (see [`Self::control`]).
     fn control_ngc(
         &mut self,
@@ -1010,6 +1042,18 @@ impl<R: Read + Seek> LineSource for ProgramReader<R> {
 
     fn note_error(&mut self) {
         ProgramReader::note_error(self);
+    }
+
+    fn profile_call(
+        &mut self,
+        label: &str,
+        params: &mut crate::expr::Params,
+    ) -> Option<Result<usize, String>> {
+        ProgramReader::profile_call(self, label, params)
+    }
+
+    fn call_depth(&self) -> usize {
+        self.ngc.as_ref().map_or(0, |c| c.depth())
     }
 }
 

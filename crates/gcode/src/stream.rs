@@ -61,6 +61,23 @@ pub trait LineSource {
 
     /// A line has failed and the stream goes on: the source should not run loops again.
     fn note_error(&mut self) {}
+
+    /// Call the LinuxCNC O-word subroutine `label` (no arguments) for the lathe profile
+    /// cycle of the line just handed out: its lines come next. The call depth before the
+    /// call (see [`LineSource::call_depth`]), or why the sub cannot be called; `None`
+    /// when this source does not follow calls.
+    fn profile_call(
+        &mut self,
+        _label: &str,
+        _params: &mut Params,
+    ) -> Option<Result<usize, String>> {
+        None
+    }
+
+    /// How deep in LinuxCNC O-word subroutine calls the reading is.
+    fn call_depth(&self) -> usize {
+        0
+    }
 }
 
 impl LineSource for Lines<'_> {
@@ -100,6 +117,9 @@ pub struct Stream<S> {
     warned_text_after_end: bool,
     /// The vendor commands (`W221`) warned about: each once.
     warned_vendor: Vec<String>,
+    /// The source's call depth (see [`LineSource::call_depth`]) where a lathe profile
+    /// cycle called its subroutine: the profile is complete when reading is back there.
+    profile_depth: usize,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -131,6 +151,7 @@ impl<S: LineSource> Stream<S> {
             warned_comment_utf8: false,
             warned_text_after_end: false,
             warned_vendor: Vec::new(),
+            profile_depth: 0,
         }
     }
 
@@ -180,6 +201,12 @@ impl<S: LineSource> Iterator for Stream<S> {
                 }
                 Ok(None) => {
                     self.finished = true;
+                    if let Some(d) = self
+                        .interp
+                        .cancel_profile("the profile's subroutine never returned")
+                    {
+                        self.queue.push_back(Event::Diagnostic(d));
+                    }
                     while let Some(d) = self.src.take_diagnostic() {
                         self.queue.push_back(Event::Diagnostic(d));
                     }
@@ -416,6 +443,9 @@ impl<S: LineSource> Iterator for Stream<S> {
                     }
                 }
             }
+            if self.interp.profile_pending() {
+                failed |= self.profile_step();
+            }
             if let Some(params) = self.params.as_deref_mut() {
                 if params.is_macro_b() {
                     for _ in 0..self.src.take_returns() {
@@ -446,6 +476,59 @@ impl<S: LineSource> Iterator for Stream<S> {
                 self.src.note_error();
             }
         }
+    }
+}
+
+impl<S: LineSource> Stream<S> {
+    /// A LinuxCNC lathe profile cycle (G70–G72) after a line: the source calls the sub
+    /// the cycle's block asks for; while the sub is read its profile's current point is
+    /// the position its expressions see; when the sub has returned the cycle's moves go
+    /// to the queue. True when the cycle is refused.
+    #[inline(never)]
+    fn profile_step(&mut self) -> bool {
+        if let Some(label) = self.interp.take_profile_call() {
+            let called = match self.params.as_deref_mut() {
+                Some(params) => self.src.profile_call(&label, params),
+                None => None,
+            };
+            let why = match called {
+                Some(Ok(depth)) => {
+                    self.profile_depth = depth;
+                    None
+                }
+                Some(Err(why)) => Some(why),
+                None => Some("its subroutine cannot be followed here".to_string()),
+            };
+            if let Some(why) = why {
+                if let Some(d) = self.interp.cancel_profile(&why) {
+                    self.queue.push_back(Event::Diagnostic(d));
+                    return true;
+                }
+            }
+        } else if self.interp.recording_profile() {
+            if self.src.call_depth() > self.profile_depth {
+                if let (Some(p), Some(params)) =
+                    (self.interp.profile_position(), self.params.as_deref_mut())
+                {
+                    params.note_position(&p);
+                }
+                return false;
+            }
+            let start = self.queue.len();
+            let queue = &mut self.queue;
+            let done = self.interp.finish_profile(&mut |e| queue.push_back(e));
+            if let Some(params) = self.params.as_deref_mut() {
+                params.after_moves(self.queue.range(start..).filter_map(|e| match e {
+                    Event::Move(m) => Some(m),
+                    Event::Diagnostic(_) => None,
+                }));
+            }
+            if let Err(d) = done {
+                self.queue.push_back(Event::Diagnostic(d));
+                return true;
+            }
+        }
+        false
     }
 }
 

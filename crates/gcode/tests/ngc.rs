@@ -200,6 +200,40 @@ fn system_parameters_after_moves_and_probes() {
     assert_eq!(m[4], [0.0, -1.0, -2.0]);
 }
 
+/// `#<_x>` … `#<_w>` are the position (LinuxCNC's names of `#5420`…); inside a lathe
+/// profile cycle's sub they are the profile's current point, which moves nothing (as in
+/// LinuxCNC's `lathe_g7x_face_boring.ngc`): each step of the profile below is 1 up in X
+/// and 2 along -Z from the last, so G70 follows X 3, 4, 5 at Z 0, -2, -4.
+#[test]
+fn position_names_and_a_profile_that_reads_them() {
+    let (m, d) = run("G21 G18 F100\nG0 X3 Y2 Z4\nG0 X[#<_x> + #<_Y>] Z#<_z>\nM2\n");
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(m[1], [5.0, 2.0, 4.0]);
+    let text = "G21 G18 F100\n\
+        o100 sub\nG0 X3 Z0\no101 repeat [2]\nG1 X[#<_x> + 1] Z[#<_z> - 2]\no101 endrepeat\no100 endsub\n\
+        G70 Q100 X8 Z2\nG1 X[#<_x>] Z[#<_z> + 1]\nM2\n";
+    let (m, d) = run(text);
+    assert!(
+        d.iter()
+            .all(|x| !x.is_error() && x.to_string().contains("lathe cycle")),
+        "{d:?}"
+    );
+    let xz: Vec<[f64; 2]> = m.iter().map(|p| [p[0], p[2]]).collect();
+    // The rapid to the start (twice: the block's, the pass's), to the profile's first
+    // point, the profile, then the next block from where the cycle left the tool.
+    assert_eq!(
+        xz,
+        [
+            [8.0, 2.0],
+            [8.0, 2.0],
+            [3.0, 0.0],
+            [4.0, -2.0],
+            [5.0, -4.0],
+            [5.0, -3.0]
+        ]
+    );
+}
+
 #[test]
 fn an_unevaluated_feed_blames_no_later_block() {
     // FADAL flavour: `F#1` is not evaluated; the block is skipped with one warning and
@@ -370,7 +404,9 @@ fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
     );
 }
 
-/// LinuxCNC's lathe cycles G70–G72 (not units there) are warned about and draw no move;
+/// LinuxCNC's lathe cycles G70–G72 (not units there), read in file order (`check`, where
+/// their subs are not run), are warned about and draw no move (in execution order they
+/// are expanded: `crates/cli/tests/g7x_cli.rs`);
 /// G76 is expanded; E is G76's taper, and a stray E is refused, as rs274 refuses it.
 #[test]
 fn linuxcnc_lathe_cycles_and_e() {

@@ -408,6 +408,9 @@ impl<'a> Intended<'a> {
                         ErrorKind::FirmwareMacro(what) => Some(format!(
                             "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; remove the printer's start and end code from the slicer's custom G-code"
                         )),
+                        ErrorKind::LatheCycle(c) => Some(format!(
+                            "{c} is a lathe's roughing or finishing cycle; the post does not write lathe cycles"
+                        )),
                         ErrorKind::CannedCyclePassedThrough(c) => {
                             Some(format!("canned cycle G{c} cannot be posted (not expanded)"))
                         }
