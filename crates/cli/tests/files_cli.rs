@@ -184,7 +184,9 @@ fn output_growth_is_bounded() {
         stderr(&o)
     );
     assert!(!out.exists() && temps(&dir).is_empty());
-    assert!(t0.elapsed().as_secs() < 60);
+    // A bound against a hang, not a speed test (the debug build beside other builds
+    // took 67 s once).
+    assert!(t0.elapsed().as_secs() < 240);
     let o = lampost(&[
         "post",
         "--machine",
