@@ -368,3 +368,47 @@ fn programs_in_other_languages_are_named() {
         assert!(!out.exists(), "{name}: nothing written");
     }
 }
+
+/// Fanuc/Haas corner words (`,R`, `,C`) and a host's line checksums (`*NN`) are not
+/// read: each is a located error whose hint says what it is, never "remove it" (leaving
+/// `,R` out would cut a sharp corner where a round one was programmed). Nothing posts.
+#[test]
+fn corner_words_and_line_checksums_are_named_not_dropped() {
+    let dir = tempdir("corner-words");
+    let haas = dir.join("haas.nc");
+    std::fs::write(
+        &haas,
+        "%\nO0001\nG20 G90 G17\nG0 X0. Y0. Z.1\nG1 Z-.1 F10.\nG1 X1. ,R.1\nY1.\nG0 Z.1\nM30\n%\n",
+    )
+    .expect("write");
+    let checksums = dir.join("sent.gcode");
+    std::fs::write(
+        &checksums,
+        "G21 G90\nN1 G0 X10 Y20 Z1*45\nN2 G1 X11 Y20 F100*12\nM30\n",
+    )
+    .expect("write");
+    for (file, at, what) in [
+        (&haas, ":6:8", "corner rounding"),
+        (&checksums, ":2:17", "checksum"),
+    ] {
+        let s = file.to_str().expect("utf8");
+        for flavor in ["auto", "haas", "fanuc", "marlin"] {
+            let o = lampost(&["check", "--flavor", flavor, s]);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{flavor}: {e}");
+            assert!(e.contains(at) && e.contains(what), "{flavor}: {e}");
+            assert!(!e.contains("remove it"), "{flavor}: {e}");
+        }
+        let out = dir.join("posted.nc");
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            s,
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        assert_ne!(o.status.code(), Some(0), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
+}

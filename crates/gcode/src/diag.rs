@@ -313,6 +313,8 @@ impl ErrorKind {
             ErrorKind::UnexpectedCharacter('\r') => "the file's line ends are a bare carriage return (old Mac): convert them to LF or CR LF",
             ErrorKind::UnexpectedCharacter(c) if c.is_control() || *c == '\u{feff}' => "remove the invisible character (an editor that shows control characters finds it)",
             ErrorKind::UnexpectedCharacter('@' | '^') => "`@` (radius) and `^` (angle) are LinuxCNC's polar coordinates, read with --flavor linuxcnc only (or auto choosing it): read the program as LinuxCNC's, or give the point's X and Y",
+            ErrorKind::UnexpectedCharacter(',') => "`,R`, `,C` and `,A` after a G1 are Fanuc/Haas corner rounding, chamfering and angle words, which lampost does not simulate (leaving them out changes the path): write the corner as an arc (G2/G3) or as lines; a decimal comma (`X1,5`) must be a point",
+            ErrorKind::UnexpectedCharacter('*') => "`*NN` at the end of a block is a host's line checksum (RepRap/Marlin serial protocol), which a program file does not hold: save the program as the slicer wrote it, or strip the `*NN` endings; a `*` elsewhere is an expression, read with --flavor linuxcnc inside `[ ]`",
             ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
             ErrorKind::NestedComment => "remove the inner parentheses or write `[ ]` instead (LinuxCNC refuses nested comments too)",
             ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
