@@ -412,3 +412,69 @@ fn corner_words_and_line_checksums_are_named_not_dropped() {
         assert!(!out.exists());
     }
 }
+
+/// Fanuc/Haas/FADAL coordinate transforms own their axis words (the centre of `G68 X Y
+/// R`, of `G51 X Y P`, the mirror axes of `G51.1 X` and `G50.1 X`): no move, no "no
+/// motion mode" error, a warning that the transform is not simulated. A Haas mill's bolt
+/// hole pattern (`G70 I J L` under a canned cycle) is named, in the haas flavour and where
+/// G70 reads as inch; the post refuses both, as their holes are not traced.
+#[test]
+fn transform_words_are_arguments_and_bolt_hole_patterns_are_named() {
+    let dir = tempdir("transforms");
+    let prog = dir.join("haas.nc");
+    std::fs::write(
+        &prog,
+        "%\nO01234\nG20 G90 G17 G40 G80\nG0 G54 X0 Y0 Z1.\nG68 X0 Y0 R45.\nG1 X1. Y0 F10.\nG69\nG51 X0 Y0 P2.\nG1 X1. Y1.\nG50\nG51.1 X0\nG1 X2.\nG50.1 X0\nG0 Z1.\nM30\n%\n",
+    )
+    .expect("write");
+    let s = prog.to_str().expect("utf8");
+    for flavor in ["fadal", "haas", "fanuc"] {
+        let o = lampost(&["trace", "--json", "--flavor", flavor, s]);
+        let e = stderr(&o);
+        assert!(o.status.success(), "{flavor}: {e}");
+        assert!(
+            e.contains("G68 (coordinate rotation) is not simulated")
+                && e.contains("G51 (scaling)")
+                && e.contains("G51.1 (mirroring)"),
+            "{flavor}: {e}"
+        );
+        let trace: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        // The G0, three G1 and the last G0: no move to a transform's centre.
+        assert_eq!(trace["moves"].as_array().map(Vec::len), Some(5), "{flavor}");
+    }
+    let bolt = dir.join("bolt.nc");
+    std::fs::write(
+        &bolt,
+        "%\nO01235\nG20 G90 G17 G40 G80\nG0 G54 X0 Y0 Z1.\nG81 G98 Z-.5 R.1 F10. L0\nG70 I1. J0. L6\nG80\nG0 Z1.\nM30\n%\n",
+    )
+    .expect("write");
+    let s = bolt.to_str().expect("utf8");
+    for (flavor, says) in [
+        ("haas", "a bolt hole pattern"),
+        ("auto", "bolt hole pattern; read with --flavor haas"),
+    ] {
+        let o = lampost(&["check", "--flavor", flavor, s]);
+        let e = stderr(&o);
+        assert!(
+            o.status.success() && e.contains(":6:1") && e.contains(says),
+            "{flavor}: {e}"
+        );
+        let out = dir.join("posted.nc");
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--flavor",
+            flavor,
+            s,
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{flavor}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("bolt hole") && !out.exists(),
+            "{}",
+            stderr(&o)
+        );
+    }
+}

@@ -507,6 +507,7 @@ impl Interpreter {
             || w.gs
                 .iter()
                 .any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
+            || Self::transform_words(&w)
             || levelling;
         if w.polar().is_some() {
             self.polar_allowed(b, &w, settings)?;
@@ -695,6 +696,17 @@ impl Interpreter {
         }
     }
 
+    /// True when the block's axis words are the arguments of a coordinate transform
+    /// (Fanuc, Haas, FADAL): the centre of a rotation `G68 X Y R`, of a scaling `G51 X Y
+    /// Z P` (or I J K), the mirror axes of `G51.1 X Y` and `G50.1 X` (cancel for those
+    /// axes), never a move. A block that also holds a motion code is read as before.
+    fn transform_words(w: &Words<'_, '_>) -> bool {
+        w.g_in(GGroup::Motion).is_none()
+            && [GGroup::Rotation, GGroup::Scaling, GGroup::Mirror]
+                .into_iter()
+                .any(|g| w.g_in(g).is_some())
+    }
+
     fn is_spline(w: &Words<'_, '_>) -> bool {
         w.has_axes() || w.word(b'I').is_some() || w.word(b'J').is_some()
     }
@@ -727,6 +739,14 @@ impl Interpreter {
                 Some(OtherCode::Setting) => continue,
                 Some(OtherCode::Unsimulated(_)) if c == 650 => {
                     ErrorKind::SubprogramNotFollowed(format!("{} (macro call)", with_p()))
+                }
+                Some(OtherCode::Unsimulated(_))
+                    if self.opts.flavor == crate::flavor::Flavor::Haas
+                        && matches!(c, 700 | 710 | 720) =>
+                {
+                    ErrorKind::NotSimulated(format!(
+                        "{name} (on a Haas mill a bolt hole pattern, whose holes the active canned cycle drills; on a Haas lathe a finishing or roughing cycle)"
+                    ))
                 }
                 Some(OtherCode::Unsimulated(what)) => {
                     ErrorKind::NotSimulated(format!("{name} ({what})"))
@@ -793,6 +813,13 @@ impl Interpreter {
                         // G70/G71 are units).
                         _ if self.opts.flavor == crate::flavor::Flavor::LinuxCnc
                             && crate::modal::is_lathe_cycle(code) =>
+                        {
+                            GGroup::Other
+                        }
+                        // Haas's bolt hole patterns on a mill, its finishing and
+                        // roughing cycles on a lathe (never units: Haas uses G20/G21).
+                        _ if self.opts.flavor == crate::flavor::Flavor::Haas
+                            && matches!(code, 700 | 710 | 720) =>
                         {
                             GGroup::Other
                         }
@@ -1512,6 +1539,20 @@ impl Interpreter {
                     Some(gw.span),
                 ));
             }
+            // G70/G71 as units take no words; with I, J or L the block is a Haas mill's
+            // bolt hole pattern (G70 I radius J angle L holes, G71 with K): its holes
+            // would be missing from the trace, so it is named, and the post refuses it.
+            if matches!(c, 700 | 710) && [b'I', b'J', b'L'].iter().any(|&l| w.word(l).is_some()) {
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "{} with I, J or L (a Haas mill's bolt hole pattern; read with --flavor haas) is read as units here, and",
+                        gw.display_code()
+                    )),
+                    Some(gw.span),
+                );
+            }
         }
         let m = &mut self.modal;
         if let Some((gw, c)) = w.g_in(GGroup::CutterComp) {
@@ -1570,7 +1611,18 @@ impl Interpreter {
             GGroup::Rotation,
         ] {
             if let Some((gw, c)) = w.g_in(group) {
-                if !matches!(c, 150 | 500 | 501 | 690) {
+                if c == 500 && w.has_axes() {
+                    // Fanuc's lathe G50 X Z sets the coordinate system (like G92).
+                    self.warn(
+                        b,
+                        out,
+                        ErrorKind::NotSimulated(format!(
+                            "{} with axis words (a lathe's coordinate system setting)",
+                            gw.display_code()
+                        )),
+                        Some(gw.span),
+                    );
+                } else if !matches!(c, 150 | 500 | 501 | 690) {
                     self.warn(
                         b,
                         out,
