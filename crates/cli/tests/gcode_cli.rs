@@ -477,4 +477,30 @@ fn transform_words_are_arguments_and_bolt_hole_patterns_are_named() {
             stderr(&o)
         );
     }
+    // Haas text engraving: its X Y Z are where and how deep the text is cut, not a rapid
+    // down to Z-.005.
+    let engrave = dir.join("engrave.nc");
+    std::fs::write(
+        &engrave,
+        "G20 G90 G17\nG0 X0 Y0 Z1\nG47 P0 (LAMPOST) X0 Y0 I0 J.5 R.05 Z-.005 F15. E10.\nG0 Z1\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&[
+        "trace",
+        "--json",
+        "--flavor",
+        "haas",
+        engrave.to_str().expect("utf8"),
+    ]);
+    let e = stderr(&o);
+    assert!(
+        o.status.success() && e.contains("Haas text engraving"),
+        "{e}"
+    );
+    let trace: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let moves = trace["moves"].as_array().cloned().unwrap_or_default();
+    assert!(
+        !moves.is_empty() && moves.iter().all(|m| axis(&m["end"], "Z") > 0.5),
+        "{moves:?}"
+    );
 }

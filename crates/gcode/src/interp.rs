@@ -733,20 +733,20 @@ impl Interpreter {
                 continue;
             }
             let kind = match other_code(c) {
+                _ if self.opts.flavor == crate::flavor::Flavor::Haas
+                    && crate::modal::haas_pattern(c).is_some() =>
+                {
+                    ErrorKind::NotSimulated(format!(
+                        "{name} ({})",
+                        crate::modal::haas_pattern(c).unwrap_or_default()
+                    ))
+                }
                 None => ErrorKind::NotSimulated(format!(
                     "{name} (a firmware code lampost does not know)"
                 )),
                 Some(OtherCode::Setting) => continue,
                 Some(OtherCode::Unsimulated(_)) if c == 650 => {
                     ErrorKind::SubprogramNotFollowed(format!("{} (macro call)", with_p()))
-                }
-                Some(OtherCode::Unsimulated(_))
-                    if self.opts.flavor == crate::flavor::Flavor::Haas
-                        && matches!(c, 700 | 710 | 720) =>
-                {
-                    ErrorKind::NotSimulated(format!(
-                        "{name} (on a Haas mill a bolt hole pattern, whose holes the active canned cycle drills; on a Haas lathe a finishing or roughing cycle)"
-                    ))
                 }
                 Some(OtherCode::Unsimulated(what)) => {
                     ErrorKind::NotSimulated(format!("{name} ({what})"))
@@ -819,7 +819,7 @@ impl Interpreter {
                         // Haas's bolt hole patterns on a mill, its finishing and
                         // roughing cycles on a lathe (never units: Haas uses G20/G21).
                         _ if self.opts.flavor == crate::flavor::Flavor::Haas
-                            && matches!(code, 700 | 710 | 720) =>
+                            && crate::modal::haas_pattern(code).is_some() =>
                         {
                             GGroup::Other
                         }

@@ -372,6 +372,16 @@ pub fn is_lathe_cycle(code: u16) -> bool {
     matches!(code, 700 | 710..=712 | 720..=722)
 }
 
+/// Haas codes read as [`GGroup::Other`] with `--flavor haas` (their words are their own,
+/// their path is not traced), and what each is.
+pub fn haas_pattern(code: u16) -> Option<&'static str> {
+    Some(match code {
+        470 => "Haas text engraving: its X Y are where the text starts, Z its depth",
+        700 | 710 | 720 => "on a Haas mill a bolt hole pattern, whose holes the active canned cycle drills; on a Haas lathe a finishing or roughing cycle",
+        _ => return None,
+    })
+}
+
 /// What a code of [`GGroup::Other`] is (`None` for any other code).
 pub fn other_code(code: u16) -> Option<OtherCode> {
     use OtherCode::*;
