@@ -259,13 +259,22 @@ impl Codes {
 /// - Haas: a comment naming Haas, or `M97`; Mach3: a comment naming Mach3;
 /// - FADAL: macro statements (`#V10 = …`, `#IF`, `#PRINT`, `#:LABEL`), a comment naming
 ///   FADAL;
-/// - Skeinforge's `(<setting> …)` header comments: Marlin.
+/// - Skeinforge's `(<setting> …)` header comments: Marlin;
+/// - PrusaSlicer's binary G-code (the magic `GCDE` at the start): Marlin.
 ///
 /// Without any of those, weaker evidence decides, the strongest kind found first: a G0
 /// or G1 with a fractional E word (a slicer's extrusion): Marlin; numbered parameters
 /// (`#1 = …`), `[…]` expressions or polar coordinates (`@`, `^`): LinuxCNC; a `;` comment, which FADAL programs do not
 /// hold (grbl, Mach3 and hobby CAM write them): LinuxCNC, whose reading is ISO's.
 pub fn detect(head: &[u8]) -> (Flavor, String) {
+    if head.starts_with(b"GCDE") {
+        // PrusaSlicer's binary G-code, for Prusa's (Marlin) firmware; the reading
+        // refuses it at its first line, naming it.
+        return (
+            Flavor::Marlin,
+            "binary G-code (PrusaSlicer's .bgcode) on line 1".into(),
+        );
+    }
     let mut head = &head[..head.len().min(DETECT_BYTES)];
     if head.len() == DETECT_BYTES {
         // Whole lines only.

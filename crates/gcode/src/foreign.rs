@@ -25,6 +25,13 @@ const APT: Foreign = Foreign {
     hint: "post the CL file in the CAM system for a G-code control, then give lampost the G-code",
 };
 /// What to do with a robot program.
+/// PrusaSlicer's binary G-code (libbgcode's `.bgcode`: the file starts with the magic
+/// `GCDE`, then compressed blocks).
+pub(crate) const BINARY_GCODE: Foreign = Foreign {
+    name: "binary G-code (PrusaSlicer's .bgcode)",
+    hint: "export plain-text G-code from the slicer (PrusaSlicer: Printer Settings → General → Firmware, `Supports binary G-code` off), or convert the file to text with libbgcode's bgcode tool",
+};
+
 const ROBOT_HINT: &str =
     "give lampost the path (a G-code program or a per-point CSV), not a robot program";
 const KRL: Foreign = Foreign {

@@ -360,6 +360,18 @@ pub fn parse_line_with<'a>(
     if line.len() > MAX_LINE_BYTES {
         return Err(too_long(line, line_no, offset));
     }
+    if line_no == 1 && line.starts_with(b"GCDE") {
+        // Binary G-code: named once, at its magic, rather than as stray bytes or letters.
+        return Err(Diagnostic::at(
+            Severity::Error,
+            ErrorKind::ForeignLanguage(crate::foreign::BINARY_GCODE),
+            line_no,
+            offset,
+            line,
+            0,
+            4,
+        ));
+    }
     let text = match std::str::from_utf8(line) {
         Ok(t) => t,
         Err(e) => {
