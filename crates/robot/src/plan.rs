@@ -916,4 +916,50 @@ mod tests {
             );
         }
     }
+    /// A track ending at joints `q` and turn `psi`, its one earlier location at `q0`.
+    fn ended(q0: Q, q: Q, psi: f64) -> Track {
+        let at = |q: Q| Located {
+            q,
+            part: Frame::identity(),
+            psi,
+        };
+        Track {
+            out: vec![at(q0), at(q)],
+            prev: q,
+            psi_prev: psi,
+        }
+    }
+
+    /// [`met`]: of tracks within [`MEET`] of one another (every joint and the turn, half
+    /// turns of the turn apart the same), the one keeping farthest from trouble so far is
+    /// kept, the first of equals; tracks farther apart and failed tries are left alone.
+    #[test]
+    fn tracks_that_meet_keep_the_one_farthest_from_trouble() {
+        let Some(arm) = Arm::builtin("puma-lens") else {
+            panic!("built-in");
+        };
+        let q = [0.1, 0.5, -0.5, 0.2, 0.4, 0.3];
+        // J1 moved (far from its limits: the margins stay q's).
+        let (mut near, mut far) = (q, q);
+        near[0] += 0.9 * MEET;
+        far[0] += 2.0 * MEET;
+        let tau = std::f64::consts::TAU;
+        // J5 near its limit (100°) at the start: nearer trouble.
+        let mut worse = q;
+        worse[4] = 1.7;
+        let tries = [
+            Some(ended(worse, q, 1.0)),
+            None,
+            Some(ended(q, near, 1.0 + tau)),
+            Some(ended(q, q, 1.0 + 1.1 * MEET)),
+            Some(ended(q, far, 1.0)),
+            Some(ended(q, q, 1.0)),
+        ];
+        // 0 and 2 meet: 2 kept (0 nearer trouble); 3's turn is too far, 4's joints; 5
+        // meets 2 and keeps as far from trouble: the first of equals (2) kept.
+        assert_eq!(met(&arm, &tries), [true, false, false, false, false, true]);
+        // Equal so far: the first kept.
+        let tries = [Some(ended(q, q, 1.0)), Some(ended(q, near, 1.0))];
+        assert_eq!(met(&arm, &tries), [false, true]);
+    }
 }

@@ -5,7 +5,8 @@ use lampost_robot::chunk::{
     chunk_files, chunk_ranges, from_zyz, part_of, verify_threads, zyz, ChunkFile,
 };
 use lampost_robot::plan::{
-    plan, plan_every_try_to_its_end, plan_threads, resample, PathPoint, Sample, CLEAR, MAX_TURN,
+    plan, plan_and_tries_met, plan_every_try_in_full, plan_every_try_to_its_end, plan_threads,
+    resample, PathPoint, Sample, CLEAR, MAX_TURN, MEET, MEET_AT,
 };
 use lampost_robot::RobotError;
 use lampost_robot::{Arm, ArmDef, Q};
@@ -313,4 +314,62 @@ fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
         "{e1:?}"
     );
     assert_eq!(verify(&bad, 2), e1);
+}
+
+/// The plate's end in passes up its face (5 passes of 600 mm, the laser off between):
+/// 3,400 locations at 1 mm, longer than `MEET_AT`, where the tried first turns 5° apart
+/// meet.
+fn plate_passes() -> Vec<PathPoint> {
+    let up = [0.0, 0.0, 1.0];
+    let mut path = plate_end();
+    for (k, z) in [50.0, 100.0, 150.0].into_iter().enumerate() {
+        let (a, b) = if k % 2 == 0 {
+            (-300.0, 300.0)
+        } else {
+            (300.0, -300.0)
+        };
+        path.push(pt(a, 1.12132, z, up, false, 10 + 2 * k));
+        path.push(pt(b, 1.12132, z, up, true, 11 + 2 * k));
+    }
+    path
+}
+
+/// Tries whose tracks meet at `MEET_AT` count as one plan: some are dropped on the
+/// plate's passes, the plan taken is the one the rule without meeting takes or keeps as
+/// far from trouble within `MEET`, on any number of threads, with or without the early
+/// stop.
+#[test]
+fn tries_that_meet_count_as_one_plan() {
+    let arm = arm();
+    let s = resample(&plate_passes(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.len() > MEET_AT, "{}", s.len());
+    let (taken, met) =
+        plan_and_tries_met(&arm, &s, arm.config, 1).unwrap_or_else(|e| panic!("{e}"));
+    let (full, full_margin) =
+        plan_every_try_in_full(&arm, &s, arm.config, 1).unwrap_or_else(|e| panic!("{e}"));
+    let margin = taken
+        .iter()
+        .map(|l| arm.margin(&l.q))
+        .fold(f64::INFINITY, f64::min);
+    println!(
+        "{} locations; tries met: {met:?}; margin {:.6}° (every try in full: {:.6}°, the same plan: {})",
+        s.len(),
+        margin.to_degrees(),
+        full_margin.to_degrees(),
+        taken == full
+    );
+    assert!(!met.is_empty(), "no try met another");
+    assert!(margin >= full_margin - MEET, "{margin} {full_margin}");
+    for threads in [2, 4] {
+        assert_eq!(
+            plan_and_tries_met(&arm, &s, arm.config, threads),
+            Ok((taken.clone(), met.clone()))
+        );
+    }
+    for threads in [1, 2] {
+        assert_eq!(
+            plan_every_try_to_its_end(&arm, &s, arm.config, threads),
+            Ok(taken.clone())
+        );
+    }
 }
