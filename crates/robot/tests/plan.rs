@@ -373,3 +373,43 @@ fn tries_that_meet_count_as_one_plan() {
         );
     }
 }
+
+/// Bit for bit what the standard parser reads (`None` where it fails).
+fn std_bits(s: &str) -> Option<u64> {
+    s.parse::<f64>().ok().map(f64::to_bits)
+}
+
+proptest! {
+    /// The location files' numbers (`lampost_gcode::fixed`, any places) are read by the
+    /// fast path, bit for bit as the standard parser reads them.
+    #[test]
+    fn numbers_as_written_are_read_as_the_standard_parser_reads_them(
+        v in prop_oneof![-1e6..1e6f64, -1.0..1.0f64, -1e-7..1e-7f64, Just(-0.0), Just(0.0)],
+        places in 0usize..10,
+    ) {
+        let s = lampost_gcode::fixed(v, places);
+        let fast = lampost_robot::chunk::parse_plain(&s);
+        if s.bytes().filter(u8::is_ascii_digit).count() <= 15 {
+            prop_assert!(fast.is_some(), "{}", s);
+        }
+        prop_assert_eq!(fast.map(f64::to_bits).or_else(|| std_bits(&s)), std_bits(&s), "{}", s);
+    }
+
+    /// Any text of digits, signs and points (and a few other characters): the fast path
+    /// gives the standard parser's value or leaves the text to it.
+    #[test]
+    fn any_number_text_is_read_as_the_standard_parser_reads_it(
+        s in "[-+]?[0-9]{0,18}(\\.[0-9]{0,18})?([eE][-+]?[0-9]{1,3})?|[-+.0-9a-z ]{0,12}",
+    ) {
+        let fast = lampost_robot::chunk::parse_plain(&s);
+        if let Some(v) = fast {
+            prop_assert_eq!(Some(v.to_bits()), std_bits(&s), "{}", s);
+        }
+        prop_assert_eq!(
+            lampost_robot::chunk::parse_number(&s).map(f64::to_bits),
+            std_bits(&s),
+            "{}",
+            s
+        );
+    }
+}
