@@ -105,15 +105,16 @@ pub fn from_zyz(e: [f64; 3]) -> Matrix3<f64> {
 }
 
 /// ` value` to `decimals` places by the G-code emitter's fixed-point writer (one rounding
-/// of an integer, `-0` written `0`), a fraction of the cost of `format!`.
-fn push_num(out: &mut String, value: f64, decimals: usize) {
-    out.push(' ');
-    out.push_str(&lampost_gcode::fixed(value, decimals));
+/// of an integer, `-0` written `0`; `lampost_gcode::fixed`'s text, appended without
+/// allocating), a fraction of the cost of `format!`.
+fn push_num(out: &mut Vec<u8>, value: f64, decimals: usize) {
+    out.push(b' ');
+    lampost_gcode::push_fixed(out, value, decimals);
 }
 
 #[allow(clippy::too_many_arguments)]
 fn row(
-    out: &mut String,
+    out: &mut Vec<u8>,
     n: usize,
     kind: &str,
     index: Option<usize>,
@@ -122,8 +123,9 @@ fn row(
     laser: bool,
     q: &Q,
 ) {
-    use std::fmt::Write;
+    use std::io::Write;
     let e = zyz(&part.r);
+    // Writing to a `Vec` cannot fail.
     let _ = match index {
         Some(i) => write!(out, "{n} {kind} {i}"),
         None => write!(out, "{n} {kind} -"),
@@ -135,11 +137,11 @@ fn row(
     for v in e {
         push_num(out, v.to_degrees(), 7);
     }
-    out.push_str(if laser { " 1" } else { " 0" });
+    out.extend_from_slice(if laser { b" 1" } else { b" 0" });
     for v in q {
         push_num(out, v.to_degrees(), 7);
     }
-    out.push('\n');
+    out.push(b'\n');
 }
 
 /// The part frame in the working frame for joint values `q`.
@@ -161,11 +163,13 @@ pub fn write_chunk(
         crate::def::Units::Mm => "mm",
         crate::def::Units::Inch => "inch",
     };
-    let mut s = format!(
+    let head = format!(
         "# {FORMAT}\n# machine {}\n# chunk {k} of {total}\n# config {}\n# units {units}, degrees, seconds\n# frame: working (origin at the laser focus, z from the focus into the head); pose of the part frame, R = Rz(rz1)·Ry(ry)·Rz(rz2)\n# n kind index dt x y z rz1 ry rz2 laser j1 j2 j3 j4 j5 j6\n",
         arm.name,
         cfg.letters()
     );
+    let mut s = Vec::with_capacity(head.len() + (range.len() + 2) * 150);
+    s.extend_from_slice(head.as_bytes());
     let safe = part_of(arm, &arm.safe);
     row(&mut s, 1, "safe", None, 0.0, &safe, false, &arm.safe);
     let mut n = 2;
@@ -185,7 +189,8 @@ pub fn write_chunk(
         n += 1;
     }
     row(&mut s, n, "safe", None, 0.0, &safe, false, &arm.safe);
-    s
+    // UTF-8 throughout (the header's text and ASCII rows).
+    String::from_utf8(s).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned())
 }
 
 /// The name of chunk `k` (from 1): `chunk-001.loc`, ….

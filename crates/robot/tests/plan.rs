@@ -413,3 +413,65 @@ proptest! {
         );
     }
 }
+
+/// A location row as the format's description gives it, number by number through
+/// `lampost_gcode::fixed`: the reference the chunk writer is held to.
+#[allow(clippy::too_many_arguments)]
+fn row_reference(
+    n: usize,
+    kind: &str,
+    index: &str,
+    dt: f64,
+    part: &lampost_robot::Frame,
+    laser: bool,
+    q: &Q,
+) -> String {
+    use lampost_gcode::fixed;
+    let mut f = vec![
+        n.to_string(),
+        kind.to_string(),
+        index.to_string(),
+        fixed(dt, 6),
+    ];
+    f.extend([part.t.x, part.t.y, part.t.z].map(|v| fixed(v, 6)));
+    f.extend(zyz(&part.r).map(|v| fixed(v.to_degrees(), 7)));
+    f.push(if laser { "1" } else { "0" }.to_string());
+    f.extend(q.map(|v| fixed(v.to_degrees(), 7)));
+    f.join(" ")
+}
+
+/// Every row of the chunk files (the plate's end, cut for a 1000-location controller) is
+/// the reference's text.
+#[test]
+fn chunk_rows_are_the_formats_numbers() {
+    let puma = arm();
+    let s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let located = plan(&puma, &s, puma.config).unwrap_or_else(|e| panic!("{e}"));
+    let ranges = chunk_ranges(&s, 1000).unwrap_or_else(|e| panic!("{e}"));
+    let files = chunk_files(&puma, puma.config, &s, &located, &ranges, 1);
+    let safe = part_of(&puma, &puma.safe);
+    let mut rows = 0;
+    for (f, r) in files.iter().zip(&ranges) {
+        let lines: Vec<&str> = f.text.lines().filter(|l| !l.starts_with('#')).collect();
+        assert_eq!(lines.len(), r.len() + 2);
+        let safe_row = |n| row_reference(n, "safe", "-", 0.0, &safe, false, &puma.safe);
+        assert_eq!(lines[0], safe_row(1));
+        assert_eq!(lines[lines.len() - 1], safe_row(lines.len()));
+        for (k, i) in r.clone().enumerate() {
+            let first = i == r.start;
+            let dt = if first { 0.0 } else { s[i].dt };
+            let want = row_reference(
+                k + 2,
+                "path",
+                &i.to_string(),
+                dt,
+                &located[i].part,
+                !first && s[i].deposit,
+                &located[i].q,
+            );
+            assert_eq!(lines[k + 1], want);
+            rows += 1;
+        }
+    }
+    assert_eq!(rows, s.len());
+}
