@@ -341,7 +341,9 @@ const TRIES: usize = 4;
 /// from the last. The first location's turn is the one nearest the safe location; when
 /// that plan fails or brings a location within [`CLEAR`] of a joint limit or the elbow's
 /// stretch, up to four more are tried in [`first_turns`]'s order, and the plan that keeps
-/// farthest from trouble is taken (the first clear one). Errors (the nearest turn's) name
+/// farthest from trouble is taken (the first clear one); on a path longer than
+/// [`MEET_AT`] locations, tries whose tracks have met there count as one plan (the one
+/// keeping farthest from trouble so far is planned on). Errors (the nearest turn's) name
 /// the input line and the joint. The tried turns are planned on up to two threads
 /// ([`plan_threads`]); the result is the same on any number.
 pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, RobotError> {
