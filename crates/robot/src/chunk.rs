@@ -105,15 +105,16 @@ pub fn from_zyz(e: [f64; 3]) -> Matrix3<f64> {
 }
 
 /// ` value` to `decimals` places by the G-code emitter's fixed-point writer (one rounding
-/// of an integer, `-0` written `0`), a fraction of the cost of `format!`.
-fn push_num(out: &mut String, value: f64, decimals: usize) {
-    out.push(' ');
-    out.push_str(&lampost_gcode::fixed(value, decimals));
+/// of an integer, `-0` written `0`; `lampost_gcode::fixed`'s text, appended without
+/// allocating), a fraction of the cost of `format!`.
+fn push_num(out: &mut Vec<u8>, value: f64, decimals: usize) {
+    out.push(b' ');
+    lampost_gcode::push_fixed(out, value, decimals);
 }
 
 #[allow(clippy::too_many_arguments)]
 fn row(
-    out: &mut String,
+    out: &mut Vec<u8>,
     n: usize,
     kind: &str,
     index: Option<usize>,
@@ -122,8 +123,9 @@ fn row(
     laser: bool,
     q: &Q,
 ) {
-    use std::fmt::Write;
+    use std::io::Write;
     let e = zyz(&part.r);
+    // Writing to a `Vec` cannot fail.
     let _ = match index {
         Some(i) => write!(out, "{n} {kind} {i}"),
         None => write!(out, "{n} {kind} -"),
@@ -135,11 +137,11 @@ fn row(
     for v in e {
         push_num(out, v.to_degrees(), 7);
     }
-    out.push_str(if laser { " 1" } else { " 0" });
+    out.extend_from_slice(if laser { b" 1" } else { b" 0" });
     for v in q {
         push_num(out, v.to_degrees(), 7);
     }
-    out.push('\n');
+    out.push(b'\n');
 }
 
 /// The part frame in the working frame for joint values `q`.
@@ -161,11 +163,13 @@ pub fn write_chunk(
         crate::def::Units::Mm => "mm",
         crate::def::Units::Inch => "inch",
     };
-    let mut s = format!(
+    let head = format!(
         "# {FORMAT}\n# machine {}\n# chunk {k} of {total}\n# config {}\n# units {units}, degrees, seconds\n# frame: working (origin at the laser focus, z from the focus into the head); pose of the part frame, R = Rz(rz1)·Ry(ry)·Rz(rz2)\n# n kind index dt x y z rz1 ry rz2 laser j1 j2 j3 j4 j5 j6\n",
         arm.name,
         cfg.letters()
     );
+    let mut s = Vec::with_capacity(head.len() + (range.len() + 2) * 150);
+    s.extend_from_slice(head.as_bytes());
     let safe = part_of(arm, &arm.safe);
     row(&mut s, 1, "safe", None, 0.0, &safe, false, &arm.safe);
     let mut n = 2;
@@ -185,7 +189,8 @@ pub fn write_chunk(
         n += 1;
     }
     row(&mut s, n, "safe", None, 0.0, &safe, false, &arm.safe);
-    s
+    // UTF-8 throughout (the header's text and ASCII rows).
+    String::from_utf8(s).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned())
 }
 
 /// The name of chunk `k` (from 1): `chunk-001.loc`, ….
@@ -411,9 +416,7 @@ fn verify_chunk(
             ));
         }
         let num = |k: usize| -> Result<f64, RobotError> {
-            fields[k]
-                .parse::<f64>()
-                .ok()
+            parse_number(fields[k])
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| verr(f, line, format!("`{}` is not a finite number", fields[k])))
         };
@@ -562,6 +565,51 @@ fn verify_chunk(
         prev = Some(q);
     }
     Ok(rep)
+}
+
+/// `field` read as `str::parse::<f64>` reads it (`None` where it fails): a plain decimal
+/// `[-]digits[.digits]` of at most 15 digits by [`parse_plain`], anything else by the
+/// standard parser.
+pub fn parse_number(field: &str) -> Option<f64> {
+    parse_plain(field).or_else(|| field.parse::<f64>().ok())
+}
+
+/// The fast path of [`parse_number`], the form the location files' numbers take: a plain
+/// decimal `[-]digits[.digits]` with at most 15 digits, else `None`. The digits make an
+/// integer `m < 10^15 < 2^53` and the decimals a power of ten `10^d` (d ≤ 15), both exact
+/// in `f64`, so `m / 10^d` is one correctly rounded division: the `f64` nearest the
+/// decimal, as the standard parser gives (proptest in `tests/plan.rs`).
+pub fn parse_plain(field: &str) -> Option<f64> {
+    const POW10: [f64; 16] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+    ];
+    let b = field.as_bytes();
+    let (neg, b) = match b.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        _ => (false, b),
+    };
+    let (mut m, mut digits, mut decimals, mut point) = (0u64, 0usize, 0usize, false);
+    for &c in b {
+        match c {
+            b'0'..=b'9' => {
+                m = m * 10 + u64::from(c - b'0');
+                digits += 1;
+                decimals += usize::from(point);
+            }
+            b'.' if !point => point = true,
+            _ => return None,
+        }
+        if digits > 15 {
+            return None;
+        }
+    }
+    // Digits on the point's left (`.5` and `5.` are the standard parser's too, but rare:
+    // left to it).
+    if digits == 0 || digits == decimals || (point && decimals == 0) {
+        return None;
+    }
+    let v = m as f64 / POW10[decimals];
+    Some(if neg { -v } else { v })
 }
 
 /// Whether `field` is `n` written in decimal as `n.to_string()` writes it (no sign, no

@@ -341,7 +341,9 @@ const TRIES: usize = 4;
 /// from the last. The first location's turn is the one nearest the safe location; when
 /// that plan fails or brings a location within [`CLEAR`] of a joint limit or the elbow's
 /// stretch, up to four more are tried in [`first_turns`]'s order, and the plan that keeps
-/// farthest from trouble is taken (the first clear one). Errors (the nearest turn's) name
+/// farthest from trouble is taken (the first clear one); on a path longer than
+/// [`MEET_AT`] locations, tries whose tracks have met there count as one plan (the one
+/// keeping farthest from trouble so far is planned on). Errors (the nearest turn's) name
 /// the input line and the joint. The tried turns are planned on up to two threads
 /// ([`plan_threads`]); the result is the same on any number.
 pub fn plan(arm: &Arm, samples: &[Sample], cfg: Config) -> Result<Vec<Located>, RobotError> {
@@ -384,7 +386,7 @@ pub fn plan_threads(
     cfg: Config,
     threads: usize,
 ) -> Result<Vec<Located>, RobotError> {
-    plan_tries(arm, samples, cfg, threads, true)
+    plan_tries(arm, samples, cfg, threads, true, true).map(|p| p.0)
 }
 
 /// [`plan_threads`] with every try planned to its end (no try stops early where it can no
@@ -396,7 +398,87 @@ pub fn plan_every_try_to_its_end(
     cfg: Config,
     threads: usize,
 ) -> Result<Vec<Located>, RobotError> {
-    plan_tries(arm, samples, cfg, threads, false)
+    plan_tries(arm, samples, cfg, threads, false, true).map(|p| p.0)
+}
+
+/// The rule before tries that meet were dropped ([`MEET_AT`]): every try planned to its
+/// end, none dropped; and the least margin of the plan taken. The reference the meeting
+/// rule is tested against.
+#[doc(hidden)]
+pub fn plan_every_try_in_full(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    threads: usize,
+) -> Result<(Vec<Located>, f64), RobotError> {
+    plan_tries(arm, samples, cfg, threads, false, false).map(|p| {
+        let m =
+            p.0.iter()
+                .map(|x| arm.margin(&x.q))
+                .fold(f64::INFINITY, f64::min);
+        (p.0, m)
+    })
+}
+
+/// [`plan_threads`], and the orders (1: the first try) of the tries dropped because their
+/// track met an earlier one's ([`MEET_AT`]).
+#[doc(hidden)]
+pub fn plan_and_tries_met(
+    arm: &Arm,
+    samples: &[Sample],
+    cfg: Config,
+    threads: usize,
+) -> Result<(Vec<Located>, Vec<usize>), RobotError> {
+    plan_tries(arm, samples, cfg, threads, true, true)
+}
+
+/// Where the tried first turns' tracks are compared: after this many locations (on a
+/// longer path), by when tracks in one valley of the joint-change cost have met (the
+/// plate's three tries 5° apart come within 1.5e-5 rad by location 1,024 at `--layer 2`,
+/// 1.5e-4 rad at `--layer 20`, from 0.1 rad at location 512).
+pub const MEET_AT: usize = 2048;
+
+/// Tracks meet when every joint and the turn about the beam lie this close (1e-3 rad,
+/// 0.06°) at [`MEET_AT`]; tracks in different valleys lie radians apart.
+pub const MEET: f64 = 1e-3;
+
+/// Whether two tracks (planned to the same location) meet: every joint and the turn
+/// about the beam within [`MEET`].
+fn meets(a: &Track, b: &Track) -> bool {
+    crate::arm::wrap(a.psi_prev - b.psi_prev).abs() <= MEET
+        && a.prev
+            .iter()
+            .zip(&b.prev)
+            .all(|(x, y)| (x - y).abs() <= MEET)
+}
+
+/// The tries (each planned to the same location, `None` where it failed) that are kept
+/// when tracks that meet count as one plan: of tries that meet, the one whose locations so
+/// far keep farthest from trouble (the first of equals); `true` where a try is dropped.
+fn met(arm: &Arm, tries: &[Option<Track>]) -> Vec<bool> {
+    let least: Vec<f64> = tries
+        .iter()
+        .map(|t| t.as_ref().map_or(f64::NEG_INFINITY, |t| t.least(arm)))
+        .collect();
+    let mut dropped = vec![false; tries.len()];
+    let mut kept: Vec<usize> = Vec::new();
+    for (k, tk) in tries.iter().enumerate() {
+        let Some(tk) = tk else {
+            continue;
+        };
+        let with = kept
+            .iter()
+            .position(|&j| tries[j].as_ref().is_some_and(|tj| meets(tj, tk)));
+        match with {
+            None => kept.push(k),
+            Some(p) if least[k] > least[kept[p]] => {
+                dropped[kept[p]] = true;
+                kept[p] = k;
+            }
+            Some(_) => dropped[k] = true,
+        }
+    }
+    dropped
 }
 
 fn plan_tries(
@@ -405,7 +487,8 @@ fn plan_tries(
     cfg: Config,
     threads: usize,
     stop_early: bool,
-) -> Result<Vec<Located>, RobotError> {
+    meet: bool,
+) -> Result<(Vec<Located>, Vec<usize>), RobotError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
     let refs = references(samples);
@@ -425,17 +508,41 @@ fn plan_tries(
     });
     if let Ok(n) = &nearest {
         if n.margin >= CLEAR {
-            return nearest.map(|n| n.located);
+            return nearest.map(|n| (n.located, Vec::new()));
         }
     }
-    // A try whose locations come nearer trouble than the plan taken so far (or than
-    // CLEAR, while a clear plan of a lower order may still come) cannot be taken: it
-    // stops there. This saves work only; the plan taken is the same.
-    let floor = Floor::new(nearest.as_ref().map_or(f64::NEG_INFINITY, |n| n.margin));
     let turns: Vec<f64> = first_turns(arm, samples, &refs, cfg)
         .into_iter()
         .take(TRIES)
         .collect();
+    // Every try's first MEET_AT locations; on a longer path, tries whose tracks have met
+    // there are one plan (the rest of the path takes them along one valley of the
+    // joint-change cost), so only one of them is planned on.
+    let heads = crate::chunk::par_map(turns.len(), threads, |k| {
+        let mut t = Track::new(arm, Some(turns[k]), samples.len());
+        let end = MEET_AT.min(samples.len());
+        advance(arm, samples, &refs, cfg, Some(turns[k]), None, &mut t, end)
+            .ok()
+            .map(|_| t)
+    });
+    let dropped = if meet && samples.len() > MEET_AT {
+        met(arm, &heads)
+    } else {
+        vec![false; heads.len()]
+    };
+    let tries_met: Vec<usize> = (0..heads.len())
+        .filter(|&k| dropped[k])
+        .map(|k| k + 1)
+        .collect();
+    let heads: Vec<Mutex<Option<Track>>> = heads
+        .into_iter()
+        .zip(&dropped)
+        .map(|(t, &d)| Mutex::new(t.filter(|_| !d)))
+        .collect();
+    // A try whose locations come nearer trouble than the plan taken so far (or than
+    // CLEAR, while a clear plan of a lower order may still come) cannot be taken: it
+    // stops there. This saves work only; the plan taken is the same.
+    let floor = Floor::new(nearest.as_ref().map_or(f64::NEG_INFINITY, |n| n.margin));
     // The order of the first clear plan found (planning stops there: a later try is not
     // needed), the next try to take, and the plan taken so far.
     let clear_at = AtomicUsize::new(usize::MAX);
@@ -443,21 +550,33 @@ fn plan_tries(
     let best: Mutex<Option<Tried>> = Mutex::new(None);
     let work = || loop {
         let k = next.fetch_add(1, Ordering::Relaxed);
-        let Some(&psi) = turns.get(k) else {
+        let Some(head) = heads.get(k) else {
             break;
         };
         let order = k + 1;
         if clear_at.load(Ordering::Relaxed) < order {
             break;
         }
+        let head = head
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .take();
+        let Some(mut t) = head else {
+            continue;
+        };
         let stop_below = stop_early.then_some(&floor);
-        let Ok(Some(located)) = track(arm, samples, &refs, cfg, Some(psi), stop_below) else {
+        if stop_below.is_some_and(|f| t.least(arm) < f.get()) {
+            continue;
+        }
+        let start = Some(turns[k]);
+        let n = samples.len();
+        let Ok(true) = advance(arm, samples, &refs, cfg, start, stop_below, &mut t, n) else {
             continue;
         };
         let tried = Tried {
             order,
-            margin: worst(&located),
-            located,
+            margin: t.least(arm),
+            located: t.out,
         };
         if tried.margin >= CLEAR {
             clear_at.fetch_min(order, Ordering::Relaxed);
@@ -484,12 +603,13 @@ fn plan_tries(
     let tried = best
         .into_inner()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    match (nearest, tried) {
+    let taken = match (nearest, tried) {
         (Ok(n), Some(t)) => Ok(if t.beats(&n) { t } else { n }.located),
         (Ok(n), None) => Ok(n.located),
         (Err(_), Some(t)) => Ok(t.located),
         (Err(e), None) => Err(e),
-    }
+    };
+    taken.map(|l| (l, tries_met))
 }
 
 /// The least margin ([`Arm::margin`]) a try must keep all along to be taken over the plan
@@ -513,6 +633,34 @@ impl Floor {
     }
 }
 
+/// A plan under way: the locations planned so far and the state the next one starts
+/// from (the last joints and turn about the beam).
+struct Track {
+    out: Vec<Located>,
+    prev: Q,
+    psi_prev: f64,
+}
+
+impl Track {
+    /// Nothing planned yet: from the safe location, with the first turn `start` (`None`:
+    /// the one nearest the safe location).
+    fn new(arm: &Arm, start: Option<f64>, capacity: usize) -> Track {
+        Track {
+            out: Vec::with_capacity(capacity),
+            prev: arm.safe,
+            psi_prev: start.unwrap_or(0.0),
+        }
+    }
+
+    /// The least margin ([`Arm::margin`]) of the locations planned so far.
+    fn least(&self, arm: &Arm) -> f64 {
+        self.out
+            .iter()
+            .map(|x| arm.margin(&x.q))
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
 /// The plan from a first turn about the beam (`None`: the one nearest the safe location).
 /// With a floor, `Ok(None)` when a location's margin falls below it: the plan cannot be
 /// taken and is left unfinished.
@@ -524,10 +672,28 @@ fn track(
     start: Option<f64>,
     floor: Option<&Floor>,
 ) -> Result<Option<Vec<Located>>, RobotError> {
-    let mut out: Vec<Located> = Vec::with_capacity(samples.len());
-    let mut prev = arm.safe;
-    let mut psi_prev = start.unwrap_or(0.0);
-    for (i, (s, u)) in samples.iter().zip(refs).enumerate() {
+    let mut t = Track::new(arm, start, samples.len());
+    let done = advance(arm, samples, refs, cfg, start, floor, &mut t, samples.len())?;
+    Ok(done.then_some(t.out))
+}
+
+/// Plans locations `t.out.len()..end` of the plan from first turn `start` (`None`: the
+/// one nearest the safe location), each from the last; `Ok(false)` when a location's
+/// margin falls below the floor (left unfinished: the plan cannot be taken).
+#[allow(clippy::too_many_arguments)]
+fn advance(
+    arm: &Arm,
+    samples: &[Sample],
+    refs: &[Vector3<f64>],
+    cfg: Config,
+    start: Option<f64>,
+    floor: Option<&Floor>,
+    t: &mut Track,
+    end: usize,
+) -> Result<bool, RobotError> {
+    let from = t.out.len();
+    for (i, (s, u)) in samples.iter().zip(refs).enumerate().take(end).skip(from) {
+        let (prev, psi_prev) = (t.prev, t.psi_prev);
         let solve = |psi: f64, fresh: bool| solve_at(arm, s, u, psi, cfg, &prev, fresh);
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
         let eval = |psi: f64| solve(psi, i == 0).map(|(q, p)| (cost(&q), q, p));
@@ -611,13 +777,13 @@ fn track(
             check_speed(arm, s, &prev, &q)?;
         }
         if floor.is_some_and(|f| arm.margin(&q) < f.get()) {
-            return Ok(None);
+            return Ok(false);
         }
-        out.push(Located { q, part, psi });
-        prev = q;
-        psi_prev = psi;
+        t.out.push(Located { q, part, psi });
+        t.prev = q;
+        t.psi_prev = psi;
     }
-    Ok(Some(out))
+    Ok(true)
 }
 
 /// The joint speeds of the move from `from` to `to` in `s.dt` seconds.
@@ -751,5 +917,51 @@ mod tests {
                 "{margins:?} {order:?}"
             );
         }
+    }
+    /// A track ending at joints `q` and turn `psi`, its one earlier location at `q0`.
+    fn ended(q0: Q, q: Q, psi: f64) -> Track {
+        let at = |q: Q| Located {
+            q,
+            part: Frame::identity(),
+            psi,
+        };
+        Track {
+            out: vec![at(q0), at(q)],
+            prev: q,
+            psi_prev: psi,
+        }
+    }
+
+    /// [`met`]: of tracks within [`MEET`] of one another (every joint and the turn, half
+    /// turns of the turn apart the same), the one keeping farthest from trouble so far is
+    /// kept, the first of equals; tracks farther apart and failed tries are left alone.
+    #[test]
+    fn tracks_that_meet_keep_the_one_farthest_from_trouble() {
+        let Some(arm) = Arm::builtin("puma-lens") else {
+            panic!("built-in");
+        };
+        let q = [0.1, 0.5, -0.5, 0.2, 0.4, 0.3];
+        // J1 moved (far from its limits: the margins stay q's).
+        let (mut near, mut far) = (q, q);
+        near[0] += 0.9 * MEET;
+        far[0] += 2.0 * MEET;
+        let tau = std::f64::consts::TAU;
+        // J5 near its limit (100°) at the start: nearer trouble.
+        let mut worse = q;
+        worse[4] = 1.7;
+        let tries = [
+            Some(ended(worse, q, 1.0)),
+            None,
+            Some(ended(q, near, 1.0 + tau)),
+            Some(ended(q, q, 1.0 + 1.1 * MEET)),
+            Some(ended(q, far, 1.0)),
+            Some(ended(q, q, 1.0)),
+        ];
+        // 0 and 2 meet: 2 kept (0 nearer trouble); 3's turn is too far, 4's joints; 5
+        // meets 2 and keeps as far from trouble: the first of equals (2) kept.
+        assert_eq!(met(&arm, &tries), [true, false, false, false, false, true]);
+        // Equal so far: the first kept.
+        let tries = [Some(ended(q, q, 1.0)), Some(ended(q, near, 1.0))];
+        assert_eq!(met(&arm, &tries), [false, true]);
     }
 }

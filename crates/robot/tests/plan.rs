@@ -5,7 +5,8 @@ use lampost_robot::chunk::{
     chunk_files, chunk_ranges, from_zyz, part_of, verify_threads, zyz, ChunkFile,
 };
 use lampost_robot::plan::{
-    plan, plan_every_try_to_its_end, plan_threads, resample, PathPoint, Sample, CLEAR, MAX_TURN,
+    plan, plan_and_tries_met, plan_every_try_in_full, plan_every_try_to_its_end, plan_threads,
+    resample, PathPoint, Sample, CLEAR, MAX_TURN, MEET, MEET_AT,
 };
 use lampost_robot::RobotError;
 use lampost_robot::{Arm, ArmDef, Q};
@@ -313,4 +314,164 @@ fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
         "{e1:?}"
     );
     assert_eq!(verify(&bad, 2), e1);
+}
+
+/// The plate's end in passes up its face (5 passes of 600 mm, the laser off between):
+/// 3,400 locations at 1 mm, longer than `MEET_AT`, where the tried first turns 5° apart
+/// meet.
+fn plate_passes() -> Vec<PathPoint> {
+    let up = [0.0, 0.0, 1.0];
+    let mut path = plate_end();
+    for (k, z) in [50.0, 100.0, 150.0].into_iter().enumerate() {
+        let (a, b) = if k % 2 == 0 {
+            (-300.0, 300.0)
+        } else {
+            (300.0, -300.0)
+        };
+        path.push(pt(a, 1.12132, z, up, false, 10 + 2 * k));
+        path.push(pt(b, 1.12132, z, up, true, 11 + 2 * k));
+    }
+    path
+}
+
+/// Tries whose tracks meet at `MEET_AT` count as one plan: some are dropped on the
+/// plate's passes, the plan taken is the one the rule without meeting takes or keeps as
+/// far from trouble within `MEET`, on any number of threads, with or without the early
+/// stop.
+#[test]
+fn tries_that_meet_count_as_one_plan() {
+    let arm = arm();
+    let s = resample(&plate_passes(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.len() > MEET_AT, "{}", s.len());
+    let (taken, met) =
+        plan_and_tries_met(&arm, &s, arm.config, 1).unwrap_or_else(|e| panic!("{e}"));
+    let (full, full_margin) =
+        plan_every_try_in_full(&arm, &s, arm.config, 1).unwrap_or_else(|e| panic!("{e}"));
+    let margin = taken
+        .iter()
+        .map(|l| arm.margin(&l.q))
+        .fold(f64::INFINITY, f64::min);
+    println!(
+        "{} locations; tries met: {met:?}; margin {:.6}° (every try in full: {:.6}°, the same plan: {})",
+        s.len(),
+        margin.to_degrees(),
+        full_margin.to_degrees(),
+        taken == full
+    );
+    assert!(!met.is_empty(), "no try met another");
+    assert!(margin >= full_margin - MEET, "{margin} {full_margin}");
+    for threads in [2, 4] {
+        assert_eq!(
+            plan_and_tries_met(&arm, &s, arm.config, threads),
+            Ok((taken.clone(), met.clone()))
+        );
+    }
+    for threads in [1, 2] {
+        assert_eq!(
+            plan_every_try_to_its_end(&arm, &s, arm.config, threads),
+            Ok(taken.clone())
+        );
+    }
+}
+
+/// Bit for bit what the standard parser reads (`None` where it fails).
+fn std_bits(s: &str) -> Option<u64> {
+    s.parse::<f64>().ok().map(f64::to_bits)
+}
+
+proptest! {
+    /// The location files' numbers (`lampost_gcode::fixed`, any places) are read by the
+    /// fast path, bit for bit as the standard parser reads them.
+    #[test]
+    fn numbers_as_written_are_read_as_the_standard_parser_reads_them(
+        v in prop_oneof![-1e6..1e6f64, -1.0..1.0f64, -1e-7..1e-7f64, Just(-0.0), Just(0.0)],
+        places in 0usize..10,
+    ) {
+        let s = lampost_gcode::fixed(v, places);
+        let fast = lampost_robot::chunk::parse_plain(&s);
+        if s.bytes().filter(u8::is_ascii_digit).count() <= 15 {
+            prop_assert!(fast.is_some(), "{}", s);
+        }
+        prop_assert_eq!(fast.map(f64::to_bits).or_else(|| std_bits(&s)), std_bits(&s), "{}", s);
+    }
+
+    /// Any text of digits, signs and points (and a few other characters): the fast path
+    /// gives the standard parser's value or leaves the text to it.
+    #[test]
+    fn any_number_text_is_read_as_the_standard_parser_reads_it(
+        s in "[-+]?[0-9]{0,18}(\\.[0-9]{0,18})?([eE][-+]?[0-9]{1,3})?|[-+.0-9a-z ]{0,12}",
+    ) {
+        let fast = lampost_robot::chunk::parse_plain(&s);
+        if let Some(v) = fast {
+            prop_assert_eq!(Some(v.to_bits()), std_bits(&s), "{}", s);
+        }
+        prop_assert_eq!(
+            lampost_robot::chunk::parse_number(&s).map(f64::to_bits),
+            std_bits(&s),
+            "{}",
+            s
+        );
+    }
+}
+
+/// A location row as the format's description gives it, number by number through
+/// `lampost_gcode::fixed`: the reference the chunk writer is held to.
+#[allow(clippy::too_many_arguments)]
+fn row_reference(
+    n: usize,
+    kind: &str,
+    index: &str,
+    dt: f64,
+    part: &lampost_robot::Frame,
+    laser: bool,
+    q: &Q,
+) -> String {
+    use lampost_gcode::fixed;
+    let mut f = vec![
+        n.to_string(),
+        kind.to_string(),
+        index.to_string(),
+        fixed(dt, 6),
+    ];
+    f.extend([part.t.x, part.t.y, part.t.z].map(|v| fixed(v, 6)));
+    f.extend(zyz(&part.r).map(|v| fixed(v.to_degrees(), 7)));
+    f.push(if laser { "1" } else { "0" }.to_string());
+    f.extend(q.map(|v| fixed(v.to_degrees(), 7)));
+    f.join(" ")
+}
+
+/// Every row of the chunk files (the plate's end, cut for a 1000-location controller) is
+/// the reference's text.
+#[test]
+fn chunk_rows_are_the_formats_numbers() {
+    let puma = arm();
+    let s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let located = plan(&puma, &s, puma.config).unwrap_or_else(|e| panic!("{e}"));
+    let ranges = chunk_ranges(&s, 1000).unwrap_or_else(|e| panic!("{e}"));
+    let files = chunk_files(&puma, puma.config, &s, &located, &ranges, 1);
+    let safe = part_of(&puma, &puma.safe);
+    let mut rows = 0;
+    for (f, r) in files.iter().zip(&ranges) {
+        let lines: Vec<&str> = f.text.lines().filter(|l| !l.starts_with('#')).collect();
+        assert_eq!(lines.len(), r.len() + 2);
+        let safe_row = |n| row_reference(n, "safe", "-", 0.0, &safe, false, &puma.safe);
+        assert_eq!(lines[0], safe_row(1));
+        assert_eq!(lines[lines.len() - 1], safe_row(lines.len()));
+        for (k, i) in r.clone().enumerate() {
+            let first = i == r.start;
+            let dt = if first { 0.0 } else { s[i].dt };
+            let want = row_reference(
+                k + 2,
+                "path",
+                &i.to_string(),
+                dt,
+                &located[i].part,
+                !first && s[i].deposit,
+                &located[i].q,
+            );
+            assert_eq!(lines[k + 1], want);
+            rows += 1;
+        }
+    }
+    assert_eq!(rows, s.len());
 }
