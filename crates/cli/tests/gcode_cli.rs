@@ -504,3 +504,44 @@ fn transform_words_are_arguments_and_bolt_hole_patterns_are_named() {
         "{moves:?}"
     );
 }
+
+/// Fusion 360's Haas 5-axis output: TCPC (G234), dynamic work offset (G254/G255) and
+/// feature coordinates (G268/G269) are named, not "unknown"; the post refuses them.
+#[test]
+fn haas_five_axis_codes_are_named() {
+    let dir = tempdir("haas-5x");
+    let prog = dir.join("umc.nc");
+    std::fs::write(
+        &prog,
+        "%\nO1001\nG90 G94 G17\nG20\nG254\nG0 X0 Y0 Z1.\nG234 H1\nG268 X0 Y0 Z0 I0 J45. K0 Q123\nG1 X1 F10.\nG269\nG255\nM30\n%\n",
+    )
+    .expect("write");
+    let s = prog.to_str().expect("utf8");
+    let o = lampost(&["check", "--flavor", "haas", s]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    for (at, what) in [
+        (":5:1", "DWO"),
+        (":7:1", "TCPC"),
+        (":8:1", "feature coordinates"),
+    ] {
+        assert!(e.contains(at) && e.contains(what), "{e}");
+    }
+    assert!(!e.contains("unknown G-code"), "{e}");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--flavor",
+        "haas",
+        s,
+        "-o",
+        "-",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":5: G254") && o.stdout.is_empty(),
+        "{}",
+        stderr(&o)
+    );
+}

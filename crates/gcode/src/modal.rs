@@ -336,7 +336,12 @@ pub fn g_group(code: u16) -> Option<GGroup> {
         | 1030
         | 1500
         | 1540
-        | 1870 => Other,
+        | 1870
+        | 2340
+        | 2540
+        | 2550
+        | 2680
+        | 2690 => Other,
         _ => return None,
     })
 }
@@ -392,7 +397,8 @@ pub fn other_code(code: u16) -> Option<OtherCode> {
         70 => DiameterMode,
         // G11 is no G-code of the machining controls: only a printer program (where an
         // unknown code is the firmware's) reaches here with it.
-        80 | 110 | 670 | 1030 | 1870 => Setting,
+        // Haas's cancels of its dynamic work offset (G255) and feature coordinates (G269).
+        80 | 110 | 670 | 1030 | 1870 | 2550 | 2690 => Setting,
         120 | 130 => Unsimulated("circular pocket milling"),
         // Only LinuxCNC's reading brings these here (elsewhere G70/G71 set the units).
         700 | 710..=712 | 720..=722 => Unsimulated("lathe roughing or finishing cycle"),
@@ -403,6 +409,9 @@ pub fn other_code(code: u16) -> Option<OtherCode> {
         660 => Unsimulated("modal macro call after every move"),
         682..=684 => Unsimulated("tilted work plane"),
         1500 => Unsimulated("pocket milling cycle"),
+        2340 => Unsimulated("Haas tool centre point control, TCPC"),
+        2540 => Unsimulated("Haas dynamic work offset, DWO"),
+        2680 => Unsimulated("Haas feature coordinates: a tilted work plane"),
         _ => return None,
     })
 }
