@@ -545,3 +545,30 @@ fn haas_five_axis_codes_are_named() {
         stderr(&o)
     );
 }
+
+/// Marlin's own G-codes in a slicer program: `G26 C P T` (mesh validation pattern, bare
+/// flags) and `G12 P0 S1 T3` (nozzle cleaning) move the nozzle: each is named at its line
+/// (no "letter without number" error), and the post refuses them.
+#[test]
+fn marlin_firmware_moves_are_named() {
+    let dir = tempdir("marlin-own");
+    let prog = dir.join("m.gcode");
+    std::fs::write(
+        &prog,
+        ";FLAVOR:Marlin\nG21\nG90\nM82\nG92 E0\nG1 Z0.2 F600\nG1 X10 Y10 F3000\nG12 P0 S1 T3\nG1 X30 Y10 E2.0\nG26 C P T\nM30\n",
+    )
+    .expect("write");
+    let s = prog.to_str().expect("utf8");
+    let o = lampost(&["check", s]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains(":8:1") && e.contains("nozzle cleaning"), "{e}");
+    assert!(e.contains(":10:1") && e.contains("G26"), "{e}");
+    let o = lampost(&["post", "--machine", "nrc-lc", "--e-extrusion", s, "-o", "-"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":8: G12") && o.stdout.is_empty(),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -733,6 +733,9 @@ impl Interpreter {
                 continue;
             }
             let kind = match other_code(c) {
+                Some(_) if c == 120 && self.opts.flavor.is_slicer() => ErrorKind::NotSimulated(
+                    format!("{name} (the printer's nozzle cleaning: it moves the nozzle)"),
+                ),
                 _ if self.opts.flavor == crate::flavor::Flavor::Haas
                     && crate::modal::haas_pattern(c).is_some() =>
                 {

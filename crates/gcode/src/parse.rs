@@ -1131,7 +1131,12 @@ fn words_reference_items<'a>(
                                 (b'T', _) => true,
                                 // Homing and bed levelling take bare flags (`G28 X`,
                                 // Marlin and Bambu `G29 A`).
-                                (b'G', Some(c)) => matches!(c, 280 | 290 | 300 | 1610 | 1620),
+                                // So do a printer firmware's own G-codes (Marlin's
+                                // `G26 C P T` mesh validation pattern).
+                                (b'G', Some(c)) => {
+                                    matches!(c, 280 | 290 | 300 | 1610 | 1620)
+                                        || slicer && crate::modal::g_group(c).is_none()
+                                }
                                 // RepRapFirmware's macro call takes a file name:
                                 // `M98 P"/macros/purge.g"`.
                                 (b'M', Some(980)) => slicer,
