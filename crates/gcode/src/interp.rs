@@ -1896,15 +1896,30 @@ impl Interpreter {
                 w.gs.iter()
                     .find(|g| matches!(g.1, 310 | 311 | 382..=385))
                     .map_or_else(|| "a probe move".to_string(), |g| g.0.display_code());
+            // LinuxCNC's G38.x: traced as its standalone rs274 simulates it (see
+            // `probe_rest`); other controls' probes stay at their programmed end.
+            let backs_off = !probe && self.opts.flavor == crate::flavor::Flavor::LinuxCnc;
+            let rest = if backs_off {
+                "; the trace goes to its programmed end and backs off 0.01 in (0.254 mm) towards its start, as LinuxCNC's simulator does"
+            } else {
+                "; the trace goes to its programmed end"
+            };
             self.warn(
                 b,
                 out,
                 ErrorKind::NotSimulated(format!(
-                    "{code} (a probe move stops where the probe touches; the trace goes to its programmed end)"
+                    "{code} (a probe move stops where the probe touches{rest})"
                 )),
                 None,
             );
+            let start = self.pos;
+            if backs_off {
+                probe_must_move(b, w, &start, &target)?;
+            }
             self.emit(b.line, MoveKind::Probe, target, feed, origin, out);
+            if backs_off {
+                self.pos = probe_rest(&start, &target, self.modal.units);
+            }
             return Ok(());
         }
         match self.modal.motion {
@@ -2843,8 +2858,89 @@ impl DisplayCode for Word<'_> {
     }
 }
 
+/// LinuxCNC's rs274 refuses a G38.2 or G38.4 (the probes that must trip) that does not
+/// move at all ("Start point too close to probe point"); G38.3 and G38.5 may, and a probe
+/// that turns only a rotary is run.
+fn probe_must_move(b: &Block<'_>, w: &Words<'_, '_>, start: &Position, end: &Position) -> Res<()> {
+    let Some(g) = w.gs.iter().find(|g| matches!(g.1, 382 | 384)) else {
+        return Ok(());
+    };
+    if start == end {
+        return Err(diag(
+            b,
+            Severity::Error,
+            ErrorKind::BadValue {
+                word: g.0.display_code(),
+                why: "the probe does not move (LinuxCNC: start point too close to probe point)",
+            },
+            Some(g.0.span),
+        ));
+    }
+    Ok(())
+}
+
+/// Where LinuxCNC's standalone rs274 leaves the tool after a straight probe (G38.x) that
+/// no contact stops: its simulator lets the probe trip at the programmed `end` and backs
+/// it off 0.01 in (0.254 mm) along the move towards its `start` (X, Y and Z only; a
+/// probe of no length stays at its end). This models a simulator: a real probe stops
+/// where it touches, which no trace knows. The probe's results (`#5061`…) hold `end`.
+pub fn probe_rest(start: &Position, end: &Position, units: Units) -> Position {
+    let back = match units {
+        Units::Inch => 0.01,
+        Units::Mm => 0.254,
+    };
+    let d = [start[0] - end[0], start[1] - end[1], start[2] - end[2]];
+    let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let mut rest = *end;
+    if length > 0.0 && length.is_finite() {
+        for (r, di) in rest.iter_mut().zip(d) {
+            *r += back * (di / length);
+        }
+    }
+    rest
+}
+
 #[cfg(test)]
 mod tests {
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A probe with no contact rests on its line, the back-off from its end towards
+        /// its start (0.01 in, 0.254 mm), rotaries untouched; worked out here from the
+        /// direction alone (no division by the length).
+        #[test]
+        fn probe_rest_backs_off_along_the_move(
+            s in proptest::array::uniform9(-100.0f64..100.0),
+            e in proptest::array::uniform9(-100.0f64..100.0),
+            inch in any::<bool>(),
+        ) {
+            let units = if inch { Units::Inch } else { Units::Mm };
+            let back = if inch { 0.01 } else { 0.254 };
+            let r = probe_rest(&s, &e, units);
+            let len = (0..3).map(|i| (s[i] - e[i]).powi(2)).sum::<f64>().sqrt();
+            prop_assume!(len > 1e-6);
+            let moved = (0..3).map(|i| (r[i] - e[i]).powi(2)).sum::<f64>().sqrt();
+            prop_assert!((moved - back).abs() < 1e-9);
+            for i in 0..3 {
+                // Towards the start: each axis moves the start's way, in proportion.
+                prop_assert!(((r[i] - e[i]) * len - back * (s[i] - e[i])).abs() < 1e-9 * (1.0 + len));
+            }
+            prop_assert_eq!(&r[3..], &e[3..]);
+        }
+    }
+
+    #[test]
+    fn probe_rest_of_a_probe_that_stands_still_is_its_end() {
+        let p = [1.0, 2.0, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let mut q = p;
+        q[3] = 9.0;
+        assert_eq!(probe_rest(&q, &p, Units::Mm), p);
+        // Worked by hand: straight down 2 in from Z1 to Z-1, backed off to Z-0.99.
+        let s = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let e = [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        assert!((probe_rest(&s, &e, Units::Inch)[2] + 0.99).abs() < 1e-15);
+    }
+
     use super::*;
     use crate::stream::Stream;
 
