@@ -222,6 +222,28 @@ pub struct Interpreter {
     profile: Option<Box<crate::lathe::Recording>>,
     /// The O-word sub a profile cycle asks the line source to call (taken by the stream).
     profile_call: Option<String>,
+    /// LinuxCNC's G41.1/G42.1 in force with its diameter D: the side, the radius (D/2)
+    /// and the lathe tool's orientation (L; 0 when none), for the moves lampost
+    /// compensates (`comp.rs`: a G70's).
+    comp_tool: Option<(crate::comp::Side, f64, u8)>,
+    /// A compensated G70's rapid to its start, made (compensated) with its moves.
+    comp_entry: Option<Position>,
+    /// Cutter compensation being simulated (`comp.rs`): its state and held moves.
+    comp: Option<Box<crate::comp::Comp<CompTag>>>,
+    /// Under simulated compensation, where the tool was last drawn; the position
+    /// ([`Interpreter::position`]) stays on the programmed path, as rs274 reads the next
+    /// block from it.
+    comp_drawn: Position,
+}
+
+/// What a compensated move keeps of its block: line, end (for the axes off the plane),
+/// feed and origin.
+#[derive(Debug, Clone, Copy)]
+struct CompTag {
+    line: u32,
+    to: Position,
+    feed: f64,
+    origin: Origin,
 }
 
 /// Words of one block, looked up by letter.
@@ -371,6 +393,10 @@ impl Interpreter {
             feed_from_macro: false,
             profile: None,
             profile_call: None,
+            comp_tool: None,
+            comp_entry: None,
+            comp: None,
+            comp_drawn: [0.0; 9],
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -569,7 +595,8 @@ impl Interpreter {
     // Not inlined, like `parse::plain_motion` (see there).
     #[inline(never)]
     pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
-        if self.profile.is_some() {
+        if self.profile.is_some() || self.comp.is_some() {
+            // Compensated moves are held (`comp.rs`): the reference path makes them.
             return None;
         }
         let motion = match p.motion {
@@ -1451,6 +1478,10 @@ impl Interpreter {
             self.motion(b, w, g53, probe, out)?;
         }
         if stop_after {
+            if let Some(c) = self.comp.take() {
+                self.comp_release(*c, out)
+                    .map_err(|e| comp_diag(b, e, None))?;
+            }
             self.ended = true;
             self.open_programs = 0;
         }
@@ -1521,7 +1552,57 @@ impl Interpreter {
                 420 | 421 => CutterComp::Right,
                 _ => CutterComp::Off,
             };
-            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off {
+            self.comp_tool = match (c, w.get(b'D')) {
+                (411 | 421, Some(d))
+                    if self.opts.flavor == crate::flavor::Flavor::LinuxCnc && d.is_finite() =>
+                {
+                    let side = if c == 411 {
+                        crate::comp::Side::Left
+                    } else {
+                        crate::comp::Side::Right
+                    };
+                    let orientation = w
+                        .get(b'L')
+                        .filter(|l| l.fract() == 0.0 && (0.0..=9.0).contains(l))
+                        .map_or(0, |l| l as u8);
+                    Some((side, d / 2.0, orientation))
+                }
+                _ => None,
+            };
+            if let Some(c) = self.comp.take() {
+                // G40 (or a new G41/G42): the held moves go as they are.
+                self.comp_release(*c, out)
+                    .map_err(|e| comp_diag(b, e, Some(gw.span)))?;
+            }
+            let plane = self.modal.plane;
+            if let (Some((side, radius, orientation)), true) =
+                (self.comp_tool, matches!(plane, Plane::XY | Plane::XZ))
+            {
+                if radius != 0.0 {
+                    let mm = self.modal.units == Units::Mm;
+                    let at = plane_point(plane, &self.pos);
+                    let orientation = if plane == Plane::XZ { orientation } else { 0 };
+                    self.comp = Some(Box::new(crate::comp::Comp::new(
+                        side,
+                        radius,
+                        orientation,
+                        mm,
+                        at,
+                    )));
+                    self.comp_drawn = self.pos;
+                }
+            }
+            if self.comp.is_some() {
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::CutterCompTraced(gw.display_code()),
+                    Some(gw.span),
+                );
+            }
+            let m = &mut self.modal;
+            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off && self.comp.is_none()
+            {
                 self.warn(
                     b,
                     out,
@@ -1933,8 +2014,7 @@ impl Interpreter {
             )),
             Motion::Rapid => {
                 self.centre_words_unused(b, w, out)?;
-                self.emit(b.line, MoveKind::Rapid, target, 0.0, origin, out);
-                Ok(())
+                self.emit_comp(b, MoveKind::Rapid, target, 0.0, origin, out)
             }
             Motion::Thread => {
                 // Spindle-synchronised (G33, rigid tap G33.1): the feed is the pitch K
@@ -1956,8 +2036,7 @@ impl Interpreter {
                     self.centre_words_unused(b, w, out)?;
                 }
                 let feed = self.feed_for(b, w)?;
-                self.emit(b.line, MoveKind::Linear, target, feed, origin, out);
-                Ok(())
+                self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
             }
             Motion::ArcCw | Motion::ArcCcw => {
                 let arc = self.arc(b, w, target, out);
@@ -2085,7 +2164,7 @@ impl Interpreter {
         let &(gw, c, _) =
             w.gs.iter()
                 .find(|g| g.2 == GGroup::Other && crate::modal::is_lathe_cycle(g.1))?;
-        if c == 700 && self.modal.cutter_comp != CutterComp::Off {
+        if c == 700 && self.modal.cutter_comp != CutterComp::Off && self.comp.is_none() {
             return None;
         }
         Some((gw, c))
@@ -2153,7 +2232,14 @@ impl Interpreter {
                 to[a] = v + off[a];
             }
         }
-        self.emit(b.line, MoveKind::Rapid, to, 0.0, Origin::CannedCycle, out);
+        if self.comp.is_some() {
+            // Compensated (a G70): the rapid goes through compensation with the cycle's
+            // moves.
+            self.comp_entry = Some(to);
+        } else {
+            self.comp_entry = None;
+            self.emit(b.line, MoveKind::Rapid, to, 0.0, Origin::CannedCycle, out);
+        }
         self.modal.motion = Motion::Rapid;
         let cycle = crate::lathe::ProfileCycle {
             cycle: code / 10,
@@ -2293,7 +2379,7 @@ impl Interpreter {
         };
         // The moves are checked whole before any is sent: a refused cycle moves nothing.
         let mut planned = Vec::with_capacity(moves.len());
-        let mut pos = self.pos;
+        let mut pos = self.comp_entry.unwrap_or(self.pos);
         let mut last = None;
         for m in moves {
             let (kind, to, f) = match m {
@@ -2342,6 +2428,62 @@ impl Interpreter {
             planned.push((kind, to, f));
         }
         let kept = rec.line;
+        if let (Some(comp), Some(entry)) = (self.comp.as_deref(), self.comp_entry.take()) {
+            // Under cutter compensation (a G70): the rapid to its start and its moves go
+            // through the compensation in force, all checked before any is sent.
+            let mut trial = comp.clone();
+            let mut pieces = Vec::new();
+            let plane = self.modal.plane;
+            let tag = |to: Position, feed: f64| CompTag {
+                line: kept,
+                to,
+                feed,
+                origin: Origin::CannedCycle,
+            };
+            trial
+                .straight(
+                    true,
+                    plane_point(plane, &entry),
+                    tag(entry, 0.0),
+                    &mut pieces,
+                )
+                .map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
+            // rs274 reads the profile's subroutine after that rapid, and its reading
+            // leaves its tool position at the profile's last point (the programmed
+            // point stays the cycle's start): found against rs274, which starts the
+            // first pass from there.
+            let off = self.offset();
+            let mut last_read = entry;
+            last_read[0] = rec.at.im + off[0];
+            last_read[2] = rec.at.re + off[2];
+            trial.tool_at(plane_point(plane, &last_read));
+            for (kind, to, f) in &planned {
+                let p = plane_point(plane, to);
+                let done = match *kind {
+                    MoveKind::Arc {
+                        clockwise, center, ..
+                    } => {
+                        let c = plane_point(
+                            plane,
+                            &[
+                                center[0], center[1], center[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                            ],
+                        );
+                        trial.arc(!clockwise, c, p, tag(*to, *f), &mut pieces)
+                    }
+                    MoveKind::Rapid => trial.straight(true, p, tag(*to, *f), &mut pieces),
+                    _ => trial.straight(false, p, tag(*to, *f), &mut pieces),
+                };
+                done.map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
+            }
+            let b_warn = rec.warning();
+            out(Event::Diagnostic(b_warn));
+            self.send_pieces(&trial, pieces, out);
+            self.pos = planned.last().map_or(entry, |m| m.1);
+            self.comp = Some(Box::new(trial));
+            self.modal.motion = last.unwrap_or(self.modal.motion);
+            return Ok(());
+        }
         let b_warn = rec.warning();
         out(Event::Diagnostic(b_warn));
         for (kind, to, f) in planned {
@@ -2513,8 +2655,8 @@ impl Interpreter {
         let mut center = [self.pos[0], self.pos[1], self.pos[2]];
         center[u] = cu;
         center[v] = cv;
-        self.emit(
-            b.line,
+        self.emit_comp(
+            b,
             MoveKind::Arc {
                 clockwise: cw,
                 center,
@@ -2525,8 +2667,148 @@ impl Interpreter {
             feed,
             Origin::Block,
             out,
-        );
-        Ok(())
+        )
+    }
+
+    /// A block's move, through cutter compensation when it is simulated (`comp.rs`):
+    /// held until the next move says where it ends; a refusal is located at the block.
+    fn emit_comp(
+        &mut self,
+        b: &Block<'_>,
+        kind: MoveKind,
+        to: Position,
+        feed: f64,
+        origin: Origin,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        if self.comp.is_none() {
+            self.emit(b.line, kind, to, feed, origin, out);
+            return Ok(());
+        }
+        if origin == Origin::MachineCoords {
+            return Err(comp_diag(
+                b,
+                crate::comp::CompError("Cannot use G53 with cutter radius compensation"),
+                None,
+            ));
+        }
+        let tag = CompTag {
+            line: b.line,
+            to,
+            feed,
+            origin,
+        };
+        self.comp_move(kind, tag, out)
+            .map_err(|e| comp_diag(b, e, None))
+    }
+
+    /// One programmed move into the compensation in force; what it lets go is sent.
+    fn comp_move(
+        &mut self,
+        kind: MoveKind,
+        tag: CompTag,
+        out: &mut impl FnMut(Event),
+    ) -> Result<(), crate::comp::CompError> {
+        let plane = self.modal.plane;
+        let Some(mut comp) = self.comp.take() else {
+            self.emit(tag.line, kind, tag.to, tag.feed, tag.origin, out);
+            return Ok(());
+        };
+        let mut pieces = Vec::new();
+        let p = plane_point(plane, &tag.to);
+        let done = match kind {
+            MoveKind::Arc {
+                clockwise,
+                center,
+                turns,
+                ..
+            } => {
+                if turns != 1 {
+                    Err(crate::comp::CompError(
+                        "an arc of more than one turn under cutter compensation (lampost does not simulate it)",
+                    ))
+                } else {
+                    comp.arc(
+                        !clockwise,
+                        plane_point(
+                            plane,
+                            &[
+                                center[0], center[1], center[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                            ],
+                        ),
+                        p,
+                        tag,
+                        &mut pieces,
+                    )
+                }
+            }
+            MoveKind::Rapid => comp.straight(true, p, tag, &mut pieces),
+            _ => comp.straight(false, p, tag, &mut pieces),
+        };
+        self.send_pieces(&comp, pieces, out);
+        if done.is_ok() {
+            self.pos = tag.to;
+        }
+        self.comp = Some(comp);
+        done
+    }
+
+    /// Compensation ends (G40, the program's end): the held moves go as they are.
+    fn comp_release(
+        &mut self,
+        mut comp: crate::comp::Comp<CompTag>,
+        out: &mut impl FnMut(Event),
+    ) -> Result<(), crate::comp::CompError> {
+        let mut pieces = Vec::new();
+        let done = comp.finish(&mut pieces);
+        self.send_pieces(&comp, pieces, out);
+        // The tool stays where it was drawn.
+        self.pos = self.comp_drawn;
+        done
+    }
+
+    /// Compensated pieces as moves (machine frame), the lathe tool's origin applied.
+    fn send_pieces(
+        &mut self,
+        comp: &crate::comp::Comp<CompTag>,
+        pieces: Vec<crate::comp::Piece<CompTag>>,
+        out: &mut impl FnMut(Event),
+    ) {
+        use crate::comp::Shape;
+        let plane = self.modal.plane;
+        let xz = plane == Plane::XZ;
+        let (u, v, _) = plane.axes();
+        let programmed = self.pos;
+        self.pos = self.comp_drawn;
+        for piece in pieces {
+            let t = piece.tag;
+            let mut end = if piece.corner { self.pos } else { t.to };
+            let q = comp.origin(piece.end, xz);
+            end[u] = q[0];
+            end[v] = q[1];
+            let kind = match piece.shape {
+                Shape::Straight { rapid: true } => MoveKind::Rapid,
+                Shape::Straight { rapid: false } => MoveKind::Linear,
+                Shape::Arc { center, turn } => {
+                    let c = comp.origin(center, xz);
+                    let mut centre = [end[0], end[1], end[2]];
+                    centre[u] = c[0];
+                    centre[v] = c[1];
+                    MoveKind::Arc {
+                        clockwise: turn < 0,
+                        center: centre,
+                        plane,
+                        turns: 1,
+                    }
+                }
+            };
+            let feed = if kind == MoveKind::Rapid { 0.0 } else { t.feed };
+            if end.iter().all(|x| x.is_finite()) {
+                self.emit(t.line, kind, end, feed, t.origin, out);
+            }
+        }
+        self.comp_drawn = self.pos;
+        self.pos = programmed;
     }
 
     /// The centre (in the plane's axes) of an arc from the tool's position to `target`
@@ -2856,6 +3138,27 @@ impl DisplayCode for Word<'_> {
             None => self.display(),
         }
     }
+}
+
+/// A position's coordinates in the plane's own order (X, Y in G17; Z, X in G18), as
+/// cutter compensation works in them (`comp.rs`).
+fn plane_point(plane: Plane, p: &Position) -> [f64; 2] {
+    let (u, v, _) = plane.axes();
+    [p[u], p[v]]
+}
+
+/// A cutter compensation refusal, located at its block.
+fn comp_diag(
+    b: &Block<'_>,
+    e: crate::comp::CompError,
+    span: Option<crate::ast::Span>,
+) -> Diagnostic {
+    diag(
+        b,
+        Severity::Error,
+        ErrorKind::CutterComp(e.0),
+        span.or(b.words().next().map(|w| w.span)),
+    )
 }
 
 /// LinuxCNC's rs274 refuses a G38.2 or G38.4 (the probes that must trip) that does not
