@@ -596,35 +596,47 @@ mod tests {
         out
     }
 
-    /// A square traced counter-clockwise with the tool on the left (inside): each
-    /// corner is an inside corner, met by intersection, 1 in from each side.
+    /// A square traced counter-clockwise with the tool on the left (inside), worked by
+    /// hand: the entry ends square to itself, 1 left of (5, 0) at (4, 0); turning along
+    /// +X from there is an outside corner (an arc about (5, 0) to (5, 1)); the square's
+    /// corners are inside corners, met 1 in from each side.
     #[test]
     fn a_square_inside_by_hand() {
         let out = run(
             Side::Left,
             1.0,
             [5.0, -5.0],
-            &[
-                [5.0, 0.0],
-                [10.0, 0.0],
-                [10.0, 10.0],
-                [0.0, 10.0],
-                [0.0, 0.0],
-            ],
+            &[[5.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]],
         );
         let ends: Vec<_> = out.iter().map(|p| p.end).collect();
-        let want = [[6.0, 0.0], [9.0, 1.0], [9.0, 9.0], [1.0, 9.0], [1.0, 0.0]];
+        let want = [
+            [4.0, 0.0],
+            [5.0, 1.0],
+            [9.0, 1.0],
+            [9.0, 9.0],
+            [1.0, 9.0],
+            [1.0, 0.0],
+        ];
         assert_eq!(ends.len(), want.len(), "{ends:?}");
         for (g, w) in ends.iter().zip(want) {
-            assert!(
-                (g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12,
-                "{ends:?}"
-            );
+            assert!((g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12, "{ends:?}");
         }
-        assert!(out.iter().all(|p| !p.corner));
+        assert_eq!(
+            out.iter().map(|p| p.corner).collect::<Vec<_>>(),
+            [false, true, false, false, false, false]
+        );
+        assert_eq!(
+            out[1].shape,
+            Shape::Arc {
+                center: [5.0, 0.0],
+                turn: -1
+            }
+        );
     }
 
-    /// The same square on the right (outside): each corner gets an arc about it.
+    /// The same square on the right (outside), by hand: the entry ends 1 right of
+    /// (5, 0), pulled back to (6, −1) where the offset of the +X side meets it (an inside
+    /// corner); the square's corner gets an arc about (10, 0).
     #[test]
     fn a_square_outside_by_hand() {
         let out = run(
@@ -633,15 +645,11 @@ mod tests {
             [5.0, -5.0],
             &[[5.0, 0.0], [10.0, 0.0], [10.0, 10.0]],
         );
-        // Entry to (4, 0); along to (10, -1); the corner arc about (10, 0) to (11, 0);
-        // up to (11, 10).
         let ends: Vec<_> = out.iter().map(|p| p.end).collect();
-        let want = [[4.0, 0.0], [10.0, -1.0], [11.0, 0.0], [11.0, 10.0]];
+        let want = [[6.0, -1.0], [10.0, -1.0], [11.0, 0.0], [11.0, 10.0]];
+        assert_eq!(ends.len(), want.len(), "{ends:?}");
         for (g, w) in ends.iter().zip(want) {
-            assert!(
-                (g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12,
-                "{ends:?}"
-            );
+            assert!((g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12, "{ends:?}");
         }
         assert_eq!(
             out[2].shape,
