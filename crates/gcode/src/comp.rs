@@ -606,7 +606,13 @@ mod tests {
             Side::Left,
             1.0,
             [5.0, -5.0],
-            &[[5.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]],
+            &[
+                [5.0, 0.0],
+                [10.0, 0.0],
+                [10.0, 10.0],
+                [0.0, 10.0],
+                [0.0, 0.0],
+            ],
         );
         let ends: Vec<_> = out.iter().map(|p| p.end).collect();
         let want = [
@@ -619,7 +625,10 @@ mod tests {
         ];
         assert_eq!(ends.len(), want.len(), "{ends:?}");
         for (g, w) in ends.iter().zip(want) {
-            assert!((g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12, "{ends:?}");
+            assert!(
+                (g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12,
+                "{ends:?}"
+            );
         }
         assert_eq!(
             out.iter().map(|p| p.corner).collect::<Vec<_>>(),
@@ -649,7 +658,10 @@ mod tests {
         let want = [[6.0, -1.0], [10.0, -1.0], [11.0, 0.0], [11.0, 10.0]];
         assert_eq!(ends.len(), want.len(), "{ends:?}");
         for (g, w) in ends.iter().zip(want) {
-            assert!((g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12, "{ends:?}");
+            assert!(
+                (g[0] - w[0]).abs() < 1e-12 && (g[1] - w[1]).abs() < 1e-12,
+                "{ends:?}"
+            );
         }
         assert_eq!(
             out[2].shape,
