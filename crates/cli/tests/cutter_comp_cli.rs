@@ -193,7 +193,35 @@ fn cutter_compensation_refusals_are_located() {
             "5:1",
             "Tool radius not less than arc radius with cutter radius compensation",
         ),
-    ] {
+    ]
+    .into_iter()
+    .chain(
+        [
+            (
+                "G18",
+                "Cannot change planes with cutter radius compensation on",
+            ),
+            ("G41.1 D2", "Cannot turn cutter radius comp on when on"),
+            ("G28", "Cannot use G28 or G30 with cutter radius comp"),
+            (
+                "G81 X1 Y1 Z-1 R1",
+                "Cannot use canned cycles with cutter compensation on",
+            ),
+            ("G38.2 Z-5", "Cannot probe with cutter radius comp on"),
+            (
+                "G53 G1 X5",
+                "Cannot use G53 with cutter radius compensation",
+            ),
+        ]
+        .into_iter()
+        .map(|(line, words)| {
+            let text: &'static str = Box::leak(
+                format!("G21 G17 F100\nG0 X-10 Y0\nG42.1 D4\nG1 X0 Y0\n{line}\nG40\nM2\n")
+                    .into_boxed_str(),
+            );
+            (text, "5:1", words)
+        }),
+    ) {
         let prog = work.join("refused.ngc");
         std::fs::write(&prog, text).expect("write");
         assert!(rs274_to_end(&prog, &work).is_err(), "rs274 runs {text}");

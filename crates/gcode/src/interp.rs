@@ -1505,6 +1505,9 @@ impl Interpreter {
         w: &Words<'_, '_>,
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
+        if self.comp.is_some() {
+            comp_conflicts(b, w, self.modal.plane)?;
+        }
         // G90 while M83 holds: firmwares differ on what E is next. lampost keeps it
         // relative, as Marlin 1, Prusa's firmware and RepRapFirmware do; Marlin 2 makes
         // it absolute again. Said once, where it happens.
@@ -1969,6 +1972,20 @@ impl Interpreter {
         } else {
             Origin::Block
         };
+        if self.comp.is_some() {
+            let why = if probe || self.modal.motion == Motion::Probe {
+                Some("Cannot probe with cutter radius comp on")
+            } else if matches!(self.modal.motion, Motion::Canned(_)) {
+                Some("Cannot use canned cycles with cutter compensation on")
+            } else if self.modal.motion == Motion::Thread {
+                Some("a spindle-synchronised move under cutter compensation (lampost does not simulate it)")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(comp_diag(b, crate::comp::CompError(why), None));
+            }
+        }
         if probe || self.modal.motion == Motion::Probe {
             // A probe move stops where the probe touches: traced to its programmed end,
             // with a warning (the post cannot place a contact it does not know).
@@ -2286,6 +2303,14 @@ impl Interpreter {
     /// True while a lathe profile cycle reads its subroutine.
     pub(crate) fn recording_profile(&self) -> bool {
         self.profile.is_some()
+    }
+
+    /// The end of the input: moves held by cutter compensation are sent as they are.
+    pub(crate) fn end_compensation(&mut self, out: &mut impl FnMut(Event)) {
+        if let Some(c) = self.comp.take() {
+            // Letting held moves go as they are cannot be refused (no end moves).
+            let _ = self.comp_release(*c, out);
+        }
     }
 
     /// The position a profile's subroutine sees (LinuxCNC's `#5420`…: the profile's
@@ -3145,6 +3170,24 @@ impl DisplayCode for Word<'_> {
 fn plane_point(plane: Plane, p: &Position) -> [f64; 2] {
     let (u, v, _) = plane.axes();
     [p[u], p[v]]
+}
+
+/// What rs274 refuses while cutter compensation is on (simulated): another plane, turning
+/// it on again, G28/G30; each located at its code.
+fn comp_conflicts(b: &Block<'_>, w: &Words<'_, '_>, plane: Plane) -> Res<()> {
+    for &(gw, c, _) in &w.gs {
+        let why = match c {
+            170 if plane != Plane::XY => {
+                "a change to the XY plane under compensation in the XZ plane (lampost does not simulate it)"
+            }
+            180 | 190 => "Cannot change planes with cutter radius compensation on",
+            410 | 411 | 420 | 421 => "Cannot turn cutter radius comp on when on",
+            280 | 300 => "Cannot use G28 or G30 with cutter radius comp",
+            _ => continue,
+        };
+        return Err(comp_diag(b, crate::comp::CompError(why), Some(gw.span)));
+    }
+    Ok(())
 }
 
 /// A cutter compensation refusal, located at its block.

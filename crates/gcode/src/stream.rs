@@ -201,6 +201,10 @@ impl<S: LineSource> Iterator for Stream<S> {
                 }
                 Ok(None) => {
                     self.finished = true;
+                    // Moves held by cutter compensation go at the end, as LinuxCNC sends
+                    // them when the program ends.
+                    let queue = &mut self.queue;
+                    self.interp.end_compensation(&mut |e| queue.push_back(e));
                     if let Some(d) = self
                         .interp
                         .cancel_profile("the profile's subroutine never returned")
