@@ -1,7 +1,7 @@
 //! LinuxCNC's lathe profile cycles G70, G71 and G72 (and G71.1/.2, G72.1/.2; issue 12,
 //! `crates/gcode/src/lathe.rs`): their moves against rs274 on random profiles (skipped
 //! when rs274 is absent, as the other oracle tests), the refusals rs274 makes as located
-//! errors, the bounds on the work, the G70 lampost does not compensate, and the post's
+//! errors, the bounds on the work, a G70 under cutter compensation, and the post's
 //! refusal.
 
 mod common;

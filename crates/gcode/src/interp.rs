@@ -1506,7 +1506,7 @@ impl Interpreter {
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
         if self.comp.is_some() {
-            comp_conflicts(b, w, self.modal.plane)?;
+            comp_conflicts(b, w, self.modal.plane, self.modal.units)?;
         }
         // G90 while M83 holds: firmwares differ on what E is next. lampost keeps it
         // relative, as Marlin 1, Prusa's firmware and RepRapFirmware do; Marlin 2 makes
@@ -2169,8 +2169,9 @@ impl Interpreter {
 
     /// The LinuxCNC lathe profile cycle (G70–G72 and their .1/.2) of the block that
     /// lampost expands: its code word and code. Only where the line source follows calls
-    /// (the cycle runs its Q subroutine), and not a G70 with cutter compensation on
-    /// (rs274 runs it compensated; lampost does not compensate): those keep their warning.
+    /// (the cycle runs its Q subroutine), and not a G70 under compensation lampost does
+    /// not simulate (G41/G42: the radius unknown): those keep their warning. A G70 under
+    /// simulated compensation (G41.1/G42.1 with D) is compensated (`comp.rs`).
     fn profile_cycle<'b, 'a>(&self, w: &Words<'b, 'a>) -> Option<(&'b Word<'a>, u16)> {
         if self.opts.flavor != crate::flavor::Flavor::LinuxCnc
             || self.calls != Calls::Followed
@@ -2501,6 +2502,7 @@ impl Interpreter {
                 };
                 done.map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
             }
+            finite(&pieces).map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
             let b_warn = rec.warning();
             out(Event::Diagnostic(b_warn));
             self.send_pieces(&trial, pieces, out);
@@ -2769,7 +2771,8 @@ impl Interpreter {
             }
             MoveKind::Rapid => comp.straight(true, p, tag, &mut pieces),
             _ => comp.straight(false, p, tag, &mut pieces),
-        };
+        }
+        .and_then(|()| finite(&pieces));
         self.send_pieces(&comp, pieces, out);
         if done.is_ok() {
             self.pos = tag.to;
@@ -3174,13 +3177,19 @@ fn plane_point(plane: Plane, p: &Position) -> [f64; 2] {
 
 /// What rs274 refuses while cutter compensation is on (simulated): another plane, turning
 /// it on again, G28/G30; each located at its code.
-fn comp_conflicts(b: &Block<'_>, w: &Words<'_, '_>, plane: Plane) -> Res<()> {
+fn comp_conflicts(b: &Block<'_>, w: &Words<'_, '_>, plane: Plane, units: Units) -> Res<()> {
     for &(gw, c, _) in &w.gs {
         let why = match c {
             170 if plane != Plane::XY => {
                 "a change to the XY plane under compensation in the XZ plane (lampost does not simulate it)"
             }
             180 | 190 => "Cannot change planes with cutter radius compensation on",
+            200 if units != Units::Inch => {
+                "a change of units under cutter compensation (lampost does not simulate it)"
+            }
+            210 if units != Units::Mm => {
+                "a change of units under cutter compensation (lampost does not simulate it)"
+            }
             410 | 411 | 420 | 421 => "Cannot turn cutter radius comp on when on",
             280 | 300 => "Cannot use G28 or G30 with cutter radius comp",
             _ => continue,
@@ -3188,6 +3197,24 @@ fn comp_conflicts(b: &Block<'_>, w: &Words<'_, '_>, plane: Plane) -> Res<()> {
         return Err(comp_diag(b, crate::comp::CompError(why), Some(gw.span)));
     }
     Ok(())
+}
+
+/// Compensated points must be numbers (a path at the edge of `f64` may not offset).
+fn finite<T>(pieces: &[crate::comp::Piece<T>]) -> Result<(), crate::comp::CompError> {
+    let ok = pieces.iter().all(|p| {
+        p.end.iter().all(|v| v.is_finite())
+            && match p.shape {
+                crate::comp::Shape::Arc { center, .. } => center.iter().all(|v| v.is_finite()),
+                crate::comp::Shape::Straight { .. } => true,
+            }
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(crate::comp::CompError(
+            "a compensated point is beyond any number",
+        ))
+    }
 }
 
 /// A cutter compensation refusal, located at its block.
