@@ -672,6 +672,65 @@ mod tests {
         );
     }
 
+    /// Distance from `p` to the segment `a`–`b`.
+    fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let t = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / (d[0] * d[0] + d[1] * d[1]))
+            .clamp(0.0, 1.0);
+        (p[0] - a[0] - t * d[0]).hypot(p[1] - a[1] - t * d[1])
+    }
+
+    proptest::proptest! {
+        /// Around a convex polygon (counter-clockwise, corners turning by at least 15°),
+        /// entered from outside along the first corner's outward bisector, every point
+        /// the tool is sent to after the entry lies the radius away from the polygon,
+        /// outside it (G42) or inside it (G41) where the radius is small next to the
+        /// sides; corner arcs only outside.
+        #[test]
+        fn compensated_points_are_the_radius_off_a_convex_path(
+            n in 3usize..9,
+            jitter in proptest::collection::vec(-0.25f64..0.25, 9),
+            radii in proptest::collection::vec(20.0f64..40.0, 9),
+            r in 0.1f64..2.0,
+            outside in proptest::bool::ANY,
+        ) {
+            let pts: Vec<[f64; 2]> = (0..n)
+                .map(|i| {
+                    let t = (i as f64 + jitter[i]) * TAU / n as f64;
+                    [radii[i] * t.cos(), radii[i] * t.sin()]
+                })
+                .collect();
+            // Convex, with no corner sharper than 15° of turn or flatter than 5°.
+            for i in 0..n {
+                let (a, b, c) = (pts[i], pts[(i + 1) % n], pts[(i + 2) % n]);
+                let cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
+                let turn = cross.atan2((b[0] - a[0]) * (c[0] - b[0]) + (b[1] - a[1]) * (c[1] - b[1]));
+                proptest::prop_assume!(turn > 0.09 && turn < 2.9);
+            }
+            let side = if outside { Side::Right } else { Side::Left };
+            let start = [pts[0][0] * 2.0, pts[0][1] * 2.0];
+            let mut path: Vec<[f64; 2]> = pts.clone();
+            path.push(pts[0]);
+            path.push(pts[1]);
+            let mut c = Comp::new(side, r, 0, true, start);
+            let mut out = Vec::new();
+            for (i, p) in path.iter().enumerate() {
+                c.straight(false, *p, i, &mut out).expect("convex path");
+            }
+            c.finish(&mut out).expect("finish");
+            // After the entry's corner, and before the last move (let go where the
+            // path stops, not met with a next side).
+            let last = path.len() - 1;
+            for piece in out.iter().filter(|p| p.tag >= 2 && p.tag < last) {
+                let d = (0..n)
+                    .map(|i| to_segment(piece.end, pts[i], pts[(i + 1) % n]))
+                    .fold(f64::INFINITY, f64::min);
+                proptest::prop_assert!((d - r).abs() < 1e-9, "{d} vs {r}: {piece:?}");
+                proptest::prop_assert!(!piece.corner || outside);
+            }
+        }
+    }
+
     #[test]
     fn refusals() {
         let mut c: Comp<()> = Comp::new(Side::Left, 1.0, 0, true, [0.0, 0.0]);
