@@ -2,8 +2,8 @@
 //! random programs (skipped without rs274; `LAMPOST_REQUIRE_RS274=1` makes that a
 //! failure): closed and open profiles of lines and arcs (by R and by centre words), run
 //! either way round, under G41.1 and G42.1 with a random diameter, in G17 and G18, in
-//! inch and mm, entered by a line and left by G40. Every program is equal to rs274 (each
-//! coordinate within its printed resolution) or refused by both.
+//! inch and mm, entered by a line or an arc and left by G40. Every program is equal to
+//! rs274 (each coordinate within its printed resolution) or refused by both.
 
 mod common;
 
@@ -64,8 +64,26 @@ fn random_program(r: &mut Rng) -> String {
         if g18 { "G18" } else { "G17" },
         word(pts[0][0] * 2.0, pts[0][1] * 2.0)
     );
-    s.push_str(&format!("{side} D{}\n", n4(d)));
-    s.push_str(&format!("G1 {}\n", word(pts[0][0], pts[0][1])));
+    // In G18, now and then a lathe tool's orientation (L 1 to 8).
+    let orientation = if g18 && r.chance(0.5) {
+        format!(" L{}", 1 + r.next() % 8)
+    } else {
+        String::new()
+    };
+    s.push_str(&format!("{side} D{}{orientation}\n", n4(d)));
+    // The entry: a line, or now and then an arc by R.
+    let lead = [pts[0][0] * 2.0, pts[0][1] * 2.0];
+    let chord = (pts[0][0] - lead[0]).hypot(pts[0][1] - lead[1]);
+    if r.chance(0.25) {
+        let g = if r.chance(0.5) { "G2" } else { "G3" };
+        s.push_str(&format!(
+            "{g} {} R{}\n",
+            word(pts[0][0], pts[0][1]),
+            n4(round(chord / 2.0 * r.range(1.05, 2.0)))
+        ));
+    } else {
+        s.push_str(&format!("G1 {}\n", word(pts[0][0], pts[0][1])));
+    }
     let mut at = pts[0];
     let last = if closed { n + 1 } else { n };
     for i in 1..last {
@@ -128,6 +146,8 @@ fn cutter_compensation_equals_rs274_on_random_profiles() {
     let work = tempdir("cutter-comp");
     let mut r = Rng(0x9e37_79b9_7f4a_7c15);
     let (mut equal, mut moves, mut values, mut both_refuse) = (0usize, 0usize, 0usize, 0usize);
+    let (mut arc_entries, mut oriented) = (0usize, 0usize);
+    let mut reasons: std::collections::BTreeMap<String, usize> = Default::default();
     let mut wrong = Vec::new();
     let programs = 160;
     for i in 0..programs {
@@ -143,12 +163,19 @@ fn cutter_compensation_equals_rs274_on_random_profiles() {
             prog.to_str().expect("utf8"),
         ]);
         match (theirs, out.status.success()) {
-            (Err(_), false) => both_refuse += 1,
+            (Err(e), false) => {
+                both_refuse += 1;
+                *reasons.entry(e.replace("rs274: ", "")).or_default() += 1;
+            }
             (Ok(canon), true) => {
                 let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
                 match compare_with_rs274(&doc, &canon) {
                     Ok((n, _)) => {
                         equal += 1;
+                        let entry = text.lines().nth(3).unwrap_or("");
+                        arc_entries +=
+                            usize::from(entry.starts_with("G2") || entry.starts_with("G3"));
+                        oriented += usize::from(text.contains(" L"));
                         moves += canon.len();
                         values += n;
                     }
@@ -163,9 +190,10 @@ fn cutter_compensation_equals_rs274_on_random_profiles() {
         }
     }
     eprintln!(
-        "cutter compensation: {programs} programs; {equal} equal to rs274 ({moves} moves, {values} coordinates), {both_refuse} refused by both, {} different",
+        "cutter compensation: {programs} programs; {equal} equal to rs274 ({moves} moves, {values} coordinates; {arc_entries} entered by an arc, {oriented} with a lathe tool's orientation), {both_refuse} refused by both, {} different",
         wrong.len()
     );
+    eprintln!("refused by both: {reasons:?}");
     assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
     assert!(equal > programs / 3, "{equal}");
 }

@@ -250,9 +250,7 @@ impl<T: Copy> Comp<T> {
         out: &mut Vec<Piece<T>>,
     ) -> Result<(), CompError> {
         if self.first {
-            return Err(CompError(
-                "an arc as the first move after cutter compensation is turned on (lampost simulates a straight entry move only)",
-            ));
+            return self.arc_entry(ccw, center, p, tag);
         }
         let (c, op, r) = (self.current, self.programmed, self.radius);
         let turn = if ccw { 1 } else { -1 };
@@ -427,6 +425,81 @@ impl<T: Copy> Comp<T> {
         self.first = false;
         self.current = end;
         self.programmed = p;
+        Ok(())
+    }
+
+    /// An arc as the entry (LinuxCNC's `convert_arc_comp1`): it ends the radius off the
+    /// programmed end along the arc's radius (in or out), and runs from the tool about a
+    /// centre moved along the line from that end to the programmed centre, so that it
+    /// is as far from the tool as from that end.
+    fn arc_entry(
+        &mut self,
+        ccw: bool,
+        center: [f64; 2],
+        p: [f64; 2],
+        tag: T,
+    ) -> Result<(), CompError> {
+        let (c, r) = (self.current, self.radius);
+        if (p[0] - c[0]).hypot(p[1] - c[1]) <= r {
+            return Err(CompError(
+                "Radius of cutter compensation entry arc is not greater than the tool radius",
+            ));
+        }
+        let turn = if ccw { 1 } else { -1 };
+        let inside = self.inside(turn);
+        let arc_radius = (center[0] - c[0]).hypot(center[1] - c[1]);
+        if inside && arc_radius <= r {
+            return Err(CompError(
+                "Tool radius not less than arc radius with cutter radius compensation",
+            ));
+        }
+        let gamma = if inside {
+            (center[1] - p[1]).atan2(center[0] - p[0])
+        } else {
+            (p[1] - center[1]).atan2(p[0] - center[0])
+        };
+        let end = [p[0] + r * gamma.cos(), p[1] + r * gamma.sin()];
+        let half = (c[1] - end[1]).hypot(c[0] - end[0]) / 2.0;
+        let ab = (center[1] - end[1]).atan2(center[0] - end[0]);
+        let a = (c[1] - end[1]).atan2(c[0] - end[0]) - ab;
+        if a.cos().abs() < 1e-6 {
+            return Err(CompError(
+                "Tool radius not less than arc radius with cutter radius compensation",
+            ));
+        }
+        let along = half / a.cos();
+        let centre = [end[0] + along * ab.cos(), end[1] + along * ab.sin()];
+        // LinuxCNC's default tolerance of an arc's two radii.
+        let spiral = 2.0 * std::f64::consts::SQRT_2 * if self.mm { 0.01 } else { 0.001 };
+        let r_end = (centre[0] - end[0]).hypot(centre[1] - end[1]);
+        let r_start = (centre[0] - c[0]).hypot(centre[1] - c[1]);
+        if (r_end - r_start).abs() > spiral {
+            return Err(CompError(
+                "the compensated entry arc's radii differ (rs274 stops here too)",
+            ));
+        }
+        if !matches!(self.orientation, 0 | 9) {
+            // A lathe tool's entry arc is preceded by a move of no length where the tool is.
+            self.hold(straight(false, c, tag, false), [0.0, 0.0], 0.0);
+            self.endpoint = Some(c);
+        }
+        let sweep = find_turn(c, centre, turn, end);
+        self.hold(
+            Piece {
+                shape: Shape::Arc {
+                    center: centre,
+                    turn,
+                },
+                end,
+                tag,
+                corner: false,
+            },
+            [0.0, 0.0],
+            sweep,
+        );
+        self.first = false;
+        self.programmed = p;
+        self.current = end;
         Ok(())
     }
 
