@@ -265,3 +265,34 @@ fn cutter_compensation_refusals_are_located() {
         assert!(err.contains(words), "{text}\n{err}");
     }
 }
+
+/// The post writes no compensated path: a program under G41.1/G42.1 is refused, with
+/// the compensation named, and nothing is written (the trace shows the tool's centre,
+/// the post would need the programmed path).
+#[test]
+fn post_refuses_compensated_programs() {
+    let dir = tempdir("cutter-comp-post");
+    let inp = dir.join("comp.ngc");
+    std::fs::write(
+        &inp,
+        "G21 G17 F100\nG0 X-10 Y0 Z5\nG1 Z0\nG42.1 D4\nG1 X0 Y0\nG1 X10\nG40 G0 X20\nM2\n",
+    )
+    .expect("write");
+    let trace = lampost(&["trace", "--flavor", "linuxcnc", inp.to_str().expect("utf8")]);
+    assert!(trace.status.success(), "{}", stderr(&trace));
+    let out_path = dir.join("out.nc");
+    let out = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--flavor",
+        "linuxcnc",
+        inp.to_str().expect("utf8"),
+        "-o",
+        out_path.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&out);
+    assert!(!out.status.success(), "posted: {err}");
+    assert!(err.contains("cutter radius compensation"), "{err}");
+    assert!(!out_path.exists());
+}
