@@ -2489,12 +2489,7 @@ impl Interpreter {
                     MoveKind::Arc {
                         clockwise, center, ..
                     } => {
-                        let c = plane_point(
-                            plane,
-                            &[
-                                center[0], center[1], center[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                            ],
-                        );
+                        let c = plane_centre(plane, center);
                         trial.arc(!clockwise, c, p, tag(*to, *f), &mut pieces)
                     }
                     MoveKind::Rapid => trial.straight(true, p, tag(*to, *f), &mut pieces),
@@ -2757,12 +2752,7 @@ impl Interpreter {
                 } else {
                     comp.arc(
                         !clockwise,
-                        plane_point(
-                            plane,
-                            &[
-                                center[0], center[1], center[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                            ],
-                        ),
+                        plane_centre(plane, center),
                         p,
                         tag,
                         &mut pieces,
@@ -3173,6 +3163,12 @@ impl DisplayCode for Word<'_> {
 fn plane_point(plane: Plane, p: &Position) -> [f64; 2] {
     let (u, v, _) = plane.axes();
     [p[u], p[v]]
+}
+
+/// An arc centre (X, Y, Z) in the plane's own order (see [`plane_point`]).
+fn plane_centre(plane: Plane, c: [f64; 3]) -> [f64; 2] {
+    let (u, v, _) = plane.axes();
+    [c[u], c[v]]
 }
 
 /// What rs274 refuses while cutter compensation is on (simulated): another plane, turning
