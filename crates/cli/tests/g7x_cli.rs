@@ -1,7 +1,7 @@
 //! LinuxCNC's lathe profile cycles G70, G71 and G72 (and G71.1/.2, G72.1/.2; issue 12,
 //! `crates/gcode/src/lathe.rs`): their moves against rs274 on random profiles (skipped
 //! when rs274 is absent, as the other oracle tests), the refusals rs274 makes as located
-//! errors, the bounds on the work, the G70 lampost does not compensate, and the post's
+//! errors, the bounds on the work, a G70 under cutter compensation, and the post's
 //! refusal.
 
 mod common;
@@ -399,9 +399,21 @@ fn g7x_auto_warning_post_refusal_and_compensated_g70() {
         "{err}"
     );
     assert!(!out_path.exists());
-    // G70 under cutter compensation: the warning of old, no move, the sub not run.
+    // G70 under cutter compensation (G42.1 with its diameter): traced compensated, as
+    // rs274 makes it (`cutter_comp_cli.rs` holds it to rs274), with its warning; the
+    // post refuses the compensated path (and, first, the lathe cycle).
     let comp = format!(
-        "G21 G18\nF250\n{PROFILE}G0 X12 Z2\nG42.1 D0.3 L2\nG70 Q100 X12 Z2 D0.5\nG40\nM2\n"
+        "G21 G18\nF250\n{PROFILE}G0 X14 Z4\nG42.1 D0.3 L2\nG70 Q100 X12 Z2 D0.5\nG40\nM2\n"
+    );
+    // From where the cycle starts, the entry move has no length: refused (rs274 too).
+    let still = comp.replace("G0 X14 Z4", "G0 X12 Z2");
+    let out = lampost_stdin(&["trace", "--flavor", "linuxcnc", "-"], still.as_bytes());
+    let err = stderr(&out);
+    assert!(
+        !out.status.success()
+            && err.contains("<stdin>:10:1")
+            && err.contains("entry move is not greater than the tool radius"),
+        "{err}"
     );
     let out = lampost_stdin(
         &["trace", "--json", "--flavor", "linuxcnc", "-"],
@@ -410,9 +422,22 @@ fn g7x_auto_warning_post_refusal_and_compensated_g70() {
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
     assert!(
-        err.contains("G70 (lathe roughing or finishing cycle) is not simulated"),
+        err.contains("G42.1: cutter radius compensation traced as LinuxCNC makes it")
+            && !err.contains("not simulated"),
         "{err}"
     );
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
-    assert_eq!(doc["moves"].as_array().map(Vec::len), Some(1));
+    assert!(doc["moves"].as_array().map_or(0, Vec::len) > 4, "{doc}");
+    let inp = dir.join("comp.ngc");
+    std::fs::write(&inp, &comp).expect("write");
+    let out = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        inp.to_str().expect("utf8"),
+        "-o",
+        out_path.to_str().expect("utf8"),
+    ]);
+    assert!(!out.status.success());
+    assert!(!out_path.exists());
 }

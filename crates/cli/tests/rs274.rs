@@ -197,3 +197,62 @@ fn tapping_and_peck_rounding_equal_rs274() {
     let (moves, _) = compare_with_rs274(&doc, &canon).expect("equal to rs274");
     assert!(moves > 30, "{moves}");
 }
+
+/// Straight probes (G38.x) with no contact: rs274's simulator trips them at their
+/// programmed end and backs the tool off 0.01 in (0.254 mm) towards the start, while
+/// `#5061`… hold the programmed end and `#5420`… the backed-off position. Probes in
+/// several directions (diagonal, with a rotary, under G92 and G55), then incremental
+/// moves and moves to the parameters, in mm and inch, equal rs274.
+#[test]
+fn probes_back_off_as_rs274_simulates() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("rs274-probes");
+    let prog = work.join("probes.ngc");
+    let text = "G21 G17 G90 G94 F100\nG0 X0 Y0 Z10\n\
+                G38.2 Z-5\nG91 G1 X1\nG90 G1 X[#5420+2] Y#5061 Z#5063\n\
+                G38.3 X7 Y-3 Z1 A30\nG1 X#5420 Y#5421 Z[#5422+1]\n\
+                G92 X0 Y0\nG38.4 X-4 Y4\nG91 G1 Y1\nG90 G92.1\n\
+                G55 G38.5 Z20\nG1 X#5061 Y#5062\nG54\n\
+                G38.5 Z#5422\nG1 Z[#5422+3]\nG38.2 A45\n\
+                G20\nG0 X0 Y0 Z1\nG38.2 Z-0.3\nG91 G38.3 X-0.5 Y0.25\nG90\n\
+                G1 X[#5420+#5061] Y#5421 Z#5422\nM2\n";
+    std::fs::write(&prog, text).expect("write");
+    let canon = rs274_motions(&prog, &work);
+    let o = lampost(&[
+        "trace",
+        "--json",
+        "--flavor",
+        "linuxcnc",
+        prog.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let (values, _) = compare_with_rs274(&doc, &canon).expect("equal to rs274");
+    assert!(values > 90, "{values}");
+    // The G0 after the first probe starts backed off: 0.254 mm above Z-5.
+    let moves = doc["moves"].as_array().expect("moves");
+    assert!((axis(&moves[3]["start"], "Z") - (-5.0 + 0.254)).abs() < 1e-9);
+    // A G38.2 or G38.4 that does not move is refused, by rs274 and by lampost, at its
+    // code; G38.3 and G38.5 may stand still, and one that turns only A is run (above).
+    for code in ["G38.2", "G38.4"] {
+        let text = format!("G21 F100\nG0 X1 Y2 Z3\n{code} Z3\nM2\n");
+        let prog = work.join("still.ngc");
+        std::fs::write(&prog, &text).expect("write");
+        assert!(rs274_to_end(&prog, &work).is_err(), "rs274 runs {code}");
+        let o = lampost(&[
+            "trace",
+            "--flavor",
+            "linuxcnc",
+            prog.to_str().expect("utf8"),
+        ]);
+        assert!(!o.status.success());
+        assert!(
+            stderr(&o).contains("3:1") || stderr(&o).contains("line 3"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(stderr(&o).contains("start point too close to probe point"));
+    }
+}

@@ -148,6 +148,14 @@ pub enum ErrorKind {
     /// (rs274 refuses it too), or one with more passes than lampost expands (`lathe.rs`).
     #[error("{0}")]
     ProfileCycle(String),
+    /// LinuxCNC's cutter radius compensation cannot go on (its words: gouging, a tool
+    /// too large for an arc or an entry move, `comp.rs`).
+    #[error("cutter radius compensation: {0}")]
+    CutterComp(&'static str),
+    /// LinuxCNC's cutter radius compensation with its radius known (G41.1/G42.1 D…):
+    /// traced as rs274 compensates (`comp.rs`); the post refuses it.
+    #[error("{0}: cutter radius compensation traced as LinuxCNC makes it (the tool's centre path, not the programmed one)")]
+    CutterCompTraced(String),
     /// A LinuxCNC lathe profile cycle expanded into the moves rs274 makes of it: a
     /// lathe's cycle, which the post refuses.
     #[error("{0} is a lathe cycle: traced as the moves LinuxCNC makes of it on a lathe")]
@@ -341,6 +349,8 @@ impl ErrorKind {
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
+            ErrorKind::CutterCompTraced(_) => "the trace shows where the tool's centre goes; the post writes no compensated path (program the centre path with G40)",
+            ErrorKind::CutterComp(_) => "the tool does not fit the path on this side: check the radius (D), the side (G41/G42) and the entry move, or lead in and out with room to spare",
             ErrorKind::ProfileCycle(_) => "G70/G71/G72 need Q (the O-word subroutine of the profile, in this file), G18 (the XZ plane), cutter compensation off for G71/G72 (G40), I (the depth of cut) above 0, and a profile that runs one way in X and in Z",
             ErrorKind::LatheCycle(_) => "a lathe cycle cannot be posted to these machines; write its moves out as G0/G1/G2/G3",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",

@@ -222,6 +222,28 @@ pub struct Interpreter {
     profile: Option<Box<crate::lathe::Recording>>,
     /// The O-word sub a profile cycle asks the line source to call (taken by the stream).
     profile_call: Option<String>,
+    /// LinuxCNC's G41.1/G42.1 in force with its diameter D: the side, the radius (D/2)
+    /// and the lathe tool's orientation (L; 0 when none), for the moves lampost
+    /// compensates (`comp.rs`: a G70's).
+    comp_tool: Option<(crate::comp::Side, f64, u8)>,
+    /// A compensated G70's rapid to its start, made (compensated) with its moves.
+    comp_entry: Option<Position>,
+    /// Cutter compensation being simulated (`comp.rs`): its state and held moves.
+    comp: Option<Box<crate::comp::Comp<CompTag>>>,
+    /// Under simulated compensation, where the tool was last drawn; the position
+    /// ([`Interpreter::position`]) stays on the programmed path, as rs274 reads the next
+    /// block from it.
+    comp_drawn: Position,
+}
+
+/// What a compensated move keeps of its block: line, end (for the axes off the plane),
+/// feed and origin.
+#[derive(Debug, Clone, Copy)]
+struct CompTag {
+    line: u32,
+    to: Position,
+    feed: f64,
+    origin: Origin,
 }
 
 /// Words of one block, looked up by letter.
@@ -371,6 +393,10 @@ impl Interpreter {
             feed_from_macro: false,
             profile: None,
             profile_call: None,
+            comp_tool: None,
+            comp_entry: None,
+            comp: None,
+            comp_drawn: [0.0; 9],
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -570,7 +596,8 @@ impl Interpreter {
     // Not inlined, like `parse::plain_motion` (see there).
     #[inline(never)]
     pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
-        if self.profile.is_some() {
+        if self.profile.is_some() || self.comp.is_some() {
+            // Compensated moves are held (`comp.rs`): the reference path makes them.
             return None;
         }
         let motion = match p.motion {
@@ -1481,6 +1508,10 @@ impl Interpreter {
             self.motion(b, w, g53, probe, out)?;
         }
         if stop_after {
+            if let Some(c) = self.comp.take() {
+                self.comp_release(*c, out)
+                    .map_err(|e| comp_diag(b, e, None))?;
+            }
             self.ended = true;
             self.open_programs = 0;
         }
@@ -1504,6 +1535,9 @@ impl Interpreter {
         w: &Words<'_, '_>,
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
+        if self.comp.is_some() {
+            comp_conflicts(b, w, self.modal.plane, self.modal.units)?;
+        }
         // G90 while M83 holds: firmwares differ on what E is next. lampost keeps it
         // relative, as Marlin 1, Prusa's firmware and RepRapFirmware do; Marlin 2 makes
         // it absolute again. Said once, where it happens.
@@ -1565,7 +1599,57 @@ impl Interpreter {
                 420 | 421 => CutterComp::Right,
                 _ => CutterComp::Off,
             };
-            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off {
+            self.comp_tool = match (c, w.get(b'D')) {
+                (411 | 421, Some(d))
+                    if self.opts.flavor == crate::flavor::Flavor::LinuxCnc && d.is_finite() =>
+                {
+                    let side = if c == 411 {
+                        crate::comp::Side::Left
+                    } else {
+                        crate::comp::Side::Right
+                    };
+                    let orientation = w
+                        .get(b'L')
+                        .filter(|l| l.fract() == 0.0 && (0.0..=9.0).contains(l))
+                        .map_or(0, |l| l as u8);
+                    Some((side, d / 2.0, orientation))
+                }
+                _ => None,
+            };
+            if let Some(c) = self.comp.take() {
+                // G40 (or a new G41/G42): the held moves go as they are.
+                self.comp_release(*c, out)
+                    .map_err(|e| comp_diag(b, e, Some(gw.span)))?;
+            }
+            let plane = self.modal.plane;
+            if let (Some((side, radius, orientation)), true) =
+                (self.comp_tool, matches!(plane, Plane::XY | Plane::XZ))
+            {
+                if radius != 0.0 {
+                    let mm = self.modal.units == Units::Mm;
+                    let at = plane_point(plane, &self.pos);
+                    let orientation = if plane == Plane::XZ { orientation } else { 0 };
+                    self.comp = Some(Box::new(crate::comp::Comp::new(
+                        side,
+                        radius,
+                        orientation,
+                        mm,
+                        at,
+                    )));
+                    self.comp_drawn = self.pos;
+                }
+            }
+            if self.comp.is_some() {
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::CutterCompTraced(gw.display_code()),
+                    Some(gw.span),
+                );
+            }
+            let m = &mut self.modal;
+            if m.cutter_comp != CutterComp::Off && before == CutterComp::Off && self.comp.is_none()
+            {
                 self.warn(
                     b,
                     out,
@@ -1943,6 +2027,20 @@ impl Interpreter {
         } else {
             Origin::Block
         };
+        if self.comp.is_some() {
+            let why = if probe || self.modal.motion == Motion::Probe {
+                Some("Cannot probe with cutter radius comp on")
+            } else if matches!(self.modal.motion, Motion::Canned(_)) {
+                Some("Cannot use canned cycles with cutter compensation on")
+            } else if self.modal.motion == Motion::Thread {
+                Some("a spindle-synchronised move under cutter compensation (lampost does not simulate it)")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(comp_diag(b, crate::comp::CompError(why), None));
+            }
+        }
         if probe || self.modal.motion == Motion::Probe {
             // A probe move stops where the probe touches: traced to its programmed end,
             // with a warning (the post cannot place a contact it does not know).
@@ -1951,15 +2049,30 @@ impl Interpreter {
                 w.gs.iter()
                     .find(|g| matches!(g.1, 310 | 311 | 382..=385))
                     .map_or_else(|| "a probe move".to_string(), |g| g.0.display_code());
+            // LinuxCNC's G38.x: traced as its standalone rs274 simulates it (see
+            // `probe_rest`); other controls' probes stay at their programmed end.
+            let backs_off = !probe && self.opts.flavor == crate::flavor::Flavor::LinuxCnc;
+            let rest = if backs_off {
+                "; the trace goes to its programmed end and backs off 0.01 in (0.254 mm) towards its start, as LinuxCNC's simulator does"
+            } else {
+                "; the trace goes to its programmed end"
+            };
             self.warn(
                 b,
                 out,
                 ErrorKind::NotSimulated(format!(
-                    "{code} (a probe move stops where the probe touches; the trace goes to its programmed end)"
+                    "{code} (a probe move stops where the probe touches{rest})"
                 )),
                 None,
             );
+            let start = self.pos;
+            if backs_off {
+                probe_must_move(b, w, &start, &target)?;
+            }
             self.emit(b.line, MoveKind::Probe, target, feed, origin, out);
+            if backs_off {
+                self.pos = probe_rest(&start, &target, self.modal.units);
+            }
             return Ok(());
         }
         match self.modal.motion {
@@ -1973,8 +2086,7 @@ impl Interpreter {
             )),
             Motion::Rapid => {
                 self.centre_words_unused(b, w, out)?;
-                self.emit(b.line, MoveKind::Rapid, target, 0.0, origin, out);
-                Ok(())
+                self.emit_comp(b, MoveKind::Rapid, target, 0.0, origin, out)
             }
             Motion::Thread => {
                 // Spindle-synchronised (G33, rigid tap G33.1): the feed is the pitch K
@@ -1996,8 +2108,7 @@ impl Interpreter {
                     self.centre_words_unused(b, w, out)?;
                 }
                 let feed = self.feed_for(b, w)?;
-                self.emit(b.line, MoveKind::Linear, target, feed, origin, out);
-                Ok(())
+                self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
             }
             Motion::ArcCw | Motion::ArcCcw => {
                 let arc = self.arc(b, w, target, out);
@@ -2113,8 +2224,9 @@ impl Interpreter {
 
     /// The LinuxCNC lathe profile cycle (G70–G72 and their .1/.2) of the block that
     /// lampost expands: its code word and code. Only where the line source follows calls
-    /// (the cycle runs its Q subroutine), and not a G70 with cutter compensation on
-    /// (rs274 runs it compensated; lampost does not compensate): those keep their warning.
+    /// (the cycle runs its Q subroutine), and not a G70 under compensation lampost does
+    /// not simulate (G41/G42: the radius unknown): those keep their warning. A G70 under
+    /// simulated compensation (G41.1/G42.1 with D) is compensated (`comp.rs`).
     fn profile_cycle<'b, 'a>(&self, w: &Words<'b, 'a>) -> Option<(&'b Word<'a>, u16)> {
         if self.opts.flavor != crate::flavor::Flavor::LinuxCnc
             || self.calls != Calls::Followed
@@ -2125,7 +2237,7 @@ impl Interpreter {
         let &(gw, c, _) =
             w.gs.iter()
                 .find(|g| g.2 == GGroup::Other && crate::modal::is_lathe_cycle(g.1))?;
-        if c == 700 && self.modal.cutter_comp != CutterComp::Off {
+        if c == 700 && self.modal.cutter_comp != CutterComp::Off && self.comp.is_none() {
             return None;
         }
         Some((gw, c))
@@ -2193,7 +2305,14 @@ impl Interpreter {
                 to[a] = v + off[a];
             }
         }
-        self.emit(b.line, MoveKind::Rapid, to, 0.0, Origin::CannedCycle, out);
+        if self.comp.is_some() {
+            // Compensated (a G70): the rapid goes through compensation with the cycle's
+            // moves.
+            self.comp_entry = Some(to);
+        } else {
+            self.comp_entry = None;
+            self.emit(b.line, MoveKind::Rapid, to, 0.0, Origin::CannedCycle, out);
+        }
         self.modal.motion = Motion::Rapid;
         let cycle = crate::lathe::ProfileCycle {
             cycle: code / 10,
@@ -2240,6 +2359,14 @@ impl Interpreter {
     /// True while a lathe profile cycle reads its subroutine.
     pub(crate) fn recording_profile(&self) -> bool {
         self.profile.is_some()
+    }
+
+    /// The end of the input: moves held by cutter compensation are sent as they are.
+    pub(crate) fn end_compensation(&mut self, out: &mut impl FnMut(Event)) {
+        if let Some(c) = self.comp.take() {
+            // Letting held moves go as they are cannot be refused (no end moves).
+            let _ = self.comp_release(*c, out);
+        }
     }
 
     /// The position a profile's subroutine sees (LinuxCNC's `#5420`…: the profile's
@@ -2333,7 +2460,7 @@ impl Interpreter {
         };
         // The moves are checked whole before any is sent: a refused cycle moves nothing.
         let mut planned = Vec::with_capacity(moves.len());
-        let mut pos = self.pos;
+        let mut pos = self.comp_entry.unwrap_or(self.pos);
         let mut last = None;
         for m in moves {
             let (kind, to, f) = match m {
@@ -2382,6 +2509,58 @@ impl Interpreter {
             planned.push((kind, to, f));
         }
         let kept = rec.line;
+        if let (Some(comp), Some(entry)) = (self.comp.as_deref(), self.comp_entry.take()) {
+            // Under cutter compensation (a G70): the rapid to its start and its moves go
+            // through the compensation in force, all checked before any is sent.
+            let mut trial = comp.clone();
+            let mut pieces = Vec::new();
+            let plane = self.modal.plane;
+            let tag = |to: Position, feed: f64| CompTag {
+                line: kept,
+                to,
+                feed,
+                origin: Origin::CannedCycle,
+            };
+            trial
+                .straight(
+                    true,
+                    plane_point(plane, &entry),
+                    tag(entry, 0.0),
+                    &mut pieces,
+                )
+                .map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
+            // rs274 reads the profile's subroutine after that rapid, and its reading
+            // leaves its tool position at the profile's last point (the programmed
+            // point stays the cycle's start): found against rs274, which starts the
+            // first pass from there.
+            let off = self.offset();
+            let mut last_read = entry;
+            last_read[0] = rec.at.im + off[0];
+            last_read[2] = rec.at.re + off[2];
+            trial.tool_at(plane_point(plane, &last_read));
+            for (kind, to, f) in &planned {
+                let p = plane_point(plane, to);
+                let done = match *kind {
+                    MoveKind::Arc {
+                        clockwise, center, ..
+                    } => {
+                        let c = plane_centre(plane, center);
+                        trial.arc(!clockwise, c, p, tag(*to, *f), &mut pieces)
+                    }
+                    MoveKind::Rapid => trial.straight(true, p, tag(*to, *f), &mut pieces),
+                    _ => trial.straight(false, p, tag(*to, *f), &mut pieces),
+                };
+                done.map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
+            }
+            finite(&pieces).map_err(|e| rec.error(&format!("cutter compensation: {e}")))?;
+            let b_warn = rec.warning();
+            out(Event::Diagnostic(b_warn));
+            self.send_pieces(&trial, pieces, out);
+            self.pos = planned.last().map_or(entry, |m| m.1);
+            self.comp = Some(Box::new(trial));
+            self.modal.motion = last.unwrap_or(self.modal.motion);
+            return Ok(());
+        }
         let b_warn = rec.warning();
         out(Event::Diagnostic(b_warn));
         for (kind, to, f) in planned {
@@ -2553,8 +2732,8 @@ impl Interpreter {
         let mut center = [self.pos[0], self.pos[1], self.pos[2]];
         center[u] = cu;
         center[v] = cv;
-        self.emit(
-            b.line,
+        self.emit_comp(
+            b,
             MoveKind::Arc {
                 clockwise: cw,
                 center,
@@ -2565,8 +2744,144 @@ impl Interpreter {
             feed,
             Origin::Block,
             out,
-        );
-        Ok(())
+        )
+    }
+
+    /// A block's move, through cutter compensation when it is simulated (`comp.rs`):
+    /// held until the next move says where it ends; a refusal is located at the block.
+    fn emit_comp(
+        &mut self,
+        b: &Block<'_>,
+        kind: MoveKind,
+        to: Position,
+        feed: f64,
+        origin: Origin,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
+        if self.comp.is_none() {
+            self.emit(b.line, kind, to, feed, origin, out);
+            return Ok(());
+        }
+        if origin == Origin::MachineCoords {
+            return Err(comp_diag(
+                b,
+                crate::comp::CompError("Cannot use G53 with cutter radius compensation"),
+                None,
+            ));
+        }
+        let tag = CompTag {
+            line: b.line,
+            to,
+            feed,
+            origin,
+        };
+        self.comp_move(kind, tag, out)
+            .map_err(|e| comp_diag(b, e, None))
+    }
+
+    /// One programmed move into the compensation in force; what it lets go is sent.
+    fn comp_move(
+        &mut self,
+        kind: MoveKind,
+        tag: CompTag,
+        out: &mut impl FnMut(Event),
+    ) -> Result<(), crate::comp::CompError> {
+        let plane = self.modal.plane;
+        let Some(mut comp) = self.comp.take() else {
+            self.emit(tag.line, kind, tag.to, tag.feed, tag.origin, out);
+            return Ok(());
+        };
+        let mut pieces = Vec::new();
+        let p = plane_point(plane, &tag.to);
+        let done = match kind {
+            MoveKind::Arc {
+                clockwise,
+                center,
+                turns,
+                ..
+            } => {
+                if turns != 1 {
+                    Err(crate::comp::CompError(
+                        "an arc of more than one turn under cutter compensation (lampost does not simulate it)",
+                    ))
+                } else {
+                    comp.arc(
+                        !clockwise,
+                        plane_centre(plane, center),
+                        p,
+                        tag,
+                        &mut pieces,
+                    )
+                }
+            }
+            MoveKind::Rapid => comp.straight(true, p, tag, &mut pieces),
+            _ => comp.straight(false, p, tag, &mut pieces),
+        }
+        .and_then(|()| finite(&pieces));
+        self.send_pieces(&comp, pieces, out);
+        if done.is_ok() {
+            self.pos = tag.to;
+        }
+        self.comp = Some(comp);
+        done
+    }
+
+    /// Compensation ends (G40, the program's end): the held moves go as they are.
+    fn comp_release(
+        &mut self,
+        mut comp: crate::comp::Comp<CompTag>,
+        out: &mut impl FnMut(Event),
+    ) -> Result<(), crate::comp::CompError> {
+        let mut pieces = Vec::new();
+        let done = comp.finish(&mut pieces);
+        self.send_pieces(&comp, pieces, out);
+        // The tool stays where it was drawn.
+        self.pos = self.comp_drawn;
+        done
+    }
+
+    /// Compensated pieces as moves (machine frame), the lathe tool's origin applied.
+    fn send_pieces(
+        &mut self,
+        comp: &crate::comp::Comp<CompTag>,
+        pieces: Vec<crate::comp::Piece<CompTag>>,
+        out: &mut impl FnMut(Event),
+    ) {
+        use crate::comp::Shape;
+        let plane = self.modal.plane;
+        let xz = plane == Plane::XZ;
+        let (u, v, _) = plane.axes();
+        let programmed = self.pos;
+        self.pos = self.comp_drawn;
+        for piece in pieces {
+            let t = piece.tag;
+            let mut end = if piece.corner { self.pos } else { t.to };
+            let q = comp.origin(piece.end, xz);
+            end[u] = q[0];
+            end[v] = q[1];
+            let kind = match piece.shape {
+                Shape::Straight { rapid: true } => MoveKind::Rapid,
+                Shape::Straight { rapid: false } => MoveKind::Linear,
+                Shape::Arc { center, turn } => {
+                    let c = comp.origin(center, xz);
+                    let mut centre = [end[0], end[1], end[2]];
+                    centre[u] = c[0];
+                    centre[v] = c[1];
+                    MoveKind::Arc {
+                        clockwise: turn < 0,
+                        center: centre,
+                        plane,
+                        turns: 1,
+                    }
+                }
+            };
+            let feed = if kind == MoveKind::Rapid { 0.0 } else { t.feed };
+            if end.iter().all(|x| x.is_finite()) {
+                self.emit(t.line, kind, end, feed, t.origin, out);
+            }
+        }
+        self.comp_drawn = self.pos;
+        self.pos = programmed;
     }
 
     /// The centre (in the plane's axes) of an arc from the tool's position to `target`
@@ -2898,8 +3213,158 @@ impl DisplayCode for Word<'_> {
     }
 }
 
+/// A position's coordinates in the plane's own order (X, Y in G17; Z, X in G18), as
+/// cutter compensation works in them (`comp.rs`).
+fn plane_point(plane: Plane, p: &Position) -> [f64; 2] {
+    let (u, v, _) = plane.axes();
+    [p[u], p[v]]
+}
+
+/// An arc centre (X, Y, Z) in the plane's own order (see [`plane_point`]).
+fn plane_centre(plane: Plane, c: [f64; 3]) -> [f64; 2] {
+    let (u, v, _) = plane.axes();
+    [c[u], c[v]]
+}
+
+/// What rs274 refuses while cutter compensation is on (simulated): another plane, turning
+/// it on again, G28/G30; each located at its code.
+fn comp_conflicts(b: &Block<'_>, w: &Words<'_, '_>, plane: Plane, units: Units) -> Res<()> {
+    for &(gw, c, _) in &w.gs {
+        let why = match c {
+            170 if plane != Plane::XY => {
+                "a change to the XY plane under compensation in the XZ plane (lampost does not simulate it)"
+            }
+            180 | 190 => "Cannot change planes with cutter radius compensation on",
+            200 if units != Units::Inch => {
+                "a change of units under cutter compensation (lampost does not simulate it)"
+            }
+            210 if units != Units::Mm => {
+                "a change of units under cutter compensation (lampost does not simulate it)"
+            }
+            410 | 411 | 420 | 421 => "Cannot turn cutter radius comp on when on",
+            280 | 300 => "Cannot use G28 or G30 with cutter radius comp",
+            _ => continue,
+        };
+        return Err(comp_diag(b, crate::comp::CompError(why), Some(gw.span)));
+    }
+    Ok(())
+}
+
+/// Compensated points must be numbers (a path at the edge of `f64` may not offset).
+fn finite<T>(pieces: &[crate::comp::Piece<T>]) -> Result<(), crate::comp::CompError> {
+    let ok = pieces.iter().all(|p| {
+        p.end.iter().all(|v| v.is_finite())
+            && match p.shape {
+                crate::comp::Shape::Arc { center, .. } => center.iter().all(|v| v.is_finite()),
+                crate::comp::Shape::Straight { .. } => true,
+            }
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(crate::comp::CompError(
+            "a compensated point is beyond any number",
+        ))
+    }
+}
+
+/// A cutter compensation refusal, located at its block.
+fn comp_diag(
+    b: &Block<'_>,
+    e: crate::comp::CompError,
+    span: Option<crate::ast::Span>,
+) -> Diagnostic {
+    diag(
+        b,
+        Severity::Error,
+        ErrorKind::CutterComp(e.0),
+        span.or(b.words().next().map(|w| w.span)),
+    )
+}
+
+/// LinuxCNC's rs274 refuses a G38.2 or G38.4 (the probes that must trip) that does not
+/// move at all ("Start point too close to probe point"); G38.3 and G38.5 may, and a probe
+/// that turns only a rotary is run.
+fn probe_must_move(b: &Block<'_>, w: &Words<'_, '_>, start: &Position, end: &Position) -> Res<()> {
+    let Some(g) = w.gs.iter().find(|g| matches!(g.1, 382 | 384)) else {
+        return Ok(());
+    };
+    if start == end {
+        return Err(diag(
+            b,
+            Severity::Error,
+            ErrorKind::BadValue {
+                word: g.0.display_code(),
+                why: "the probe does not move (LinuxCNC: start point too close to probe point)",
+            },
+            Some(g.0.span),
+        ));
+    }
+    Ok(())
+}
+
+/// Where LinuxCNC's standalone rs274 leaves the tool after a straight probe (G38.x) that
+/// no contact stops: its simulator lets the probe trip at the programmed `end` and backs
+/// it off 0.01 in (0.254 mm) along the move towards its `start` (X, Y and Z only; a
+/// probe of no length stays at its end). This models a simulator: a real probe stops
+/// where it touches, which no trace knows. The probe's results (`#5061`…) hold `end`.
+pub fn probe_rest(start: &Position, end: &Position, units: Units) -> Position {
+    let back = match units {
+        Units::Inch => 0.01,
+        Units::Mm => 0.254,
+    };
+    let d = [start[0] - end[0], start[1] - end[1], start[2] - end[2]];
+    let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let mut rest = *end;
+    if length > 0.0 && length.is_finite() {
+        for (r, di) in rest.iter_mut().zip(d) {
+            *r += back * (di / length);
+        }
+    }
+    rest
+}
+
 #[cfg(test)]
 mod tests {
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A probe with no contact rests on its line, the back-off from its end towards
+        /// its start (0.01 in, 0.254 mm), rotaries untouched; worked out here from the
+        /// direction alone (no division by the length).
+        #[test]
+        fn probe_rest_backs_off_along_the_move(
+            s in proptest::array::uniform9(-100.0f64..100.0),
+            e in proptest::array::uniform9(-100.0f64..100.0),
+            inch in any::<bool>(),
+        ) {
+            let units = if inch { Units::Inch } else { Units::Mm };
+            let back = if inch { 0.01 } else { 0.254 };
+            let r = probe_rest(&s, &e, units);
+            let len = (0..3).map(|i| (s[i] - e[i]).powi(2)).sum::<f64>().sqrt();
+            prop_assume!(len > 1e-6);
+            let moved = (0..3).map(|i| (r[i] - e[i]).powi(2)).sum::<f64>().sqrt();
+            prop_assert!((moved - back).abs() < 1e-9);
+            for i in 0..3 {
+                // Towards the start: each axis moves the start's way, in proportion.
+                prop_assert!(((r[i] - e[i]) * len - back * (s[i] - e[i])).abs() < 1e-9 * (1.0 + len));
+            }
+            prop_assert_eq!(&r[3..], &e[3..]);
+        }
+    }
+
+    #[test]
+    fn probe_rest_of_a_probe_that_stands_still_is_its_end() {
+        let p = [1.0, 2.0, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let mut q = p;
+        q[3] = 9.0;
+        assert_eq!(probe_rest(&q, &p, Units::Mm), p);
+        // Worked by hand: straight down 2 in from Z1 to Z-1, backed off to Z-0.99.
+        let s = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let e = [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        assert!((probe_rest(&s, &e, Units::Inch)[2] + 0.99).abs() < 1e-15);
+    }
+
     use super::*;
     use crate::stream::Stream;
 

@@ -22,6 +22,7 @@
 //! - `serde`: moves and modal state serialise to JSON for `lampost trace --json`.
 
 mod ast;
+pub mod comp;
 mod diag;
 mod emit;
 mod expr;

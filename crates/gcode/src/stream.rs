@@ -6,7 +6,7 @@ use std::io::{self, BufRead};
 use crate::ast::{Block, BlockKind, MacroKind};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::expr::Params;
-use crate::interp::{Calls, EWord, Event, Interpreter, Options};
+use crate::interp::{Calls, EWord, Event, Interpreter, MoveKind, Options};
 use crate::lines::{Line, LineReader, Lines};
 use crate::parse::{
     comment_not_utf8, parse_line_lenient, parse_str_with, plain_motion, Reading, MAX_LINE_BYTES,
@@ -201,6 +201,10 @@ impl<S: LineSource> Iterator for Stream<S> {
                 }
                 Ok(None) => {
                     self.finished = true;
+                    // Moves held by cutter compensation go at the end, as LinuxCNC sends
+                    // them when the program ends.
+                    let queue = &mut self.queue;
+                    self.interp.end_compensation(&mut |e| queue.push_back(e));
                     if let Some(d) = self
                         .interp
                         .cancel_profile("the profile's subroutine never returned")
@@ -386,6 +390,11 @@ impl<S: LineSource> Iterator for Stream<S> {
                                 // The queue held nothing before this block: its events are
                                 // exactly the block's.
                                 after_moves(params, queue);
+                                if ends_with_probe(queue) {
+                                    // A probe may leave the tool off its end (backed off,
+                                    // `interp::probe_rest`): the position is the tool's.
+                                    params.note_position(&self.interp.program_position());
+                                }
                             }
                             false
                         }
@@ -606,6 +615,18 @@ fn evaluate_macro_b<'a>(
         }
     }
     Ok(())
+}
+
+/// Whether a block's last move is a probe.
+fn ends_with_probe(events: &VecDeque<Event>) -> bool {
+    events
+        .iter()
+        .rev()
+        .find_map(|e| match e {
+            Event::Move(m) => Some(m.kind == MoveKind::Probe),
+            Event::Diagnostic(_) => None,
+        })
+        .unwrap_or(false)
 }
 
 /// The system parameters after a block's moves (see [`Params::after_moves`]).

@@ -183,7 +183,7 @@ fn other_flavours_leave_macros_verbatim() {
 
 #[test]
 fn system_parameters_after_moves_and_probes() {
-    // As LinuxCNC's standalone rs274: #5420… the position, #5061… a probe's end and
+    // As LinuxCNC's standalone rs274: #5420… the position (a probe backed off), #5061… a probe's end and
     // #5070 0 (no probe trips), so a `while [#5070 NE 0]` retry loop ends.
     let text = "G20 F10\nG0 X1 Y1 Z1\nG38.3 Z-1\nG0 X#5070 Y#5063 Z#5061\n\
         #5070 = 1\no4 while [#5070 NE 0]\nG38.3 Z-2\no4 endwhile\nG0 X#5420 Y#5421\n";
@@ -197,7 +197,9 @@ fn system_parameters_after_moves_and_probes() {
     assert_eq!(d.len(), 2);
     assert_eq!(m[2], [0.0, -1.0, 1.0]);
     assert_eq!(m.len(), 5);
-    assert_eq!(m[4], [0.0, -1.0, -2.0]);
+    // #5420… the tool's position: the probe backed off 0.01 in from its end (the
+    // trace models rs274's simulator, `interp::probe_rest`).
+    assert_eq!(m[4], [0.0, -1.0, -1.99]);
 }
 
 /// `#<_x>` … `#<_w>` are the position (LinuxCNC's names of `#5420`…); inside a lathe

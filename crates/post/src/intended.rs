@@ -405,6 +405,9 @@ impl<'a> Intended<'a> {
                         ErrorKind::NotSimulated(what) => Some(format!(
                             "{what} changes the path; the post cannot follow it"
                         )),
+                        ErrorKind::CutterCompTraced(what) => Some(format!(
+                            "{what}: cutter radius compensation changes the path; the post writes no compensated path (program the tool's centre path, G40)"
+                        )),
                         ErrorKind::FirmwareMacro(what) => Some(format!(
                             "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; remove the printer's start and end code from the slicer's custom G-code"
                         )),
