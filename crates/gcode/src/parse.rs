@@ -848,7 +848,9 @@ fn words_reference_items<'a>(
         }
         b'#' => {
             let next = bytes.get(i + 1).copied().unwrap_or(b' ');
-            block.kind = if next == b'<' || next.is_ascii_digit() {
+            // `#1 =`, `#<name> =` and the indirect `#[expr] =` (pcb2gcode's autolevel
+            // stores each probe so); FADAL statements follow `#` with a letter or `:`.
+            block.kind = if next == b'<' || next == b'[' || next.is_ascii_digit() {
                 BlockKind::Macro(MacroKind::LinuxCncExpression)
             } else {
                 BlockKind::Macro(MacroKind::FadalStatement)
@@ -1459,6 +1461,11 @@ mod tests {
             ("G1 G31 X+R6. Y+R7. F+R4. P1", MacroKind::FadalRegisterWords),
             ("#<depth> = 5", MacroKind::LinuxCncExpression),
             ("#1 = 5", MacroKind::LinuxCncExpression),
+            (
+                "#[#112 * 4 + #113 + 500] = #5063",
+                MacroKind::LinuxCncExpression,
+            ),
+            ("  #[1 + 1] = 3", MacroKind::LinuxCncExpression),
             ("G1 X[#1 + 2]", MacroKind::LinuxCncExpression),
             ("o100 sub", MacroKind::LinuxCncOWord),
             ("O<probe> call [1]", MacroKind::LinuxCncOWord),

@@ -94,6 +94,15 @@ fn loops_and_branches() {
 }
 
 #[test]
+fn indirect_parameters_are_set_and_read() {
+    // `#[expr] = value` at the start of a line sets the parameter the expression names
+    // (pcb2gcode's autolevel stores each probe so): it was read as a FADAL statement.
+    let (m, d) = run("G21 G0 X0\n#1 = 2\n#[#1 * 4 + 500] = 7.5\n  #[#1 + 1] = 3\nG0 X#508 Y#3\n");
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(m.last().map(|p| (p[0], p[1])), Some((7.5, 3.0)));
+}
+
+#[test]
 fn parameters_are_set_after_the_line_is_read() {
     // RS274NGC: `#1 = 2 G0 X#1` moves to the old #1.
     let (m, d) = run("G21 G0 X0\n#1 = 5\n#1 = 2 G0 X#1\nG0 X#1\n");
