@@ -482,3 +482,43 @@ fn a_rotary_word_at_zero_is_no_rotation() {
     );
     assert!(!out5.exists());
 }
+
+/// A full circle smaller than the tolerance (`G3 … J0.0002`), linearised under a tilted
+/// index: every chord point lies within the tolerance of its end, so the first one ends
+/// the move for `verify`, and the next used to be checked against the following feed
+/// (fuzz target `post`, seed 1123, input 18638): `post` passed and `verify` failed.
+/// Now a point within the tolerance of the move just ended is that move's; a point
+/// moved beyond the tolerance still fails.
+#[test]
+fn a_circle_smaller_than_the_tolerance_verifies() {
+    let dir = tempdir("tiny-circle");
+    let input = dir.join("tiny.nc");
+    std::fs::write(
+        &input,
+        "G20 G90 G17\nG0 X0 Y0 Z0.1\nG1 Z0 F20.\nG1 X1.\nG3 X1. Y0 J0.0002\nG0 Z0.2\nG0 X0 Y0.5\nG1 Z0 F20.\nG1 X1 Y0.5\nG0 Z0.2\nM30\n",
+    )
+    .expect("write");
+    let out = dir.join("tiny.out");
+    let (i, o) = (input.to_str().expect("utf8"), out.to_str().expect("utf8"));
+    let idx = ["--machine", "fadal-lamp", "--index", "A=0,B=-20"];
+    let r = lampost(&[&["post"][..], &idx, &[i, "-o", o]].concat());
+    assert!(r.status.success(), "{}", stderr(&r));
+    let r = lampost(&[&["verify"][..], &idx, &[i, o]].concat());
+    assert!(r.status.success(), "{}", stderr(&r));
+    // The circle's last chord point (the line before the laser goes off) moved 0.004 in.
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = text.lines().collect();
+    let k = lines
+        .iter()
+        .position(|l| l.starts_with("M72"))
+        .expect("laser off")
+        - 1;
+    let moved = lines[k].replace("Y-0.0363", "Y-0.0400");
+    assert_ne!(moved, lines[k], "{}", lines[k]);
+    let mut tampered = lines.clone();
+    tampered[k] = &moved;
+    let bad = dir.join("bad.out");
+    std::fs::write(&bad, tampered.join("\n") + "\n").expect("write");
+    let r = lampost(&[&["verify"][..], &idx, &[i, bad.to_str().expect("utf8")]].concat());
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+}

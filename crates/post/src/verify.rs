@@ -269,6 +269,11 @@ pub fn verify_traced<R: BufRead>(
         )
     });
     let mut current: Option<Step> = None;
+    // The move that ended at the last point (its end within the tolerance), while no
+    // point has yet come onto the next one; and the next move, given back when a point
+    // turned out to belong to the one that ended (see `check`).
+    let mut ended: Option<Step> = None;
+    let mut held: Option<Step> = None;
     // The angle the current move (an arc) has swept so far, along its sweep.
     let mut swept = 0.0f64;
     let mut rep = VerifyReport::default();
@@ -328,8 +333,12 @@ pub fn verify_traced<R: BufRead>(
                 )));
             }
         }
-        if current.is_none() {
-            *current = intended.next().transpose()?;
+        let fresh = current.is_none();
+        if fresh {
+            *current = match held.take() {
+                Some(s) => Some(s),
+                None => intended.next().transpose()?,
+            };
             swept = 0.0;
         }
         let Some(step) = *current else {
@@ -368,19 +377,31 @@ pub fn verify_traced<R: BufRead>(
                 p.x, p.y, p.z, step.line
             )));
         }
-        let err = if is_end && !entering && d_end <= tolerance && last_turn {
+        let (err, step) = if is_end && !entering && d_end <= tolerance && last_turn {
             *current = None;
-            d_end
+            ended = Some(step);
+            (d_end, step)
         } else {
             let d = dist_to(&step, &p);
-            if d > tolerance {
+            // A point of a move shorter than the tolerance (an arc smaller than it,
+            // written as chords, every one within the tolerance of its end), after the
+            // point that ended it: it stays within the tolerance of that end, where the
+            // tool already is. Checked against that move; the next is given back.
+            let back = ended
+                .filter(|e| fresh && !entering && d > tolerance && (p - e.end).norm() <= tolerance);
+            if let Some(e) = back {
+                held = current.take();
+                ((p - e.end).norm(), e)
+            } else if d > tolerance {
                 on_point(line, d);
                 return Err(PostError::Verify(format!(
                     "posted line {line}: the tool tip ({:.5}, {:.5}, {:.5}) is {d:.3e} from the intended path of input line {} (tolerance {tolerance:.1e})",
                     p.x, p.y, p.z, step.line
                 )));
+            } else {
+                ended = None;
+                (d, step)
             }
-            d
         };
         on_point(line, err);
         let want = intended_axis(&step);
@@ -519,7 +540,7 @@ pub fn verify_traced<R: BufRead>(
             }
         }
     }
-    let rest = match current {
+    let rest = match current.or(held) {
         Some(s) => Some(s),
         None => intended.next().transpose()?,
     };
