@@ -9,26 +9,7 @@ mod common;
 
 use common::*;
 
-/// A small deterministic generator (xorshift64*): the same programs on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        self.unit() < p
-    }
-}
+use lampost_testkit::XorShift as Rng;
 
 fn n4(v: f64) -> String {
     format!("{v:.4}")
@@ -45,7 +26,7 @@ fn random_program(r: &mut Rng) -> String {
     let word = |a: f64, b: f64| format!("{pa}{} {pb}{}", n4(a), n4(b));
     let round = |v: f64| format!("{v:.4}").parse::<f64>().unwrap_or(v);
     // A polygon-ish loop around the origin: n points at rising angles, radius varied.
-    let n = 3 + (r.next() % 5) as usize;
+    let n = 3 + (r.next_u64() % 5) as usize;
     let ccw = r.chance(0.5);
     let mut pts = Vec::with_capacity(n);
     let turn0 = r.range(0.0, std::f64::consts::TAU);
@@ -66,7 +47,7 @@ fn random_program(r: &mut Rng) -> String {
     );
     // In G18, now and then a lathe tool's orientation (L 1 to 8).
     let orientation = if g18 && r.chance(0.5) {
-        format!(" L{}", 1 + r.next() % 8)
+        format!(" L{}", 1 + r.next_u64() % 8)
     } else {
         String::new()
     };

@@ -72,6 +72,56 @@ impl SplitMix {
     }
 }
 
+/// xorshift64*: the generator of the oracle tests' random programs (`g76_cli`, `g7x_cli`,
+/// `cutter_comp_cli`, the post's `tamper`): the same programs on every run, so the
+/// figures their docs quote are those of every run.
+#[derive(Debug, Clone)]
+pub struct XorShift(pub u64);
+
+impl XorShift {
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Uniform in `[0, 1)`, 53 bits.
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    /// True with probability `p`.
+    pub fn chance(&mut self, p: f64) -> bool {
+        self.unit() < p
+    }
+
+    /// A number in `0..n` (0 when `n` is 0).
+    pub fn pick(&mut self, n: u64) -> u64 {
+        self.next_u64() % n.max(1)
+    }
+
+    /// A number in `0..n` (0 when `n` is 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        self.pick(n as u64) as usize
+    }
+
+    /// −1 or +1, even odds.
+    pub fn sign(&mut self) -> f64 {
+        if self.chance(0.5) {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+}
+
 /// Whether every file an external oracle needs is there (e.g. `.tools/py/bin/python`).
 /// When one is missing: a failure naming it and the script that installs it
 /// (`install`) if `LAMPOST_REQUIRE_PY=1`, else `false` and a SKIPPED line on standard
