@@ -360,10 +360,14 @@ impl Composed {
         Some(())
     }
 
-    /// Append the line to `out`.
+    /// Append the line to `out`: a copy of the whole buffer (a fixed size, so a few
+    /// vector moves where a copy of the line's own length is a call to `memcpy`), cut
+    /// back to the line.
     #[inline(always)]
     fn append_to(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.buf[..self.len]);
+        let at = out.len();
+        out.extend_from_slice(&self.buf);
+        out.truncate(at + self.len);
     }
 }
 
@@ -1086,7 +1090,12 @@ impl<W: Write> Emitter<W> {
         self.last_percent = false;
         // `track`, `suppressed` and `after` of the G word, from one rounding.
         let code = round_half_away(g * 10.0) as i64;
-        if let Some(line) = self.compose_motion(g, code, axes, scale, feed) {
+        // Composed in place: a line returned by value is copied out by `memcpy`.
+        let mut line = Composed::new();
+        if self
+            .compose_motion(&mut line, g, code, axes, scale, feed)
+            .is_some()
+        {
             self.commit_motion(code, feed);
             line.append_to(&mut self.line);
             return self.flush_line();
@@ -1147,12 +1156,13 @@ impl<W: Write> Emitter<W> {
     #[inline(always)]
     fn compose_motion(
         &self,
+        c: &mut Composed,
         g: f64,
         code: i64,
         axes: &[(u8, f64, i64)],
         scale: f64,
         feed: Option<f64>,
-    ) -> Option<Composed> {
+    ) -> Option<()> {
         let decimals = match self.units {
             Units::Inch => 4,
             Units::Mm => 3,
@@ -1171,7 +1181,6 @@ impl<W: Write> Emitter<W> {
         if !(common_axes && common_g && common_f && self.next_number_common()) {
             return None;
         }
-        let mut c = Composed::new();
         if numbered {
             c.letter(b'N')?;
             c.counter(&self.n_text)?;
@@ -1195,7 +1204,7 @@ impl<W: Write> Emitter<W> {
                 c.byte(b'.')?;
             }
         }
-        Some(c)
+        Some(())
     }
 
     /// [`Emitter::words`]' block composed on the stack, when it has no G or F word (no
