@@ -1009,17 +1009,16 @@ impl<W: Write> Emitter<W> {
     /// dialect (or ISO spelling when verbatim), numbered when renumbering.
     pub fn words(&mut self, words: &[(u8, f64)], comment: Option<&str>) -> io::Result<()> {
         // (A non-finite number is never composed: the general path refuses it.)
-        if comment.is_none() {
-            if let Some(line) = self.compose_words(words) {
-                self.frame_start(false)?;
-                self.line.truncate(self.start);
-                self.last_percent = false;
-                if !words.is_empty() {
-                    self.advance_number();
-                }
-                line.append_to(&mut self.line);
-                return self.flush_line();
+        let mut line = Composed::new();
+        if comment.is_none() && self.compose_words(&mut line, words).is_some() {
+            self.frame_start(false)?;
+            self.line.truncate(self.start);
+            self.last_percent = false;
+            if !words.is_empty() {
+                self.advance_number();
             }
+            line.append_to(&mut self.line);
+            return self.flush_line();
         }
         self.words_general(words, comment)
     }
@@ -1213,7 +1212,7 @@ impl<W: Write> Emitter<W> {
     /// rotaries within ±99999.999 (the process codes and the moves a post writes). The
     /// text is what the general path writes (property-tested: `composed_words_match`);
     /// `None` leaves the general path to write the block, nothing changed.
-    fn compose_words(&self, words: &[(u8, f64)]) -> Option<Composed> {
+    fn compose_words(&self, c: &mut Composed, words: &[(u8, f64)]) -> Option<()> {
         let decimals = match self.units {
             Units::Inch => 4,
             Units::Mm => 3,
@@ -1221,7 +1220,6 @@ impl<W: Write> Emitter<W> {
         if words.len() > 4 || !self.next_number_common() {
             return None;
         }
-        let mut c = Composed::new();
         if self.opts.renumber.is_some() && !words.is_empty() {
             c.letter(b'N')?;
             c.counter(&self.n_text)?;
@@ -1261,7 +1259,7 @@ impl<W: Write> Emitter<W> {
                 _ => return None,
             }
         }
-        Some(c)
+        Some(())
     }
 
     /// Whether the next N (when renumbering) is the counter's and within the dialect.
