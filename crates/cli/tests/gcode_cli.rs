@@ -572,3 +572,85 @@ fn marlin_firmware_moves_are_named() {
         stderr(&o)
     );
 }
+
+/// A length word with no decimal point under `--flavor fanuc` or `haas` (`X30`): those
+/// controls read it in least input increments by default (0.030 mm), lampost in whole
+/// units. Warned once, located, on a fast-lane line too; never for zero, a word with its
+/// point, a macro call's arguments or under another flavour; F counts on a Haas only.
+/// The post refuses the program and writes nothing.
+#[test]
+fn whole_number_lengths_under_fanuc_and_haas_are_warned_and_not_posted() {
+    let dir = tempdir("integer-words");
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).expect("write");
+        p.to_str().expect("utf8").to_string()
+    };
+    let fanuc = write(
+        "fanuc.nc",
+        "O1000\nG21 G90 G54\nG0 X10. Y0\nG1 Z-5. F100\nG1 X30\nG1 Y40\nM30\n",
+    );
+    let o = lampost(&["check", "--flavor", "fanuc", &fanuc]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("`X30` has no decimal point")
+            && e.contains("0.030 mm")
+            && e.contains("3401#0")
+            && e.contains("fanuc.nc:5:4"),
+        "{e}"
+    );
+    assert_eq!(e.matches("has no decimal point").count(), 1, "once: {e}");
+    // The same program as LinuxCNC reads it: whole units, nothing to say.
+    let o = lampost(&["check", "--flavor", "linuxcnc", &fanuc]);
+    assert!(!stderr(&o).contains("decimal point"), "{}", stderr(&o));
+    // F without a point: a Haas (setting 77), not a Fanuc.
+    let haas = write(
+        "haas.nc",
+        "O1000\nG20 G90 G54\nG0 X1.5 Y0.\nG65 P9000 A1 B2\nG1 Z-.1 F20\nM30\n",
+    );
+    let o = lampost(&["check", "--flavor", "haas", &haas]);
+    let e = stderr(&o);
+    assert!(
+        e.contains("`F20` has no decimal point")
+            && e.contains("0.0020 in/min")
+            && e.contains("setting 77")
+            && e.contains("haas.nc:5:"),
+        "{e}"
+    );
+    let fanuc_feed = write("ff.nc", "G21 G90\nG1 X1. F100\nM30\n");
+    let o = lampost(&["check", "--flavor", "fanuc", &fanuc_feed]);
+    assert!(!stderr(&o).contains("decimal point"), "{}", stderr(&o));
+    // The post does not guess.
+    let out = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--flavor",
+        "fanuc",
+        &fanuc,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("fanuc.nc:5") && e.contains("`X30.`"), "{e}");
+    assert!(!out.exists(), "nothing is written");
+    // With every point written, it posts.
+    let pointed = write(
+        "pointed.nc",
+        "O1000\nG21 G90 G54\nG0 X10. Y0\nG1 Z-5. F100\nG1 X30.\nG1 Y40.\nM30\n",
+    );
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--flavor",
+        "fanuc",
+        &pointed,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

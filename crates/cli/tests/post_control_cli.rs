@@ -120,12 +120,12 @@ fn fadal_and_haas_calls_are_followed_by_the_post() {
     for (name, text) in [
         (
             "m98.nc",
-            "O1 (MAIN)\nG20 G90 G0 X0 Y0 Z1\nM98 P800 L2\nG0 Z1\nM30\n\
-             O800 (SUB)\nG91 G1 Z-1.1 F10\nX1\nZ1.1\nG90\nM99\n",
+            "O1 (MAIN)\nG20 G90 G0 X0 Y0 Z1.\nM98 P800 L2\nG0 Z1.\nM30\n\
+             O800 (SUB)\nG91 G1 Z-1.1 F10.\nX1.\nZ1.1\nG90\nM99\n",
         ),
         (
             "m97.nc",
-            "G20 G90 G0 X0 Y0 Z1\nM97 P100 L2\nG0 Z1\nM30\nN100 G91 G1 Z-1.1 F10\nX1\nZ1.1\nG90\nM99\n",
+            "G20 G90 G0 X0 Y0 Z1.\nM97 P100 L2\nG0 Z1.\nM30\nN100 G91 G1 Z-1.1 F10.\nX1.\nZ1.1\nG90\nM99\n",
         ),
     ] {
         let input = dir.join(name);
@@ -145,7 +145,8 @@ fn fadal_and_haas_calls_are_followed_by_the_post() {
 fn m99_in_a_main_program_is_refused_by_the_post_and_warned_by_trace() {
     let dir = tempdir("post-control-m99");
     let input = dir.join("loop.nc");
-    let text = "G20 G90 G0 X0 Y0 Z1\nG1 Z-0.1 F10\nX1\nG0 Z1\nM99\n";
+    // (Every length with its point, as Fanuc and Haas programs are written.)
+    let text = "G20 G90 G0 X0 Y0 Z1.\nG1 Z-0.1 F10.\nX1.\nG0 Z1.\nM99\n";
     std::fs::write(&input, text).expect("write");
     let p = input.to_str().expect("utf-8");
     for flavor in ["fanuc", "haas", "fadal", "linuxcnc"] {

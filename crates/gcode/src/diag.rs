@@ -255,6 +255,22 @@ pub enum ErrorKind {
     /// M99 where the flavour has no main-program loop and no subprogram is running.
     #[error("M99 outside a subprogram: there is no call to return from")]
     ReturnOutsideSubprogram,
+    /// A length or angle word written without a decimal point in a Fanuc or Haas
+    /// program (`X10`): those controls read it in least input increments by default,
+    /// lampost reads whole units (see `interp.rs`, `integer_word`).
+    #[error("`{word}` has no decimal point: {control} reads it as {increments} ({setting}); lampost reads it as {units}")]
+    IntegerWord {
+        /// The word as written.
+        word: String,
+        /// `a Fanuc control` or `a Haas control`.
+        control: &'static str,
+        /// The control's setting that decides it, at its default.
+        setting: &'static str,
+        /// The value in least input increments, with its unit.
+        increments: String,
+        /// The value in whole units, with its unit.
+        units: String,
+    },
     /// A Fanuc Macro B statement or `G65` call that cannot be followed.
     #[error("{0}")]
     MacroB(String),
@@ -368,6 +384,7 @@ impl ErrorKind {
             ErrorKind::CallsTooDeep(_) => "flatten the calls: lampost follows calls 8 deep",
             ErrorKind::TooManyCalls { .. } => "check the L repeats of nested calls; split the program",
             ErrorKind::TooManyPrograms(_) => "split the file",
+            ErrorKind::IntegerWord { .. } => "write the decimal point where whole units are meant (`X10.`; CAM posts for these controls always do); a program written for least increments has every such number that many times too large here. The post refuses the program until each has its point",
             ErrorKind::MacroB(_) => "check the Macro B structure: each WHILE [..] DOm closed by its ENDm (nested loops numbered apart), each GOTO n to a block Nn of the same program, each G65 P.. to a program of this file that ends in M99",
             ErrorKind::MainProgramLoops(_) => "end the program with M30; to run its body several times, make it a subprogram and call it with M98 P… L…",
             ErrorKind::ReturnOutsideSubprogram => "end the program with M30 (M99 returns from a subprogram called with M98)",

@@ -202,6 +202,9 @@ pub struct Interpreter {
     /// Axes named in the block being run.
     block_axes: u16,
     warned_macro: bool,
+    /// A length word with no decimal point has been warned about under a Fanuc or Haas
+    /// flavour ([`Interpreter::integer_word`]): once a program.
+    warned_integer: bool,
     /// A zero centre word off the active plane (`K0` in G17) has been warned about: once
     /// a program, as a post writes one on every arc.
     warned_normal_centre: bool,
@@ -340,6 +343,76 @@ fn m97_runs(w: &Words<'_, '_>) -> u32 {
     }
 }
 
+/// A word that reads differently as least input increments and as whole units (see
+/// [`Interpreter::integer_word`]): a length, angle or centre word (F too on a Haas)
+/// written as a plain whole number other than zero, no point, no exponent, no
+/// expression.
+fn integer_dimension(w: &Word<'_>, with_feed: bool) -> bool {
+    dimension_letter(w.letter, with_feed)
+        && w.register.is_none()
+        && whole_number_text(w.text.as_bytes())
+}
+
+/// A length, angle, centre or radius letter (F too with `with_feed`): see
+/// [`Interpreter::integer_word`]. Not Q, which is a code as often as a length (G268's
+/// order, G76's chamfer angle).
+fn dimension_letter(l: u8, with_feed: bool) -> bool {
+    matches!(
+        l,
+        b'X' | b'Y'
+            | b'Z'
+            | b'A'
+            | b'B'
+            | b'C'
+            | b'U'
+            | b'V'
+            | b'W'
+            | b'I'
+            | b'J'
+            | b'K'
+            | b'R'
+            | b'Q'
+    ) || (with_feed && l == b'F')
+}
+
+/// A number written as a whole number other than zero: an optional sign, then digits
+/// only, one of them not 0 (blanks between them skipped, as the parser skips them).
+fn whole_number_text(text: &[u8]) -> bool {
+    let mut chars = text.iter().filter(|c| !c.is_ascii_whitespace()).peekable();
+    chars.next_if(|c| matches!(c, b'+' | b'-'));
+    let (mut digits, mut nonzero) = (false, false);
+    for &c in chars {
+        if !c.is_ascii_digit() {
+            return false;
+        }
+        digits = true;
+        nonzero |= c != b'0';
+    }
+    digits && nonzero
+}
+
+/// Whether a fast-lane line (letters, plain numbers and blanks: see
+/// [`crate::parse`]'s `plain_motion`) holds a word [`Interpreter::integer_word`] would
+/// warn of; the stream then sends it down the reference path, which warns.
+pub(crate) fn has_integer_word(bytes: &[u8], with_feed: bool) -> bool {
+    let mut i = 0;
+    while i < bytes.len() {
+        let letter = bytes[i].to_ascii_uppercase();
+        i += 1;
+        if !letter.is_ascii_uppercase() {
+            continue;
+        }
+        let start = i;
+        while i < bytes.len() && !bytes[i].is_ascii_alphabetic() {
+            i += 1;
+        }
+        if dimension_letter(letter, with_feed) && whole_number_text(&bytes[start..i]) {
+            return true;
+        }
+    }
+    false
+}
+
 fn diag(
     b: &Block<'_>,
     sev: Severity,
@@ -386,6 +459,7 @@ impl Interpreter {
             axes_named: 0,
             block_axes: 0,
             warned_macro: false,
+            warned_integer: false,
             warned_normal_centre: false,
             warned_e_mode: false,
             rigid_tap: false,
@@ -535,6 +609,9 @@ impl Interpreter {
                 .any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
             || Self::transform_words(&w)
             || levelling;
+        if !settings && !self.warned_integer {
+            self.integer_word(b, &w, out);
+        }
         if w.polar().is_some() {
             self.polar_allowed(b, &w, settings)?;
         }
@@ -582,6 +659,80 @@ impl Interpreter {
                 self.start_profile(b, &w, cycle, out)
             }
         }
+    }
+
+    /// Whether the lines still need looking at for [`Interpreter::integer_word`] (a
+    /// Fanuc or Haas flavour, not warned yet), and whether F counts (Haas).
+    pub(crate) fn watching_integers(&self) -> Option<bool> {
+        match self.opts.flavor {
+            _ if self.warned_integer => None,
+            crate::flavor::Flavor::Fanuc => Some(false),
+            crate::flavor::Flavor::Haas => Some(true),
+            _ => None,
+        }
+    }
+
+    /// Under a Fanuc or Haas flavour, warn (once a program) of a length, angle or
+    /// centre word written without a decimal point (`X10`): those controls read it in
+    /// least input increments by default (Fanuc: parameter 3401#0 DPI = 0; Haas: setting
+    /// 162 "Default to Float" off, and for F setting 77 "Scale Integer F" off), so `X10`
+    /// is 0.010 mm or 0.0010 in there, where lampost (like LinuxCNC, grbl and Mach3)
+    /// reads whole units. CAM posts for these controls write every such number with its
+    /// point (`X10.`), so a word without one is a hand edit or a program meant for
+    /// another control: which reading is meant cannot be told, and a factor of 1,000 or
+    /// 10,000 rides on it. Zero reads the same either way; macro calls (G65, G66) pass
+    /// arguments, and G4's X is a time. The post refuses the program (`intended.rs`).
+    fn integer_word(&mut self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) {
+        let (control, setting, haas) = match self.opts.flavor {
+            crate::flavor::Flavor::Fanuc => (
+                "a Fanuc control",
+                "parameter 3401#0 DPI = 0, its default",
+                false,
+            ),
+            crate::flavor::Flavor::Haas => (
+                "a Haas control",
+                "setting 162 Default to Float off, its default",
+                true,
+            ),
+            _ => return,
+        };
+        if w.gs.iter().any(|g| matches!(g.1, 40 | 650 | 660 | 661)) {
+            return;
+        }
+        let Some(word) = b.words().find(|wd| integer_dimension(wd, haas)) else {
+            return;
+        };
+        self.warned_integer = true;
+        let mm = self.modal.units == Units::Mm;
+        let letter = word.letter;
+        let (step, unit) = match letter {
+            b'A' | b'B' | b'C' => (0.001, "°"),
+            b'F' if mm => (0.001, " mm/min"),
+            b'F' => (0.0001, " in/min"),
+            _ if mm => (0.001, " mm"),
+            _ => (0.0001, " in"),
+        };
+        let places = if step < 0.001 { 4 } else { 3 };
+        let (setting, increments) = if letter == b'F' {
+            (
+                "setting 77 Scale Integer F off, its default",
+                format!("{:.*}{unit}", places, word.value * step),
+            )
+        } else {
+            (setting, format!("{:.*}{unit}", places, word.value * step))
+        };
+        out(Event::Diagnostic(diag(
+            b,
+            Severity::Warning,
+            ErrorKind::IntegerWord {
+                word: word.display(),
+                control,
+                setting,
+                increments,
+                units: format!("{}{unit}", word.value),
+            },
+            Some(word.span),
+        )));
     }
 
     /// The fast lane's interpreter (see [`crate::stream`]): a plain move

@@ -246,7 +246,15 @@ impl<S: LineSource> Iterator for Stream<S> {
             };
             if self.fast_lane && line.len <= MAX_LINE_BYTES && vendor.is_none() {
                 if let Some(p) = plain_motion(line.bytes) {
-                    direct = self.interp.plain_motion(&p, line.number);
+                    // A whole-number length word under Fanuc or Haas goes the reference
+                    // way, which warns of it (`Interpreter::integer_word`).
+                    let integer = self
+                        .interp
+                        .watching_integers()
+                        .is_some_and(|f| crate::interp::has_integer_word(line.bytes, f));
+                    if !integer {
+                        direct = self.interp.plain_motion(&p, line.number);
+                    }
                 }
             }
             let plain = direct.is_some();

@@ -295,8 +295,8 @@ fn haas(text: &str, order: Order) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
 
 #[test]
 fn haas_m97_calls_a_local_subprogram_by_its_n_label() {
-    let text = "O1000\nG20 G90 G0 X0 Y0\nM97 P100 L2\nG0 X5\nM97 P200\nM30\n\
-        N100 G91 G0 Y1\nG90\nM99\nN200 G0 Z-1\nM97 P100\nM99\n";
+    let text = "O1000\nG20 G90 G0 X0 Y0\nM97 P100 L2\nG0 X5.\nM97 P200\nM30\n\
+        N100 G91 G0 Y1.\nG90\nM99\nN200 G0 Z-1.\nM97 P100\nM99\n";
     let (m, d) = haas(text, Order::Execution);
     // Only the bodies after M30, read on after the main program, are warned about.
     assert_eq!(d.len(), 1, "{d:?}");
@@ -401,7 +401,7 @@ fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
     // A move in a setting code's block is a move (Haas `G103 P1 G1 X1 F100` was dropped
     // with its feed); the setting's own arguments stay its own (`G187 P1 E.002`).
     let opts = Flavor::Haas.options(Options::default(), None);
-    let src = b"G21 G90\nG0 X0 Y0\nG103 P1 G1 X1 F100\nG187 P1 E.002\nG1 X2 Y1 G187 P2\nM30\n";
+    let src = b"G21 G90\nG0 X0 Y0\nG103 P1 G1 X1. F100.\nG187 P1 E.002\nG1 X2. Y1. G187 P2\nM30\n";
     let mut ends = Vec::new();
     for e in Stream::from_bytes(src, opts, false) {
         match e.expect("in memory") {

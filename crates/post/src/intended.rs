@@ -408,6 +408,9 @@ impl<'a> Intended<'a> {
                         ErrorKind::CutterCompTraced(what) => Some(format!(
                             "{what}: cutter radius compensation changes the path; the post writes no compensated path (program the tool's centre path, G40)"
                         )),
+                        ErrorKind::IntegerWord { word, control, .. } => Some(format!(
+                            "`{word}` has no decimal point, and {control} reads such a number in least increments by default: whether whole units or increments are meant cannot be told, and the post does not guess; write the decimal point (`{word}.`) in every such word"
+                        )),
                         ErrorKind::FirmwareMacro(what) => Some(format!(
                             "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; remove the printer's start and end code from the slicer's custom G-code"
                         )),
