@@ -224,7 +224,11 @@ fn other_flavours_refuse_the_characters() {
         Flavor::Mach3,
         Flavor::Marlin,
     ] {
-        for (text, ch) in [("G0 X1 Y0\nG0 @1 ^90\n", '@'), ("G0 X1 Y0\nG0 ^90\n", '^')] {
+        // (`X1.` with its point: Fanuc and Haas warn of `X1`.)
+        for (text, ch) in [
+            ("G0 X1. Y0\nG0 @1 ^90\n", '@'),
+            ("G0 X1. Y0\nG0 ^90\n", '^'),
+        ] {
             let (m, d) = run_as(flavor, text);
             assert_eq!(m.len(), 1, "{flavor:?}");
             assert_eq!(d.len(), 1, "{flavor:?}: {d:?}");
