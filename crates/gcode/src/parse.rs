@@ -1114,12 +1114,9 @@ fn words_reference_items<'a>(
                     s => s,
                 };
                 // RS274/NGC (and Fanuc) read a blank inside a number as nothing: `X 1 0 . 5`
-                // is X10.5, as rs274 reads it. A slicer's firmware does not; nor is a
-                // code's number joined (`G1 12.5` is a number without its letter, clearer
-                // than rs274's unknown G112.5).
-                let joins = !slicer && !matches!(letter, b'G' | b'M' | b'N' | b'O');
+                // is X10.5, as rs274 reads it. A slicer's firmware does not.
                 let scanned = match scanned {
-                    Ok((end, value)) if joins => match spaced_number_end(bytes, j, end) {
+                    Ok((end, value)) if !slicer => match spaced_number_end(bytes, j, end) {
                         Some(e) => parse_number(&text[j..e]).map(|v| (e, v)).ok_or_else(|| {
                             err(ErrorKind::BadNumber(text[j..e].to_string()), start, e)
                         }),
