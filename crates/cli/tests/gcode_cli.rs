@@ -654,35 +654,3 @@ fn whole_number_lengths_under_fanuc_and_haas_are_warned_and_not_posted() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
-
-/// Blanks inside a number read as nothing (RS274/NGC: blanks do not change a line's
-/// meaning), as rs274 reads them: `X 1 0 . 5` is X10.5, `G0 X1 .5 Y2 3` is X1.5 Y23
-/// (rs274 gives STRAIGHT_TRAVERSE(1.5, 23, 0) and STRAIGHT_FEED(12.34, 23, 0) for this
-/// program); a slicer's firmware reading keeps its words apart.
-#[test]
-fn blanks_inside_a_number_are_read_as_rs274_reads_them() {
-    let dir = tempdir("spaced-numbers");
-    let p = dir.join("sp.nc");
-    std::fs::write(
-        &p,
-        "G21 G90\nG0 X1 .5 Y2 3\nG1 X1 2 . 3 4 F100\nG 1 X 1 0 . 5\nM2\n",
-    )
-    .expect("write");
-    let o = lampost(&["trace", p.to_str().expect("utf8")]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let t = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        t.contains("G0 X1.5 Y23 Z0")
-            && t.contains("G1 X12.34 Y23 Z0 F100")
-            && t.contains("G1 X10.5 Y23"),
-        "{t}"
-    );
-    // Two points in one number are not one number.
-    std::fs::write(&p, "G21 G90\nG0 X1.5 .5\nM2\n").expect("write");
-    let o = lampost(&["trace", p.to_str().expect("utf8")]);
-    assert!(
-        !o.status.success(),
-        "{}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-}

@@ -62,35 +62,6 @@ fn number(i: &str) -> IResult<&str, &str> {
     )))(i)
 }
 
-/// Where a number read from `start` to `end` goes on after blanks (`1 0 . 5`: RS274/NGC
-/// ignores blanks in a line, and rs274 reads X10.5), or `None` when it ends at `end`:
-/// digits, and at most one point in the whole number; never a blank at its end.
-fn spaced_number_end(bytes: &[u8], start: usize, end: usize) -> Option<usize> {
-    let mut dot = bytes[start..end].contains(&b'.');
-    let (mut k, mut last) = (end, end);
-    loop {
-        while k < bytes.len() && matches!(bytes[k], b' ' | b'\t') {
-            k += 1;
-        }
-        let run = k;
-        while let Some(&c) = bytes.get(k) {
-            if c.is_ascii_digit() {
-                k += 1;
-            } else if c == b'.' && !dot {
-                dot = true;
-                k += 1;
-            } else {
-                break;
-            }
-        }
-        if k == run {
-            break;
-        }
-        last = k;
-    }
-    (last > end).then_some(last)
-}
-
 /// Parse a decimal number text (as accepted by `number`) to `f64`, correctly rounded.
 pub fn parse_number(text: &str) -> Option<f64> {
     let bytes = text.as_bytes();
@@ -1109,17 +1080,6 @@ fn words_reference_items<'a>(
                             .ok_or_else(|| {
                                 err(ErrorKind::BadNumber(text[j..e].to_string()), start, e)
                             }),
-                        None => Ok((end, value)),
-                    },
-                    s => s,
-                };
-                // RS274/NGC (and Fanuc) read a blank inside a number as nothing: `X 1 0 . 5`
-                // is X10.5, as rs274 reads it. A slicer's firmware does not.
-                let scanned = match scanned {
-                    Ok((end, value)) if !slicer => match spaced_number_end(bytes, j, end) {
-                        Some(e) => parse_number(&text[j..e]).map(|v| (e, v)).ok_or_else(|| {
-                            err(ErrorKind::BadNumber(text[j..e].to_string()), start, e)
-                        }),
                         None => Ok((end, value)),
                     },
                     s => s,
