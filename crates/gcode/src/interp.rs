@@ -166,9 +166,9 @@ struct CannedParams {
     r: Option<f64>,
     q: Option<f64>,
     p: f64,
-    /// LinuxCNC: the Z the tool was at when this series of cycles began (rs274's
-    /// `cycle_il`, the "initial level"; machine frame), kept until a motion other than a
-    /// cycle: G91's R counts from it, and G98 retracts to it.
+    /// The Z the tool was at when this series of cycles began (rs274's `cycle_il`, the
+    /// "initial level", Fanuc's initial point; machine frame), kept until a motion other
+    /// than a cycle: G91's R counts from it, and G98 retracts to it.
     initial_z: Option<f64>,
 }
 
@@ -609,6 +609,19 @@ impl Interpreter {
                 .any(|g| g.2 == GGroup::Other && self.own_words(&w, g.1))
             || Self::transform_words(&w)
             || levelling;
+        let lathe_cycle = self.lathe_units_cycle(&w);
+        let settings = settings || lathe_cycle.is_some();
+        if let Some(gw) = lathe_cycle {
+            self.warn(
+                b,
+                out,
+                ErrorKind::NotSimulated(format!(
+                    "{} with P, Q, U, W, D or R (a Fanuc or Haas lathe's finishing or roughing cycle over the profile blocks P to Q; its words are its own, not units and moves)",
+                    gw.display_code()
+                )),
+                Some(gw.span),
+            );
+        }
         if !settings && !self.warned_integer {
             self.integer_word(b, &w, out);
         }
@@ -857,6 +870,65 @@ impl Interpreter {
             Some(gw.span),
         );
         true
+    }
+
+    /// A G70 or G71 read as inch/mm (every flavour but `haas`, which reads them as its
+    /// own cycles, and `linuxcnc`, where they are unknown) whose block carries P, Q, U,
+    /// W, D or R: units codes take no words, so this is a Fanuc or Haas lathe's
+    /// finishing or roughing cycle (`G71 P10 Q20 U0.01 W0.005 D0.05 F0.01`), which used
+    /// to switch the program to millimetres and move U and W as two more axes, silently.
+    /// Its code word, when it is one.
+    fn lathe_units_cycle<'w>(&self, w: &'w Words<'_, '_>) -> Option<&'w Word<'w>> {
+        if matches!(
+            self.opts.flavor,
+            crate::flavor::Flavor::Haas | crate::flavor::Flavor::LinuxCnc
+        ) {
+            return None;
+        }
+        let (gw, c) = w.g_in(GGroup::Units)?;
+        (matches!(c, 700 | 710)
+            && [b'P', b'Q', b'U', b'W', b'D', b'R']
+                .iter()
+                .any(|&l| w.word(l).is_some()))
+        .then_some(gw)
+    }
+
+    /// G4's words. Fanuc, Haas and FADAL give the dwell time as X (U on a lathe) in
+    /// seconds, or P in milliseconds: `G04 X1.5` dwells, it moves nothing (it used to be
+    /// traced as a move of the motion in force to X1.5). A move cannot share the block.
+    /// LinuxCNC takes the time in P only and refuses G4 without it, as rs274 does.
+    /// True when the block's axis words were the dwell's.
+    fn dwell_words(&self, b: &Block<'_>, w: &Words<'_, '_>, gw: &Word<'_>) -> Res<bool> {
+        let refuse = |why: &'static str| {
+            Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::BadValue {
+                    word: gw.display_code(),
+                    why,
+                },
+                Some(gw.span),
+            ))
+        };
+        if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+            return if w.word(b'P').is_none() {
+                refuse("dwell time missing: LinuxCNC's G4 takes the seconds in P (rs274 refuses it too)")
+            } else {
+                Ok(false)
+            };
+        }
+        if w.get(b'X').is_none() && w.get(b'U').is_none() {
+            return Ok(false);
+        }
+        if AXES
+            .iter()
+            .any(|&l| l != b'X' && l != b'U' && w.get(l).is_some())
+        {
+            return refuse(
+                "G4's X (or U) is the dwell time in seconds; a move cannot share its block",
+            );
+        }
+        Ok(true)
     }
 
     /// True when the block's words belong to a code of [`GGroup::Other`] (its arguments,
@@ -1287,6 +1359,16 @@ impl Interpreter {
                 };
             }
             self.modal_groups(b, w, out)?;
+            let haas_lathe_cycle = self.opts.flavor == crate::flavor::Flavor::Haas
+                && w.gs.iter().any(|g| matches!(g.1, 700 | 710 | 720))
+                && w.word(b'P').is_some()
+                && w.word(b'Q').is_some();
+            if self.lathe_units_cycle(w).is_some() || haas_lathe_cycle {
+                // The cycle's F is the feed from here on (Fanuc, Haas: F is modal).
+                if let Some(f) = w.word(b'F').filter(|f| f.value >= 0.0) {
+                    self.modal.feed = f.value;
+                }
+            }
             return self.settings(w);
         }
         if w.word(b'O').is_some() && crate::program::program_number(b).is_some() {
@@ -1566,6 +1648,7 @@ impl Interpreter {
                 continue;
             }
             match c {
+                40 => axes_used |= self.dwell_words(b, w, gw)?,
                 100 => {
                     axes_used = true;
                     self.g10(b, w, gw)?;
@@ -1710,7 +1793,10 @@ impl Interpreter {
                 _ => Plane::XY,
             };
         }
-        if let Some((gw, c)) = w.g_in(GGroup::Units) {
+        if let Some((gw, c)) = w
+            .g_in(GGroup::Units)
+            .filter(|_| self.lathe_units_cycle(w).is_none())
+        {
             let units = if c == 200 || c == 700 {
                 Units::Inch
             } else {
@@ -3145,13 +3231,11 @@ impl Interpreter {
         };
         let off = self.offset();
         let incremental = self.modal.distance == Distance::Incremental;
-        // The initial level: for LinuxCNC where Z was when this series of cycles began
-        // (rs274's `cycle_il`), elsewhere where Z is now.
-        let initial = if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
-            *self.canned.initial_z.get_or_insert(self.pos[Z])
-        } else {
-            self.pos[Z]
-        };
+        // The initial level: where Z was when this series of cycles began (rs274's
+        // `cycle_il`; Fanuc's and Haas's "initial point", the Z before the cycle was
+        // first given), in every flavour: after a G99 hole the tool is at R, and a later
+        // G98 still returns to that level, and G91's R still counts from it.
+        let initial = *self.canned.initial_z.get_or_insert(self.pos[Z]);
         let (r_abs, bottom) = if incremental {
             let r = initial + rv;
             (r, r + zv)

@@ -206,6 +206,8 @@ pub struct Intended<'a> {
     /// What the user should hear of (a program read in units it did not name, the
     /// interpreter's warnings).
     notes: Vec<String>,
+    /// The section a G0 that extrudes in X or Y was warned of in.
+    warned_wet_rapid: Option<usize>,
     /// The section's warnings so far, one note per kind: (kind, first line, how many).
     warned: Vec<(std::mem::Discriminant<ErrorKind>, u32, usize)>,
     /// A rotary or extra axis word at zero has been noted (see `extra_axes_at_zero`).
@@ -247,6 +249,7 @@ impl<'a> Intended<'a> {
             frame_cache: None,
             retract_z: None,
             notes: Vec::new(),
+            warned_wet_rapid: None,
             warned: Vec::new(),
             noted_zero_axes: false,
         }
@@ -475,6 +478,23 @@ impl<'a> Intended<'a> {
             let dry = self.opts.e_extrusion
                 && matches!(m.kind, MoveKind::Linear | MoveKind::Arc { .. })
                 && !m.extruded.is_some_and(|grown| grown > 0.0);
+            // A G0 along which E grows is travel here, as slicers mean it: their start and
+            // end code primes the nozzle on a lift (Cura: `G0 F10000 Z1.5 E4.5`), which is
+            // no deposit. The firmware would extrude along it, so one that also moves in
+            // X or Y (a deposit written as G0 by hand) is warned of, once a section.
+            if self.opts.e_extrusion
+                && matches!(m.kind, MoveKind::Rapid)
+                && m.origin == Origin::Block
+                && m.extruded.is_some_and(|grown| grown > 0.0)
+                && (m.end[0] != m.start[0] || m.end[1] != m.start[1])
+                && self.warned_wet_rapid != Some(self.idx)
+            {
+                self.warned_wet_rapid = Some(self.idx);
+                self.notes.push(format!(
+                    "{}:{}: a G0 that extrudes while it moves in X or Y is posted as travel (laser off): the firmware would extrude along it; write deposits as G1",
+                    sec.name, m.line
+                ));
+            }
             let is_feed = !matches!(m.kind, MoveKind::Rapid) && !dry;
             // Layers: a feed move ending at a new Z level starts a new layer.
             if is_feed && sec.layers.is_some() {

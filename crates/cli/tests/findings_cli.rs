@@ -1,0 +1,167 @@
+//! Wrong readings found by probing real programs from sources not seen before
+//! (`fixtures/findings/README.md`), each fixed and checked here against rs274 or the
+//! controls' manuals.
+
+mod common;
+
+use common::*;
+use std::path::PathBuf;
+
+fn finding(name: &str) -> PathBuf {
+    root().join("fixtures/findings").join(name)
+}
+
+fn trace_json(flavor: &str, path: &PathBuf) -> serde_json::Value {
+    let o = lampost(&[
+        "trace",
+        "--json",
+        "--flavor",
+        flavor,
+        path.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{flavor}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).expect("json")
+}
+
+/// Ends of the traced moves, (x, y, z).
+fn ends(doc: &serde_json::Value) -> Vec<[f64; 3]> {
+    doc["moves"]
+        .as_array()
+        .expect("moves")
+        .iter()
+        .map(|m| {
+            let e = &m["end"];
+            ["X", "Y", "Z"].map(|k| e[k].as_f64().expect("number"))
+        })
+        .collect()
+}
+
+/// A series of drill cycles keeps the level it began at, in every flavour: after G99
+/// holes a G98 returns to it (16), G91's R counts from it (17: the fourth hole was
+/// drilled 0.9 in too deep), and a cycle started below R (11). Equal to rs274's moves.
+#[test]
+fn drill_cycles_keep_their_initial_level_in_every_flavour() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-cycles");
+    for name in [
+        "11-g81-started-below-r.nc",
+        "16-g98-after-g99-initial-level.nc",
+        "17-g91-cycle-r-from-initial-level.nc",
+    ] {
+        let path = finding(name);
+        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+        for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+            let doc = trace_json(flavor, &path);
+            compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{name} as {flavor}: {e}"));
+        }
+    }
+}
+
+/// `G04 X1.5` (Fanuc, Haas, FADAL: X is the dwell in seconds) moves nothing; it was
+/// traced as a move to X1.5, and the plunge after it 8.5 mm from where the control
+/// plunges. LinuxCNC takes the time in P only and refuses it, as rs274 does.
+#[test]
+fn a_dwell_s_x_is_a_time_not_a_move() {
+    let path = finding("19-g4-dwell-x-moves.nc");
+    for flavor in ["fadal", "fanuc", "haas", "mach3"] {
+        let e = ends(&trace_json(flavor, &path));
+        assert_eq!(
+            e,
+            vec![[10.0, 10.0, 5.0], [10.0, 10.0, 0.0], [20.0, 10.0, 0.0]],
+            "{flavor}"
+        );
+    }
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        path.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains(":3:1") && stderr(&o).contains("dwell time missing"),
+        "{}",
+        stderr(&o)
+    );
+    // A move cannot share a dwell's block.
+    let dir = tempdir("findings-dwell");
+    let p = dir.join("d.nc");
+    std::fs::write(&p, "G21 G90\nG0 X1. Y1.\nG04 X1.5 Y3.\nM30\n").expect("write");
+    let o = lampost(&["check", "--flavor", "fanuc", p.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("dwell time"), "{}", stderr(&o));
+    if let Some(_rs274) = require_rs274() {
+        assert!(
+            rs274_to_end(&path, &dir).is_err(),
+            "rs274 refuses G4 without P"
+        );
+    }
+}
+
+/// A Fanuc/Haas lathe roughing cycle `G71 P10 Q20 U0.01 W0.005 D0.05 F0.010` read
+/// where G71 means millimetres (fadal, fanuc, mach3): named, its words its own, the
+/// units unchanged (inch), its F the feed from there on; it switched the program to
+/// millimetres and moved U and W as axes, silently. The post refuses it.
+#[test]
+fn a_lathe_roughing_cycle_is_not_a_units_code() {
+    let path = finding("05-haas-lathe-g71-feed.nc");
+    for flavor in ["fadal", "fanuc", "mach3", "haas"] {
+        let o = lampost(&["trace", "--flavor", flavor, path.to_str().expect("utf8")]);
+        assert!(o.status.success(), "{flavor}: {}", stderr(&o));
+        assert!(stderr(&o).contains(":5:1"), "{flavor}: {}", stderr(&o));
+        let doc = trace_json(flavor, &path);
+        let e = ends(&doc);
+        assert_eq!(
+            e,
+            vec![
+                [1.6, 0.0, 0.1],
+                [0.4, 0.0, 0.1],
+                [0.4, 0.0, -0.5],
+                [1.0, 0.0, -0.5],
+                [1.6, 0.0, -0.5],
+                [1.6, 0.0, 0.1]
+            ],
+            "{flavor}: inch throughout"
+        );
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--convert-units",
+            "--flavor",
+            flavor,
+            path.to_str().expect("utf8"),
+            "-o",
+            "-",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{flavor}: {}", stderr(&o));
+        assert!(stderr(&o).contains("lathe"), "{flavor}: {}", stderr(&o));
+    }
+}
+
+/// A Marlin `G0` along which E grows: slicers write it in their start and end code to
+/// prime the nozzle on a lift (Cura's `G0 F10000 Z1.5 E4.5`), which is no deposit, so the
+/// post keeps G0 as travel; one that also moves in X or Y (the firmware would extrude
+/// along it) is warned of at its line, where it used to pass without a word.
+#[test]
+fn a_slicer_g0_that_extrudes_is_travel_and_warned() {
+    let path = finding("14-marlin-g0-extrudes.gcode");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--e-extrusion",
+        path.to_str().expect("utf8"),
+        "-o",
+        "-",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("14-marlin-g0-extrudes.gcode:8") && e.contains("a G0 that extrudes"),
+        "{e}"
+    );
+    assert_eq!(String::from_utf8_lossy(&o.stdout).matches("M71").count(), 2);
+}
