@@ -5,13 +5,13 @@
 mod common;
 
 use common::*;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 fn finding(name: &str) -> PathBuf {
     root().join("fixtures/findings").join(name)
 }
 
-fn trace_json(flavor: &str, path: &PathBuf) -> serde_json::Value {
+fn trace_json(flavor: &str, path: &Path) -> serde_json::Value {
     let o = lampost(&[
         "trace",
         "--json",
