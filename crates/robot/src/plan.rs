@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::arm::{Arm, Config, Frame, NoReach, Q};
+use crate::arm::{Arm, Config, Frame, NoReach, Turned, Q};
 use crate::error::RobotError;
 
 /// A path point (part frame).
@@ -204,20 +204,44 @@ pub const LOOK_AHEAD: usize = 128;
 /// Candidate turns about the beam at the first location (5° apart).
 const TURNS: u32 = 72;
 
-/// The inverse at one location: joints within the limits nearest `prev`, in `cfg`.
+/// One location with the turn about the beam left free: the sample, its reference
+/// perpendicular and, for an arm with the closed form, what every solve there shares
+/// ([`Arm::at_site`]).
+struct Site<'a> {
+    s: &'a Sample,
+    u: &'a Vector3<f64>,
+    closed: Option<Turned>,
+}
+
+impl<'a> Site<'a> {
+    fn new(arm: &Arm, s: &'a Sample, u: &'a Vector3<f64>) -> Site<'a> {
+        let closed = arm.closed_form.then(|| {
+            let m = Matrix3::from_rows(&[
+                u.transpose(),
+                s.axis.cross(u).transpose(),
+                s.axis.transpose(),
+            ]);
+            arm.at_site(&m, &s.tip)
+        });
+        Site { s, u, closed }
+    }
+}
+
+/// The inverse at one location turned `psi` about the beam: joints within the limits
+/// nearest `prev`, in `cfg`. (The part frame, [`part_in_work`], is worked out for the turn
+/// chosen only.)
 fn solve_at(
     arm: &Arm,
-    s: &Sample,
-    u: &Vector3<f64>,
+    site: &Site,
     psi: f64,
     cfg: Config,
     prev: &Q,
     fresh: bool,
-) -> Result<(Q, Frame), NoReach> {
-    let part = part_in_work(&s.tip, &s.axis, u, psi);
-    let raw = if arm.closed_form {
-        arm.inverse_in_work(&part, cfg, prev[3])?
+) -> Result<Q, NoReach> {
+    let raw = if let Some(t) = &site.closed {
+        arm.inverse_turned(t, psi, cfg, prev[3])?
     } else {
+        let part = part_in_work(&site.s.tip, &site.s.axis, site.u, psi);
         let world = arm.head.mul(&part);
         let flange = arm.flange_for(&world);
         // The first location (or one after a blocked turn) starts from the near-PUMA
@@ -246,7 +270,7 @@ fn solve_at(
             arm.links[j].hi.to_degrees()
         ),
     })?;
-    Ok((q, part))
+    Ok(q)
 }
 
 /// A margin counts up to this much (30°): beyond it the next criterion decides.
@@ -292,7 +316,8 @@ pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Co
         let mut reached = true;
         'visits: for (v, &i) in visits.iter().enumerate() {
             let mut at = |i: usize, prev: &Q, fresh: bool| {
-                let (q, _) = solve_at(arm, &samples[i], &refs[i], psi, cfg, prev, fresh).ok()?;
+                let site = Site::new(arm, &samples[i], &refs[i]);
+                let q = solve_at(arm, &site, psi, cfg, prev, fresh).ok()?;
                 worst = worst.min(arm.margin(&q));
                 Some(q)
             };
@@ -694,14 +719,15 @@ fn advance(
     let from = t.out.len();
     for (i, (s, u)) in samples.iter().zip(refs).enumerate().take(end).skip(from) {
         let (prev, psi_prev) = (t.prev, t.psi_prev);
-        let solve = |psi: f64, fresh: bool| solve_at(arm, s, u, psi, cfg, &prev, fresh);
+        let site = Site::new(arm, s, u);
+        let solve = |psi: f64, fresh: bool| solve_at(arm, &site, psi, cfg, &prev, fresh);
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-        let eval = |psi: f64| solve(psi, i == 0).map(|(q, p)| (cost(&q), q, p));
-        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, p)| (cost(&q), q, p));
-        let mut best: Option<(f64, f64, Q, Frame)> = None; // (cost, psi, q, part)
+        let eval = |psi: f64| solve(psi, i == 0).map(|q| (cost(&q), q));
+        let eval_fresh = |psi: f64| solve(psi, true).map(|q| (cost(&q), q));
+        let mut best: Option<(f64, f64, Q)> = None; // (cost, psi, q)
         if i > 0 || start.is_some() {
-            if let Ok((c, q, p)) = eval(psi_prev) {
-                best = Some((c, psi_prev, q, p));
+            if let Ok((c, q)) = eval(psi_prev) {
+                best = Some((c, psi_prev, q));
             }
         }
         let chosen = i == 0 && best.is_some();
@@ -712,9 +738,9 @@ fn advance(
             for k in 0..TURNS {
                 let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
                 match eval_fresh(psi) {
-                    Ok((c, q, p)) => {
+                    Ok((c, q)) => {
                         if best.as_ref().is_none_or(|b| c < b.0) {
-                            best = Some((c, psi, q, p));
+                            best = Some((c, psi, q));
                         }
                     }
                     Err(e) => fails.push(e),
@@ -757,9 +783,9 @@ fn advance(
                         }
                     }
                 }
-                if let Some(((c, q, p), psi)) = cand {
+                if let Some(((c, q), psi)) = cand {
                     if c < b.0 {
-                        b = (c, psi, q, p);
+                        b = (c, psi, q);
                     }
                 }
                 if wide {
@@ -770,9 +796,10 @@ fn advance(
             }
             best = Some(b);
         }
-        let Some((_, psi, q, part)) = best else {
+        let Some((_, psi, q)) = best else {
             return Err(unreachable(arm, s, i, &[]));
         };
+        let part = part_in_work(&s.tip, &s.axis, u, psi);
         if i > 0 {
             check_speed(arm, s, &prev, &q)?;
         }

@@ -59,13 +59,16 @@ proptest! {
 
     /// The fast closed form (planning's) gives the reference's joints to 1e-12 rad in
     /// every configuration, or refuses naming the same joint; from the part frame in the
-    /// working frame likewise. Wrists at the singularity (θ5 = 0) included.
+    /// working frame likewise, and from a location's shared part (`at_site`) turned about
+    /// the beam (`inverse_turned`, planning's search). Wrists at the singularity (θ5 = 0)
+    /// included.
     #[test]
     fn the_fast_closed_form_agrees_with_the_reference(
         q in joints(),
         singular in any::<bool>(),
         wrist in -3.0..3.0f64,
         reach in prop_oneof![Just(1.0), 0.3..1.7f64],
+        turn in -7.0..7.0f64,
     ) {
         let arm = puma();
         let mut q = q;
@@ -76,9 +79,17 @@ proptest! {
         // Now and then moved, maybe beyond reach (or inside the shoulder offset).
         t.t *= reach;
         let part = arm.head.inverse().mul(&arm.base.mul(&t).mul(&arm.holder));
+        // The part frame as Rz(turn) · (m, −m·tip), as planning builds it.
+        let m = Frame::rot_z(-turn) * part.r;
+        let tip = -(part.r.transpose() * part.t);
+        let site = arm.at_site(&m, &tip);
         for c in Config::ALL {
             let reference = arm.inverse_closed(&t, c, wrist);
-            for fast in [arm.inverse_closed_fast(&t, c, wrist), arm.inverse_in_work(&part, c, wrist)] {
+            for fast in [
+                arm.inverse_closed_fast(&t, c, wrist),
+                arm.inverse_in_work(&part, c, wrist),
+                arm.inverse_turned(&site, turn, c, wrist),
+            ] {
                 match (&reference, &fast) {
                     (Ok(r), Ok(f)) => {
                         // The two forms round differently where the elbow's triangle is
