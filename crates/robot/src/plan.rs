@@ -411,33 +411,7 @@ pub fn plan_threads(
     cfg: Config,
     threads: usize,
 ) -> Result<Vec<Located>, RobotError> {
-    plan_tries(arm, samples, cfg, threads, true, true, Search::Reference).map(|p| p.0)
-}
-
-/// [`plan_and_tries_met`] with the search for the turn about the beam given.
-#[doc(hidden)]
-pub fn plan_with_search(
-    arm: &Arm,
-    samples: &[Sample],
-    cfg: Config,
-    threads: usize,
-    search: Search,
-) -> Result<(Vec<Located>, Vec<usize>), RobotError> {
-    plan_tries(arm, samples, cfg, threads, true, true, search)
-}
-
-/// One whole plan from the first turn `start` (`None`: the one nearest the safe location)
-/// with the search given, for comparing the searches.
-#[doc(hidden)]
-pub fn track_with_search(
-    arm: &Arm,
-    samples: &[Sample],
-    cfg: Config,
-    start: Option<f64>,
-    search: Search,
-) -> Result<Vec<Located>, RobotError> {
-    let refs = references(samples);
-    track(arm, samples, &refs, cfg, start, None, search).map(Option::unwrap_or_default)
+    plan_tries(arm, samples, cfg, threads, true, true).map(|p| p.0)
 }
 
 /// [`plan_threads`] with every try planned to its end (no try stops early where it can no
@@ -449,7 +423,7 @@ pub fn plan_every_try_to_its_end(
     cfg: Config,
     threads: usize,
 ) -> Result<Vec<Located>, RobotError> {
-    plan_tries(arm, samples, cfg, threads, false, true, Search::Reference).map(|p| p.0)
+    plan_tries(arm, samples, cfg, threads, false, true).map(|p| p.0)
 }
 
 /// The rule before tries that meet were dropped ([`MEET_AT`]): every try planned to its
@@ -462,7 +436,7 @@ pub fn plan_every_try_in_full(
     cfg: Config,
     threads: usize,
 ) -> Result<(Vec<Located>, f64), RobotError> {
-    plan_tries(arm, samples, cfg, threads, false, false, Search::Reference).map(|p| {
+    plan_tries(arm, samples, cfg, threads, false, false).map(|p| {
         let m =
             p.0.iter()
                 .map(|x| arm.margin(&x.q))
@@ -480,7 +454,7 @@ pub fn plan_and_tries_met(
     cfg: Config,
     threads: usize,
 ) -> Result<(Vec<Located>, Vec<usize>), RobotError> {
-    plan_tries(arm, samples, cfg, threads, true, true, Search::Reference)
+    plan_tries(arm, samples, cfg, threads, true, true)
 }
 
 /// Where the tried first turns' tracks are compared: after this many locations (on a
@@ -539,7 +513,6 @@ fn plan_tries(
     threads: usize,
     stop_early: bool,
     meet: bool,
-    search: Search,
 ) -> Result<(Vec<Located>, Vec<usize>), RobotError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
@@ -550,7 +523,7 @@ fn plan_tries(
             .fold(f64::INFINITY, f64::min)
     };
     // Without a floor a plan is never dropped: `None` cannot come back.
-    let nearest = track(arm, samples, &refs, cfg, None, None, search).map(|l| {
+    let nearest = track(arm, samples, &refs, cfg, None, None).map(|l| {
         let l = l.unwrap_or_default();
         Tried {
             order: 0,
@@ -573,19 +546,9 @@ fn plan_tries(
     let heads = crate::chunk::par_map(turns.len(), threads, |k| {
         let mut t = Track::new(arm, Some(turns[k]), samples.len());
         let end = MEET_AT.min(samples.len());
-        advance(
-            arm,
-            samples,
-            &refs,
-            cfg,
-            Some(turns[k]),
-            None,
-            &mut t,
-            end,
-            search,
-        )
-        .ok()
-        .map(|_| t)
+        advance(arm, samples, &refs, cfg, Some(turns[k]), None, &mut t, end)
+            .ok()
+            .map(|_| t)
     });
     let dropped = if meet && samples.len() > MEET_AT {
         met(arm, &heads)
@@ -632,9 +595,7 @@ fn plan_tries(
         }
         let start = Some(turns[k]);
         let n = samples.len();
-        let Ok(true) = advance(
-            arm, samples, &refs, cfg, start, stop_below, &mut t, n, search,
-        ) else {
+        let Ok(true) = advance(arm, samples, &refs, cfg, start, stop_below, &mut t, n) else {
             continue;
         };
         let tried = Tried {
@@ -703,11 +664,6 @@ struct Track {
     out: Vec<Located>,
     prev: Q,
     psi_prev: f64,
-    /// The turn before the last (`None` before the second location).
-    psi_prev2: Option<f64>,
-    /// The joints' rate of change in the turn at the last location ([`Search::Newton`];
-    /// `None` where the reference search found it).
-    slope: Option<Q>,
 }
 
 impl Track {
@@ -718,8 +674,6 @@ impl Track {
             out: Vec::with_capacity(capacity),
             prev: arm.safe,
             psi_prev: start.unwrap_or(0.0),
-            psi_prev2: None,
-            slope: None,
         }
     }
 
@@ -742,27 +696,15 @@ fn track(
     cfg: Config,
     start: Option<f64>,
     floor: Option<&Floor>,
-    search: Search,
 ) -> Result<Option<Vec<Located>>, RobotError> {
     let mut t = Track::new(arm, start, samples.len());
-    let done = advance(
-        arm,
-        samples,
-        refs,
-        cfg,
-        start,
-        floor,
-        &mut t,
-        samples.len(),
-        search,
-    )?;
+    let done = advance(arm, samples, refs, cfg, start, floor, &mut t, samples.len())?;
     Ok(done.then_some(t.out))
 }
 
 /// Plans locations `t.out.len()..end` of the plan from first turn `start` (`None`: the
-/// one nearest the safe location), each from the last, the turn about the beam found by
-/// `search`; `Ok(false)` when a location's margin falls below the floor (left unfinished:
-/// the plan cannot be taken).
+/// one nearest the safe location), each from the last; `Ok(false)` when a location's
+/// margin falls below the floor (left unfinished: the plan cannot be taken).
 #[allow(clippy::too_many_arguments)]
 fn advance(
     arm: &Arm,
@@ -773,22 +715,89 @@ fn advance(
     floor: Option<&Floor>,
     t: &mut Track,
     end: usize,
-    search: Search,
 ) -> Result<bool, RobotError> {
     let from = t.out.len();
     for (i, (s, u)) in samples.iter().zip(refs).enumerate().take(end).skip(from) {
-        let prev = t.prev;
+        let (prev, psi_prev) = (t.prev, t.psi_prev);
         let site = Site::new(arm, s, u);
-        let quick = match search {
-            Search::Newton if i > 0 => newton(arm, &site, cfg, t),
-            _ => None,
-        };
-        let (psi, q, slope) = match quick {
-            Some(found) => found,
-            None => {
-                let (psi, q) = reference(arm, &site, cfg, &prev, t.psi_prev, i, start)?;
-                (psi, q, None)
+        let solve = |psi: f64, fresh: bool| solve_at(arm, &site, psi, cfg, &prev, fresh);
+        let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
+        let eval = |psi: f64| solve(psi, i == 0).map(|q| (cost(&q), q));
+        let eval_fresh = |psi: f64| solve(psi, true).map(|q| (cost(&q), q));
+        let mut best: Option<(f64, f64, Q)> = None; // (cost, psi, q)
+        if i > 0 || start.is_some() {
+            if let Ok((c, q)) = eval(psi_prev) {
+                best = Some((c, psi_prev, q));
             }
+        }
+        let chosen = i == 0 && best.is_some();
+        let scanned = best.is_none();
+        if scanned {
+            // Scan the whole turn (the first point, or the last turn is blocked).
+            let mut fails: Vec<NoReach> = Vec::new();
+            for k in 0..TURNS {
+                let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
+                match eval_fresh(psi) {
+                    Ok((c, q)) => {
+                        if best.as_ref().is_none_or(|b| c < b.0) {
+                            best = Some((c, psi, q));
+                        }
+                    }
+                    Err(e) => fails.push(e),
+                }
+            }
+            if best.is_none() {
+                return Err(unreachable(arm, s, i, &fails));
+            }
+        }
+        // Refine: parabolic steps on the cost (not at a first turn chosen for the whole
+        // path: drawing it towards the safe location would undo the choice). After a scan
+        // (the first location, or a blocked turn) four steps of shrinking width from 2°;
+        // from the last turn, steps 0.5° wide until the parabola's least lies within its
+        // reach (one step, mostly: the cost is smooth and the turn moves little), four at
+        // most.
+        if let (Some(mut b), false) = (best, chosen) {
+            let wide = i == 0 || scanned;
+            let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
+            for _ in 0..4 {
+                let (Ok(lo), Ok(hi)) = (eval(b.1 - h), eval(b.1 + h)) else {
+                    h /= 4.0;
+                    continue;
+                };
+                let denom = lo.0 - 2.0 * b.0 + hi.0;
+                let mut cand = if lo.0 < b.0 {
+                    Some((lo, b.1 - h))
+                } else if hi.0 < b.0 {
+                    Some((hi, b.1 + h))
+                } else {
+                    None
+                };
+                let mut reached = false;
+                if denom > 0.0 {
+                    let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
+                    reached = raw.abs() < 4.0 * h;
+                    let step = raw.clamp(-4.0 * h, 4.0 * h);
+                    if let Ok(p) = eval(b.1 + step) {
+                        if cand.as_ref().is_none_or(|c| p.0 < c.0 .0) {
+                            cand = Some((p, b.1 + step));
+                        }
+                    }
+                }
+                if let Some(((c, q), psi)) = cand {
+                    if c < b.0 {
+                        b = (c, psi, q);
+                    }
+                }
+                if wide {
+                    h /= 4.0;
+                } else if reached {
+                    break;
+                }
+            }
+            best = Some(b);
+        }
+        let Some((_, psi, q)) = best else {
+            return Err(unreachable(arm, s, i, &[]));
         };
         let part = part_in_work(&s.tip, &s.axis, u, psi);
         if i > 0 {
@@ -799,186 +808,9 @@ fn advance(
         }
         t.out.push(Located { q, part, psi });
         t.prev = q;
-        t.psi_prev2 = (i > 0).then_some(t.psi_prev);
         t.psi_prev = psi;
-        t.slope = slope;
     }
     Ok(true)
-}
-
-/// How the turn about the beam at each location after the first is found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Search {
-    /// From the last turn, parabolic steps 0.5° wide on the joint change ([`reference`]):
-    /// what planning uses.
-    Reference,
-    /// Gauss–Newton steps on the joint change from the turn predicted by the last two
-    /// ([`newton`]), the reference search where they do not settle: a prototype, not
-    /// used by planning. It finds the least joint change more closely than the
-    /// reference's parabola (whose least lies off the cost's by about h²·C‴/6C″ with
-    /// h = 0.5°), so its plans differ from the reference's by more than rounding
-    /// (`docs/robot.md`).
-    Newton,
-}
-
-/// Gauss–Newton steps at most this wide (0.5°): a wider one leaves the reference search
-/// to take over.
-const NEWTON_STEP: f64 = std::f64::consts::PI / 360.0;
-
-/// A step shorter than this (1e-8 rad) ends the Gauss–Newton search.
-const NEWTON_DONE: f64 = 1e-8;
-
-/// The probe (1e-6 rad) that finds the joints' rate of change in the turn by a
-/// difference where the last location gave none.
-const NEWTON_PROBE: f64 = 1e-6;
-
-/// Steps (solves after the first) before the reference search takes over.
-const NEWTON_SOLVES: usize = 4;
-
-fn dot(a: &Q, b: &Q) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// The turn about the beam at `site` that moves the joints least from the track's last
-/// location (the sum of squares of the joint changes), by Gauss–Newton steps from the
-/// turn predicted by the last two (ψ + (ψ − ψ₋₁), the difference wrapped): each step
-/// `−g·r / g·g`, where `r` is the joint change and `g` the joints' rate of change in the
-/// turn (the last location's, then the difference of this location's last two solves),
-/// until a step is shorter than [`NEWTON_DONE`]. `None` (the reference takes over) where
-/// a solve fails, a step is wider than [`NEWTON_STEP`], a step with this location's
-/// rate raises the joint change, or [`NEWTON_SOLVES`] steps do not settle. Returns the
-/// turn, the joints and the rate of change there.
-fn newton(arm: &Arm, site: &Site, cfg: Config, t: &Track) -> Option<(f64, Q, Option<Q>)> {
-    let prev = t.prev;
-    let solve = |psi: f64| solve_at(arm, site, psi, cfg, &prev, false).ok();
-    let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-    let mut psi = t.psi_prev
-        + t.psi_prev2
-            .map_or(0.0, |p2| crate::arm::wrap(t.psi_prev - p2));
-    let mut q = solve(psi)?;
-    let mut g = match t.slope {
-        Some(g) => g,
-        None => {
-            let qp = solve(psi + NEWTON_PROBE)?;
-            std::array::from_fn(|j| (qp[j] - q[j]) / NEWTON_PROBE)
-        }
-    };
-    let mut c = cost(&q);
-    let mut own = false;
-    for _ in 0..=NEWTON_SOLVES {
-        let r: Q = std::array::from_fn(|j| q[j] - prev[j]);
-        let step = -dot(&g, &r) / dot(&g, &g);
-        if !(step.is_finite() && step.abs() <= NEWTON_STEP) {
-            return None;
-        }
-        if step.abs() < NEWTON_DONE {
-            return Some((psi, q, Some(g)));
-        }
-        let q1 = solve(psi + step)?;
-        let c1 = cost(&q1);
-        if c1 > c && own {
-            return None;
-        }
-        own = true;
-        g = std::array::from_fn(|j| (q1[j] - q[j]) / step);
-        (psi, q, c) = (psi + step, q1, c1);
-    }
-    None
-}
-
-/// The reference search for the turn about the beam at location `i` (`site`): from the
-/// last turn `psi_prev`, parabolic steps on the joint change from `prev`; a scan of the
-/// whole turn at the first location (without a first turn `start`) or where the last
-/// turn is blocked. Returns the turn and the joints.
-#[allow(clippy::too_many_arguments)]
-fn reference(
-    arm: &Arm,
-    site: &Site,
-    cfg: Config,
-    prev: &Q,
-    psi_prev: f64,
-    i: usize,
-    start: Option<f64>,
-) -> Result<(f64, Q), RobotError> {
-    let (prev, s) = (*prev, site.s);
-    let solve = |psi: f64, fresh: bool| solve_at(arm, site, psi, cfg, &prev, fresh);
-    let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-    let eval = |psi: f64| solve(psi, i == 0).map(|q| (cost(&q), q));
-    let eval_fresh = |psi: f64| solve(psi, true).map(|q| (cost(&q), q));
-    let mut best: Option<(f64, f64, Q)> = None; // (cost, psi, q)
-    if i > 0 || start.is_some() {
-        if let Ok((c, q)) = eval(psi_prev) {
-            best = Some((c, psi_prev, q));
-        }
-    }
-    let chosen = i == 0 && best.is_some();
-    let scanned = best.is_none();
-    if scanned {
-        // Scan the whole turn (the first point, or the last turn is blocked).
-        let mut fails: Vec<NoReach> = Vec::new();
-        for k in 0..TURNS {
-            let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
-            match eval_fresh(psi) {
-                Ok((c, q)) => {
-                    if best.as_ref().is_none_or(|b| c < b.0) {
-                        best = Some((c, psi, q));
-                    }
-                }
-                Err(e) => fails.push(e),
-            }
-        }
-        if best.is_none() {
-            return Err(unreachable(arm, s, i, &fails));
-        }
-    }
-    // Refine: parabolic steps on the cost (not at a first turn chosen for the whole
-    // path: drawing it towards the safe location would undo the choice). After a scan
-    // (the first location, or a blocked turn) four steps of shrinking width from 2°;
-    // from the last turn, steps 0.5° wide until the parabola's least lies within its
-    // reach (one step, mostly: the cost is smooth and the turn moves little), four at
-    // most.
-    if let (Some(mut b), false) = (best, chosen) {
-        let wide = i == 0 || scanned;
-        let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
-        for _ in 0..4 {
-            let (Ok(lo), Ok(hi)) = (eval(b.1 - h), eval(b.1 + h)) else {
-                h /= 4.0;
-                continue;
-            };
-            let denom = lo.0 - 2.0 * b.0 + hi.0;
-            let mut cand = if lo.0 < b.0 {
-                Some((lo, b.1 - h))
-            } else if hi.0 < b.0 {
-                Some((hi, b.1 + h))
-            } else {
-                None
-            };
-            let mut reached = false;
-            if denom > 0.0 {
-                let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
-                reached = raw.abs() < 4.0 * h;
-                let step = raw.clamp(-4.0 * h, 4.0 * h);
-                if let Ok(p) = eval(b.1 + step) {
-                    if cand.as_ref().is_none_or(|c| p.0 < c.0 .0) {
-                        cand = Some((p, b.1 + step));
-                    }
-                }
-            }
-            if let Some(((c, q), psi)) = cand {
-                if c < b.0 {
-                    b = (c, psi, q);
-                }
-            }
-            if wide {
-                h /= 4.0;
-            } else if reached {
-                break;
-            }
-        }
-        best = Some(b);
-    }
-    best.map(|b| (b.1, b.2))
-        .ok_or_else(|| unreachable(arm, s, i, &[]))
 }
 
 /// The joint speeds of the move from `from` to `to` in `s.dt` seconds.
@@ -1124,8 +956,6 @@ mod tests {
             out: vec![at(q0), at(q)],
             prev: q,
             psi_prev: psi,
-            psi_prev2: Some(psi),
-            slope: None,
         }
     }
 
