@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::arm::{Arm, Config, Frame, NoReach, Turned, Q};
+use crate::arm::{Arm, Config, Directions, Frame, NoReach, Turned, Q};
 use crate::error::RobotError;
 
 /// A path point (part frame).
@@ -237,9 +237,9 @@ fn solve_at(
     cfg: Config,
     prev: &Q,
     fresh: bool,
-) -> Result<Q, NoReach> {
-    let raw = if let Some(t) = &site.closed {
-        arm.inverse_turned(t, psi, cfg, prev[3])?
+) -> Result<(Q, Option<Directions>), NoReach> {
+    let (raw, dirs) = if let Some(t) = &site.closed {
+        arm.inverse_turned_with(t, psi, cfg, prev[3])?
     } else {
         let part = part_in_work(&site.s.tip, &site.s.axis, site.u, psi);
         let world = arm.head.mul(&part);
@@ -255,10 +255,11 @@ fn solve_at(
                 .unwrap_or(*prev),
             _ => *prev,
         };
-        arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
+        let q = arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
             joint: 2,
             why: "the numerical inverse does not converge (out of reach?)".into(),
-        })?
+        })?;
+        (q, None)
     };
     let q = arm.fit_limits(&raw, prev).map_err(|j| NoReach {
         joint: j,
@@ -270,7 +271,7 @@ fn solve_at(
             arm.links[j].hi.to_degrees()
         ),
     })?;
-    Ok(q)
+    Ok((q, dirs))
 }
 
 /// A margin counts up to this much (30°): beyond it the next criterion decides.
@@ -317,7 +318,7 @@ pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Co
         'visits: for (v, &i) in visits.iter().enumerate() {
             let mut at = |i: usize, prev: &Q, fresh: bool| {
                 let site = Site::new(arm, &samples[i], &refs[i]);
-                let q = solve_at(arm, &site, psi, cfg, prev, fresh).ok()?;
+                let (q, _) = solve_at(arm, &site, psi, cfg, prev, fresh).ok()?;
                 worst = worst.min(arm.margin(&q));
                 Some(q)
             };
@@ -702,6 +703,16 @@ fn track(
     Ok(done.then_some(t.out))
 }
 
+/// The search's best turn so far: (joint change, turn, joints, their directions).
+type Best = (f64, f64, Q, Option<Directions>);
+
+/// A side's joint change, and its joints and directions where solved in full.
+type Side = (f64, Option<(Q, Option<Directions>)>);
+
+/// Joint changes by [`Arm::change_turned`] are used below this (π − 0.5 rad): nearer a
+/// half turn the full solve picks the turn.
+const NO_WRAP: f64 = std::f64::consts::PI - 0.5;
+
 /// Plans locations `t.out.len()..end` of the plan from first turn `start` (`None`: the
 /// one nearest the safe location), each from the last; `Ok(false)` when a location's
 /// margin falls below the floor (left unfinished: the plan cannot be taken).
@@ -722,12 +733,26 @@ fn advance(
         let site = Site::new(arm, s, u);
         let solve = |psi: f64, fresh: bool| solve_at(arm, &site, psi, cfg, &prev, fresh);
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-        let eval = |psi: f64| solve(psi, i == 0).map(|q| (cost(&q), q));
-        let eval_fresh = |psi: f64| solve(psi, true).map(|q| (cost(&q), q));
-        let mut best: Option<(f64, f64, Q)> = None; // (cost, psi, q)
+        let eval = |psi: f64| solve(psi, i == 0).map(|(q, d)| (cost(&q), q, d));
+        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, d)| (cost(&q), q, d));
+        // The cost alone a step to each side of the best so far (`b`): from its joints
+        // and their directions without the angles where it can ([`Arm::change_turned`]),
+        // else by a full solve (`Some` joints).
+        let side = |psi: f64, b: &Best| -> Result<Side, NoReach> {
+            if let (Some(t), Some(d)) = (&site.closed, &b.3) {
+                if let Some(dq) = arm.change_turned(t, psi, cfg, &b.2, d) {
+                    let ch: Q = std::array::from_fn(|j| (b.2[j] - prev[j]) + dq[j]);
+                    if ch.iter().all(|c| c.abs() < NO_WRAP) {
+                        return Ok((ch.iter().map(|c| c * c).sum(), None));
+                    }
+                }
+            }
+            eval(psi).map(|(c, q, d)| (c, Some((q, d))))
+        };
+        let mut best: Option<Best> = None;
         if i > 0 || start.is_some() {
-            if let Ok((c, q)) = eval(psi_prev) {
-                best = Some((c, psi_prev, q));
+            if let Ok((c, q, d)) = eval(psi_prev) {
+                best = Some((c, psi_prev, q, d));
             }
         }
         let chosen = i == 0 && best.is_some();
@@ -738,9 +763,9 @@ fn advance(
             for k in 0..TURNS {
                 let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
                 match eval_fresh(psi) {
-                    Ok((c, q)) => {
+                    Ok((c, q, d)) => {
                         if best.as_ref().is_none_or(|b| c < b.0) {
-                            best = Some((c, psi, q));
+                            best = Some((c, psi, q, d));
                         }
                     }
                     Err(e) => fails.push(e),
@@ -760,7 +785,7 @@ fn advance(
             let wide = i == 0 || scanned;
             let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
             for _ in 0..4 {
-                let (Ok(lo), Ok(hi)) = (eval(b.1 - h), eval(b.1 + h)) else {
+                let (Ok(lo), Ok(hi)) = (side(b.1 - h, &b), side(b.1 + h, &b)) else {
                     h /= 4.0;
                     continue;
                 };
@@ -777,15 +802,23 @@ fn advance(
                     let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
                     reached = raw.abs() < 4.0 * h;
                     let step = raw.clamp(-4.0 * h, 4.0 * h);
-                    if let Ok(p) = eval(b.1 + step) {
-                        if cand.as_ref().is_none_or(|c| p.0 < c.0 .0) {
-                            cand = Some((p, b.1 + step));
+                    if let Ok((c, q, d)) = eval(b.1 + step) {
+                        if cand.as_ref().is_none_or(|x| c < x.0 .0) {
+                            cand = Some(((c, Some((q, d))), b.1 + step));
                         }
                     }
                 }
-                if let Some(((c, q), psi)) = cand {
+                if let Some(((c, full), psi)) = cand {
                     if c < b.0 {
-                        b = (c, psi, q);
+                        // A side found by its cost alone is solved in full when taken.
+                        match full {
+                            Some((q, d)) => b = (c, psi, q, d),
+                            None => {
+                                if let Ok((c, q, d)) = eval(psi) {
+                                    b = (c, psi, q, d);
+                                }
+                            }
+                        }
                     }
                 }
                 if wide {
@@ -796,7 +829,7 @@ fn advance(
             }
             best = Some(b);
         }
-        let Some((_, psi, q)) = best else {
+        let Some((_, psi, q, _)) = best else {
             return Err(unreachable(arm, s, i, &[]));
         };
         let part = part_in_work(&s.tip, &s.axis, u, psi);
