@@ -831,7 +831,8 @@ impl Arm {
 
     /// The joint changes from `q` (joints within the limits, whose angles point along
     /// `dirs`, from [`Arm::inverse_turned_with`] at the same location) to the solution
-    /// turned `psi` about the beam, each taken on the turn nearest `q` (what
+    /// turned `psi` about the beam (and that solution's directions), each taken on the
+    /// turn nearest `q` (what
     /// [`Arm::fit_limits`] takes from a previous location as near as `q`), without the
     /// six `atan2`: each angle's change from `q`'s by an arctangent series of the two
     /// directions' cross over dot product. `None` (solve in full instead) where the
@@ -845,7 +846,7 @@ impl Arm {
         c: Config,
         q: &Q,
         dirs: &Directions,
-    ) -> Option<Q> {
+    ) -> Option<(Q, Directions)> {
         let w = self.wrist_parts(&self.turned_wrist(at, psi), c).ok()?;
         let to = Directions::of(&w, c)?;
         let mut out = [0.0; 6];
@@ -865,7 +866,7 @@ impl Arm {
             }
             out[j] = d;
         }
-        Some(out)
+        Some((out, to))
     }
 
     /// The wrist frame for the part frame turned `psi` about the beam ([`Arm::at_site`]).

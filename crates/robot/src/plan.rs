@@ -665,6 +665,8 @@ struct Track {
     out: Vec<Located>,
     prev: Q,
     psi_prev: f64,
+    /// The directions of the last location's angles ([`Arm::change_turned`]).
+    dirs: Option<Directions>,
 }
 
 impl Track {
@@ -675,6 +677,7 @@ impl Track {
             out: Vec::with_capacity(capacity),
             prev: arm.safe,
             psi_prev: start.unwrap_or(0.0),
+            dirs: None,
         }
     }
 
@@ -703,8 +706,9 @@ fn track(
     Ok(done.then_some(t.out))
 }
 
-/// The search's best turn so far: (joint change, turn, joints, their directions).
-type Best = (f64, f64, Q, Option<Directions>);
+/// The search's best turn so far: (joint change, turn, joints, their directions, solved
+/// in full: else the joints are the last location's plus the changes by directions).
+type Best = (f64, f64, Q, Option<Directions>, bool);
 
 /// A side's joint change, and its joints and directions where solved in full.
 type Side = (f64, Option<(Q, Option<Directions>)>);
@@ -740,7 +744,7 @@ fn advance(
         // else by a full solve (`Some` joints).
         let side = |psi: f64, b: &Best| -> Result<Side, NoReach> {
             if let (Some(t), Some(d)) = (&site.closed, &b.3) {
-                if let Some(dq) = arm.change_turned(t, psi, cfg, &b.2, d) {
+                if let Some((dq, _)) = arm.change_turned(t, psi, cfg, &b.2, d) {
                     let ch: Q = std::array::from_fn(|j| (b.2[j] - prev[j]) + dq[j]);
                     if ch.iter().all(|c| c.abs() < NO_WRAP) {
                         return Ok((ch.iter().map(|c| c * c).sum(), None));
@@ -749,10 +753,21 @@ fn advance(
             }
             eval(psi).map(|(c, q, d)| (c, Some((q, d))))
         };
+        // The last turn, priced likewise from the last location's solution where it can
+        // (not solved in full: `false`), else solved in full.
+        let quick = match (&site.closed, &t.dirs) {
+            (Some(st), Some(d)) if i > 0 => arm
+                .change_turned(st, psi_prev, cfg, &prev, d)
+                .filter(|(dq, _)| dq.iter().all(|c| c.abs() < NO_WRAP)),
+            _ => None,
+        };
         let mut best: Option<Best> = None;
-        if i > 0 || start.is_some() {
+        if let Some((dq, d)) = quick {
+            let q: Q = std::array::from_fn(|j| prev[j] + dq[j]);
+            best = Some((dq.iter().map(|c| c * c).sum(), psi_prev, q, Some(d), false));
+        } else if i > 0 || start.is_some() {
             if let Ok((c, q, d)) = eval(psi_prev) {
-                best = Some((c, psi_prev, q, d));
+                best = Some((c, psi_prev, q, d, true));
             }
         }
         let chosen = i == 0 && best.is_some();
@@ -765,7 +780,7 @@ fn advance(
                 match eval_fresh(psi) {
                     Ok((c, q, d)) => {
                         if best.as_ref().is_none_or(|b| c < b.0) {
-                            best = Some((c, psi, q, d));
+                            best = Some((c, psi, q, d, true));
                         }
                     }
                     Err(e) => fails.push(e),
@@ -812,10 +827,10 @@ fn advance(
                     if c < b.0 {
                         // A side found by its cost alone is solved in full when taken.
                         match full {
-                            Some((q, d)) => b = (c, psi, q, d),
+                            Some((q, d)) => b = (c, psi, q, d, true),
                             None => {
                                 if let Ok((c, q, d)) = eval(psi) {
-                                    b = (c, psi, q, d);
+                                    b = (c, psi, q, d, true);
                                 }
                             }
                         }
@@ -829,8 +844,15 @@ fn advance(
             }
             best = Some(b);
         }
-        let Some((_, psi, q, _)) = best else {
+        let Some((_, psi, q, d, full)) = best else {
             return Err(unreachable(arm, s, i, &[]));
+        };
+        // A last turn priced from directions and kept is solved in full.
+        let (q, d) = if full {
+            (q, d)
+        } else {
+            let (q, d) = solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?;
+            (q, d)
         };
         let part = part_in_work(&s.tip, &s.axis, u, psi);
         if i > 0 {
@@ -842,6 +864,7 @@ fn advance(
         t.out.push(Located { q, part, psi });
         t.prev = q;
         t.psi_prev = psi;
+        t.dirs = d;
     }
     Ok(true)
 }
@@ -989,6 +1012,7 @@ mod tests {
             out: vec![at(q0), at(q)],
             prev: q,
             psi_prev: psi,
+            dirs: None,
         }
     }
 

@@ -124,16 +124,20 @@ proptest! {
         }
     }
 
-    /// A joint change by directions (`change_turned`, planning's cost a step to each side)
-    /// is the full solve's joints, fitted near the first solve's, minus those, to 1e-14
-    /// rad, in every configuration; it declines (`None`) only where the full solve is
-    /// needed. Turns up to ±2° apart, wrists near the singularity included.
+    /// A joint change by directions (`change_turned`: planning's cost a step to each side,
+    /// and of the last turn from the last location) is the full solve's joints, fitted
+    /// near the first solve's, minus those, to 1e-14 rad, in every configuration; it
+    /// declines (`None`) only where the full solve is needed. Turns up to ±2° apart, at
+    /// the same location or at one moved by joint changes up to 0.01 rad; wrists near the
+    /// singularity included.
     #[test]
     fn joint_changes_by_directions_agree_with_full_solves(
         q in joints(),
         near_singular in any::<bool>(),
         turn in -7.0..7.0f64,
         step in -0.035..0.035f64,
+        moved in any::<bool>(),
+        shift in proptest::array::uniform6(-0.01..0.01f64),
     ) {
         let arm = puma();
         let mut q = q;
@@ -144,6 +148,14 @@ proptest! {
         let m = Frame::rot_z(-turn) * part.r;
         let tip = -(part.r.transpose() * part.t);
         let site = arm.at_site(&m, &tip);
+        // The next location: the part where joints `q + shift` put it, the same turn.
+        let next = if moved {
+            let q2: Q = std::array::from_fn(|j| q[j] + shift[j]);
+            let part = arm.head.inverse().mul(&arm.base.mul(&arm.flange(&q2)).mul(&arm.holder));
+            arm.at_site(&(Frame::rot_z(-turn) * part.r), &-(part.r.transpose() * part.t))
+        } else {
+            site
+        };
         for c in Config::ALL {
             let Ok((raw0, dirs)) = arm.inverse_turned_with(&site, turn, c, q[3]) else {
                 continue;
@@ -156,10 +168,12 @@ proptest! {
             let Some(dirs) = dirs else {
                 continue;
             };
-            let Some(dq) = arm.change_turned(&site, turn + step, c, &q0, &dirs) else {
+            let Some((dq, to)) = arm.change_turned(&next, turn + step, c, &q0, &dirs) else {
                 continue;
             };
-            let raw1 = arm.inverse_turned(&site, turn + step, c, q0[3]);
+            let raw1 = arm.inverse_turned_with(&next, turn + step, c, q0[3]);
+            prop_assert!(raw1.as_ref().is_ok_and(|r| r.1 == Some(to)), "config {}: directions", c.letters());
+            let raw1 = raw1.map(|r| r.0);
             prop_assert!(raw1.is_ok(), "config {}: {raw1:?}", c.letters());
             let Ok(raw1) = raw1 else { continue };
             let q1 = arm.fit_limits(&raw1, &q0);
