@@ -283,6 +283,83 @@ pub struct Arm {
     fast: Fast,
 }
 
+/// One location's part frame before the turn about the beam, carried to the wrist frame
+/// ([`Arm::at_site`]): what every solve there ([`Arm::inverse_turned`]) shares.
+#[derive(Debug, Clone, Copy)]
+pub struct Turned {
+    r: Matrix3<f64>,
+    t: Vector3<f64>,
+}
+
+/// The wrist's sin |θ5| below which the wrist counts as singular (θ4 kept).
+const SINGULAR: f64 = 1e-10;
+
+/// The closed form's intermediate values ([`Arm::wrist_parts`]).
+#[derive(Debug, Clone, Copy)]
+struct WristParts {
+    c1: f64,
+    s1: f64,
+    c2: f64,
+    s2: f64,
+    c23: f64,
+    s23: f64,
+    m00: f64,
+    m02: f64,
+    m10: f64,
+    m12: f64,
+    m20: f64,
+    m21: f64,
+    m22: f64,
+    sb: f64,
+}
+
+/// The six joint angles of a closed-form solution as directions `(x, y)`, each angle
+/// plus its joint's offset being `atan2(y, x)` (not of unit length): what
+/// [`Arm::change_turned`] measures changes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Directions([(f64, f64); 6]);
+
+impl Directions {
+    /// From the closed form's parts (`None` at the wrist singularity).
+    fn of(w: &WristParts, c: Config) -> Option<Directions> {
+        if w.sb < SINGULAR {
+            return None;
+        }
+        // θ3 = (θ2 + θ3) − θ2; θ4 = atan2(m12, m02), θ5 = −atan2(sb, m22), θ6 =
+        // atan2(m21, −m20), the flipped wrist half a turn on (θ5 negated).
+        let d3 = (w.c23 * w.c2 + w.s23 * w.s2, w.s23 * w.c2 - w.c23 * w.s2);
+        let (d4, d5, d6) = if c.flip {
+            ((-w.m02, -w.m12), (w.m22, w.sb), (w.m20, -w.m21))
+        } else {
+            ((w.m02, w.m12), (w.m22, -w.sb), (-w.m20, w.m21))
+        };
+        Some(Directions([(w.c1, w.s1), (w.c2, w.s2), d3, d4, d5, d6]))
+    }
+}
+
+/// atan(t) for |t| ≤ [`SMALL`] by its series to t¹³ (truncation below 5e-20
+/// relative).
+fn atan_small(t: f64) -> f64 {
+    const C: [f64; 7] = [
+        1.0,
+        -1.0 / 3.0,
+        1.0 / 5.0,
+        -1.0 / 7.0,
+        1.0 / 9.0,
+        -1.0 / 11.0,
+        1.0 / 13.0,
+    ];
+    let u = t * t;
+    t * C.iter().rev().fold(0.0, |acc, c| acc * u + c)
+}
+
+/// The largest change (tangent 0.05, 2.9°) [`Arm::change_turned`] takes by its series.
+const SMALL: f64 = 0.05;
+
+/// How far inside its limits (1e-9 rad) a joint changed by [`Arm::change_turned`] must
+/// lie (nearer, the full solve decides).
+const LIMIT_SLACK: f64 = 1e-9;
+
 /// What [`Arm::inverse_closed_fast`] and [`Arm::inverse_in_work`] take from the arm
 /// file once rather than at every solve.
 #[derive(Debug, Clone, Copy)]
@@ -584,6 +661,33 @@ impl Arm {
         self.inverse_wrist(&tp, c, wrist)
     }
 
+    /// What every solve of [`Arm::inverse_turned`] at one location shares: the part frame
+    /// `(m, −m·tip)` (the location's pose before the turn about the beam, as
+    /// [`crate::plan::part_in_work`] builds it) carried to the wrist frame.
+    pub fn at_site(&self, m: &Matrix3<f64>, tip: &Vector3<f64>) -> Turned {
+        let tw = &self.fast.to_wrist;
+        Turned {
+            r: m * tw.r,
+            t: m * (tw.t - tip),
+        }
+    }
+
+    /// [`Arm::inverse_in_work`] for the part frame `Rz(psi) · (m, −m·tip)` in the working
+    /// frame, given [`Arm::at_site`]'s `(m·R, m·(t − tip))` of the part-to-wrist frame
+    /// `(R, t)`: the wrist frame is `work · Rz(psi) · that`, so a solve at another turn
+    /// costs one turn of two of the working frame's axes and one product, where
+    /// [`Arm::inverse_in_work`] takes three. Agrees with it to 1e-12 rad
+    /// (`tests/kinematics.rs`, proptest).
+    pub fn inverse_turned(
+        &self,
+        at: &Turned,
+        psi: f64,
+        c: Config,
+        wrist: f64,
+    ) -> Result<Q, NoReach> {
+        self.inverse_wrist(&self.turned_wrist(at, psi), c, wrist)
+    }
+
     /// Where the wrist centre `p` (base frame) lies for the closed forms, in the plane of
     /// the upper arm for shoulder configuration `c`; `Err` naming the waist when it lies
     /// inside the shoulder offset, the elbow when beyond the arm's reach.
@@ -619,8 +723,10 @@ impl Arm {
         Ok(Reach { x, y, r2, rr, cpsi })
     }
 
-    /// The closed form from the wrist frame `T05 · Rz(θ6)` (base frame).
-    fn inverse_wrist(&self, tp: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+    /// The closed form's stages before the angles: from the wrist frame `T05 · Rz(θ6)`
+    /// (base frame), the sines and cosines of θ1, θ2 and θ2 + θ3 and the wrist's matrix
+    /// `m = R03ᵀ · R = Rz(θ4) · Ry(−θ5) · Rz(θ6)`.
+    fn wrist_parts(&self, tp: &Frame, c: Config) -> Result<WristParts, NoReach> {
         let l = &self.links;
         let (a2, d3) = (l[1].a, l[2].d);
         let p = tp.t;
@@ -638,11 +744,8 @@ impl Arm {
         let n = (xx * xx + yy * yy).sqrt();
         let (cf, sf) = self.fast.phi;
         let (c23, s23) = ((xx * cf + yy * sf) / n, (yy * cf - xx * sf) / n);
-        let t1 = s1.atan2(c1);
-        let t2 = s2.atan2(c2);
-        let t3 = s23.atan2(c23) - t2;
-        // m = R03ᵀ · R = Rz(θ4) · Ry(−θ5) · Rz(θ6), with R03 = Rz(θ1) Rx(90°) Rz(θ2 + θ3)
-        // Rx(−90°): columns (c1 c23, s1 c23, s23), (−s1, c1, 0), (−c1 s23, −s1 s23, c23).
+        // m = R03ᵀ · R, with R03 = Rz(θ1) Rx(90°) Rz(θ2 + θ3) Rx(−90°): columns
+        // (c1 c23, s1 c23, s23), (−s1, c1, 0), (−c1 s23, −s1 s23, c23).
         let r = &tp.r;
         let row =
             |a: f64, b: f64, cc: f64, j: usize| a * r[(0, j)] + b * r[(1, j)] + cc * r[(2, j)];
@@ -652,22 +755,53 @@ impl Arm {
         let (m10, m12) = (row(-s1, c1, 0.0, 0), row(-s1, c1, 0.0, 2));
         let (m20, m21, m22) = (row(w0, w1, w2, 0), row(w0, w1, w2, 1), row(w0, w1, w2, 2));
         let sb = (m02 * m02 + m12 * m12).sqrt();
+        Ok(WristParts {
+            c1,
+            s1,
+            c2,
+            s2,
+            c23,
+            s23,
+            m00,
+            m02,
+            m10,
+            m12,
+            m20,
+            m21,
+            m22,
+            sb,
+        })
+    }
+
+    /// The closed form from the wrist frame `T05 · Rz(θ6)` (base frame).
+    fn inverse_wrist(&self, tp: &Frame, c: Config, wrist: f64) -> Result<Q, NoReach> {
+        let w = self.wrist_parts(tp, c)?;
+        Ok(self.angles(&w, c, wrist))
+    }
+
+    /// The joint values from [`Arm::wrist_parts`] (six `atan2`); at the wrist
+    /// singularity θ4 keeps `wrist`.
+    fn angles(&self, w: &WristParts, c: Config, wrist: f64) -> Q {
+        let l = &self.links;
+        let t1 = w.s1.atan2(w.c1);
+        let t2 = w.s2.atan2(w.c2);
+        let t3 = w.s23.atan2(w.c23) - t2;
         let (t4, b, t6);
-        if sb < 1e-10 {
-            let w = wrist + l[3].offset;
-            if m22 > 0.0 {
+        if w.sb < SINGULAR {
+            let wr = wrist + l[3].offset;
+            if w.m22 > 0.0 {
                 b = 0.0;
-                t4 = w;
-                t6 = m10.atan2(m00) - w;
+                t4 = wr;
+                t6 = w.m10.atan2(w.m00) - wr;
             } else {
                 b = PI;
-                t4 = w;
-                t6 = w - (-m10).atan2(-m00);
+                t4 = wr;
+                t6 = wr - (-w.m10).atan2(-w.m00);
             }
         } else {
-            let bb = sb.atan2(m22);
-            let a4 = m12.atan2(m02);
-            let a6 = m21.atan2(-m20);
+            let bb = w.sb.atan2(w.m22);
+            let a4 = w.m12.atan2(w.m02);
+            let a6 = w.m21.atan2(-w.m20);
             if c.flip {
                 b = -bb;
                 t4 = a4 + PI;
@@ -679,7 +813,76 @@ impl Arm {
             }
         }
         let th = [t1, t2, t3, t4, -b, t6];
-        Ok(std::array::from_fn(|k| wrap(th[k] - l[k].offset)))
+        std::array::from_fn(|k| wrap(th[k] - l[k].offset))
+    }
+
+    /// [`Arm::inverse_turned`], and the directions of the six angles
+    /// ([`Directions`]; `None` at the wrist singularity), for [`Arm::change_turned`].
+    pub fn inverse_turned_with(
+        &self,
+        at: &Turned,
+        psi: f64,
+        c: Config,
+        wrist: f64,
+    ) -> Result<(Q, Option<Directions>), NoReach> {
+        let w = self.wrist_parts(&self.turned_wrist(at, psi), c)?;
+        Ok((self.angles(&w, c, wrist), Directions::of(&w, c)))
+    }
+
+    /// The joint changes from `q` (joints within the limits, whose angles point along
+    /// `dirs`, from [`Arm::inverse_turned_with`] at the same location) to the solution
+    /// turned `psi` about the beam (and that solution's directions), each taken on the
+    /// turn nearest `q` (what
+    /// [`Arm::fit_limits`] takes from a previous location as near as `q`), without the
+    /// six `atan2`: each angle's change from `q`'s by an arctangent series of the two
+    /// directions' cross over dot product. `None` (solve in full instead) where the
+    /// pose is out of reach, at the wrist singularity, where a change's tangent is over [`SMALL`] (0.05)
+    /// or a joint would come within 1e-9 rad of a limit. Agrees with the full solve's
+    /// joints minus `q` to 1e-14 rad (`tests/kinematics.rs`, proptest).
+    pub fn change_turned(
+        &self,
+        at: &Turned,
+        psi: f64,
+        c: Config,
+        q: &Q,
+        dirs: &Directions,
+    ) -> Option<(Q, Directions)> {
+        let w = self.wrist_parts(&self.turned_wrist(at, psi), c).ok()?;
+        let to = Directions::of(&w, c)?;
+        let mut out = [0.0; 6];
+        for j in 0..6 {
+            let ((x0, y0), (x1, y1)) = (dirs.0[j], to.0[j]);
+            let dot = x0 * x1 + y0 * y1;
+            let cross = x0 * y1 - y0 * x1;
+            let t = cross / dot;
+            if !(dot > 0.0 && t.abs() <= SMALL) {
+                return None;
+            }
+            let d = atan_small(t);
+            let l = &self.links[j];
+            let v = q[j] + d;
+            if !(v > l.lo + LIMIT_SLACK && v < l.hi - LIMIT_SLACK) {
+                return None;
+            }
+            out[j] = d;
+        }
+        Some((out, to))
+    }
+
+    /// The wrist frame for the part frame turned `psi` about the beam ([`Arm::at_site`]).
+    fn turned_wrist(&self, at: &Turned, psi: f64) -> Frame {
+        let (s, co) = psi.sin_cos();
+        let w = &self.fast.work;
+        let (w0, w1) = (w.r.column(0), w.r.column(1));
+        let a = Matrix3::from_columns(&[
+            w0 * co + w1 * s,
+            w1 * co - w0 * s,
+            w.r.column(2).into_owned(),
+        ]);
+        Frame {
+            r: a * at.r,
+            t: a * at.t + w.t,
+        }
     }
 
     /// Damped-least-squares inverse from `seed`: joint values that put the flange at

@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::arm::{Arm, Config, Frame, NoReach, Q};
+use crate::arm::{Arm, Config, Directions, Frame, NoReach, Turned, Q};
 use crate::error::RobotError;
 
 /// A path point (part frame).
@@ -204,20 +204,44 @@ pub const LOOK_AHEAD: usize = 128;
 /// Candidate turns about the beam at the first location (5° apart).
 const TURNS: u32 = 72;
 
-/// The inverse at one location: joints within the limits nearest `prev`, in `cfg`.
+/// One location with the turn about the beam left free: the sample, its reference
+/// perpendicular and, for an arm with the closed form, what every solve there shares
+/// ([`Arm::at_site`]).
+struct Site<'a> {
+    s: &'a Sample,
+    u: &'a Vector3<f64>,
+    closed: Option<Turned>,
+}
+
+impl<'a> Site<'a> {
+    fn new(arm: &Arm, s: &'a Sample, u: &'a Vector3<f64>) -> Site<'a> {
+        let closed = arm.closed_form.then(|| {
+            let m = Matrix3::from_rows(&[
+                u.transpose(),
+                s.axis.cross(u).transpose(),
+                s.axis.transpose(),
+            ]);
+            arm.at_site(&m, &s.tip)
+        });
+        Site { s, u, closed }
+    }
+}
+
+/// The inverse at one location turned `psi` about the beam: joints within the limits
+/// nearest `prev`, in `cfg`. (The part frame, [`part_in_work`], is worked out for the turn
+/// chosen only.)
 fn solve_at(
     arm: &Arm,
-    s: &Sample,
-    u: &Vector3<f64>,
+    site: &Site,
     psi: f64,
     cfg: Config,
     prev: &Q,
     fresh: bool,
-) -> Result<(Q, Frame), NoReach> {
-    let part = part_in_work(&s.tip, &s.axis, u, psi);
-    let raw = if arm.closed_form {
-        arm.inverse_in_work(&part, cfg, prev[3])?
+) -> Result<(Q, Option<Directions>), NoReach> {
+    let (raw, dirs) = if let Some(t) = &site.closed {
+        arm.inverse_turned_with(t, psi, cfg, prev[3])?
     } else {
+        let part = part_in_work(&site.s.tip, &site.s.axis, site.u, psi);
         let world = arm.head.mul(&part);
         let flange = arm.flange_for(&world);
         // The first location (or one after a blocked turn) starts from the near-PUMA
@@ -231,10 +255,11 @@ fn solve_at(
                 .unwrap_or(*prev),
             _ => *prev,
         };
-        arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
+        let q = arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
             joint: 2,
             why: "the numerical inverse does not converge (out of reach?)".into(),
-        })?
+        })?;
+        (q, None)
     };
     let q = arm.fit_limits(&raw, prev).map_err(|j| NoReach {
         joint: j,
@@ -246,7 +271,7 @@ fn solve_at(
             arm.links[j].hi.to_degrees()
         ),
     })?;
-    Ok((q, part))
+    Ok((q, dirs))
 }
 
 /// A margin counts up to this much (30°): beyond it the next criterion decides.
@@ -292,7 +317,8 @@ pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Co
         let mut reached = true;
         'visits: for (v, &i) in visits.iter().enumerate() {
             let mut at = |i: usize, prev: &Q, fresh: bool| {
-                let (q, _) = solve_at(arm, &samples[i], &refs[i], psi, cfg, prev, fresh).ok()?;
+                let site = Site::new(arm, &samples[i], &refs[i]);
+                let (q, _) = solve_at(arm, &site, psi, cfg, prev, fresh).ok()?;
                 worst = worst.min(arm.margin(&q));
                 Some(q)
             };
@@ -639,6 +665,8 @@ struct Track {
     out: Vec<Located>,
     prev: Q,
     psi_prev: f64,
+    /// The directions of the last location's angles ([`Arm::change_turned`]).
+    dirs: Option<Directions>,
 }
 
 impl Track {
@@ -649,6 +677,7 @@ impl Track {
             out: Vec::with_capacity(capacity),
             prev: arm.safe,
             psi_prev: start.unwrap_or(0.0),
+            dirs: None,
         }
     }
 
@@ -677,6 +706,17 @@ fn track(
     Ok(done.then_some(t.out))
 }
 
+/// The search's best turn so far: (joint change, turn, joints, their directions, solved
+/// in full: else the joints are the last location's plus the changes by directions).
+type Best = (f64, f64, Q, Option<Directions>, bool);
+
+/// A side's joint change, and its joints and directions where solved in full.
+type Side = (f64, Option<(Q, Option<Directions>)>);
+
+/// Joint changes by [`Arm::change_turned`] are used below this (π − 0.5 rad): nearer a
+/// half turn the full solve picks the turn.
+const NO_WRAP: f64 = std::f64::consts::PI - 0.5;
+
 /// Plans locations `t.out.len()..end` of the plan from first turn `start` (`None`: the
 /// one nearest the safe location), each from the last; `Ok(false)` when a location's
 /// margin falls below the floor (left unfinished: the plan cannot be taken).
@@ -694,14 +734,40 @@ fn advance(
     let from = t.out.len();
     for (i, (s, u)) in samples.iter().zip(refs).enumerate().take(end).skip(from) {
         let (prev, psi_prev) = (t.prev, t.psi_prev);
-        let solve = |psi: f64, fresh: bool| solve_at(arm, s, u, psi, cfg, &prev, fresh);
+        let site = Site::new(arm, s, u);
+        let solve = |psi: f64, fresh: bool| solve_at(arm, &site, psi, cfg, &prev, fresh);
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-        let eval = |psi: f64| solve(psi, i == 0).map(|(q, p)| (cost(&q), q, p));
-        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, p)| (cost(&q), q, p));
-        let mut best: Option<(f64, f64, Q, Frame)> = None; // (cost, psi, q, part)
-        if i > 0 || start.is_some() {
-            if let Ok((c, q, p)) = eval(psi_prev) {
-                best = Some((c, psi_prev, q, p));
+        let eval = |psi: f64| solve(psi, i == 0).map(|(q, d)| (cost(&q), q, d));
+        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, d)| (cost(&q), q, d));
+        // The cost alone a step to each side of the best so far (`b`): from its joints
+        // and their directions without the angles where it can ([`Arm::change_turned`]),
+        // else by a full solve (`Some` joints).
+        let side = |psi: f64, b: &Best| -> Result<Side, NoReach> {
+            if let (Some(t), Some(d)) = (&site.closed, &b.3) {
+                if let Some((dq, _)) = arm.change_turned(t, psi, cfg, &b.2, d) {
+                    let ch: Q = std::array::from_fn(|j| (b.2[j] - prev[j]) + dq[j]);
+                    if ch.iter().all(|c| c.abs() < NO_WRAP) {
+                        return Ok((ch.iter().map(|c| c * c).sum(), None));
+                    }
+                }
+            }
+            eval(psi).map(|(c, q, d)| (c, Some((q, d))))
+        };
+        // The last turn, priced likewise from the last location's solution where it can
+        // (not solved in full: `false`), else solved in full.
+        let quick = match (&site.closed, &t.dirs) {
+            (Some(st), Some(d)) if i > 0 => arm
+                .change_turned(st, psi_prev, cfg, &prev, d)
+                .filter(|(dq, _)| dq.iter().all(|c| c.abs() < NO_WRAP)),
+            _ => None,
+        };
+        let mut best: Option<Best> = None;
+        if let Some((dq, d)) = quick {
+            let q: Q = std::array::from_fn(|j| prev[j] + dq[j]);
+            best = Some((dq.iter().map(|c| c * c).sum(), psi_prev, q, Some(d), false));
+        } else if i > 0 || start.is_some() {
+            if let Ok((c, q, d)) = eval(psi_prev) {
+                best = Some((c, psi_prev, q, d, true));
             }
         }
         let chosen = i == 0 && best.is_some();
@@ -712,9 +778,9 @@ fn advance(
             for k in 0..TURNS {
                 let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
                 match eval_fresh(psi) {
-                    Ok((c, q, p)) => {
+                    Ok((c, q, d)) => {
                         if best.as_ref().is_none_or(|b| c < b.0) {
-                            best = Some((c, psi, q, p));
+                            best = Some((c, psi, q, d, true));
                         }
                     }
                     Err(e) => fails.push(e),
@@ -734,7 +800,7 @@ fn advance(
             let wide = i == 0 || scanned;
             let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
             for _ in 0..4 {
-                let (Ok(lo), Ok(hi)) = (eval(b.1 - h), eval(b.1 + h)) else {
+                let (Ok(lo), Ok(hi)) = (side(b.1 - h, &b), side(b.1 + h, &b)) else {
                     h /= 4.0;
                     continue;
                 };
@@ -751,15 +817,23 @@ fn advance(
                     let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
                     reached = raw.abs() < 4.0 * h;
                     let step = raw.clamp(-4.0 * h, 4.0 * h);
-                    if let Ok(p) = eval(b.1 + step) {
-                        if cand.as_ref().is_none_or(|c| p.0 < c.0 .0) {
-                            cand = Some((p, b.1 + step));
+                    if let Ok((c, q, d)) = eval(b.1 + step) {
+                        if cand.as_ref().is_none_or(|x| c < x.0 .0) {
+                            cand = Some(((c, Some((q, d))), b.1 + step));
                         }
                     }
                 }
-                if let Some(((c, q, p), psi)) = cand {
+                if let Some(((c, full), psi)) = cand {
                     if c < b.0 {
-                        b = (c, psi, q, p);
+                        // A side found by its cost alone is solved in full when taken.
+                        match full {
+                            Some((q, d)) => b = (c, psi, q, d, true),
+                            None => {
+                                if let Ok((c, q, d)) = eval(psi) {
+                                    b = (c, psi, q, d, true);
+                                }
+                            }
+                        }
                     }
                 }
                 if wide {
@@ -770,9 +844,17 @@ fn advance(
             }
             best = Some(b);
         }
-        let Some((_, psi, q, part)) = best else {
+        let Some((_, psi, q, d, full)) = best else {
             return Err(unreachable(arm, s, i, &[]));
         };
+        // A last turn priced from directions and kept is solved in full.
+        let (q, d) = if full {
+            (q, d)
+        } else {
+            let (q, d) = solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?;
+            (q, d)
+        };
+        let part = part_in_work(&s.tip, &s.axis, u, psi);
         if i > 0 {
             check_speed(arm, s, &prev, &q)?;
         }
@@ -782,6 +864,7 @@ fn advance(
         t.out.push(Located { q, part, psi });
         t.prev = q;
         t.psi_prev = psi;
+        t.dirs = d;
     }
     Ok(true)
 }
@@ -929,6 +1012,7 @@ mod tests {
             out: vec![at(q0), at(q)],
             prev: q,
             psi_prev: psi,
+            dirs: None,
         }
     }
 
