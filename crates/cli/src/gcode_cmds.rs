@@ -193,11 +193,9 @@ pub fn fmt(
     };
     let mut src = open_seekable(file)?;
     let flavor = resolve(flavor, &mut src).map_err(|e| io_err(&name, e))?;
-    // A slicer's numbers may have exponents; LinuxCNC reads its polar words `@` and `^`.
-    let reading = Reading {
-        slicer: flavor.flavor.is_slicer(),
-        polar: flavor.flavor == Flavor::LinuxCnc,
-    };
+    // A slicer's numbers may have exponents; LinuxCNC reads its polar words `@` and `^`;
+    // Fanuc and Haas their `:` program numbers.
+    let reading = Reading::of(flavor.flavor, flavor.flavor.is_slicer());
     let mut reader = LineReader::new(std::io::BufReader::with_capacity(1 << 16, src));
     let mut out = Output::create(output)?;
     let werr = |e: std::io::Error| CliError::write(&e);

@@ -165,3 +165,39 @@ fn a_slicer_g0_that_extrudes_is_travel_and_warned() {
     );
     assert_eq!(String::from_utf8_lossy(&o.stdout).matches("M71").count(), 2);
 }
+
+/// Fanuc's and Haas's ISO program number `:0097` is the O address (`--flavor fanuc`,
+/// `haas`, and what `auto` picks for it); LinuxCNC refuses it, as rs274 does.
+#[test]
+fn a_colon_program_number_is_fanuc_s_o() {
+    let path = finding("02-colon-program-number.nc");
+    let p = path.to_str().expect("utf8");
+    for flavor in ["auto", "fanuc", "haas"] {
+        let o = lampost(&["check", "--flavor", flavor, p]);
+        assert!(o.status.success(), "{flavor}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("flavour fanuc") || flavor == "haas",
+            "{}",
+            stderr(&o)
+        );
+    }
+    let o = lampost(&["check", "--flavor", "linuxcnc", p]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(":2:1"), "{}", stderr(&o));
+}
+
+/// A comment holding parentheses whose words look like another language's
+/// (`(ROUGH CYCLE (PASS 1))`) is a nested comment, said at the inner `(`, not
+/// "Sinumerik syntax".
+#[test]
+fn a_nested_comment_is_never_taken_for_another_language() {
+    let path = finding("10-nested-comment-named-sinumerik.nc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("comments do not nest") && e.contains(":2:14"),
+        "{e}"
+    );
+    assert!(!e.contains("Sinumerik"), "{e}");
+}

@@ -408,6 +408,16 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             Some((3, Flavor::Marlin, "a move with a fractional E (extrusion)"))
         } else if code.contains('#') || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
+        } else if code
+            .trim_start()
+            .strip_prefix(':')
+            .is_some_and(|r| r.starts_with(|c: char| c.is_ascii_digit()))
+        {
+            Some((
+                2,
+                Flavor::Fanuc,
+                "a `:` program number (Fanuc's O address in ISO code)",
+            ))
         } else if polar_word(code) {
             Some((2, Flavor::LinuxCnc, "a polar coordinate (`@`, `^`)"))
         } else if semicolon_comment(line) {

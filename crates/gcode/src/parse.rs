@@ -28,6 +28,21 @@ pub struct Reading {
     /// LinuxCNC's polar coordinates: `@` (radius) and `^` (angle) are words, with the
     /// letters `@` and `^` (elsewhere each is an unexpected character).
     pub polar: bool,
+    /// Fanuc's and Haas's `:` program number (`:0097`, the O address in ISO code).
+    pub colon_program: bool,
+}
+
+impl Reading {
+    /// How `flavor` reads lines (`slicer`: a printer firmware's reading, E as
+    /// extrusion): the one place the parser's choices are made from a flavour.
+    pub fn of(flavor: crate::flavor::Flavor, slicer: bool) -> Reading {
+        use crate::flavor::Flavor;
+        Reading {
+            slicer,
+            polar: flavor == Flavor::LinuxCnc,
+            colon_program: matches!(flavor, Flavor::Fanuc | Flavor::Haas),
+        }
+    }
 }
 
 impl From<bool> for Reading {
@@ -35,6 +50,7 @@ impl From<bool> for Reading {
         Reading {
             slicer,
             polar: false,
+            colon_program: false,
         }
     }
 }
@@ -766,42 +782,44 @@ fn words_reference<'a>(
             return Ok(());
         }
     }
-    if read.is_err() {
-        if let Some(f) = crate::foreign_language(text) {
-            // Name the language rather than a stray letter of it.
-            let start = text.len() - text.trim_start().len();
-            return Err(Diagnostic::at(
-                Severity::Error,
-                ErrorKind::ForeignLanguage(f),
-                line_no,
-                offset,
-                text.as_bytes(),
-                start,
-                text.trim_end().len().max(start + 1).min(text.len()),
-            ));
+    let Err(e) = read else {
+        return Ok(());
+    };
+    // A `(` inside a comment, before where reading failed: comments do not nest. Said
+    // first, so that a comment's words (`(ROUGH CYCLE (PASS 1))`) are never taken for
+    // another language's.
+    let nested = block.items.iter().find_map(|item| match item {
+        Item::Comment(c) if c.style == CommentStyle::Paren && c.span.start < e.span.start => {
+            // The comment's text starts one byte after its `(`.
+            memchr::memchr(b'(', c.text.as_bytes()).map(|r| c.span.start + 1 + r - offset)
         }
+        _ => None,
+    });
+    if let Some(at) = nested {
+        return Err(Diagnostic::at(
+            Severity::Error,
+            ErrorKind::NestedComment,
+            line_no,
+            offset,
+            text.as_bytes(),
+            at,
+            at + 1,
+        ));
     }
-    read.map_err(|e| {
-        let nested = block.items.iter().find_map(|item| match item {
-            Item::Comment(c) if c.style == CommentStyle::Paren && c.span.start < e.span.start => {
-                // The comment's text starts one byte after its `(`.
-                memchr::memchr(b'(', c.text.as_bytes()).map(|r| c.span.start + 1 + r - offset)
-            }
-            _ => None,
-        });
-        match nested {
-            Some(at) => Diagnostic::at(
-                Severity::Error,
-                ErrorKind::NestedComment,
-                line_no,
-                offset,
-                text.as_bytes(),
-                at,
-                at + 1,
-            ),
-            None => e,
-        }
-    })
+    if let Some(f) = crate::foreign_language(text) {
+        // Name the language rather than a stray letter of it.
+        let start = text.len() - text.trim_start().len();
+        return Err(Diagnostic::at(
+            Severity::Error,
+            ErrorKind::ForeignLanguage(f),
+            line_no,
+            offset,
+            text.as_bytes(),
+            start,
+            text.trim_end().len().max(start + 1).min(text.len()),
+        ));
+    }
+    Err(e)
 }
 
 /// The whole line as one `(` comment, when it starts (after blanks) with `(` and holds a
@@ -891,6 +909,20 @@ fn words_reference_items<'a>(
     let mut firmware = false;
     while i < bytes.len() {
         let c = bytes[i];
+        // Fanuc's and Haas's ISO program number `:0097` is the O address (rs274 refuses
+        // it, so only under those flavours), at the start of a block.
+        let c = if c == b':'
+            && reading.colon_program
+            && bytes.get(i + 1).is_some_and(u8::is_ascii_digit)
+            && block
+                .items
+                .iter()
+                .all(|it| matches!(it, Item::Word(w) if w.letter == b'N'))
+        {
+            b'O'
+        } else {
+            c
+        };
         match c {
             b' ' | b'\t' => i += 1,
             b'(' => match memchr::memchr(b')', &bytes[i + 1..]) {
@@ -1516,6 +1548,7 @@ mod tests {
         let polar = Reading {
             slicer: false,
             polar: true,
+            colon_program: false,
         };
         let mut b = Block::empty(1, 0);
         parse_line_with(b"G1 @ 1.5 ^-30 (c) F10", 1, 0, &mut b, polar).expect("parses");

@@ -142,10 +142,7 @@ impl<S: LineSource> Stream<S> {
             stopped: false,
             finished: false,
             any_content: false,
-            reading: Reading {
-                slicer: opts.e_word == EWord::Extrusion,
-                polar: opts.flavor == crate::flavor::Flavor::LinuxCnc,
-            },
+            reading: Reading::of(opts.flavor, opts.e_word == EWord::Extrusion),
             params,
             fast_lane: !opts.flavor.extruder_is_a_or_b(),
             warned_comment_utf8: false,
