@@ -895,7 +895,8 @@ impl Interpreter {
 
     /// G4's words. Fanuc, Haas and FADAL give the dwell time as X (U on a lathe) in
     /// seconds, or P in milliseconds: `G04 X1.5` dwells, it moves nothing (it used to be
-    /// traced as a move of the motion in force to X1.5). A move cannot share the block.
+    /// traced as a move of the motion in force to X1.5), and no other axis may share the
+    /// block. With P, the time is P and the axis words are a move (`G04 P.001 G0 X1.0`).
     /// LinuxCNC takes the time in P only and refuses G4 without it, as rs274 does.
     /// True when the block's axis words were the dwell's.
     fn dwell_words(&self, b: &Block<'_>, w: &Words<'_, '_>, gw: &Word<'_>) -> Res<bool> {
@@ -917,7 +918,9 @@ impl Interpreter {
                 Ok(false)
             };
         }
-        if w.get(b'X').is_none() && w.get(b'U').is_none() {
+        // With P the time is P, and the block's axis words are a move, as rs274 reads
+        // `G04 P.001 G0 X1.0` (LinuxCNC's own sample programs write it).
+        if w.word(b'P').is_some() || (w.get(b'X').is_none() && w.get(b'U').is_none()) {
             return Ok(false);
         }
         if AXES
