@@ -201,3 +201,18 @@ fn a_nested_comment_is_never_taken_for_another_language() {
     );
     assert!(!e.contains("Sinumerik"), "{e}");
 }
+
+/// A carriage return at the start of a line (a script that ends its lines `\n\r`) is
+/// white space, as rs274 reads it; one inside a line is still refused at its column
+/// (bare carriage returns as line ends would join lines into one block).
+#[test]
+fn a_carriage_return_starting_a_line_is_white_space() {
+    let path = finding("01-cr-inside-line.nc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    let e = stderr(&o);
+    assert!(!o.status.success());
+    assert!(
+        e.contains(":4:7") && !e.contains(":2:1") && !e.contains(":3:1"),
+        "{e}"
+    );
+}

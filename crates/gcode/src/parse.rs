@@ -853,7 +853,11 @@ fn words_reference_items<'a>(
     };
     let bytes = line;
     let mut i = 0;
-    while i < bytes.len() && (bytes[i] == b' ' || bytes[i] == b'\t') {
+    // Blanks, and carriage returns at the start of a line: a file whose lines end
+    // `\n\r` (a script's) starts every line with one, which rs274 reads as white space.
+    // One inside a line stays an error: bare carriage returns as line ends (an old Mac
+    // file) would otherwise join lines into one block.
+    while i < bytes.len() && matches!(bytes[i], b' ' | b'\t' | b'\r') {
         i += 1;
     }
     if i == bytes.len() {
