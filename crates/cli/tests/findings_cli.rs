@@ -216,3 +216,16 @@ fn a_carriage_return_starting_a_line_is_white_space() {
         "{e}"
     );
 }
+
+/// Fanuc's packed call `M98 P31234` runs O1234 three times (the digits before the last
+/// four are the repeat count) when the file holds no O31234; it was refused as a call
+/// of a program not in the file.
+#[test]
+fn a_packed_m98_repeats_its_program() {
+    let path = finding("18-fanuc-m98-packed-repeat.nc");
+    let xs: Vec<f64> = ends(&trace_json("fanuc", &path))
+        .iter()
+        .map(|e| e[0])
+        .collect();
+    assert_eq!(xs, [0.0, 10.0, 20.0, 30.0]);
+}

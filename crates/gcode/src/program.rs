@@ -919,8 +919,8 @@ fn action(
             p.span,
         );
     }
-    let number = p.value as u32;
-    let repeats = match b.word(b'L') {
+    let mut number = p.value as u32;
+    let mut repeats = match b.word(b'L') {
         None => 1,
         Some(l) if l.value > f64::from(MAX_REPEATS) => {
             return bad(l.display(), "more than 10000 repeats", l.span)
@@ -928,6 +928,19 @@ fn action(
         Some(l) if l.value >= 0.0 && l.value.fract() == 0.0 => l.value as u32,
         Some(l) => return bad(l.display(), "the repeat count L is a whole number", l.span),
     };
+    let held = |n: u32| {
+        let from = by_number.partition_point(|&i| programs[i as usize].number < n);
+        by_number
+            .get(from)
+            .is_some_and(|&i| programs[i as usize].number == n)
+    };
+    // Fanuc's packed call `M98 P31234`: the last four digits the program, the ones
+    // before them the repeat count (Fanuc 0i: M98 P△△△△□□□□), taken when the file holds
+    // no program of the whole number, no L is given, and it holds the four digits' one.
+    if number > 9999 && b.word(b'L').is_none() && !held(number) && held(number % 10_000) {
+        repeats = (number / 10_000).min(MAX_REPEATS);
+        number %= 10_000;
+    }
     let from = by_number.partition_point(|&i| programs[i as usize].number < number);
     let mut found = by_number[from..]
         .iter()
