@@ -836,7 +836,7 @@ impl Arm {
     /// [`Arm::fit_limits`] takes from a previous location as near as `q`), without the
     /// six `atan2`: each angle's change from `q`'s by an arctangent series of the two
     /// directions' cross over dot product. `None` (solve in full instead) where the
-    /// pose is out of reach, at the wrist singularity, where a change's tangent is over [`SMALL`] (0.05)
+    /// pose is out of reach, at the wrist singularity, where a change's tangent is over `SMALL` (0.05)
     /// or a joint would come within 1e-9 rad of a limit. Agrees with the full solve's
     /// joints minus `q` to 1e-14 rad (`tests/kinematics.rs`, proptest).
     pub fn change_turned(
