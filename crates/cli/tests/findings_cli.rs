@@ -229,3 +229,16 @@ fn a_packed_m98_repeats_its_program() {
         .collect();
     assert_eq!(xs, [0.0, 10.0, 20.0, 30.0]);
 }
+
+/// ShopBot's OpenSBP (`SA`, `MS,2,2`, `J3,x,y,z`), which Vectric and Fusion post for
+/// ShopBot routers, is named at its first line, where each line was a stray letter or
+/// comma (the FabMo sample gave 3,291 errors, none naming the language).
+#[test]
+fn shopbot_opensbp_is_named() {
+    let path = finding("13-shopbot-opensbp.sbp");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("ShopBot OpenSBP") && e.contains(":2:1"), "{e}");
+    assert!(!e.contains("has no number"), "{e}");
+}

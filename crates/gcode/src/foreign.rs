@@ -24,6 +24,10 @@ const APT: Foreign = Foreign {
     name: "APT cutter-location (CL) data, a CAM system's output before posting",
     hint: "post the CL file in the CAM system for a G-code control, then give lampost the G-code",
 };
+const SHOPBOT: Foreign = Foreign {
+    name: "ShopBot OpenSBP (two-letter commands and comma-separated values)",
+    hint: "post the job from the CAM system for a G-code control (Vectric and Fusion have G-code posts for ShopBot's and other routers); lampost reads no OpenSBP",
+};
 /// What to do with a robot program.
 /// PrusaSlicer's binary G-code (libbgcode's `.bgcode`: the file starts with the magic
 /// `GCDE`, then compressed blocks).
@@ -133,6 +137,19 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     {
         return Some(FANUC_TP);
     }
+    // ShopBot OpenSBP: a two-letter command, then its values after commas (`MS,2,2`,
+    // `J3,1.2,1.1,0.2`, `CG, ,1.2,…`), or the absolute and relative mode words alone.
+    // (No G-code line starts with a letter, a letter or digit, and a comma.)
+    // Its comments start with `'`; its conditions read system values `%(25)`.
+    let sbp = u.split('\'').next().unwrap_or("").trim();
+    let b = sbp.as_bytes();
+    if b.len() >= 3 && b[0].is_ascii_uppercase() && b[1].is_ascii_alphanumeric() && b[2] == b','
+        || matches!(sbp, "SA" | "SR")
+        || sbp.starts_with("IF %(")
+        || sbp.contains(" THEN GOSUB ")
+    {
+        return Some(SHOPBOT);
+    }
     // Sinumerik: its cycles, messages, tool names, `NAME=` values and frame statements.
     let code = u.split(';').next().unwrap_or("");
     const SIN: [&str; 24] = [
@@ -172,6 +189,16 @@ mod tests {
             ("MoveL p10, v100, fine, tool0;", Some(RAPID)),
             ("MODULE MainModule", Some(RAPID)),
             ("/PROG  WELD1", Some(FANUC_TP)),
+            ("MS,2.0,2.0", Some(SHOPBOT)),
+            ("J3,1.239209,1.139149,0.200000", Some(SHOPBOT)),
+            ("CG, ,1.2,2.1,-1.0,0.0,T,-1", Some(SHOPBOT)),
+            ("SA", Some(SHOPBOT)),
+            (
+                "SA                             \t'Set program to absolute",
+                Some(SHOPBOT),
+            ),
+            ("IF %(25)=1 THEN GOSUB UNIT_ERROR\t'check", Some(SHOPBOT)),
+            ("G1 X1. ,R.1", None),
             // G-code lines with faults are not another language.
             ("G1 X", None),
             ("G0 X1 Y2 ; rapid", None),
