@@ -242,3 +242,23 @@ fn shopbot_opensbp_is_named() {
     assert!(e.contains("ShopBot OpenSBP") && e.contains(":2:1"), "{e}");
     assert!(!e.contains("has no number"), "{e}");
 }
+
+/// Haas's additional work offsets G110–G129 (G154 P1–P20) are warned as G154 is under
+/// `--flavor haas`, where G110 was "unknown G-code"; G112 (a Haas lathe's XC
+/// interpolation) stays unknown.
+#[test]
+fn haas_g110_to_g129_are_work_offsets() {
+    let path = finding("20-haas-g110-and-arc-l.nc");
+    let o = lampost(&["check", "--flavor", "haas", path.to_str().expect("utf8")]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("G110 (an extended work offset") && e.contains(":4:1"),
+        "{e}"
+    );
+    let dir = tempdir("findings-g112");
+    let p = dir.join("g112.nc");
+    std::fs::write(&p, "G20 G90\nG112\nG0 X1. Y1.\nM30\n").expect("write");
+    let o = lampost(&["check", "--flavor", "haas", p.to_str().expect("utf8")]);
+    assert!(stderr(&o).contains("unknown G-code G112"), "{}", stderr(&o));
+}

@@ -1075,7 +1075,8 @@ impl Interpreter {
                         // Haas's bolt hole patterns on a mill, its finishing and
                         // roughing cycles on a lathe (never units: Haas uses G20/G21).
                         _ if self.opts.flavor == crate::flavor::Flavor::Haas
-                            && crate::modal::haas_pattern(code).is_some() =>
+                            && (crate::modal::haas_pattern(code).is_some()
+                                || crate::modal::haas_work_offset(code)) =>
                         {
                             GGroup::Other
                         }

@@ -387,6 +387,13 @@ pub fn haas_pattern(code: u16) -> Option<&'static str> {
     })
 }
 
+/// Haas's additional work offsets G110–G129 (the same as `G154 P1`–`P20`), read as
+/// [`GGroup::Other`] with `--flavor haas` and warned as G154 is; not G112 and G113 (a Haas
+/// lathe's XY-to-XC interpolation), which stay unknown.
+pub fn haas_work_offset(code: u16) -> bool {
+    code % 10 == 0 && matches!(code, 1100 | 1110 | 1140..=1290)
+}
+
 /// What a code of [`GGroup::Other`] is (`None` for any other code).
 pub fn other_code(code: u16) -> Option<OtherCode> {
     use OtherCode::*;
@@ -405,6 +412,7 @@ pub fn other_code(code: u16) -> Option<OtherCode> {
         434 | 435 => Unsimulated("tool centre point control"),
         531 => Unsimulated("tool axis to the tilted work plane (moves the rotaries)"),
         541 | 1540 => ExtendedOffset,
+        c if haas_work_offset(c) => ExtendedOffset,
         650 => Unsimulated("macro call"),
         660 => Unsimulated("modal macro call after every move"),
         682..=684 => Unsimulated("tilted work plane"),
