@@ -214,8 +214,41 @@ impl ConfigOf {
 pub struct NoReach {
     /// The limiting joint (0-based).
     pub joint: usize,
-    /// Why, in words.
-    pub why: String,
+    /// Why.
+    pub why: Why,
+}
+
+/// Why an inverse has no answer: words, or a joint outside its limits (kept as numbers
+/// until shown: planning meets and drops thousands of these while it searches).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Why {
+    /// In words.
+    Words(String),
+    /// The joint (named by whoever shows it) would be at `value`, outside `[lo, hi]`
+    /// (radians).
+    Outside {
+        /// The joint's value.
+        value: f64,
+        /// Its lower limit.
+        lo: f64,
+        /// Its upper limit.
+        hi: f64,
+    },
+}
+
+impl std::fmt::Display for Why {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Why::Words(w) => f.write_str(w),
+            Why::Outside { value, lo, hi } => write!(
+                f,
+                "would be {:.3}°, outside its limits [{:.1}°, {:.1}°]",
+                value.to_degrees(),
+                lo.to_degrees(),
+                hi.to_degrees()
+            ),
+        }
+    }
 }
 
 /// Wrap an angle into (−π, π].
@@ -373,6 +406,8 @@ struct Fast {
     e_inv: Frame,
     /// cos and sin of φ = atan2(d4, a3), the forearm's angle.
     phi: (f64, f64),
+    /// φ itself ([`Arm::margin`]'s stretched elbow).
+    phi_angle: f64,
 }
 
 impl Fast {
@@ -394,6 +429,7 @@ impl Fast {
             } else {
                 (1.0, 0.0)
             },
+            phi_angle: d4.atan2(a3),
         }
     }
 }
@@ -545,7 +581,7 @@ impl Arm {
         }
         if self.closed_form || self.approx.is_some() {
             let l = &self.links;
-            let w = wrap(q[2] + l[2].offset + l[3].d.atan2(l[2].a)).abs();
+            let w = wrap(q[2] + l[2].offset + self.fast.phi_angle).abs();
             m = m.min(w).min(PI - w);
         }
         m
@@ -698,11 +734,11 @@ impl Arm {
         if r2 < d3 * d3 || r2 == 0.0 {
             return Err(NoReach {
                 joint: 0,
-                why: format!(
+                why: Why::Words(format!(
                     "the wrist centre is {:.3} from the waist axis, inside the shoulder offset {:.3}",
                     r2.sqrt(),
                     d3.abs()
-                ),
+                )),
             });
         }
         let xr = (r2 - d3 * d3).sqrt();
@@ -715,9 +751,9 @@ impl Arm {
             let (lo, hi) = ((a2.abs() - l3sq.sqrt()).abs(), a2.abs() + l3sq.sqrt());
             return Err(NoReach {
                 joint: 2,
-                why: format!(
+                why: Why::Words(format!(
                     "the wrist centre is {rr:.3} from the shoulder; the elbow reaches {lo:.3} to {hi:.3}"
-                ),
+                )),
             });
         }
         Ok(Reach { x, y, r2, rr, cpsi })

@@ -22,6 +22,6 @@ mod def;
 mod error;
 pub mod plan;
 
-pub use arm::{wrap, Arm, Config, Directions, Frame, Turned, Q};
+pub use arm::{wrap, Arm, Config, Directions, Frame, NoReach, Turned, Why, Q};
 pub use def::{builtin_text, is_arm_text, ArmDef, Units, ARM_BUILTINS};
 pub use error::RobotError;

@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::arm::{Arm, Config, Directions, Frame, NoReach, Turned, Q};
+use crate::arm::{Arm, Config, Directions, Frame, NoReach, Turned, Why, Q};
 use crate::error::RobotError;
 
 /// A path point (part frame).
@@ -257,19 +257,17 @@ fn solve_at(
         };
         let q = arm.inverse_dls(&flange, &seed).ok_or_else(|| NoReach {
             joint: 2,
-            why: "the numerical inverse does not converge (out of reach?)".into(),
+            why: Why::Words("the numerical inverse does not converge (out of reach?)".into()),
         })?;
         (q, None)
     };
     let q = arm.fit_limits(&raw, prev).map_err(|j| NoReach {
         joint: j,
-        why: format!(
-            "{} would be {:.3}°, outside its limits [{:.1}°, {:.1}°]",
-            arm.joint_name(j),
-            raw[j].to_degrees(),
-            arm.links[j].lo.to_degrees(),
-            arm.links[j].hi.to_degrees()
-        ),
+        why: Why::Outside {
+            value: raw[j],
+            lo: arm.links[j].lo,
+            hi: arm.links[j].hi,
+        },
     })?;
     Ok((q, dirs))
 }
@@ -667,6 +665,9 @@ struct Track {
     psi_prev: f64,
     /// The directions of the last location's angles ([`Arm::change_turned`]).
     dirs: Option<Directions>,
+    /// How many locations in a row up to the last kept joints found by changes (see
+    /// [`RESYNC`]).
+    drift: usize,
 }
 
 impl Track {
@@ -678,6 +679,7 @@ impl Track {
             prev: arm.safe,
             psi_prev: start.unwrap_or(0.0),
             dirs: None,
+            drift: 0,
         }
     }
 
@@ -707,11 +709,14 @@ fn track(
 }
 
 /// The search's best turn so far: (joint change, turn, joints, their directions, solved
-/// in full: else the joints are the last location's plus the changes by directions).
+/// in full: else the joints are the last location's plus the changes by directions,
+/// [`Arm::change_turned`]).
 type Best = (f64, f64, Q, Option<Directions>, bool);
 
-/// A side's joint change, and its joints and directions where solved in full.
-type Side = (f64, Option<(Q, Option<Directions>)>);
+/// At most this many locations in a row (64) keep joints found by changes from the last
+/// ([`Arm::change_turned`], each within 1e-14 rad of the full solve's); the next is solved
+/// in full, so rounding cannot pile up along the path.
+const RESYNC: usize = 64;
 
 /// Joint changes by [`Arm::change_turned`] are used below this (π − 0.5 rad): nearer a
 /// half turn the full solve picks the turn.
@@ -739,19 +744,20 @@ fn advance(
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
         let eval = |psi: f64| solve(psi, i == 0).map(|(q, d)| (cost(&q), q, d));
         let eval_fresh = |psi: f64| solve(psi, true).map(|(q, d)| (cost(&q), q, d));
-        // The cost alone a step to each side of the best so far (`b`): from its joints
-        // and their directions without the angles where it can ([`Arm::change_turned`]),
-        // else by a full solve (`Some` joints).
-        let side = |psi: f64, b: &Best| -> Result<Side, NoReach> {
+        // A turn priced from the best so far (`b`): its joints as `b`'s plus the changes
+        // measured from `b`'s directions without the angles where it can
+        // ([`Arm::change_turned`]; not solved in full: `false`), else solved in full.
+        let side = |psi: f64, b: &Best| -> Result<Best, NoReach> {
             if let (Some(t), Some(d)) = (&site.closed, &b.3) {
-                if let Some((dq, _)) = arm.change_turned(t, psi, cfg, &b.2, d) {
+                if let Some((dq, to)) = arm.change_turned(t, psi, cfg, &b.2, d) {
                     let ch: Q = std::array::from_fn(|j| (b.2[j] - prev[j]) + dq[j]);
                     if ch.iter().all(|c| c.abs() < NO_WRAP) {
-                        return Ok((ch.iter().map(|c| c * c).sum(), None));
+                        let q: Q = std::array::from_fn(|j| b.2[j] + dq[j]);
+                        return Ok((ch.iter().map(|c| c * c).sum(), psi, q, Some(to), false));
                     }
                 }
             }
-            eval(psi).map(|(c, q, d)| (c, Some((q, d))))
+            eval(psi).map(|(c, q, d)| (c, psi, q, d, true))
         };
         // The last turn, priced likewise from the last location's solution where it can
         // (not solved in full: `false`), else solved in full.
@@ -806,9 +812,9 @@ fn advance(
                 };
                 let denom = lo.0 - 2.0 * b.0 + hi.0;
                 let mut cand = if lo.0 < b.0 {
-                    Some((lo, b.1 - h))
+                    Some(lo)
                 } else if hi.0 < b.0 {
-                    Some((hi, b.1 + h))
+                    Some(hi)
                 } else {
                     None
                 };
@@ -817,24 +823,14 @@ fn advance(
                     let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
                     reached = raw.abs() < 4.0 * h;
                     let step = raw.clamp(-4.0 * h, 4.0 * h);
-                    if let Ok((c, q, d)) = eval(b.1 + step) {
-                        if cand.as_ref().is_none_or(|x| c < x.0 .0) {
-                            cand = Some(((c, Some((q, d))), b.1 + step));
+                    if let Ok(p) = side(b.1 + step, &b) {
+                        if cand.as_ref().is_none_or(|x| p.0 < x.0) {
+                            cand = Some(p);
                         }
                     }
                 }
-                if let Some(((c, full), psi)) = cand {
-                    if c < b.0 {
-                        // A side found by its cost alone is solved in full when taken.
-                        match full {
-                            Some((q, d)) => b = (c, psi, q, d, true),
-                            None => {
-                                if let Ok((c, q, d)) = eval(psi) {
-                                    b = (c, psi, q, d, true);
-                                }
-                            }
-                        }
-                    }
+                if let Some(c) = cand.filter(|c| c.0 < b.0) {
+                    b = c;
                 }
                 if wide {
                     h /= 4.0;
@@ -847,13 +843,13 @@ fn advance(
         let Some((_, psi, q, d, full)) = best else {
             return Err(unreachable(arm, s, i, &[]));
         };
-        // A last turn priced from directions and kept is solved in full.
-        let (q, d) = if full {
+        // Joints found by changes are kept, up to RESYNC locations in a row.
+        let (q, d) = if full || t.drift + 1 < RESYNC {
             (q, d)
         } else {
-            let (q, d) = solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?;
-            (q, d)
+            solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?
         };
+        let drift = if full { 0 } else { (t.drift + 1) % RESYNC };
         let part = part_in_work(&s.tip, &s.axis, u, psi);
         if i > 0 {
             check_speed(arm, s, &prev, &q)?;
@@ -865,6 +861,7 @@ fn advance(
         t.prev = q;
         t.psi_prev = psi;
         t.dirs = d;
+        t.drift = drift;
     }
     Ok(true)
 }
@@ -912,7 +909,10 @@ fn unreachable(arm: &Arm, s: &Sample, i: usize, fails: &[NoReach]) -> RobotError
     let why = fails
         .iter()
         .find(|f| f.joint == j)
-        .map_or("no solution".to_string(), |f| f.why.clone());
+        .map_or("no solution".to_string(), |f| match &f.why {
+            Why::Words(w) => w.clone(),
+            o @ Why::Outside { .. } => format!("{} {o}", arm.joint_name(j)),
+        });
     let name = arm.joint_name(j).to_string();
     RobotError::Unreachable {
         line: s.line,
@@ -1013,6 +1013,7 @@ mod tests {
             prev: q,
             psi_prev: psi,
             dirs: None,
+            drift: 0,
         }
     }
 

@@ -334,6 +334,30 @@ fn plate_passes() -> Vec<PathPoint> {
     path
 }
 
+/// Planning keeps joints found by changes from the last location's (without the closed
+/// form's angles, up to 64 locations in a row): every location's joints are the full
+/// closed form's at its pose, on the turn nearest them, to 1e-11 rad.
+#[test]
+fn planned_joints_are_the_full_solves_at_their_poses() {
+    let arm = arm();
+    let s = resample(&plate_passes(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let located = plan(&arm, &s, arm.config).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(located.len(), s.len());
+    let mut most = 0.0f64;
+    for l in &located {
+        let raw = arm
+            .inverse_in_work(&l.part, arm.config, l.q[3])
+            .unwrap_or_else(|e| panic!("{}", e.why));
+        let q = arm
+            .fit_limits(&raw, &l.q)
+            .unwrap_or_else(|j| panic!("J{}", j + 1));
+        for j in 0..6 {
+            most = most.max((q[j] - l.q[j]).abs());
+        }
+    }
+    assert!(most < 1e-11, "{most:e} rad");
+}
+
 /// Tries whose tracks meet at `MEET_AT` count as one plan: some are dropped on the
 /// plate's passes, the plan taken is the one the rule without meeting takes or keeps as
 /// far from trouble within `MEET`, on any number of threads, with or without the early
