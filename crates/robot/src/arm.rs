@@ -17,6 +17,8 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use crate::def::{ArmDef, FrameDef, Units};
 use crate::error::RobotError;
 
+mod lanes;
+
 /// Joint values, radians.
 pub type Q = [f64; 6];
 
@@ -118,13 +120,10 @@ impl Link {
 
 /// The wrist centre in the upper arm's plane ([`Arm::reach`]): its signed distance `x`
 /// from the waist axis past the shoulder offset (negative for a left shoulder) and height
-/// `y` above the shoulder, `r2` its squared distance from the waist axis, `rr` from the
-/// shoulder, and the cosine of the shoulder's angle in the elbow's triangle.
+/// `y` above the shoulder, and the cosine of the shoulder's angle in the elbow's triangle.
 struct Reach {
     x: f64,
     y: f64,
-    r2: f64,
-    rr: f64,
     cpsi: f64,
 }
 
@@ -721,7 +720,8 @@ impl Arm {
         c: Config,
         wrist: f64,
     ) -> Result<Q, NoReach> {
-        self.inverse_wrist(&self.turned_wrist(at, psi), c, wrist)
+        let w = self.turned_parts(at, psi, c)?;
+        Ok(self.angles(&w, c, wrist))
     }
 
     /// Where the wrist centre `p` (base frame) lies for the closed forms, in the plane of
@@ -756,57 +756,31 @@ impl Arm {
                 )),
             });
         }
-        Ok(Reach { x, y, r2, rr, cpsi })
+        Ok(Reach { x, y, cpsi })
     }
 
-    /// The closed form's stages before the angles: from the wrist frame `T05 · Rz(θ6)`
-    /// (base frame), the sines and cosines of θ1, θ2 and θ2 + θ3 and the wrist's matrix
-    /// `m = R03ᵀ · R = Rz(θ4) · Ry(−θ5) · Rz(θ6)`.
+    /// The closed form's stages before the angles ([`Arm::parts_lanes`]) for the wrist
+    /// frame `T05 · Rz(θ6)` (base frame); `Err` as [`Arm::reach`] says.
     fn wrist_parts(&self, tp: &Frame, c: Config) -> Result<WristParts, NoReach> {
-        let l = &self.links;
-        let (a2, d3) = (l[1].a, l[2].d);
-        let p = tp.t;
-        let Reach { x, y, r2, rr, cpsi } = self.reach(&p, c)?;
-        // θ1 = atan2(py, px) + atan2(d3, x), and x² + d3² = r2.
-        let (c1, s1) = ((p.x * x - p.y * d3) / r2, (p.y * x + p.x * d3) / r2);
-        // θ2 = atan2(y, x) ± ψ, cos ψ = cpsi, sin ψ ≥ 0.
-        let cp = cpsi.clamp(-1.0, 1.0);
-        let sp = ((1.0 - cp) * (1.0 + cp)).sqrt();
-        let n2 = if c.up == c.right { 1.0 } else { -1.0 };
-        let (cx, sy) = (x / rr, y / rr);
-        let (c2, s2) = (cx * cp - sy * n2 * sp, sy * cp + cx * n2 * sp);
-        // θ2 + θ3 = atan2(y − a2 s2, x − a2 c2) − φ.
-        let (xx, yy) = (x - a2 * c2, y - a2 * s2);
-        let n = (xx * xx + yy * yy).sqrt();
-        let (cf, sf) = self.fast.phi;
-        let (c23, s23) = ((xx * cf + yy * sf) / n, (yy * cf - xx * sf) / n);
-        // m = R03ᵀ · R, with R03 = Rz(θ1) Rx(90°) Rz(θ2 + θ3) Rx(−90°): columns
-        // (c1 c23, s1 c23, s23), (−s1, c1, 0), (−c1 s23, −s1 s23, c23).
-        let r = &tp.r;
-        let row =
-            |a: f64, b: f64, cc: f64, j: usize| a * r[(0, j)] + b * r[(1, j)] + cc * r[(2, j)];
-        let (u0, u1, u2) = (c1 * c23, s1 * c23, s23);
-        let (w0, w1, w2) = (-c1 * s23, -s1 * s23, c23);
-        let (m00, m02) = (row(u0, u1, u2, 0), row(u0, u1, u2, 2));
-        let (m10, m12) = (row(-s1, c1, 0.0, 0), row(-s1, c1, 0.0, 2));
-        let (m20, m21, m22) = (row(w0, w1, w2, 0), row(w0, w1, w2, 1), row(w0, w1, w2, 2));
-        let sb = (m02 * m02 + m12 * m12).sqrt();
-        Ok(WristParts {
-            c1,
-            s1,
-            c2,
-            s2,
-            c23,
-            s23,
-            m00,
-            m02,
-            m10,
-            m12,
-            m20,
-            m21,
-            m22,
-            sb,
-        })
+        self.checked_parts(&lanes::Frames::of(tp), c)
+    }
+
+    /// [`Arm::wrist_parts`] for the part frame turned `psi` about the beam
+    /// ([`Arm::at_site`]).
+    fn turned_parts(&self, at: &Turned, psi: f64, c: Config) -> Result<WristParts, NoReach> {
+        self.checked_parts(&self.turned_lanes(at, &[psi.sin_cos()]), c)
+    }
+
+    fn checked_parts(&self, tp: &lanes::Frames<1>, c: Config) -> Result<WristParts, NoReach> {
+        let w = self.parts_lanes(tp, c);
+        if w.reached[0] {
+            return Ok(w.one());
+        }
+        let p = Vector3::new(tp.t[0][0], tp.t[1][0], tp.t[2][0]);
+        Err(self.reach(&p, c).err().unwrap_or(NoReach {
+            joint: 2,
+            why: Why::Words("the wrist centre is out of reach".into()),
+        }))
     }
 
     /// The closed form from the wrist frame `T05 · Rz(θ6)` (base frame).
@@ -861,7 +835,7 @@ impl Arm {
         c: Config,
         wrist: f64,
     ) -> Result<(Q, Option<Directions>), NoReach> {
-        let w = self.wrist_parts(&self.turned_wrist(at, psi), c)?;
+        let w = self.turned_parts(at, psi, c)?;
         Ok((self.angles(&w, c, wrist), Directions::of(&w, c)))
     }
 
@@ -883,42 +857,8 @@ impl Arm {
         q: &Q,
         dirs: &Directions,
     ) -> Option<(Q, Directions)> {
-        let w = self.wrist_parts(&self.turned_wrist(at, psi), c).ok()?;
-        let to = Directions::of(&w, c)?;
-        let mut out = [0.0; 6];
-        for j in 0..6 {
-            let ((x0, y0), (x1, y1)) = (dirs.0[j], to.0[j]);
-            let dot = x0 * x1 + y0 * y1;
-            let cross = x0 * y1 - y0 * x1;
-            let t = cross / dot;
-            if !(dot > 0.0 && t.abs() <= SMALL) {
-                return None;
-            }
-            let d = atan_small(t);
-            let l = &self.links[j];
-            let v = q[j] + d;
-            if !(v > l.lo + LIMIT_SLACK && v < l.hi - LIMIT_SLACK) {
-                return None;
-            }
-            out[j] = d;
-        }
-        Some((out, to))
-    }
-
-    /// The wrist frame for the part frame turned `psi` about the beam ([`Arm::at_site`]).
-    fn turned_wrist(&self, at: &Turned, psi: f64) -> Frame {
-        let (s, co) = psi.sin_cos();
-        let w = &self.fast.work;
-        let (w0, w1) = (w.r.column(0), w.r.column(1));
-        let a = Matrix3::from_columns(&[
-            w0 * co + w1 * s,
-            w1 * co - w0 * s,
-            w.r.column(2).into_owned(),
-        ]);
-        Frame {
-            r: a * at.r,
-            t: a * at.t + w.t,
-        }
+        let [one] = self.changes_lanes(at, &[psi.sin_cos()], c, q, dirs);
+        one
     }
 
     /// Damped-least-squares inverse from `seed`: joint values that put the flange at

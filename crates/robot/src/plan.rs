@@ -159,10 +159,42 @@ pub struct Located {
 /// The part frame in the working frame that puts `tip` at the focus with `axis` along
 /// +z, turned `psi` about the beam from the reference `u` (a unit vector ⟂ `axis`).
 pub fn part_in_work(tip: &Vector3<f64>, axis: &Vector3<f64>, u: &Vector3<f64>, psi: f64) -> Frame {
+    part_turned(tip, axis, u, psi.sin_cos())
+}
+
+/// [`part_in_work`] given the turn's sine and cosine.
+fn part_turned(tip: &Vector3<f64>, axis: &Vector3<f64>, u: &Vector3<f64>, sc: (f64, f64)) -> Frame {
     let v = axis.cross(u);
     let m = Matrix3::from_rows(&[u.transpose(), v.transpose(), axis.transpose()]);
-    let r = Frame::rot_z(psi) * m;
+    let (s, c) = sc;
+    let r = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0) * m;
     Frame { r, t: -(r * tip) }
+}
+
+/// The sine and cosine of `ψ + x` from those of `ψ`, for a small turn `x` (at most 8°,
+/// 0.14 rad, here: the series to x¹³ and x¹⁴ leave less than 1e-24).
+fn turned_by(sc: (f64, f64), x: f64) -> (f64, f64) {
+    let u = x * x;
+    // sin x = x (1 − u/3! + u²/5! − …), cos x = 1 − u/2! + u²/4! − …
+    let sin = x
+        * (1.0
+            - u / 6.0
+                * (1.0
+                    - u / 20.0
+                        * (1.0
+                            - u / 42.0
+                                * (1.0 - u / 72.0 * (1.0 - u / 110.0 * (1.0 - u / 156.0))))));
+    let cos = 1.0
+        - u / 2.0
+            * (1.0
+                - u / 12.0
+                    * (1.0
+                        - u / 30.0
+                            * (1.0
+                                - u / 56.0
+                                    * (1.0 - u / 90.0 * (1.0 - u / 132.0 * (1.0 - u / 182.0))))));
+    let (s, c) = sc;
+    (s * cos + c * sin, c * cos - s * sin)
 }
 
 /// The reference perpendicular of every sample: the first sample's `perpendicular`,
@@ -737,6 +769,9 @@ fn advance(
     end: usize,
 ) -> Result<bool, RobotError> {
     let from = t.out.len();
+    // The refining step from the last turn (0.5°), its sine and cosine.
+    let narrow = 0.5f64.to_radians();
+    let narrow_sc = narrow.sin_cos();
     for (i, (s, u)) in samples.iter().zip(refs).enumerate().take(end).skip(from) {
         let (prev, psi_prev) = (t.prev, t.psi_prev);
         let site = Site::new(arm, s, u);
@@ -747,9 +782,9 @@ fn advance(
         // A turn priced from the best so far (`b`): its joints as `b`'s plus the changes
         // measured from `b`'s directions without the angles where it can
         // ([`Arm::change_turned`]; not solved in full: `false`), else solved in full.
-        let side = |psi: f64, b: &Best| -> Result<Best, NoReach> {
+        let side_sc = |psi: f64, sc: (f64, f64), b: &Best| -> Result<Best, NoReach> {
             if let (Some(t), Some(d)) = (&site.closed, &b.3) {
-                if let Some((dq, to)) = arm.change_turned(t, psi, cfg, &b.2, d) {
+                if let [Some((dq, to))] = arm.changes_lanes(t, &[sc], cfg, &b.2, d) {
                     let ch: Q = std::array::from_fn(|j| (b.2[j] - prev[j]) + dq[j]);
                     if ch.iter().all(|c| c.abs() < NO_WRAP) {
                         let q: Q = std::array::from_fn(|j| b.2[j] + dq[j]);
@@ -759,19 +794,36 @@ fn advance(
             }
             eval(psi).map(|(c, q, d)| (c, psi, q, d, true))
         };
-        // The last turn, priced likewise from the last location's solution where it can
-        // (not solved in full: `false`), else solved in full.
-        let quick = match (&site.closed, &t.dirs) {
-            (Some(st), Some(d)) if i > 0 => arm
-                .change_turned(st, psi_prev, cfg, &prev, d)
-                .filter(|(dq, _)| dq.iter().all(|c| c.abs() < NO_WRAP)),
-            _ => None,
+        let side = |psi: f64, b: &Best| side_sc(psi, psi.sin_cos(), b);
+        let sc_prev = psi_prev.sin_cos();
+        // The last turn and a refining step to each side of it, priced at once from the
+        // last location's joints and directions where they can be
+        // ([`Arm::changes_lanes`]; not solved in full: `false`).
+        let priced: [Option<Best>; 3] = match (&site.closed, &t.dirs) {
+            (Some(st), Some(d)) if i > 0 => {
+                let psis = [psi_prev, psi_prev - narrow, psi_prev + narrow];
+                // The sides' sines and cosines by the angle-sum formulas (to an ulp).
+                let (s0, c0) = sc_prev;
+                let (sh, ch) = narrow_sc;
+                let sc = [
+                    (s0, c0),
+                    (s0 * ch - c0 * sh, c0 * ch + s0 * sh),
+                    (s0 * ch + c0 * sh, c0 * ch - s0 * sh),
+                    (s0, c0),
+                ];
+                let lanes = arm.changes_lanes(st, &sc, cfg, &prev, d);
+                std::array::from_fn(|k| {
+                    let (dq, to) = lanes[k]?;
+                    dq.iter().all(|c| c.abs() < NO_WRAP).then(|| {
+                        let q: Q = std::array::from_fn(|j| prev[j] + dq[j]);
+                        (dq.iter().map(|c| c * c).sum(), psis[k], q, Some(to), false)
+                    })
+                })
+            }
+            _ => [None; 3],
         };
-        let mut best: Option<Best> = None;
-        if let Some((dq, d)) = quick {
-            let q: Q = std::array::from_fn(|j| prev[j] + dq[j]);
-            best = Some((dq.iter().map(|c| c * c).sum(), psi_prev, q, Some(d), false));
-        } else if i > 0 || start.is_some() {
+        let mut best: Option<Best> = priced[0];
+        if best.is_none() && (i > 0 || start.is_some()) {
             if let Ok((c, q, d)) = eval(psi_prev) {
                 best = Some((c, psi_prev, q, d, true));
             }
@@ -802,11 +854,18 @@ fn advance(
         // from the last turn, steps 0.5° wide until the parabola's least lies within its
         // reach (one step, mostly: the cost is smooth and the turn moves little), four at
         // most.
+        // The last turn the parabola priced, and its sine and cosine.
+        let mut para = (f64::NAN, (0.0, 1.0));
         if let (Some(mut b), false) = (best, chosen) {
             let wide = i == 0 || scanned;
             let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
             for _ in 0..4 {
-                let (Ok(lo), Ok(hi)) = (side(b.1 - h, &b), side(b.1 + h, &b)) else {
+                // The sides priced with the last turn, where they were.
+                let at = |k: usize, psi: f64| match priced[k] {
+                    Some(p) if b.1 == psi_prev && h == narrow => Ok(p),
+                    _ => side(psi, &b),
+                };
+                let (Ok(lo), Ok(hi)) = (at(1, b.1 - h), at(2, b.1 + h)) else {
                     h /= 4.0;
                     continue;
                 };
@@ -823,7 +882,14 @@ fn advance(
                     let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
                     reached = raw.abs() < 4.0 * h;
                     let step = raw.clamp(-4.0 * h, 4.0 * h);
-                    if let Ok(p) = side(b.1 + step, &b) {
+                    let psi = b.1 + step;
+                    let sc = if b.1 == psi_prev {
+                        turned_by(sc_prev, step)
+                    } else {
+                        psi.sin_cos()
+                    };
+                    if let Ok(p) = side_sc(psi, sc, &b) {
+                        para = (psi, sc);
                         if cand.as_ref().is_none_or(|x| p.0 < x.0) {
                             cand = Some(p);
                         }
@@ -850,7 +916,14 @@ fn advance(
             solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?
         };
         let drift = if full { 0 } else { (t.drift + 1) % RESYNC };
-        let part = part_in_work(&s.tip, &s.axis, u, psi);
+        let sc = if psi == para.0 {
+            para.1
+        } else if psi == psi_prev {
+            sc_prev
+        } else {
+            psi.sin_cos()
+        };
+        let part = part_turned(&s.tip, &s.axis, u, sc);
         if i > 0 {
             check_speed(arm, s, &prev, &q)?;
         }
@@ -1001,6 +1074,29 @@ mod tests {
             );
         }
     }
+    /// [`turned_by`] is `sin_cos` of the sum to 1e-15 for turns up to 8° from anywhere.
+    #[test]
+    fn a_small_turn_by_the_angle_sum_is_the_sum_turned() {
+        let mut seed = 99u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..100_000 {
+            let psi = (next() - 0.5) * 40.0;
+            let x = (next() - 0.5) * 2.0 * 8f64.to_radians();
+            let (s, c) = turned_by(psi.sin_cos(), x);
+            let (s1, c1) = (psi + x).sin_cos();
+            // The sum itself is rounded: |ψ| ≤ 20 puts an ulp of it near 4e-15.
+            assert!(
+                (s - s1).abs() < 1e-14 && (c - c1).abs() < 1e-14,
+                "{psi} {x}"
+            );
+        }
+    }
+
     /// A track ending at joints `q` and turn `psi`, its one earlier location at `q0`.
     fn ended(q0: Q, q: Q, psi: f64) -> Track {
         let at = |q: Q| Located {

@@ -351,8 +351,8 @@ fn planned_joints_are_the_full_solves_at_their_poses() {
         let q = arm
             .fit_limits(&raw, &l.q)
             .unwrap_or_else(|j| panic!("J{}", j + 1));
-        for j in 0..6 {
-            most = most.max((q[j] - l.q[j]).abs());
+        for (a, b) in q.iter().zip(&l.q) {
+            most = most.max((a - b).abs());
         }
     }
     assert!(most < 1e-11, "{most:e} rad");
