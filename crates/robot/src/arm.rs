@@ -369,22 +369,6 @@ impl Directions {
     }
 }
 
-/// atan(t) for |t| ≤ [`SMALL`] by its series to t¹³ (truncation below 5e-20
-/// relative).
-fn atan_small(t: f64) -> f64 {
-    const C: [f64; 7] = [
-        1.0,
-        -1.0 / 3.0,
-        1.0 / 5.0,
-        -1.0 / 7.0,
-        1.0 / 9.0,
-        -1.0 / 11.0,
-        1.0 / 13.0,
-    ];
-    let u = t * t;
-    t * C.iter().rev().fold(0.0, |acc, c| acc * u + c)
-}
-
 /// The largest change (tangent 0.05, 2.9°) [`Arm::change_turned`] takes by its series.
 const SMALL: f64 = 0.05;
 

@@ -5,7 +5,6 @@
 //! location at once, which the compiler turns into vector instructions.
 
 use super::{Arm, Config, Directions, Frame, Turned, WristParts, LIMIT_SLACK, SINGULAR, SMALL};
-use crate::arm::atan_small;
 use crate::arm::Q;
 
 /// `N` lanes of one value.
@@ -14,6 +13,26 @@ type L<const N: usize> = [f64; N];
 /// `f` on every lane.
 fn lanes<const N: usize>(f: impl FnMut(usize) -> f64) -> L<N> {
     std::array::from_fn(f)
+}
+
+/// atan(t) lane by lane for |t| ≤ [`SMALL`] by its series to t¹³ (truncation below
+/// 5e-20 relative), by Horner's rule across the lanes.
+fn atan_small<const N: usize>(t: &L<N>) -> L<N> {
+    const C: [f64; 7] = [
+        1.0,
+        -1.0 / 3.0,
+        1.0 / 5.0,
+        -1.0 / 7.0,
+        1.0 / 9.0,
+        -1.0 / 11.0,
+        1.0 / 13.0,
+    ];
+    let u = lanes::<N>(|k| t[k] * t[k]);
+    let mut acc = [C[6]; N];
+    for c in C[..6].iter().rev() {
+        acc = lanes(|k| acc[k] * u[k] + c);
+    }
+    lanes(|k| t[k] * acc[k])
 }
 
 /// `N` frames (rotation entries `r[i][j]`, translation `t[i]`), lane by lane.
@@ -83,12 +102,13 @@ impl Arm {
         sc: &[(f64, f64); N],
     ) -> Frames<N> {
         let w = &self.fast.work;
+        let (sn, cs) = (lanes::<N>(|k| sc[k].0), lanes::<N>(|k| sc[k].1));
         // a = work · Rz(ψ): columns w0 cos ψ + w1 sin ψ, w1 cos ψ − w0 sin ψ, w2.
         let a: [[L<N>; 3]; 3] = std::array::from_fn(|i| {
             let (w0, w1, w2) = (w.r[(i, 0)], w.r[(i, 1)], w.r[(i, 2)]);
             [
-                lanes(|k| w0 * sc[k].1 + w1 * sc[k].0),
-                lanes(|k| w1 * sc[k].1 - w0 * sc[k].0),
+                lanes(|k| w0 * cs[k] + w1 * sn[k]),
+                lanes(|k| w1 * cs[k] - w0 * sn[k]),
                 [w2; N],
             ]
         });
@@ -210,28 +230,27 @@ impl Arm {
         let to = [(w.c1, w.s1), (w.c2, w.s2), d3, d4, d5, d6];
         // Each angle's change from `q`'s: atan of the two directions' cross over dot.
         let mut ok: [bool; N] = std::array::from_fn(|k| w.reached[k] && w.sb[k] >= SINGULAR);
-        let mut out = [[0.0; 6]; N];
-        for j in 0..6 {
-            let (x0, y0) = dirs.0[j];
+        let mut out = [[0.0; N]; 6];
+        for (j, (dir, lk)) in dirs.0.iter().zip(&self.links).enumerate() {
+            let (x0, y0) = *dir;
             let (x1, y1) = (&to[j].0, &to[j].1);
             let dot = lanes::<N>(|k| x0 * x1[k] + y0 * y1[k]);
             let cross = lanes::<N>(|k| x0 * y1[k] - y0 * x1[k]);
             let t = lanes::<N>(|k| cross[k] / dot[k]);
-            let d = lanes::<N>(|k| atan_small(t[k]));
-            let lk = &self.links[j];
-            for k in 0..N {
-                let v = q[j] + d[k];
-                ok[k] &= dot[k] > 0.0
+            out[j] = atan_small(&t);
+            let v = lanes::<N>(|k| q[j] + out[j][k]);
+            ok = std::array::from_fn(|k| {
+                ok[k]
+                    && dot[k] > 0.0
                     && t[k].abs() <= SMALL
-                    && v > lk.lo + LIMIT_SLACK
-                    && v < lk.hi - LIMIT_SLACK;
-                out[k][j] = d[k];
-            }
+                    && v[k] > lk.lo + LIMIT_SLACK
+                    && v[k] < lk.hi - LIMIT_SLACK
+            });
         }
         std::array::from_fn(|k| {
             ok[k].then(|| {
                 (
-                    out[k],
+                    std::array::from_fn(|j| out[j][k]),
                     Directions(std::array::from_fn(|j| (to[j].0[k], to[j].1[k]))),
                 )
             })
