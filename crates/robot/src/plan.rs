@@ -209,12 +209,16 @@ pub fn references(samples: &[Sample]) -> Vec<Vector3<f64>> {
         } else {
             let k = a_prev.cross(&s.axis);
             let c = a_prev.dot(&s.axis);
-            let turned = if k.norm() > 1e-15 {
+            let turned = if k.norm() <= 1e-15 {
+                u
+            } else if c > 0.0 {
+                // Rodrigues' rotation by the unnormalised axis k = a × b (|k| = sin, c = cos):
+                // u c + k × u + k (k·u) / (1 + c), without trigonometry.
+                u * c + k.cross(&u) + k * (k.dot(&u) / (1.0 + c))
+            } else {
                 let ang = k.norm().atan2(c);
                 let k = k.normalize();
                 u * ang.cos() + k.cross(&u) * ang.sin() + k * k.dot(&u) * (1.0 - ang.cos())
-            } else {
-                u
             };
             let t = turned - s.axis * s.axis.dot(&turned);
             if t.norm() > 1e-6 {
