@@ -182,7 +182,7 @@ pub fn write_chunk(
             "path",
             Some(i),
             dt,
-            &located[i].part,
+            &located[i].part(&samples[i]),
             laser,
             &located[i].q,
         );

@@ -31,6 +31,10 @@ pub struct Sample {
     pub tip: Vector3<f64>,
     /// Unit axis (part frame).
     pub axis: Vector3<f64>,
+    /// The reference perpendicular (unit, ⟂ `axis`) the turn about the beam is measured
+    /// from: the first location's [`perpendicular`], then carried along the path by the
+    /// smallest turn of the axis ([`carry`]).
+    pub u: Vector3<f64>,
     /// Laser on during the move to here.
     pub deposit: bool,
     /// Seconds allowed for the move to here (0 for the first).
@@ -57,13 +61,17 @@ pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotEr
     let Some(first) = path.first() else {
         return Err(RobotError::Option("the path has no points".into()));
     };
+    let axis = first.axis.normalize();
     let mut out = vec![Sample {
         tip: first.tip,
-        axis: first.axis.normalize(),
+        axis,
+        u: perpendicular(&axis),
         deposit: first.deposit,
         dt: 0.0,
         line: first.line,
     }];
+    // The last location's axis and reference perpendicular.
+    let (mut a_prev, mut u) = (axis, perpendicular(&axis));
     let mut total = 1.0;
     for w in path.windows(2) {
         let (a, b) = (&w[0], &w[1]);
@@ -104,9 +112,12 @@ pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotEr
             } else {
                 (a.tip + (b.tip - a.tip) * f, slerp(&ua, &ub, turn, f))
             };
+            u = carry(&u, &a_prev, &axis);
+            a_prev = axis;
             out.push(Sample {
                 tip,
                 axis,
+                u,
                 deposit: b.deposit,
                 dt,
                 line: b.line,
@@ -150,10 +161,17 @@ pub fn perpendicular(a: &Vector3<f64>) -> Vector3<f64> {
 pub struct Located {
     /// Joint values, radians.
     pub q: Q,
-    /// The part frame in the working frame.
-    pub part: Frame,
-    /// The chosen turn about the beam, radians (against the transported reference).
+    /// The chosen turn about the beam, radians (against the sample's reference
+    /// perpendicular [`Sample::u`]).
     pub psi: f64,
+}
+
+impl Located {
+    /// The part frame in the working frame at this location of sample `s` (the pose the
+    /// joints were solved for): [`part_in_work`] at the chosen turn.
+    pub fn part(&self, s: &Sample) -> Frame {
+        part_in_work(&s.tip, &s.axis, &s.u, self.psi)
+    }
 }
 
 /// The part frame in the working frame that puts `tip` at the focus with `axis` along
@@ -197,40 +215,29 @@ fn turned_by(sc: (f64, f64), x: f64) -> (f64, f64) {
     (s * cos + c * sin, c * cos - s * sin)
 }
 
-/// The reference perpendicular of every sample: the first sample's `perpendicular`,
-/// then carried along the path by the smallest turn of the axis.
-pub fn references(samples: &[Sample]) -> Vec<Vector3<f64>> {
-    let mut out = Vec::with_capacity(samples.len());
-    let mut u = Vector3::zeros();
-    let mut a_prev = Vector3::zeros();
-    for (i, s) in samples.iter().enumerate() {
-        u = if i == 0 {
-            perpendicular(&s.axis)
-        } else {
-            let k = a_prev.cross(&s.axis);
-            let c = a_prev.dot(&s.axis);
-            let turned = if k.norm() <= 1e-15 {
-                u
-            } else if c > 0.0 {
-                // Rodrigues' rotation by the unnormalised axis k = a × b (|k| = sin, c = cos):
-                // u c + k × u + k (k·u) / (1 + c), without trigonometry.
-                u * c + k.cross(&u) + k * (k.dot(&u) / (1.0 + c))
-            } else {
-                let ang = k.norm().atan2(c);
-                let k = k.normalize();
-                u * ang.cos() + k.cross(&u) * ang.sin() + k * k.dot(&u) * (1.0 - ang.cos())
-            };
-            let t = turned - s.axis * s.axis.dot(&turned);
-            if t.norm() > 1e-6 {
-                t.normalize()
-            } else {
-                perpendicular(&s.axis)
-            }
-        };
-        a_prev = s.axis;
-        out.push(u);
+/// The reference perpendicular `u` (of the last location, whose axis was `a_prev`)
+/// carried to a location whose axis is `axis`: turned by the smallest turn of the axis,
+/// then made perpendicular to `axis` again ([`perpendicular`] where it vanishes).
+pub fn carry(u: &Vector3<f64>, a_prev: &Vector3<f64>, axis: &Vector3<f64>) -> Vector3<f64> {
+    let k = a_prev.cross(axis);
+    let c = a_prev.dot(axis);
+    let turned = if k.norm() <= 1e-15 {
+        *u
+    } else if c > 0.0 {
+        // Rodrigues' rotation by the unnormalised axis k = a × b (|k| = sin, c = cos):
+        // u c + k × u + k (k·u) / (1 + c), without trigonometry.
+        u * c + k.cross(u) + k * (k.dot(u) / (1.0 + c))
+    } else {
+        let ang = k.norm().atan2(c);
+        let k = k.normalize();
+        u * ang.cos() + k.cross(u) * ang.sin() + k * k.dot(u) * (1.0 - ang.cos())
+    };
+    let t = turned - axis * axis.dot(&turned);
+    if t.norm() > 1e-6 {
+        t.normalize()
+    } else {
+        perpendicular(axis)
     }
-    out
 }
 
 /// Locations the look-ahead of the first turn about the beam visits (evenly spread over
@@ -240,26 +247,24 @@ pub const LOOK_AHEAD: usize = 128;
 /// Candidate turns about the beam at the first location (5° apart).
 const TURNS: u32 = 72;
 
-/// One location with the turn about the beam left free: the sample, its reference
-/// perpendicular and, for an arm with the closed form, what every solve there shares
-/// ([`Arm::at_site`]).
+/// One location with the turn about the beam left free: the sample and, for an arm with
+/// the closed form, what every solve there shares ([`Arm::at_site`]).
 struct Site<'a> {
     s: &'a Sample,
-    u: &'a Vector3<f64>,
     closed: Option<Turned>,
 }
 
 impl<'a> Site<'a> {
-    fn new(arm: &Arm, s: &'a Sample, u: &'a Vector3<f64>) -> Site<'a> {
+    fn new(arm: &Arm, s: &'a Sample) -> Site<'a> {
         let closed = arm.closed_form.then(|| {
             let m = Matrix3::from_rows(&[
-                u.transpose(),
-                s.axis.cross(u).transpose(),
+                s.u.transpose(),
+                s.axis.cross(&s.u).transpose(),
                 s.axis.transpose(),
             ]);
             arm.at_site(&m, &s.tip)
         });
-        Site { s, u, closed }
+        Site { s, closed }
     }
 }
 
@@ -277,7 +282,7 @@ fn solve_at(
     let (raw, dirs) = if let Some(t) = &site.closed {
         arm.inverse_turned_with(t, psi, cfg, prev[3])?
     } else {
-        let part = part_in_work(&site.s.tip, &site.s.axis, site.u, psi);
+        let part = part_in_work(&site.s.tip, &site.s.axis, &site.s.u, psi);
         let world = arm.head.mul(&part);
         let flange = arm.flange_for(&world);
         // The first location (or one after a blocked turn) starts from the near-PUMA
@@ -323,8 +328,8 @@ const EASY: f64 = 0.5;
 /// worst location farther from the joint limits and the elbow's stretch ([`Arm::margin`],
 /// in whole degrees, 30° or more counting as equal), then lies nearer the safe location.
 /// Turns that miss a location visited are left out.
-pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Config) -> Vec<f64> {
-    let n = samples.len().min(refs.len());
+pub fn first_turns(arm: &Arm, samples: &[Sample], cfg: Config) -> Vec<f64> {
+    let n = samples.len();
     if n == 0 {
         return Vec::new();
     }
@@ -351,7 +356,7 @@ pub fn first_turns(arm: &Arm, samples: &[Sample], refs: &[Vector3<f64>], cfg: Co
         let mut reached = true;
         'visits: for (v, &i) in visits.iter().enumerate() {
             let mut at = |i: usize, prev: &Q, fresh: bool| {
-                let site = Site::new(arm, &samples[i], &refs[i]);
+                let site = Site::new(arm, &samples[i]);
                 let (q, _) = solve_at(arm, &site, psi, cfg, prev, fresh).ok()?;
                 worst = worst.min(arm.margin(&q));
                 Some(q)
@@ -551,14 +556,13 @@ fn plan_tries(
 ) -> Result<(Vec<Located>, Vec<usize>), RobotError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
-    let refs = references(samples);
     let worst = |l: &[Located]| {
         l.iter()
             .map(|x| arm.margin(&x.q))
             .fold(f64::INFINITY, f64::min)
     };
     // Without a floor a plan is never dropped: `None` cannot come back.
-    let nearest = track(arm, samples, &refs, cfg, None, None).map(|l| {
+    let nearest = track(arm, samples, cfg, None, None).map(|l| {
         let l = l.unwrap_or_default();
         Tried {
             order: 0,
@@ -571,7 +575,7 @@ fn plan_tries(
             return nearest.map(|n| (n.located, Vec::new()));
         }
     }
-    let turns: Vec<f64> = first_turns(arm, samples, &refs, cfg)
+    let turns: Vec<f64> = first_turns(arm, samples, cfg)
         .into_iter()
         .take(TRIES)
         .collect();
@@ -581,7 +585,7 @@ fn plan_tries(
     let heads = crate::chunk::par_map(turns.len(), threads, |k| {
         let mut t = Track::new(arm, Some(turns[k]), samples.len());
         let end = MEET_AT.min(samples.len());
-        advance(arm, samples, &refs, cfg, Some(turns[k]), None, &mut t, end)
+        advance(arm, samples, cfg, Some(turns[k]), None, &mut t, end)
             .ok()
             .map(|_| t)
     });
@@ -630,7 +634,7 @@ fn plan_tries(
         }
         let start = Some(turns[k]);
         let n = samples.len();
-        let Ok(true) = advance(arm, samples, &refs, cfg, start, stop_below, &mut t, n) else {
+        let Ok(true) = advance(arm, samples, cfg, start, stop_below, &mut t, n) else {
             continue;
         };
         let tried = Tried {
@@ -734,13 +738,12 @@ impl Track {
 fn track(
     arm: &Arm,
     samples: &[Sample],
-    refs: &[Vector3<f64>],
     cfg: Config,
     start: Option<f64>,
     floor: Option<&Floor>,
 ) -> Result<Option<Vec<Located>>, RobotError> {
     let mut t = Track::new(arm, start, samples.len());
-    let done = advance(arm, samples, refs, cfg, start, floor, &mut t, samples.len())?;
+    let done = advance(arm, samples, cfg, start, floor, &mut t, samples.len())?;
     Ok(done.then_some(t.out))
 }
 
@@ -765,7 +768,6 @@ const NO_WRAP: f64 = std::f64::consts::PI - 0.5;
 fn advance(
     arm: &Arm,
     samples: &[Sample],
-    refs: &[Vector3<f64>],
     cfg: Config,
     start: Option<f64>,
     floor: Option<&Floor>,
@@ -776,9 +778,9 @@ fn advance(
     // The refining step from the last turn (0.5°), its sine and cosine.
     let narrow = 0.5f64.to_radians();
     let narrow_sc = narrow.sin_cos();
-    for (i, (s, u)) in samples.iter().zip(refs).enumerate().take(end).skip(from) {
+    for (i, s) in samples.iter().enumerate().take(end).skip(from) {
         let (prev, psi_prev) = (t.prev, t.psi_prev);
-        let site = Site::new(arm, s, u);
+        let site = Site::new(arm, s);
         let solve = |psi: f64, fresh: bool| solve_at(arm, &site, psi, cfg, &prev, fresh);
         let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
         let eval = |psi: f64| solve(psi, i == 0).map(|(q, d)| (cost(&q), q, d));
@@ -858,8 +860,6 @@ fn advance(
         // from the last turn, steps 0.5° wide until the parabola's least lies within its
         // reach (one step, mostly: the cost is smooth and the turn moves little), four at
         // most.
-        // The last turn the parabola priced, and its sine and cosine.
-        let mut para = (f64::NAN, (0.0, 1.0));
         if let (Some(mut b), false) = (best, chosen) {
             let wide = i == 0 || scanned;
             let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
@@ -893,7 +893,6 @@ fn advance(
                         psi.sin_cos()
                     };
                     if let Ok(p) = side_sc(psi, sc, &b) {
-                        para = (psi, sc);
                         if cand.as_ref().is_none_or(|x| p.0 < x.0) {
                             cand = Some(p);
                         }
@@ -920,21 +919,13 @@ fn advance(
             solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?
         };
         let drift = if full { 0 } else { (t.drift + 1) % RESYNC };
-        let sc = if psi == para.0 {
-            para.1
-        } else if psi == psi_prev {
-            sc_prev
-        } else {
-            psi.sin_cos()
-        };
-        let part = part_turned(&s.tip, &s.axis, u, sc);
         if i > 0 {
             check_speed(arm, s, &prev, &q)?;
         }
         if floor.is_some_and(|f| arm.margin(&q) < f.get()) {
             return Ok(false);
         }
-        t.out.push(Located { q, part, psi });
+        t.out.push(Located { q, psi });
         t.prev = q;
         t.psi_prev = psi;
         t.dirs = d;
@@ -1078,6 +1069,38 @@ mod tests {
             );
         }
     }
+    /// [`carry`] turns the reference by the smallest turn of the axis, as Rodrigues'
+    /// formula with the turn's angle (`atan2`, `sin`, `cos`) turns it, to 1e-14, for
+    /// turns up to 170°; the result is a unit vector perpendicular to the new axis.
+    #[test]
+    fn the_reference_is_carried_by_the_smallest_turn() {
+        let mut seed = 5u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for trial in 0..50_000 {
+            let a = Vector3::new(next(), next(), next()).normalize();
+            let kick = if trial % 2 == 0 { 0.05 } else { 3.0 };
+            let b = (a + Vector3::new(next(), next(), next()) * kick).normalize();
+            if a.dot(&b) < (170f64).to_radians().cos() {
+                continue;
+            }
+            let u = perpendicular(&a);
+            let k = a.cross(&b);
+            let ang = k.norm().atan2(a.dot(&b));
+            let k = k.normalize();
+            let turned =
+                u * ang.cos() + k.cross(&u) * ang.sin() + k * k.dot(&u) * (1.0 - ang.cos());
+            let want = (turned - b * b.dot(&turned)).normalize();
+            let got = carry(&u, &a, &b);
+            assert!((got - want).norm() < 1e-14, "{a:?} {b:?}");
+            assert!((got.norm() - 1.0).abs() < 1e-15 && got.dot(&b).abs() < 1e-15);
+        }
+    }
+
     /// [`turned_by`] is `sin_cos` of the sum to 1e-15 for turns up to 8° from anywhere.
     #[test]
     fn a_small_turn_by_the_angle_sum_is_the_sum_turned() {
@@ -1103,11 +1126,7 @@ mod tests {
 
     /// A track ending at joints `q` and turn `psi`, its one earlier location at `q0`.
     fn ended(q0: Q, q: Q, psi: f64) -> Track {
-        let at = |q: Q| Located {
-            q,
-            part: Frame::identity(),
-            psi,
-        };
+        let at = |q: Q| Located { q, psi };
         Track {
             out: vec![at(q0), at(q)],
             prev: q,

@@ -76,7 +76,7 @@ fn planned_joints_bring_every_point_to_the_focus_in_one_configuration() {
         let part = part_of(&arm, &l.q);
         assert!(part.apply(&x.tip).norm() < 1e-9, "focus");
         assert!((part.r * x.axis - Vector3::z()).norm() < 1e-9, "approach");
-        assert!((part.r - l.part.r).abs().max() < 1e-9);
+        assert!((part.r - l.part(x).r).abs().max() < 1e-9);
         assert!(arm.within_limits(&l.q).is_none());
         let co = arm.config_of(&l.q).unwrap_or_else(|| panic!("closed form"));
         assert!(co.fits(arm.config), "{co:?}");
@@ -94,6 +94,7 @@ fn sample(deposit: bool, line: usize) -> Sample {
     Sample {
         tip: Vector3::zeros(),
         axis: Vector3::z(),
+        u: Vector3::x(),
         deposit,
         dt: 0.1,
         line,
@@ -344,9 +345,9 @@ fn planned_joints_are_the_full_solves_at_their_poses() {
     let located = plan(&arm, &s, arm.config).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(located.len(), s.len());
     let mut most = 0.0f64;
-    for l in &located {
+    for (l, x) in located.iter().zip(&s) {
         let raw = arm
-            .inverse_in_work(&l.part, arm.config, l.q[3])
+            .inverse_in_work(&l.part(x), arm.config, l.q[3])
             .unwrap_or_else(|e| panic!("{}", e.why));
         let q = arm
             .fit_limits(&raw, &l.q)
@@ -489,7 +490,7 @@ fn chunk_rows_are_the_formats_numbers() {
                 "path",
                 &i.to_string(),
                 dt,
-                &located[i].part,
+                &located[i].part(&s[i]),
                 !first && s[i].deposit,
                 &located[i].q,
             );
