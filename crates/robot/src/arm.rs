@@ -819,7 +819,18 @@ impl Arm {
         c: Config,
         wrist: f64,
     ) -> Result<(Q, Option<Directions>), NoReach> {
-        let w = self.turned_parts(at, psi, c)?;
+        self.inverse_turned_sc(at, psi.sin_cos(), c, wrist)
+    }
+
+    /// [`Arm::inverse_turned_with`] given the turn's sine and cosine `(sin ψ, cos ψ)`.
+    pub fn inverse_turned_sc(
+        &self,
+        at: &Turned,
+        sc: (f64, f64),
+        c: Config,
+        wrist: f64,
+    ) -> Result<(Q, Option<Directions>), NoReach> {
+        let w = self.checked_parts(&self.turned_lanes(at, &[sc]), c)?;
         Ok((self.angles(&w, c, wrist), Directions::of(&w, c)))
     }
 

@@ -268,21 +268,21 @@ impl<'a> Site<'a> {
     }
 }
 
-/// The inverse at one location turned `psi` about the beam: joints within the limits
-/// nearest `prev`, in `cfg`. (The part frame, [`part_in_work`], is worked out for the turn
-/// chosen only.)
+/// The inverse at one location turned about the beam by the angle whose sine and cosine
+/// are `sc`: joints within the limits nearest `prev`, in `cfg`. (The part frame,
+/// [`part_in_work`], is worked out where it is written only.)
 fn solve_at(
     arm: &Arm,
     site: &Site,
-    psi: f64,
+    sc: (f64, f64),
     cfg: Config,
     prev: &Q,
     fresh: bool,
 ) -> Result<(Q, Option<Directions>), NoReach> {
     let (raw, dirs) = if let Some(t) = &site.closed {
-        arm.inverse_turned_with(t, psi, cfg, prev[3])?
+        arm.inverse_turned_sc(t, sc, cfg, prev[3])?
     } else {
-        let part = part_in_work(&site.s.tip, &site.s.axis, &site.s.u, psi);
+        let part = part_turned(&site.s.tip, &site.s.axis, &site.s.u, sc);
         let world = arm.head.mul(&part);
         let flange = arm.flange_for(&world);
         // The first location (or one after a blocked turn) starts from the near-PUMA
@@ -357,7 +357,7 @@ pub fn first_turns(arm: &Arm, samples: &[Sample], cfg: Config) -> Vec<f64> {
         'visits: for (v, &i) in visits.iter().enumerate() {
             let mut at = |i: usize, prev: &Q, fresh: bool| {
                 let site = Site::new(arm, &samples[i]);
-                let (q, _) = solve_at(arm, &site, psi, cfg, prev, fresh).ok()?;
+                let (q, _) = solve_at(arm, &site, psi.sin_cos(), cfg, prev, fresh).ok()?;
                 worst = worst.min(arm.margin(&q));
                 Some(q)
             };
@@ -520,10 +520,10 @@ fn meets(a: &Track, b: &Track) -> bool {
 /// The tries (each planned to the same location, `None` where it failed) that are kept
 /// when tracks that meet count as one plan: of tries that meet, the one whose locations so
 /// far keep farthest from trouble (the first of equals); `true` where a try is dropped.
-fn met(arm: &Arm, tries: &[Option<Track>]) -> Vec<bool> {
+fn met(tries: &[Option<Track>]) -> Vec<bool> {
     let least: Vec<f64> = tries
         .iter()
-        .map(|t| t.as_ref().map_or(f64::NEG_INFINITY, |t| t.least(arm)))
+        .map(|t| t.as_ref().map_or(f64::NEG_INFINITY, |t| t.least()))
         .collect();
     let mut dropped = vec![false; tries.len()];
     let mut kept: Vec<usize> = Vec::new();
@@ -590,7 +590,7 @@ fn plan_tries(
             .map(|_| t)
     });
     let dropped = if meet && samples.len() > MEET_AT {
-        met(arm, &heads)
+        met(&heads)
     } else {
         vec![false; heads.len()]
     };
@@ -629,7 +629,7 @@ fn plan_tries(
             continue;
         };
         let stop_below = stop_early.then_some(&floor);
-        if stop_below.is_some_and(|f| t.least(arm) < f.get()) {
+        if stop_below.is_some_and(|f| t.least() < f.get()) {
             continue;
         }
         let start = Some(turns[k]);
@@ -639,7 +639,7 @@ fn plan_tries(
         };
         let tried = Tried {
             order,
-            margin: t.least(arm),
+            margin: t.least(),
             located: t.out,
         };
         if tried.margin >= CLEAR {
@@ -703,32 +703,36 @@ struct Track {
     out: Vec<Located>,
     prev: Q,
     psi_prev: f64,
+    /// The sine and cosine of `psi_prev`.
+    sc_prev: (f64, f64),
     /// The directions of the last location's angles ([`Arm::change_turned`]).
     dirs: Option<Directions>,
     /// How many locations in a row up to the last kept joints found by changes (see
     /// [`RESYNC`]).
     drift: usize,
+    /// The least margin ([`Arm::margin`]) of the locations planned so far.
+    least: f64,
 }
 
 impl Track {
     /// Nothing planned yet: from the safe location, with the first turn `start` (`None`:
     /// the one nearest the safe location).
     fn new(arm: &Arm, start: Option<f64>, capacity: usize) -> Track {
+        let psi = start.unwrap_or(0.0);
         Track {
             out: Vec::with_capacity(capacity),
             prev: arm.safe,
-            psi_prev: start.unwrap_or(0.0),
+            psi_prev: psi,
+            sc_prev: psi.sin_cos(),
             dirs: None,
             drift: 0,
+            least: f64::INFINITY,
         }
     }
 
     /// The least margin ([`Arm::margin`]) of the locations planned so far.
-    fn least(&self, arm: &Arm) -> f64 {
-        self.out
-            .iter()
-            .map(|x| arm.margin(&x.q))
-            .fold(f64::INFINITY, f64::min)
+    fn least(&self) -> f64 {
+        self.least
     }
 }
 
@@ -747,10 +751,21 @@ fn track(
     Ok(done.then_some(t.out))
 }
 
-/// The search's best turn so far: (joint change, turn, joints, their directions, solved
-/// in full: else the joints are the last location's plus the changes by directions,
-/// [`Arm::change_turned`]).
-type Best = (f64, f64, Q, Option<Directions>, bool);
+/// A turn about the beam priced at one location.
+#[derive(Debug, Clone, Copy)]
+struct Priced {
+    /// The joint change from the last location (sum of squares, rad²).
+    cost: f64,
+    /// The turn, and its sine and cosine.
+    psi: f64,
+    sc: (f64, f64),
+    /// The joints there and their directions ([`Arm::change_turned`]).
+    q: Q,
+    dirs: Option<Directions>,
+    /// Solved in full; else the joints are another turn's plus changes measured by
+    /// directions ([`Arm::changes_lanes`]).
+    full: bool,
+}
 
 /// At most this many locations in a row (64) keep joints found by changes from the last
 /// ([`Arm::change_turned`], each within 1e-14 rad of the full solve's); the next is solved
@@ -761,9 +776,182 @@ const RESYNC: usize = 64;
 /// half turn the full solve picks the turn.
 const NO_WRAP: f64 = std::f64::consts::PI - 0.5;
 
+/// The refining step from the last turn (0.5°).
+const NARROW_DEG: f64 = 0.5;
+
+/// The refining step after a scan (2°).
+const WIDE_DEG: f64 = 2.0;
+
+/// One location's search for its turn about the beam: what every pricing there shares.
+struct Step<'a> {
+    arm: &'a Arm,
+    cfg: Config,
+    site: Site<'a>,
+    /// The location's place on the path (the first seeds a numerical inverse afresh).
+    i: usize,
+    /// The last location's joints and turn (with its sine and cosine).
+    prev: Q,
+    psi_prev: f64,
+    sc_prev: (f64, f64),
+}
+
+impl Step<'_> {
+    /// The joint change from the last location.
+    fn cost(&self, q: &Q) -> f64 {
+        q.iter()
+            .zip(&self.prev)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum()
+    }
+
+    /// Turn `psi` solved in full (`fresh`: a numerical inverse seeded afresh).
+    fn solved(&self, psi: f64, sc: (f64, f64), fresh: bool) -> Result<Priced, NoReach> {
+        let (q, dirs) = solve_at(self.arm, &self.site, sc, self.cfg, &self.prev, fresh)?;
+        Ok(Priced {
+            cost: self.cost(&q),
+            psi,
+            sc,
+            q,
+            dirs,
+            full: true,
+        })
+    }
+
+    /// Turn `psi` priced from `b`: its joints as `b`'s plus the changes measured from
+    /// `b`'s directions where it can ([`Arm::changes_lanes`]), else solved in full.
+    fn from(&self, psi: f64, sc: (f64, f64), b: &Priced) -> Result<Priced, NoReach> {
+        if let (Some(t), Some(d)) = (&self.site.closed, &b.dirs) {
+            if let [Some((dq, to))] = self.arm.changes_lanes(t, &[sc], self.cfg, &b.q, d) {
+                let ch: Q = std::array::from_fn(|j| (b.q[j] - self.prev[j]) + dq[j]);
+                if ch.iter().all(|c| c.abs() < NO_WRAP) {
+                    return Ok(Priced {
+                        cost: ch.iter().map(|c| c * c).sum(),
+                        psi,
+                        sc,
+                        q: std::array::from_fn(|j| b.q[j] + dq[j]),
+                        dirs: Some(to),
+                        full: false,
+                    });
+                }
+            }
+        }
+        self.solved(psi, sc, self.i == 0)
+    }
+
+    /// The last turn and a narrow step to each side of it, priced at once from the last
+    /// location's joints and directions `dirs` where they can be (one four-lane
+    /// [`Arm::changes_lanes`]; the sides' sines and cosines by the angle sum, to an ulp).
+    fn last_and_sides(&self, dirs: &Directions, narrow_sc: (f64, f64)) -> [Option<Priced>; 3] {
+        let Some(st) = &self.site.closed else {
+            return [None; 3];
+        };
+        let narrow = NARROW_DEG.to_radians();
+        let psis = [
+            self.psi_prev,
+            self.psi_prev - narrow,
+            self.psi_prev + narrow,
+        ];
+        let ((s0, c0), (sh, ch)) = (self.sc_prev, narrow_sc);
+        let sc = [
+            (s0, c0),
+            (s0 * ch - c0 * sh, c0 * ch + s0 * sh),
+            (s0 * ch + c0 * sh, c0 * ch - s0 * sh),
+        ];
+        let lanes = self.arm.changes_lanes(
+            st,
+            &[sc[0], sc[1], sc[2], sc[0]],
+            self.cfg,
+            &self.prev,
+            dirs,
+        );
+        std::array::from_fn(|k| {
+            let (dq, to) = lanes[k]?;
+            dq.iter().all(|c| c.abs() < NO_WRAP).then(|| Priced {
+                cost: dq.iter().map(|c| c * c).sum(),
+                psi: psis[k],
+                sc: sc[k],
+                q: std::array::from_fn(|j| self.prev[j] + dq[j]),
+                dirs: Some(to),
+                full: false,
+            })
+        })
+    }
+
+    /// The whole turn scanned (72 turns 5° apart from the last), the cheapest kept:
+    /// at the first location, or where the last turn is blocked.
+    fn scan(&self, s: &Sample) -> Result<Priced, RobotError> {
+        let mut best: Option<Priced> = None;
+        let mut fails: Vec<NoReach> = Vec::new();
+        for k in 0..TURNS {
+            let psi = self.psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
+            match self.solved(psi, psi.sin_cos(), true) {
+                Ok(p) if best.as_ref().is_none_or(|b| p.cost < b.cost) => best = Some(p),
+                Ok(_) => {}
+                Err(e) => fails.push(e),
+            }
+        }
+        best.ok_or_else(|| unreachable(self.arm, s, self.i, &fails))
+    }
+
+    /// Parabolic steps on the cost from `b`: after a scan (`wide`) four steps of
+    /// shrinking width from 2°; from the last turn, steps 0.5° wide until the parabola's
+    /// least lies within its reach (one step, mostly: the cost is smooth and the turn
+    /// moves little), four at most. `priced`: [`Step::last_and_sides`]'s, used for the
+    /// first narrow step from the last turn.
+    fn refine(&self, mut b: Priced, wide: bool, priced: &[Option<Priced>; 3]) -> Priced {
+        let narrow = NARROW_DEG.to_radians();
+        let mut h = if wide { WIDE_DEG } else { NARROW_DEG }.to_radians();
+        let side = |k: usize, psi: f64, b: &Priced, h: f64| match priced[k] {
+            Some(p) if b.psi == self.psi_prev && h == narrow => Ok(p),
+            _ => self.from(psi, psi.sin_cos(), b),
+        };
+        for _ in 0..4 {
+            let (Ok(lo), Ok(hi)) = (side(1, b.psi - h, &b, h), side(2, b.psi + h, &b, h)) else {
+                h /= 4.0;
+                continue;
+            };
+            let denom = lo.cost - 2.0 * b.cost + hi.cost;
+            let mut cand = if lo.cost < b.cost {
+                Some(lo)
+            } else if hi.cost < b.cost {
+                Some(hi)
+            } else {
+                None
+            };
+            let mut reached = false;
+            if denom > 0.0 {
+                let raw = -h * (hi.cost - lo.cost) / (2.0 * denom);
+                reached = raw.abs() < 4.0 * h;
+                let step = raw.clamp(-4.0 * h, 4.0 * h);
+                let psi = b.psi + step;
+                // The parabola's turn from its centre's sine and cosine by the series.
+                let sc = turned_by(b.sc, step);
+                if let Ok(p) = self.from(psi, sc, &b) {
+                    if cand.as_ref().is_none_or(|x| p.cost < x.cost) {
+                        cand = Some(p);
+                    }
+                }
+            }
+            if let Some(c) = cand.filter(|c| c.cost < b.cost) {
+                b = c;
+            }
+            if wide {
+                h /= 4.0;
+            } else if reached {
+                break;
+            }
+        }
+        b
+    }
+}
+
 /// Plans locations `t.out.len()..end` of the plan from first turn `start` (`None`: the
 /// one nearest the safe location), each from the last; `Ok(false)` when a location's
-/// margin falls below the floor (left unfinished: the plan cannot be taken).
+/// margin falls below the floor (left unfinished: the plan cannot be taken). At each
+/// location: the last turn and its narrow sides priced ([`Step::last_and_sides`]); where
+/// the last turn is blocked, the whole turn scanned ([`Step::scan`]); then refined
+/// ([`Step::refine`]; not at a first turn chosen for the whole path: drawing it towards
+/// the safe location would undo the choice); then kept ([`keep`]).
 #[allow(clippy::too_many_arguments)]
 fn advance(
     arm: &Arm,
@@ -775,162 +963,73 @@ fn advance(
     end: usize,
 ) -> Result<bool, RobotError> {
     let from = t.out.len();
-    // The refining step from the last turn (0.5°), its sine and cosine.
-    let narrow = 0.5f64.to_radians();
-    let narrow_sc = narrow.sin_cos();
+    let narrow_sc = NARROW_DEG.to_radians().sin_cos();
     for (i, s) in samples.iter().enumerate().take(end).skip(from) {
-        let (prev, psi_prev) = (t.prev, t.psi_prev);
-        let site = Site::new(arm, s);
-        let solve = |psi: f64, fresh: bool| solve_at(arm, &site, psi, cfg, &prev, fresh);
-        let cost = |q: &Q| -> f64 { q.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum() };
-        let eval = |psi: f64| solve(psi, i == 0).map(|(q, d)| (cost(&q), q, d));
-        let eval_fresh = |psi: f64| solve(psi, true).map(|(q, d)| (cost(&q), q, d));
-        // A turn priced from the best so far (`b`): its joints as `b`'s plus the changes
-        // measured from `b`'s directions without the angles where it can
-        // ([`Arm::change_turned`]; not solved in full: `false`), else solved in full.
-        let side_sc = |psi: f64, sc: (f64, f64), b: &Best| -> Result<Best, NoReach> {
-            if let (Some(t), Some(d)) = (&site.closed, &b.3) {
-                if let [Some((dq, to))] = arm.changes_lanes(t, &[sc], cfg, &b.2, d) {
-                    let ch: Q = std::array::from_fn(|j| (b.2[j] - prev[j]) + dq[j]);
-                    if ch.iter().all(|c| c.abs() < NO_WRAP) {
-                        let q: Q = std::array::from_fn(|j| b.2[j] + dq[j]);
-                        return Ok((ch.iter().map(|c| c * c).sum(), psi, q, Some(to), false));
-                    }
-                }
-            }
-            eval(psi).map(|(c, q, d)| (c, psi, q, d, true))
+        let step = Step {
+            arm,
+            cfg,
+            site: Site::new(arm, s),
+            i,
+            prev: t.prev,
+            psi_prev: t.psi_prev,
+            sc_prev: t.sc_prev,
         };
-        let side = |psi: f64, b: &Best| side_sc(psi, psi.sin_cos(), b);
-        let sc_prev = psi_prev.sin_cos();
-        // The last turn and a refining step to each side of it, priced at once from the
-        // last location's joints and directions where they can be
-        // ([`Arm::changes_lanes`]; not solved in full: `false`).
-        let priced: [Option<Best>; 3] = match (&site.closed, &t.dirs) {
-            (Some(st), Some(d)) if i > 0 => {
-                let psis = [psi_prev, psi_prev - narrow, psi_prev + narrow];
-                // The sides' sines and cosines by the angle-sum formulas (to an ulp).
-                let (s0, c0) = sc_prev;
-                let (sh, ch) = narrow_sc;
-                let sc = [
-                    (s0, c0),
-                    (s0 * ch - c0 * sh, c0 * ch + s0 * sh),
-                    (s0 * ch + c0 * sh, c0 * ch - s0 * sh),
-                    (s0, c0),
-                ];
-                let lanes = arm.changes_lanes(st, &sc, cfg, &prev, d);
-                std::array::from_fn(|k| {
-                    let (dq, to) = lanes[k]?;
-                    dq.iter().all(|c| c.abs() < NO_WRAP).then(|| {
-                        let q: Q = std::array::from_fn(|j| prev[j] + dq[j]);
-                        (dq.iter().map(|c| c * c).sum(), psis[k], q, Some(to), false)
-                    })
-                })
-            }
+        let priced = match &t.dirs {
+            Some(d) if i > 0 => step.last_and_sides(d, narrow_sc),
             _ => [None; 3],
         };
-        let mut best: Option<Best> = priced[0];
-        if best.is_none() && (i > 0 || start.is_some()) {
-            if let Ok((c, q, d)) = eval(psi_prev) {
-                best = Some((c, psi_prev, q, d, true));
-            }
-        }
-        let chosen = i == 0 && best.is_some();
-        let scanned = best.is_none();
-        if scanned {
-            // Scan the whole turn (the first point, or the last turn is blocked).
-            let mut fails: Vec<NoReach> = Vec::new();
-            for k in 0..TURNS {
-                let psi = psi_prev + f64::from(k) * std::f64::consts::TAU / f64::from(TURNS);
-                match eval_fresh(psi) {
-                    Ok((c, q, d)) => {
-                        if best.as_ref().is_none_or(|b| c < b.0) {
-                            best = Some((c, psi, q, d, true));
-                        }
-                    }
-                    Err(e) => fails.push(e),
-                }
-            }
-            if best.is_none() {
-                return Err(unreachable(arm, s, i, &fails));
-            }
-        }
-        // Refine: parabolic steps on the cost (not at a first turn chosen for the whole
-        // path: drawing it towards the safe location would undo the choice). After a scan
-        // (the first location, or a blocked turn) four steps of shrinking width from 2°;
-        // from the last turn, steps 0.5° wide until the parabola's least lies within its
-        // reach (one step, mostly: the cost is smooth and the turn moves little), four at
-        // most.
-        if let (Some(mut b), false) = (best, chosen) {
-            let wide = i == 0 || scanned;
-            let mut h = if wide { 2f64 } else { 0.5 }.to_radians();
-            for _ in 0..4 {
-                // The sides priced with the last turn, where they were.
-                let at = |k: usize, psi: f64| match priced[k] {
-                    Some(p) if b.1 == psi_prev && h == narrow => Ok(p),
-                    _ => side(psi, &b),
-                };
-                let (Ok(lo), Ok(hi)) = (at(1, b.1 - h), at(2, b.1 + h)) else {
-                    h /= 4.0;
-                    continue;
-                };
-                let denom = lo.0 - 2.0 * b.0 + hi.0;
-                let mut cand = if lo.0 < b.0 {
-                    Some(lo)
-                } else if hi.0 < b.0 {
-                    Some(hi)
-                } else {
-                    None
-                };
-                let mut reached = false;
-                if denom > 0.0 {
-                    let raw = -h * (hi.0 - lo.0) / (2.0 * denom);
-                    reached = raw.abs() < 4.0 * h;
-                    let step = raw.clamp(-4.0 * h, 4.0 * h);
-                    let psi = b.1 + step;
-                    let sc = if b.1 == psi_prev {
-                        turned_by(sc_prev, step)
-                    } else {
-                        psi.sin_cos()
-                    };
-                    if let Ok(p) = side_sc(psi, sc, &b) {
-                        if cand.as_ref().is_none_or(|x| p.0 < x.0) {
-                            cand = Some(p);
-                        }
-                    }
-                }
-                if let Some(c) = cand.filter(|c| c.0 < b.0) {
-                    b = c;
-                }
-                if wide {
-                    h /= 4.0;
-                } else if reached {
-                    break;
-                }
-            }
-            best = Some(b);
-        }
-        let Some((_, psi, q, d, full)) = best else {
-            return Err(unreachable(arm, s, i, &[]));
+        let last = priced[0].or_else(|| {
+            (i > 0 || start.is_some())
+                .then(|| step.solved(t.psi_prev, t.sc_prev, i == 0).ok())
+                .flatten()
+        });
+        let best = match last {
+            // A first turn chosen for the whole path is kept as it is.
+            Some(b) if i == 0 => b,
+            Some(b) => step.refine(b, false, &priced),
+            None => step.refine(step.scan(s)?, true, &priced),
         };
-        // Joints found by changes are kept, up to RESYNC locations in a row.
-        let (q, d) = if full || t.drift + 1 < RESYNC {
-            (q, d)
-        } else {
-            solve(psi, i == 0).map_err(|e| unreachable(arm, s, i, &[e]))?
-        };
-        let drift = if full { 0 } else { (t.drift + 1) % RESYNC };
-        if i > 0 {
-            check_speed(arm, s, &prev, &q)?;
-        }
-        if floor.is_some_and(|f| arm.margin(&q) < f.get()) {
+        if !keep(&step, s, best, floor, t)? {
             return Ok(false);
         }
-        t.out.push(Located { q, psi });
-        t.prev = q;
-        t.psi_prev = psi;
-        t.dirs = d;
-        t.drift = drift;
     }
+    Ok(true)
+}
+
+/// The location priced `best` appended to the track: solved in full where RESYNC
+/// locations in a row kept joints found by changes, checked for joint speed, and
+/// `Ok(false)` where its margin falls below the floor.
+fn keep(
+    step: &Step,
+    s: &Sample,
+    best: Priced,
+    floor: Option<&Floor>,
+    t: &mut Track,
+) -> Result<bool, RobotError> {
+    let (arm, i) = (step.arm, step.i);
+    // Solved in full afresh (the turn's sine and cosine too, which the angle sums and
+    // series carry from location to location otherwise).
+    let resync = !best.full && t.drift + 1 >= RESYNC;
+    let b = if resync {
+        step.solved(best.psi, best.psi.sin_cos(), i == 0)
+            .map_err(|e| unreachable(arm, s, i, &[e]))?
+    } else {
+        best
+    };
+    if i > 0 {
+        check_speed(arm, s, &step.prev, &b.q)?;
+    }
+    let margin = arm.margin(&b.q);
+    if floor.is_some_and(|f| margin < f.get()) {
+        return Ok(false);
+    }
+    t.out.push(Located { q: b.q, psi: b.psi });
+    t.least = t.least.min(margin);
+    t.prev = b.q;
+    t.psi_prev = b.psi;
+    t.sc_prev = b.sc;
+    t.dirs = b.dirs;
+    t.drift = if best.full || resync { 0 } else { t.drift + 1 };
     Ok(true)
 }
 
@@ -1127,12 +1226,17 @@ mod tests {
     /// A track ending at joints `q` and turn `psi`, its one earlier location at `q0`.
     fn ended(q0: Q, q: Q, psi: f64) -> Track {
         let at = |q: Q| Located { q, psi };
+        let Some(arm) = Arm::builtin("puma-lens") else {
+            panic!("built-in");
+        };
         Track {
             out: vec![at(q0), at(q)],
             prev: q,
             psi_prev: psi,
+            sc_prev: psi.sin_cos(),
             dirs: None,
             drift: 0,
+            least: arm.margin(&q0).min(arm.margin(&q)),
         }
     }
 
@@ -1141,9 +1245,6 @@ mod tests {
     /// kept, the first of equals; tracks farther apart and failed tries are left alone.
     #[test]
     fn tracks_that_meet_keep_the_one_farthest_from_trouble() {
-        let Some(arm) = Arm::builtin("puma-lens") else {
-            panic!("built-in");
-        };
         let q = [0.1, 0.5, -0.5, 0.2, 0.4, 0.3];
         // J1 moved (far from its limits: the margins stay q's).
         let (mut near, mut far) = (q, q);
@@ -1163,9 +1264,9 @@ mod tests {
         ];
         // 0 and 2 meet: 2 kept (0 nearer trouble); 3's turn is too far, 4's joints; 5
         // meets 2 and keeps as far from trouble: the first of equals (2) kept.
-        assert_eq!(met(&arm, &tries), [true, false, false, false, false, true]);
+        assert_eq!(met(&tries), [true, false, false, false, false, true]);
         // Equal so far: the first kept.
         let tries = [Some(ended(q, q, 1.0)), Some(ended(q, near, 1.0))];
-        assert_eq!(met(&arm, &tries), [false, true]);
+        assert_eq!(met(&tries), [false, true]);
     }
 }
