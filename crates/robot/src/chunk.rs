@@ -400,14 +400,7 @@ fn verify_chunk(
     }
     let mut prev: Option<Q> = None;
     for (r, &(line, text)) in rows.iter().enumerate() {
-        let mut fields = [""; 17];
-        let mut count = 0;
-        for w in text.split_whitespace() {
-            if let Some(x) = fields.get_mut(count) {
-                *x = w;
-            }
-            count += 1;
-        }
+        let (fields, count) = fields_of(text);
         if count != 17 {
             return Err(verr(
                 f,
@@ -565,6 +558,36 @@ fn verify_chunk(
         prev = Some(q);
     }
     Ok(rep)
+}
+
+/// The first 17 fields of a row split at ASCII whitespace (the format's separators), and
+/// how many fields the row has: one pass over the bytes. A field is a run of bytes
+/// other than ASCII whitespace; cut at ASCII bytes, each is whole UTF-8 text.
+fn fields_of(text: &str) -> ([&str; 17], usize) {
+    let mut fields = [""; 17];
+    let mut count = 0;
+    let mut start = None;
+    let b = text.as_bytes();
+    for (i, c) in b.iter().enumerate() {
+        match (c.is_ascii_whitespace(), start) {
+            (true, Some(s)) => {
+                if let Some(x) = fields.get_mut(count) {
+                    *x = text.get(s..i).unwrap_or_default();
+                }
+                count += 1;
+                start = None;
+            }
+            (false, None) => start = Some(i),
+            _ => {}
+        }
+    }
+    if let Some(s) = start {
+        if let Some(x) = fields.get_mut(count) {
+            *x = text.get(s..).unwrap_or_default();
+        }
+        count += 1;
+    }
+    (fields, count)
 }
 
 /// `field` read as `str::parse::<f64>` reads it (`None` where it fails): a plain decimal
