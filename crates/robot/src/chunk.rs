@@ -112,36 +112,146 @@ fn push_num(out: &mut Vec<u8>, value: f64, decimals: usize) {
     lampost_gcode::push_fixed(out, value, decimals);
 }
 
+/// A location row's values as written: the pose's position and ZYZ angles in degrees,
+/// the joints in degrees.
+struct RowValues {
+    n: usize,
+    kind: &'static str,
+    index: Option<usize>,
+    dt: f64,
+    pos: [f64; 3],
+    angles: [f64; 3],
+    laser: bool,
+    joints: [f64; 6],
+}
+
+impl RowValues {
+    fn new(
+        n: usize,
+        kind: &'static str,
+        index: Option<usize>,
+        dt: f64,
+        part: &Frame,
+        laser: bool,
+        q: &Q,
+    ) -> RowValues {
+        RowValues {
+            n,
+            kind,
+            index,
+            dt,
+            pos: [part.t.x, part.t.y, part.t.z],
+            angles: zyz(&part.r).map(f64::to_degrees),
+            laser,
+            joints: q.map(f64::to_degrees),
+        }
+    }
+}
+
+/// The row's text number by number through `lampost_gcode::push_fixed` and `write!`:
+/// the reference [`compose_row`] is held to, and the writer of rows it cannot compose.
+fn row_reference(out: &mut Vec<u8>, v: &RowValues) {
+    use std::io::Write;
+    // Writing to a `Vec` cannot fail.
+    let _ = match v.index {
+        Some(i) => write!(out, "{} {} {i}", v.n, v.kind),
+        None => write!(out, "{} {} -", v.n, v.kind),
+    };
+    push_num(out, v.dt, 6);
+    for x in v.pos {
+        push_num(out, x, 6);
+    }
+    for x in v.angles {
+        push_num(out, x, 7);
+    }
+    out.extend_from_slice(if v.laser { b" 1" } else { b" 0" });
+    for x in v.joints {
+        push_num(out, x, 7);
+    }
+    out.push(b'\n');
+}
+
+/// The longest row [`compose_row`] writes: two whole numbers of at most 20 digits, a
+/// kind of at most 4 letters, 13 numbers of at most 17 bytes and 17 separators.
+const ROW_MAX: usize = 2 * 20 + 4 + 13 * 17 + 17 + 2;
+
+/// A row composed on the stack ([`compose_row`]), its length kept.
+struct Composed {
+    buf: [u8; ROW_MAX + 32],
+    len: usize,
+}
+
+impl Composed {
+    fn room(&mut self) -> Option<&mut [u8; 32]> {
+        self.buf.get_mut(self.len..)?.first_chunk_mut()
+    }
+
+    fn bytes(&mut self, b: &[u8]) -> Option<()> {
+        self.room()?.get_mut(..b.len())?.copy_from_slice(b);
+        self.len += b.len();
+        Some(())
+    }
+
+    fn whole(&mut self, w: usize) -> Option<()> {
+        let w = u64::try_from(w).ok()?;
+        self.len += lampost_gcode::whole_into(self.room()?, w);
+        Some(())
+    }
+
+    fn fixed<const D: usize>(&mut self, x: f64) -> Option<()> {
+        self.bytes(b" ")?;
+        self.len += lampost_gcode::fixed_into::<D>(self.room()?, x)?;
+        Some(())
+    }
+}
+
+/// The row's text composed on the stack by `lampost_gcode::fixed_into` (the same text
+/// as [`row_reference`], property-tested) and appended once; `None` (nothing appended)
+/// where a value lies beyond its fast range.
+fn compose_row(out: &mut Vec<u8>, v: &RowValues) -> Option<()> {
+    let mut c = Composed {
+        buf: [b' '; ROW_MAX + 32],
+        len: 0,
+    };
+    c.whole(v.n)?;
+    c.bytes(b" ")?;
+    c.bytes(v.kind.as_bytes())?;
+    c.bytes(b" ")?;
+    match v.index {
+        Some(i) => c.whole(i)?,
+        None => c.bytes(b"-")?,
+    }
+    c.fixed::<6>(v.dt)?;
+    for x in v.pos {
+        c.fixed::<6>(x)?;
+    }
+    for x in v.angles {
+        c.fixed::<7>(x)?;
+    }
+    c.bytes(if v.laser { b" 1" } else { b" 0" })?;
+    for x in v.joints {
+        c.fixed::<7>(x)?;
+    }
+    c.bytes(b"\n")?;
+    out.extend_from_slice(c.buf.get(..c.len)?);
+    Some(())
+}
+
 #[allow(clippy::too_many_arguments)]
 fn row(
     out: &mut Vec<u8>,
     n: usize,
-    kind: &str,
+    kind: &'static str,
     index: Option<usize>,
     dt: f64,
     part: &Frame,
     laser: bool,
     q: &Q,
 ) {
-    use std::io::Write;
-    let e = zyz(&part.r);
-    // Writing to a `Vec` cannot fail.
-    let _ = match index {
-        Some(i) => write!(out, "{n} {kind} {i}"),
-        None => write!(out, "{n} {kind} -"),
-    };
-    push_num(out, dt, 6);
-    for v in [part.t.x, part.t.y, part.t.z] {
-        push_num(out, v, 6);
+    let v = RowValues::new(n, kind, index, dt, part, laser, q);
+    if compose_row(out, &v).is_none() {
+        row_reference(out, &v);
     }
-    for v in e {
-        push_num(out, v.to_degrees(), 7);
-    }
-    out.extend_from_slice(if laser { b" 1" } else { b" 0" });
-    for v in q {
-        push_num(out, v.to_degrees(), 7);
-    }
-    out.push(b'\n');
 }
 
 /// The part frame in the working frame for joint values `q`.
@@ -660,6 +770,58 @@ fn gap(samples: &[Sample], a: usize, b: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    fn value() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            -1e3..1e3f64,
+            -400.0..400.0f64,
+            -1e-6..1e-6f64,
+            -1e10..1e10f64,
+            Just(-0.0),
+            Just(0.0),
+            Just(1e8),
+            Just(-99_999_999.999_999_95),
+            Just(1e9 - 0.000_000_4),
+            Just(f64::NAN),
+            Just(f64::INFINITY),
+            Just(1e300),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(5_000))]
+        /// The row composed on the stack is the reference's text, or nothing where it
+        /// leaves the row to the reference (a value beyond the fast range).
+        #[test]
+        fn composed_rows_are_the_references_text(
+            n in prop_oneof![1usize..5000, any::<usize>()],
+            index in prop::option::of(prop_oneof![0usize..400_000, any::<usize>()]),
+            path in any::<bool>(),
+            laser in any::<bool>(),
+            dt in value(),
+            pos in prop::array::uniform3(value()),
+            angles in prop::array::uniform3(value()),
+            joints in prop::array::uniform6(value()),
+        ) {
+            let v = RowValues { n, kind: if path { "path" } else { "safe" }, index, dt, pos, angles, laser, joints };
+            let mut want = b"prefix".to_vec();
+            row_reference(&mut want, &v);
+            let mut got = b"prefix".to_vec();
+            let fast = [dt].iter().chain(&pos).all(|x| x.abs() < 1e9)
+                && angles.iter().chain(&joints).all(|x| x.abs() < 1e8);
+            match compose_row(&mut got, &v) {
+                Some(()) => {
+                    prop_assert!(fast);
+                    prop_assert_eq!(String::from_utf8_lossy(&got), String::from_utf8_lossy(&want));
+                }
+                None => {
+                    prop_assert!(!fast);
+                    prop_assert_eq!(&got, b"prefix");
+                }
+            }
+        }
+    }
 
     #[test]
     fn decimal_fields_are_read_as_to_string_writes_them() {
