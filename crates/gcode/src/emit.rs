@@ -1358,8 +1358,8 @@ impl<W: Write> Emitter<W> {
 #[cfg(test)]
 mod tests {
     use super::{
-        fixed, out_of_range, push_fixed, push_scaled, round_half_away, Counter, Dialect,
-        EmitOptions, Emitter, FAST_MAX,
+        fixed, fixed_into, out_of_range, push_fixed, push_scaled, round_half_away, whole_into,
+        Counter, Dialect, EmitOptions, Emitter, FAST_MAX,
     };
     use crate::Units;
     use proptest::prelude::*;
