@@ -263,8 +263,8 @@ fn push_scaled<const D: usize>(out: &mut Vec<u8>, n: i64) {
 /// which is left to it. The same text as [`push_fixed`] (property-tested).
 #[inline]
 pub fn fixed_into<const D: usize>(dst: &mut [u8; 32], value: f64) -> Option<usize> {
-    // NaN fails the comparison.
-    if !(value.abs() < FAST_MAX[D]) {
+    // NaN and the infinities fail the test.
+    if !value.is_finite() || value.abs() >= FAST_MAX[D] {
         return None;
     }
     Some(scaled_text::<D>(
