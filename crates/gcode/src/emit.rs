@@ -257,6 +257,28 @@ fn push_scaled<const D: usize>(out: &mut Vec<u8>, n: i64) {
     out.truncate(at + len);
 }
 
+/// [`push_fixed`]'s text for `D` places (1 ≤ `D` ≤ 8) written at the start of `dst`,
+/// for composing a line on the stack: its length (at most 17 bytes), or `None` for a
+/// value [`push_fixed`] does not round once (not finite, or `|value| ≥ 10^15 / 10^D`),
+/// which is left to it. The same text as [`push_fixed`] (property-tested).
+#[inline]
+pub fn fixed_into<const D: usize>(dst: &mut [u8; 32], value: f64) -> Option<usize> {
+    // NaN and the infinities fail the test.
+    if !value.is_finite() || value.abs() >= FAST_MAX[D] {
+        return None;
+    }
+    Some(scaled_text::<D>(
+        dst,
+        round_half_away(value * POW[D]) as i64,
+    ))
+}
+
+/// `w` in decimal (`w.to_string()`'s text) written at the start of `dst`: its length.
+#[inline]
+pub fn whole_into(dst: &mut [u8; 32], w: u64) -> usize {
+    whole_text(dst, 0, w)
+}
+
 /// [`push_scaled`]'s text written at the start of `dst`, left to right (the digit
 /// count worked out first); returns its length (at most 1 + 19 + 1 + `D` ≤ 29).
 #[inline(always)]
@@ -1336,8 +1358,8 @@ impl<W: Write> Emitter<W> {
 #[cfg(test)]
 mod tests {
     use super::{
-        fixed, out_of_range, push_fixed, push_scaled, round_half_away, Counter, Dialect,
-        EmitOptions, Emitter, FAST_MAX,
+        fixed, fixed_into, out_of_range, push_fixed, push_scaled, round_half_away, whole_into,
+        Counter, Dialect, EmitOptions, Emitter, FAST_MAX,
     };
     use crate::Units;
     use proptest::prelude::*;
@@ -1549,6 +1571,35 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(20_000))]
+        /// `fixed_into` writes `push_fixed`'s text, or leaves the value to it exactly
+        /// where `push_fixed` does not round once; `whole_into` writes `to_string`'s.
+        #[test]
+        fn fixed_into_writes_push_fixeds_text(
+            v in prop_oneof![-1e3f64..1e3, -1.0f64..1.0, -1e-7f64..1e-7, -1e9f64..1e9, -1e16f64..1e16,
+                Just(-0.0), Just(0.0), Just(f64::NAN), Just(f64::INFINITY), Just(-0.000_000_05), Just(1e8 - 0.000_000_05)],
+            w in prop_oneof![0u64..1000, any::<u64>()],
+        ) {
+            fn one<const D: usize>(v: f64) -> Result<(), TestCaseError> {
+                let mut want = Vec::new();
+                push_fixed(&mut want, v, D);
+                let mut dst = [0u8; 32];
+                let fast = v.is_finite() && v.abs() < 1e15 / 10f64.powi(D as i32);
+                match fixed_into::<D>(&mut dst, v) {
+                    Some(n) => {
+                        prop_assert!(fast);
+                        prop_assert_eq!(String::from_utf8_lossy(&dst[..n]), String::from_utf8_lossy(&want), "{} at {} places", v, D);
+                    }
+                    None => prop_assert!(!fast, "{} at {} places", v, D),
+                }
+                Ok(())
+            }
+            one::<1>(v)?; one::<2>(v)?; one::<3>(v)?; one::<4>(v)?;
+            one::<5>(v)?; one::<6>(v)?; one::<7>(v)?; one::<8>(v)?;
+            let mut dst = [0u8; 32];
+            let n = whole_into(&mut dst, w);
+            prop_assert_eq!(String::from_utf8_lossy(&dst[..n]), w.to_string());
+        }
+
         #[test]
         fn rounding_is_bit_identical(x in proptest::num::f64::NORMAL | proptest::num::f64::SUBNORMAL | proptest::num::f64::ZERO, scale in -20i32..20) {
             let x = x * 10f64.powi(scale);

@@ -42,7 +42,10 @@ mod stream;
 
 pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Text, Word};
 pub use diag::{Diagnostic, ErrorKind, Severity, Snippet};
-pub use emit::{fixed, out_of_range, push_fixed, round_half_away, Dialect, EmitOptions, Emitter};
+pub use emit::{
+    fixed, fixed_into, out_of_range, push_fixed, round_half_away, whole_into, Dialect, EmitOptions,
+    Emitter,
+};
 pub use expr::{sets_feed, Params};
 pub use flavor::{detect, Flavor, Resolved, DETECT_BYTES};
 pub use foreign::{foreign_language, Foreign};

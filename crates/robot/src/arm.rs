@@ -116,6 +116,20 @@ impl Link {
             t: Vector3::new(self.a * ct, self.a * st, self.d),
         }
     }
+
+    /// `f · A_i(q)` multiplied out for the DH form (the columns of `f` turned by θ and
+    /// twisted by α; no product with `A_i`'s zeros and ones): [`Link::transform`]'s
+    /// product within rounding (proptest).
+    pub fn after(&self, f: &Frame, q: f64) -> Frame {
+        let (st, ct) = (q + self.offset).sin_cos();
+        let (r0, r1, r2) = (f.r.column(0), f.r.column(1), f.r.column(2));
+        let u = r0 * ct + r1 * st;
+        let v = r1 * ct - r0 * st;
+        Frame {
+            r: Matrix3::from_columns(&[u, v * self.ca + r2 * self.sa, r2 * self.ca - v * self.sa]),
+            t: f.t + u * self.a + r2 * self.d,
+        }
+    }
 }
 
 /// The wrist centre in the upper arm's plane ([`Arm::reach`]): its signed distance `x`
@@ -910,6 +924,16 @@ impl Arm {
         out
     }
 
+    /// [`Arm::chain`] by [`Link::after`], the DH product multiplied out: the same frames
+    /// within rounding (proptest), for verification.
+    pub fn chain_dh(&self, q: &Q) -> [Frame; 7] {
+        let mut out = [Frame::identity(); 7];
+        for i in 0..6 {
+            out[i + 1] = self.links[i].after(&out[i], q[i]);
+        }
+        out
+    }
+
     /// The configuration of joint values (closed-form arms only).
     pub fn config_of(&self, q: &Q) -> Option<ConfigOf> {
         if !self.closed_form {
@@ -918,7 +942,8 @@ impl Arm {
         self.config_of_chain(q, &self.chain(q))
     }
 
-    /// [`Arm::config_of`] given `frames = self.chain(q)` (verification has them).
+    /// [`Arm::config_of`] given `frames = self.chain(q)` or [`Arm::chain_dh`]
+    /// (verification has them; θ1's cosine and sine are read from `frames[1]`).
     pub fn config_of_chain(&self, q: &Q, frames: &[Frame; 7]) -> Option<ConfigOf> {
         if !self.closed_form {
             return None;
@@ -927,7 +952,8 @@ impl Arm {
         let th: [f64; 6] = std::array::from_fn(|k| q[k] + l[k].offset);
         // The wrist centre: o3 + d4 · z3.
         let p = frames[3].t + frames[3].r.column(2) * l[3].d;
-        let (s1, c1) = th[0].sin_cos();
+        // `frames[1]` is A_1: its first column (cos θ1, sin θ1, 0).
+        let (s1, c1) = (frames[1].r[(1, 0)], frames[1].r[(0, 0)]);
         let x = p.x * c1 + p.y * s1;
         let y = p.z - l[0].d;
         let eps = 1e-9 * self.scale.max(1.0);
@@ -973,8 +999,10 @@ pub fn rot_vec(r: &Matrix3<f64>) -> Vector3<f64> {
     }
 }
 
-/// The angle between two rotations, radians.
-pub fn rot_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+/// The angle between two rotations, radians (the reference of verification's chord
+/// test).
+#[cfg(test)]
+pub(crate) fn rot_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
     rot_vec(&(a * b.transpose())).norm()
 }
 

@@ -22,7 +22,7 @@ use std::ops::Range;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::arm::{rot_angle, Arm, Config, Frame, Q};
+use crate::arm::{Arm, Config, Frame, Q};
 use crate::error::RobotError;
 use crate::plan::{check_speed, Located, Sample};
 
@@ -97,12 +97,46 @@ pub fn zyz(r: &Matrix3<f64>) -> [f64; 3] {
     }
 }
 
-/// The rotation of ZYZ Euler angles (radians).
+/// The rotation of ZYZ Euler angles (radians), `Rz(a) · Ry(b) · Rz(c)` multiplied out
+/// (the product's entries without its multiplications by 0 and 1; against the product in
+/// the tests).
 pub fn from_zyz(e: [f64; 3]) -> Matrix3<f64> {
+    let (sa, ca) = e[0].sin_cos();
     let (sb, cb) = e[1].sin_cos();
-    let ry = Matrix3::new(cb, 0.0, sb, 0.0, 1.0, 0.0, -sb, 0.0, cb);
-    Frame::rot_z(e[0]) * ry * Frame::rot_z(e[2])
+    let (sc, cc) = e[2].sin_cos();
+    let (cacb, sacb) = (ca * cb, sa * cb);
+    Matrix3::new(
+        cacb * cc - sa * sc,
+        -cacb * sc - sa * cc,
+        ca * sb,
+        sacb * cc + ca * sc,
+        -sacb * sc + ca * cc,
+        sa * sb,
+        -sb * cc,
+        sb * sc,
+        cb,
+    )
 }
+
+/// The Frobenius distance `‖a − b‖` of two rotations, which is `2√2 · sin(θ/2)` for the
+/// angle θ between them: an angle test without a product or an arctangent.
+fn rot_chord(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    (a - b).norm()
+}
+
+/// The angle between two rotations from their [`rot_chord`], radians.
+fn chord_angle(chord: f64) -> f64 {
+    2.0 * (chord / (2.0 * std::f64::consts::SQRT_2)).min(1.0).asin()
+}
+
+/// The chord of [`ROT_TOL`]: rotations farther apart than this are more than
+/// [`ROT_TOL`] apart.
+fn tol_chord() -> f64 {
+    2.0 * std::f64::consts::SQRT_2 * (ROT_TOL / 2.0).sin()
+}
+
+/// Largest angle between the written pose's rotation and the joints', radians.
+const ROT_TOL: f64 = 1e-6;
 
 /// ` value` to `decimals` places by the G-code emitter's fixed-point writer (one rounding
 /// of an integer, `-0` written `0`; `lampost_gcode::fixed`'s text, appended without
@@ -112,42 +146,156 @@ fn push_num(out: &mut Vec<u8>, value: f64, decimals: usize) {
     lampost_gcode::push_fixed(out, value, decimals);
 }
 
+/// A location row's values as written: the pose's position and ZYZ angles in degrees,
+/// the joints in degrees.
+struct RowValues {
+    n: usize,
+    kind: &'static str,
+    index: Option<usize>,
+    dt: f64,
+    pos: [f64; 3],
+    angles: [f64; 3],
+    laser: bool,
+    joints: [f64; 6],
+}
+
+impl RowValues {
+    fn new(
+        n: usize,
+        kind: &'static str,
+        index: Option<usize>,
+        dt: f64,
+        part: &Frame,
+        laser: bool,
+        q: &Q,
+    ) -> RowValues {
+        RowValues {
+            n,
+            kind,
+            index,
+            dt,
+            pos: [part.t.x, part.t.y, part.t.z],
+            angles: zyz(&part.r).map(f64::to_degrees),
+            laser,
+            joints: q.map(f64::to_degrees),
+        }
+    }
+}
+
+/// The row's text number by number through `lampost_gcode::push_fixed` and `write!`:
+/// the reference [`compose_row`] is held to, and the writer of rows it cannot compose.
+fn row_reference(out: &mut Vec<u8>, v: &RowValues) {
+    use std::io::Write;
+    // Writing to a `Vec` cannot fail.
+    let _ = match v.index {
+        Some(i) => write!(out, "{} {} {i}", v.n, v.kind),
+        None => write!(out, "{} {} -", v.n, v.kind),
+    };
+    push_num(out, v.dt, 6);
+    for x in v.pos {
+        push_num(out, x, 6);
+    }
+    for x in v.angles {
+        push_num(out, x, 7);
+    }
+    out.extend_from_slice(if v.laser { b" 1" } else { b" 0" });
+    for x in v.joints {
+        push_num(out, x, 7);
+    }
+    out.push(b'\n');
+}
+
+/// The longest row [`compose_row`] writes: two whole numbers of at most 20 digits, a
+/// kind of at most 4 letters, 13 numbers of at most 17 bytes and 17 separators.
+const ROW_MAX: usize = 2 * 20 + 4 + 13 * 17 + 17 + 2;
+
+/// A row composed on the stack ([`compose_row`]), its length kept.
+struct Composed {
+    buf: [u8; ROW_MAX + 32],
+    len: usize,
+}
+
+impl Composed {
+    fn room(&mut self) -> Option<&mut [u8; 32]> {
+        self.buf.get_mut(self.len..)?.first_chunk_mut()
+    }
+
+    fn bytes(&mut self, b: &[u8]) -> Option<()> {
+        self.room()?.get_mut(..b.len())?.copy_from_slice(b);
+        self.len += b.len();
+        Some(())
+    }
+
+    fn whole(&mut self, w: usize) -> Option<()> {
+        let w = u64::try_from(w).ok()?;
+        self.len += lampost_gcode::whole_into(self.room()?, w);
+        Some(())
+    }
+
+    fn fixed<const D: usize>(&mut self, x: f64) -> Option<()> {
+        self.bytes(b" ")?;
+        self.len += lampost_gcode::fixed_into::<D>(self.room()?, x)?;
+        Some(())
+    }
+}
+
+/// The row's text composed on the stack by `lampost_gcode::fixed_into` (the same text
+/// as [`row_reference`], property-tested) and appended once; `None` (nothing appended)
+/// where a value lies beyond its fast range.
+fn compose_row(out: &mut Vec<u8>, v: &RowValues) -> Option<()> {
+    let mut c = Composed {
+        buf: [b' '; ROW_MAX + 32],
+        len: 0,
+    };
+    c.whole(v.n)?;
+    c.bytes(b" ")?;
+    c.bytes(v.kind.as_bytes())?;
+    c.bytes(b" ")?;
+    match v.index {
+        Some(i) => c.whole(i)?,
+        None => c.bytes(b"-")?,
+    }
+    c.fixed::<6>(v.dt)?;
+    for x in v.pos {
+        c.fixed::<6>(x)?;
+    }
+    for x in v.angles {
+        c.fixed::<7>(x)?;
+    }
+    c.bytes(if v.laser { b" 1" } else { b" 0" })?;
+    for x in v.joints {
+        c.fixed::<7>(x)?;
+    }
+    c.bytes(b"\n")?;
+    out.extend_from_slice(c.buf.get(..c.len)?);
+    Some(())
+}
+
 #[allow(clippy::too_many_arguments)]
 fn row(
     out: &mut Vec<u8>,
     n: usize,
-    kind: &str,
+    kind: &'static str,
     index: Option<usize>,
     dt: f64,
     part: &Frame,
     laser: bool,
     q: &Q,
 ) {
-    use std::io::Write;
-    let e = zyz(&part.r);
-    // Writing to a `Vec` cannot fail.
-    let _ = match index {
-        Some(i) => write!(out, "{n} {kind} {i}"),
-        None => write!(out, "{n} {kind} -"),
-    };
-    push_num(out, dt, 6);
-    for v in [part.t.x, part.t.y, part.t.z] {
-        push_num(out, v, 6);
+    let v = RowValues::new(n, kind, index, dt, part, laser, q);
+    if compose_row(out, &v).is_none() {
+        row_reference(out, &v);
     }
-    for v in e {
-        push_num(out, v.to_degrees(), 7);
-    }
-    out.extend_from_slice(if laser { b" 1" } else { b" 0" });
-    for v in q {
-        push_num(out, v.to_degrees(), 7);
-    }
-    out.push(b'\n');
 }
 
 /// The part frame in the working frame for joint values `q`.
 pub fn part_of(arm: &Arm, q: &Q) -> Frame {
     arm.head.inverse().mul(&arm.part(q))
 }
+
+/// Room reserved a row in a chunk's text: the plate's rows average 161 bytes (a path
+/// row of the full-size plate at `--layer 2`), so the text is not copied as it grows.
+const ROW_BYTES: usize = 176;
 
 /// One chunk's location file.
 pub fn write_chunk(
@@ -168,7 +316,7 @@ pub fn write_chunk(
         arm.name,
         cfg.letters()
     );
-    let mut s = Vec::with_capacity(head.len() + (range.len() + 2) * 150);
+    let mut s = Vec::with_capacity(head.len() + (range.len() + 2) * ROW_BYTES);
     s.extend_from_slice(head.as_bytes());
     let safe = part_of(arm, &arm.safe);
     row(&mut s, 1, "safe", None, 0.0, &safe, false, &arm.safe);
@@ -362,7 +510,10 @@ fn verify_chunk(
     let Some(c) = chunks.get(k) else {
         return Ok(rep);
     };
-    let head_inv = arm.head.inverse();
+    // The working frame's pose of the base, once: a location's part frame is this times
+    // the flange times the holder.
+    let head_base = arm.head.inverse().mul(&arm.base);
+    let chord_tol = tol_chord();
     let f = c.name.as_str();
     let mut header = Vec::new();
     let mut rows: Vec<(usize, &str)> = Vec::new();
@@ -400,14 +551,7 @@ fn verify_chunk(
     }
     let mut prev: Option<Q> = None;
     for (r, &(line, text)) in rows.iter().enumerate() {
-        let mut fields = [""; 17];
-        let mut count = 0;
-        for w in text.split_whitespace() {
-            if let Some(x) = fields.get_mut(count) {
-                *x = w;
-            }
-            count += 1;
-        }
+        let (fields, plain, count) = read_row(text);
         if count != 17 {
             return Err(verr(
                 f,
@@ -416,7 +560,8 @@ fn verify_chunk(
             ));
         }
         let num = |k: usize| -> Result<f64, RobotError> {
-            parse_number(fields[k])
+            plain[k]
+                .or_else(|| parse_number(fields[k]))
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| verr(f, line, format!("`{}` is not a finite number", fields[k])))
         };
@@ -443,16 +588,16 @@ fn verify_chunk(
             ));
         }
         // One chain for the pose and the configuration.
-        let frames = arm.chain(&q);
-        let part = head_inv.mul(&arm.base.mul(&frames[6]).mul(&arm.holder));
+        let frames = arm.chain_dh(&q);
+        let part = head_base.mul(&frames[6]).mul(&arm.holder);
         let pos = Vector3::new(num(4)?, num(5)?, num(6)?);
         let rot = from_zyz([num(7)?, num(8)?, num(9)?].map(f64::to_radians));
         let dpos = (pos - part.t).norm();
-        let drot = rot_angle(&rot, &part.r);
-        if dpos > 1e-4 || drot > 1e-6 {
+        let chord = rot_chord(&rot, &part.r);
+        if dpos > 1e-4 || chord > chord_tol {
             return Err(verr(f, line, format!(
                 "the written pose is not where the joints put the part ({dpos:.2e} away, {:.2e}° turned)",
-                drot.to_degrees()
+                chord_angle(chord).to_degrees()
             )));
         }
         let is_safe = r == 0 || r == rows.len() - 1;
@@ -567,6 +712,122 @@ fn verify_chunk(
     Ok(rep)
 }
 
+/// The first 17 fields of a row split at ASCII whitespace (the format's separators), and
+/// how many fields the row has: [`read_row`]'s reference. A field is a run of bytes
+/// other than ASCII whitespace; cut at ASCII bytes, each is whole UTF-8 text.
+#[cfg(test)]
+fn fields_of(text: &str) -> ([&str; 17], usize) {
+    let mut fields = [""; 17];
+    let mut count = 0;
+    let mut start = None;
+    let b = text.as_bytes();
+    for (i, c) in b.iter().enumerate() {
+        match (c.is_ascii_whitespace(), start) {
+            (true, Some(s)) => {
+                if let Some(x) = fields.get_mut(count) {
+                    *x = text.get(s..i).unwrap_or_default();
+                }
+                count += 1;
+                start = None;
+            }
+            (false, None) => start = Some(i),
+            _ => {}
+        }
+    }
+    if let Some(s) = start {
+        if let Some(x) = fields.get_mut(count) {
+            *x = text.get(s..).unwrap_or_default();
+        }
+        count += 1;
+    }
+    (fields, count)
+}
+
+/// A row's fields as [`fields_of`] splits them, each read as a number by
+/// [`parse_plain`] as the same pass goes over its bytes (`None` where it is not in
+/// `parse_plain`'s form: read by [`parse_number`] from the field's text), and how many
+/// fields the row has. Property-tested against [`fields_of`] and [`parse_plain`].
+fn read_row(text: &str) -> ([&str; 17], [Option<f64>; 17], usize) {
+    let mut fields = [""; 17];
+    let mut plain = [None; 17];
+    let mut count = 0;
+    let b = text.as_bytes();
+    let mut i = 0;
+    loop {
+        while b.get(i).is_some_and(u8::is_ascii_whitespace) {
+            i += 1;
+        }
+        if i >= b.len() {
+            break;
+        }
+        let start = i;
+        let (value, end) = plain_prefix(b, start);
+        i = end;
+        let value = match b.get(i) {
+            Some(c) if !c.is_ascii_whitespace() => {
+                // More than a number: the field goes on to the next space.
+                while b.get(i).is_some_and(|c| !c.is_ascii_whitespace()) {
+                    i += 1;
+                }
+                None
+            }
+            _ => value,
+        };
+        if let (Some(x), Some(v)) = (fields.get_mut(count), plain.get_mut(count)) {
+            *x = text.get(start..i).unwrap_or_default();
+            *v = value;
+        }
+        count += 1;
+    }
+    (fields, plain, count)
+}
+
+/// The longest prefix of `b[start..]` made of `-`, digits and points as a plain decimal
+/// begins, read as [`parse_plain`] reads it, and where it ends: `(value, end)`, the
+/// value `None` where the prefix is not in `parse_plain`'s form. (`b[start..end]` is
+/// then `parse_plain`'s whole field when `end` is the field's end.)
+#[inline]
+fn plain_prefix(b: &[u8], start: usize) -> (Option<f64>, usize) {
+    let mut i = start;
+    let neg = b.get(i) == Some(&b'-');
+    i += usize::from(neg);
+    let mut m = 0u64;
+    let first = i;
+    // The whole part.
+    while let Some(&c) = b.get(i).filter(|c| c.is_ascii_digit()) {
+        m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+        i += 1;
+    }
+    let whole = i - first;
+    let mut decimals = 0;
+    let point = b.get(i) == Some(&b'.');
+    if point {
+        i += 1;
+        let from = i;
+        while let Some(&c) = b.get(i).filter(|c| c.is_ascii_digit()) {
+            m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+            i += 1;
+        }
+        decimals = i - from;
+    }
+    // `parse_plain`'s form: digits before the point, some after it if there is one, at
+    // most 15 in all (so `m` is exact).
+    let ok = whole > 0 && (!point || decimals > 0) && whole + decimals <= 15;
+    let value = POW10.get(decimals).filter(|_| ok).map(|p| {
+        let v = m as f64 / p;
+        if neg {
+            -v
+        } else {
+            v
+        }
+    });
+    (value, i)
+}
+
+const POW10: [f64; 16] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+];
+
 /// `field` read as `str::parse::<f64>` reads it (`None` where it fails): a plain decimal
 /// `[-]digits[.digits]` of at most 15 digits by [`parse_plain`], anything else by the
 /// standard parser.
@@ -580,9 +841,6 @@ pub fn parse_number(field: &str) -> Option<f64> {
 /// in `f64`, so `m / 10^d` is one correctly rounded division: the `f64` nearest the
 /// decimal, as the standard parser gives (proptest in `tests/plan.rs`).
 pub fn parse_plain(field: &str) -> Option<f64> {
-    const POW10: [f64; 16] = [
-        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-    ];
     let b = field.as_bytes();
     let (neg, b) = match b.split_first() {
         Some((b'-', rest)) => (true, rest),
@@ -637,6 +895,137 @@ fn gap(samples: &[Sample], a: usize, b: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    fn value() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            -1e3..1e3f64,
+            -400.0..400.0f64,
+            -1e-6..1e-6f64,
+            -1e10..1e10f64,
+            Just(-0.0),
+            Just(0.0),
+            Just(1e8),
+            Just(-99_999_999.999_999_95),
+            Just(1e9 - 0.000_000_4),
+            Just(f64::NAN),
+            Just(f64::INFINITY),
+            Just(1e300),
+        ]
+    }
+
+    fn rot_y(b: f64) -> Matrix3<f64> {
+        let (sb, cb) = b.sin_cos();
+        Matrix3::new(cb, 0.0, sb, 0.0, 1.0, 0.0, -sb, 0.0, cb)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(5_000))]
+        /// `from_zyz` multiplied out is the product `Rz(a) · Ry(b) · Rz(c)`; the angle
+        /// from the chord of two rotations is `rot_angle`'s (the rotation vector's
+        /// length), and the chord test against the tolerance decides as `rot_angle`
+        /// against 1e-6 rad does, for angles from 1e-9 to 3.1 rad.
+        #[test]
+        fn the_chord_angle_is_the_rotation_angle(
+            e in prop::array::uniform3(-7.0..7.0f64),
+            axis in prop::array::uniform3(-1.0..1.0f64),
+            angle in prop_oneof![1e-9..1e-5f64, 0.999e-6..1.001e-6f64, 1e-5..3.1f64],
+        ) {
+            let a = from_zyz(e);
+            let product = Frame::rot_z(e[0]) * rot_y(e[1]) * Frame::rot_z(e[2]);
+            prop_assert!((a - product).abs().max() < 1e-15, "{} vs {}", a, product);
+            let axis = Vector3::from(axis);
+            prop_assume!(axis.norm() > 0.1);
+            let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);
+            let b = turn.matrix() * a;
+            let reference = crate::arm::rot_angle(&b, &a);
+            let chord = rot_chord(&b, &a);
+            prop_assert!((chord_angle(chord) - reference).abs() < 1e-14 + 1e-9 * reference, "{} vs {}", chord_angle(chord), reference);
+            if (reference - ROT_TOL).abs() > 1e-14 {
+                prop_assert_eq!(chord > tol_chord(), reference > ROT_TOL);
+            }
+        }
+    }
+
+    fn token() -> impl Strategy<Value = String> {
+        prop_oneof![
+            (-1e4..1e4f64, 0usize..9).prop_map(|(v, d)| lampost_gcode::fixed(v, d)),
+            "[-+]?[0-9]{0,18}(\\.[0-9]{0,18})?([eE][-+]?[0-9]{1,3})?",
+            "[-+.0-9a-z]{1,6}",
+            Just("path".to_string()),
+            Just("-".to_string()),
+            Just("1é".to_string()),
+            Just("\u{a0}2".to_string()),
+        ]
+    }
+
+    fn gap() -> impl Strategy<Value = String> {
+        prop_oneof![
+            4 => Just(" ".to_string()),
+            1 => "[ \t\r\x0c]{1,3}",
+            1 => Just("\x0b".to_string()),
+            1 => Just("\u{a0}".to_string()),
+            1 => Just(String::new()),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(5_000))]
+        /// `read_row` splits a row as `fields_of` does (ASCII whitespace), and reads a
+        /// field as a number exactly where `parse_plain` does, to the same bits.
+        #[test]
+        fn rows_are_read_as_split_and_parsed_one_by_one(
+            lead in gap(),
+            parts in prop::collection::vec((token(), gap()), 0..22),
+        ) {
+            let mut text = lead;
+            for (t, g) in &parts {
+                text.push_str(t);
+                text.push_str(g);
+            }
+            let (fields, plain, count) = read_row(&text);
+            let (want, want_count) = fields_of(&text);
+            prop_assert_eq!(count, want_count, "{:?}", text);
+            prop_assert_eq!(fields, want, "{:?}", text);
+            for (f, v) in fields.iter().zip(plain) {
+                prop_assert_eq!(v.map(f64::to_bits), parse_plain(f).map(f64::to_bits), "{:?} in {:?}", f, text);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(5_000))]
+        /// The row composed on the stack is the reference's text, or nothing where it
+        /// leaves the row to the reference (a value beyond the fast range).
+        #[test]
+        fn composed_rows_are_the_references_text(
+            n in prop_oneof![1usize..5000, any::<usize>()],
+            index in prop::option::of(prop_oneof![0usize..400_000, any::<usize>()]),
+            path in any::<bool>(),
+            laser in any::<bool>(),
+            dt in value(),
+            pos in prop::array::uniform3(value()),
+            angles in prop::array::uniform3(value()),
+            joints in prop::array::uniform6(value()),
+        ) {
+            let v = RowValues { n, kind: if path { "path" } else { "safe" }, index, dt, pos, angles, laser, joints };
+            let mut want = b"prefix".to_vec();
+            row_reference(&mut want, &v);
+            let mut got = b"prefix".to_vec();
+            let fast = [dt].iter().chain(&pos).all(|x| x.abs() < 1e9)
+                && angles.iter().chain(&joints).all(|x| x.abs() < 1e8);
+            match compose_row(&mut got, &v) {
+                Some(()) => {
+                    prop_assert!(fast);
+                    prop_assert_eq!(String::from_utf8_lossy(&got), String::from_utf8_lossy(&want));
+                }
+                None => {
+                    prop_assert!(!fast);
+                    prop_assert_eq!(&got, b"prefix");
+                }
+            }
+        }
+    }
 
     #[test]
     fn decimal_fields_are_read_as_to_string_writes_them() {

@@ -348,3 +348,37 @@ fn bad_arm_files_are_refused_at_their_line() {
     let typo = base.replacen("max_speed = 60.0", "max_sped = 60.0", 1);
     assert_eq!(refusal(&typo).0, line_of(&typo, "max_sped", 0));
 }
+
+/// The PUMA with one link given a general twist and offsets (α = −37°, d = 35, a = 12):
+/// every entry of a DH product is non-trivial.
+fn twisted() -> Arm {
+    let text = lampost_robot::builtin_text("puma-lens")
+        .unwrap_or_default()
+        .replacen(
+            "d = 0.0\na = 0.0\nalpha = -90.0",
+            "d = 35.0\na = 12.0\nalpha = -37.0",
+            1,
+        );
+    Arm::from_toml(&text, "twisted.toml").unwrap_or_else(|e| panic!("{e}"))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+    /// The DH product multiplied out (verification's chain) gives the generic product's
+    /// frames to 1e-12 (rotations) and 1e-12 of the arm's size (positions), on the PUMA
+    /// and on an arm with a general twist; and the same configuration from either.
+    #[test]
+    fn the_multiplied_out_chain_is_the_products(q in joints(), wide in proptest::array::uniform6(-7.0..7.0f64)) {
+        let arm = puma();
+        let other = twisted();
+        for (a, q) in [(&arm, q), (&other, q), (&arm, wide), (&other, wide)] {
+            let (fast, reference) = (a.chain_dh(&q), a.chain(&q));
+            for (f, r) in fast.iter().zip(&reference) {
+                prop_assert!((f.r - r.r).abs().max() < 1e-12, "{:?} vs {:?}", f, r);
+                prop_assert!((f.t - r.t).norm() < 1e-12 * 1000.0, "{:?} vs {:?}", f, r);
+            }
+        }
+        prop_assert_eq!(arm.config_of_chain(&q, &arm.chain_dh(&q)), arm.config_of(&q));
+    }
+}

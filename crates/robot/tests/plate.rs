@@ -130,3 +130,77 @@ fn the_plans_turns_and_joints_dumped_and_compared() {
         println!("largest difference from {path}: {most:.3e} rad");
     }
 }
+
+/// A measurement (ignored): the plate planned at `LAYER` (2 by default), then its chunk
+/// files (4,000 locations each, as `cargo xtask bench robot` cuts them) written and
+/// verified `REPS` times (5 by default) on two threads, each stage's best and mean wall
+/// time printed; the files' text written to `CHUNK_DUMP` and compared byte for byte with
+/// the dump at `CHUNK_BEFORE` where given: how the text of two builds was compared. Run
+/// with `CHUNK_DUMP=/tmp/after.txt CHUNK_BEFORE=/tmp/before.txt cargo test --release -p
+/// lampost-robot --test plate chunk_text -- --ignored --nocapture`.
+#[test]
+#[ignore = "a measurement: run with --ignored --nocapture"]
+fn chunk_text_timed_dumped_and_compared() {
+    use lampost_robot::chunk::{chunk_files, chunk_ranges, verify_threads};
+    use std::time::Instant;
+    let Some(arm) = Arm::builtin("puma-lens") else {
+        panic!("built-in");
+    };
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
+    let layer = env("LAYER").unwrap_or(2.0);
+    let reps = env("REPS").map_or(5, |r| r as usize).max(1);
+    let s = resample(&plate_path(layer), arm.spacing).unwrap_or_else(|e| panic!("{e}"));
+    let (p, _) = plan_and_tries_met(&arm, &s, arm.config, 2).unwrap_or_else(|e| panic!("{e}"));
+    let ranges = chunk_ranges(&s, 4000).unwrap_or_else(|e| panic!("{e}"));
+    let (mut text_ms, mut verify_ms) = (Vec::new(), Vec::new());
+    let (mut text_cpu, mut verify_cpu) = (0.0, 0.0);
+    let mut files = Vec::new();
+    for _ in 0..reps {
+        let (t, c) = (Instant::now(), cpu_ms());
+        files = chunk_files(&arm, arm.config, &s, &p, &ranges, 2);
+        text_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        text_cpu += cpu_ms() - c;
+        let (t, c) = (Instant::now(), cpu_ms());
+        verify_threads(&arm, &s, arm.config, &files, arm.tolerance, 2)
+            .unwrap_or_else(|e| panic!("{e}"));
+        verify_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        verify_cpu += cpu_ms() - c;
+    }
+    let show = |v: &[f64], cpu: f64| {
+        format!(
+            "best {:.1} ms, mean {:.1} ms wall, {:.0} ms CPU",
+            v.iter().copied().fold(f64::INFINITY, f64::min),
+            v.iter().sum::<f64>() / v.len() as f64,
+            cpu / v.len() as f64
+        )
+    };
+    println!(
+        "{} locations in {} chunks, {reps} runs: text {}; verification {}",
+        s.len(),
+        files.len(),
+        show(&text_ms, text_cpu),
+        show(&verify_ms, verify_cpu)
+    );
+    let text: String = files.iter().map(|f| f.text.as_str()).collect();
+    if let Ok(path) = std::env::var("CHUNK_DUMP") {
+        std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{path}: {e}"));
+    }
+    if let Ok(path) = std::env::var("CHUNK_BEFORE") {
+        let before = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        assert!(before == text, "the chunk text differs from {path}");
+        println!("the same text as {path} ({} bytes)", text.len());
+    }
+}
+
+/// This process's CPU time, ms (user and system, from `/proc/self/stat`; NaN elsewhere).
+fn cpu_ms() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let f: Vec<&str> = s.rsplit(')').next()?.split_whitespace().collect();
+            let u: f64 = f.get(11)?.parse().ok()?;
+            let k: f64 = f.get(12)?.parse().ok()?;
+            Some((u + k) * 10.0)
+        })
+        .unwrap_or(f64::NAN)
+}
