@@ -155,14 +155,17 @@ fn chunk_text_timed_dumped_and_compared() {
     let (mut text_ms, mut verify_ms) = (Vec::new(), Vec::new());
     let (mut text_cpu, mut verify_cpu) = (0.0, 0.0);
     let mut files = Vec::new();
+    let mut report = None;
     for _ in 0..reps {
         let (t, c) = (Instant::now(), cpu_ms());
         files = chunk_files(&arm, arm.config, &s, &p, &ranges, 2);
         text_ms.push(t.elapsed().as_secs_f64() * 1e3);
         text_cpu += cpu_ms() - c;
         let (t, c) = (Instant::now(), cpu_ms());
-        verify_threads(&arm, &s, arm.config, &files, arm.tolerance, 2)
-            .unwrap_or_else(|e| panic!("{e}"));
+        report = Some(
+            verify_threads(&arm, &s, arm.config, &files, arm.tolerance, 2)
+                .unwrap_or_else(|e| panic!("{e}")),
+        );
         verify_ms.push(t.elapsed().as_secs_f64() * 1e3);
         verify_cpu += cpu_ms() - c;
     }
@@ -181,6 +184,7 @@ fn chunk_text_timed_dumped_and_compared() {
         show(&text_ms, text_cpu),
         show(&verify_ms, verify_cpu)
     );
+    println!("verification: {report:?}");
     let text: String = files.iter().map(|f| f.text.as_str()).collect();
     if let Ok(path) = std::env::var("CHUNK_DUMP") {
         std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{path}: {e}"));
