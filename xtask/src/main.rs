@@ -278,7 +278,7 @@ const ROBOT_CHUNK: usize = 4000;
 /// `lampost plan path --layer LAYER --approach build --hatch 1.5 --spacing 2` plans it,
 /// and posted for puma-lens as `lampost post --machine puma-lens --chunk-points 4000`
 /// posts it (resampling, poses, chunks, the location files' text, the in-process
-/// verification), all in this process and without files. Returns (path points,
+/// verification of each chunk as it is written), all in this process and without files. Returns (path points,
 /// locations, chunk sizes).
 fn robot_plate(
     mesh: &lampost_mesh::Mesh,
@@ -324,7 +324,6 @@ fn robot_plate(
     };
     let p = lampost_plan::plan(mesh, &s, &opts).map_err(|e| e.to_string())?;
     let path: Vec<plan::PathPoint> = p
-        .points()
         .iter()
         .enumerate()
         .map(|(i, q)| plan::PathPoint {
@@ -342,17 +341,22 @@ fn robot_plate(
     let poses = plan::plan(&arm, &samples, arm.config).map_err(|e| e.to_string())?;
     lap(&mut split.poses);
     let ranges = chunk::chunk_ranges(&samples, ROBOT_CHUNK).map_err(|e| e.to_string())?;
-    let files = chunk::chunk_files(
+    // As `lampost post` does, less the files: each chunk written, verified and handed on.
+    let (files, _) = chunk::post_chunks(
         &arm,
         arm.config,
         &samples,
         &poses,
         &ranges,
+        arm.tolerance,
         chunk::default_threads(),
-    );
-    lap(&mut split.text);
-    chunk::verify(&arm, &samples, arm.config, &files, arm.tolerance).map_err(|e| e.to_string())?;
-    lap(&mut split.verify);
+        |_, _| Ok::<(), String>(()),
+    )
+    .map_err(|e| match e {
+        chunk::PostError::Verify(e) => e.to_string(),
+        chunk::PostError::Keep(e) => e,
+    })?;
+    lap(&mut split.chunks);
     Ok((
         path.len(),
         samples.len(),
@@ -369,10 +373,9 @@ struct RobotSplit {
     resample: (Duration, f64),
     /// Poses: the turn about the beam, IK, the first turn's look-ahead.
     poses: (Duration, f64),
-    /// Chunk cuts and the location files' text.
-    text: (Duration, f64),
-    /// The in-process verification (reading the text back, FK).
-    verify: (Duration, f64),
+    /// Chunk cuts, the location files' text and its in-process verification (each chunk
+    /// read back, FK, as it is written).
+    chunks: (Duration, f64),
 }
 
 impl RobotSplit {
@@ -382,12 +385,11 @@ impl RobotSplit {
             format!("{:.0}/{:.0}", d.0.as_secs_f64() * 1e3 / n, d.1 * 1e3 / n)
         };
         format!(
-            "split, ms wall/CPU (mean): path planning {}, resampling {}, poses (IK, turn about the beam, look-ahead) {}, chunks and text {}, verification {}",
+            "split, ms wall/CPU (mean): path planning {}, resampling {}, poses (IK, turn about the beam, look-ahead) {}, chunks (text, and verification as each is written) {}",
             ms(&self.path),
             ms(&self.resample),
             ms(&self.poses),
-            ms(&self.text),
-            ms(&self.verify)
+            ms(&self.chunks)
         )
     }
 }

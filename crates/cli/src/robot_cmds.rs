@@ -203,20 +203,50 @@ pub fn post(
     let poses = plan::plan(arm, &samples, cfg).map_err(located)?;
     let ranges = chunk::chunk_ranges(&samples, chunk_points).map_err(located)?;
     let total = ranges.len();
-    let files = chunk::chunk_files(
+    // Each chunk is written, verified as `lampost verify` reads it, and staged beside its
+    // target as soon as it is; nothing is renamed into place until every chunk and the
+    // manifest are (a failure removes what was staged).
+    let existed = Path::new(dir).is_dir();
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::usage(format!("error: cannot create the folder {dir}: {e}\n")))?;
+    let staged: std::sync::Mutex<Vec<(TempFile, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+    let stage = |file: &str, body: &[u8]| -> Result<(), CliError> {
+        let target = Path::new(dir).join(file);
+        let (t, mut f) = TempFile::beside(Some(&target.to_string_lossy()))?;
+        f.write_all(body).map_err(werr)?;
+        f.flush().map_err(werr)?;
+        staged
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .push((t, target));
+        Ok(())
+    };
+    let posted = chunk::post_chunks(
         arm,
         cfg,
         &samples,
         &poses,
         &ranges,
+        arm.tolerance,
         chunk::default_threads(),
+        |c, text| stage(&c.name, text),
     );
-    // Verify what is about to be written, as `lampost verify` reads it.
-    let rep = chunk::verify(arm, &samples, cfg, &files, arm.tolerance).map_err(|e| {
-        CliError::failed(format!(
-            "error: {e}\n  = help: this is a lampost fault; nothing was written\n"
-        ))
-    })?;
+    let (files, rep) = match posted {
+        Ok(p) => p,
+        Err(e) => {
+            // What was staged goes; so does the folder where this run made it.
+            drop(staged);
+            if !existed {
+                let _ = std::fs::remove_dir(dir);
+            }
+            return Err(match e {
+                chunk::PostError::Verify(e) => CliError::failed(format!(
+                    "error: {e}\n  = help: this is a lampost fault; nothing was written\n"
+                )),
+                chunk::PostError::Keep(e) => e,
+            });
+        }
+    };
     let seconds: f64 = samples.iter().map(|s| s.dt).sum();
     let laser_s: f64 = samples.iter().filter(|s| s.deposit).map(|s| s.dt).sum();
     let chunks: Vec<Obj> = files
@@ -244,23 +274,15 @@ pub fn post(
         "verify": obj!{"max_focus_error": rep.max_focus_error, "max_axis_error_deg": rep.max_axis_error_deg},
     };
     let manifest = json::to_string(&manifest)?;
-    // Nothing is written until everything is planned and verified; then every file is
-    // staged beside its target and renamed into place together.
-    std::fs::create_dir_all(dir)
-        .map_err(|e| CliError::usage(format!("error: cannot create the folder {dir}: {e}\n")))?;
-    let mut staged: Vec<(TempFile, PathBuf)> = Vec::new();
-    let mut stage = |file: &str, body: &str| -> Result<(), CliError> {
-        let target = Path::new(dir).join(file);
-        let (t, mut f) = TempFile::beside(Some(&target.to_string_lossy()))?;
-        f.write_all(body.as_bytes()).map_err(werr)?;
-        f.flush().map_err(werr)?;
-        staged.push((t, target));
-        Ok(())
-    };
-    for f in &files {
-        stage(&f.name, &f.text)?;
-    }
-    stage("manifest.json", &format!("{manifest}\n"))?;
+    stage("manifest.json", format!("{manifest}\n").as_bytes())?;
+    let mut staged = staged
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    // Renamed into place in chunk order, the manifest last.
+    staged.sort_by(|a, b| {
+        let last = |p: &PathBuf| p.ends_with("manifest.json");
+        (last(&a.1), &a.1).cmp(&(last(&b.1), &b.1))
+    });
     for (t, target) in staged {
         t.persist(&target)?;
     }

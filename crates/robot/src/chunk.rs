@@ -307,6 +307,24 @@ pub fn write_chunk(
     k: usize,
     total: usize,
 ) -> String {
+    let mut s = Vec::new();
+    write_chunk_into(&mut s, arm, cfg, samples, located, range, k, total);
+    // UTF-8 throughout (the header's text and ASCII rows).
+    String::from_utf8(s).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned())
+}
+
+/// [`write_chunk`]'s text into `s` (cleared first; its room kept for the next chunk).
+#[allow(clippy::too_many_arguments)]
+fn write_chunk_into(
+    s: &mut Vec<u8>,
+    arm: &Arm,
+    cfg: Config,
+    samples: &[Sample],
+    located: &[Located],
+    range: Range<usize>,
+    k: usize,
+    total: usize,
+) {
     let units = match arm.units {
         crate::def::Units::Mm => "mm",
         crate::def::Units::Inch => "inch",
@@ -316,16 +334,17 @@ pub fn write_chunk(
         arm.name,
         cfg.letters()
     );
-    let mut s = Vec::with_capacity(head.len() + (range.len() + 2) * ROW_BYTES);
+    s.clear();
+    s.reserve(head.len() + (range.len() + 2) * ROW_BYTES);
     s.extend_from_slice(head.as_bytes());
     let safe = part_of(arm, &arm.safe);
-    row(&mut s, 1, "safe", None, 0.0, &safe, false, &arm.safe);
+    row(s, 1, "safe", None, 0.0, &safe, false, &arm.safe);
     let mut n = 2;
     for i in range.clone() {
         let dt = if i == range.start { 0.0 } else { samples[i].dt };
         let laser = i != range.start && samples[i].deposit;
         row(
-            &mut s,
+            s,
             n,
             "path",
             Some(i),
@@ -336,9 +355,7 @@ pub fn write_chunk(
         );
         n += 1;
     }
-    row(&mut s, n, "safe", None, 0.0, &safe, false, &arm.safe);
-    // UTF-8 throughout (the header's text and ASCII rows).
-    String::from_utf8(s).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned())
+    row(s, n, "safe", None, 0.0, &safe, false, &arm.safe);
 }
 
 /// The name of chunk `k` (from 1): `chunk-001.loc`, ….
@@ -469,27 +486,51 @@ pub fn verify_threads(
     threads: usize,
 ) -> Result<Report, RobotError> {
     let per = par_map(chunks.len(), threads, |k| {
-        verify_chunk(arm, samples, cfg, chunks, k, tol)
+        let c = &chunks[k];
+        let read = Read {
+            name: &c.name,
+            first: c.first,
+            count: c.count,
+            text: &c.text,
+            k,
+            total: chunks.len(),
+        };
+        verify_chunk(arm, samples, cfg, read, tol)
     });
+    let places: Vec<(&str, usize, usize)> = chunks
+        .iter()
+        .map(|c| (c.name.as_str(), c.first, c.count))
+        .collect();
+    gather(samples, &places, per)
+}
+
+/// The chunks' reports gathered in chunk order, with the chunks' order checked: each
+/// starting where the last ended, the last ending at the path's end (`places`: each
+/// chunk's name, first location and count). The first error in chunk order.
+fn gather(
+    samples: &[Sample],
+    places: &[(&str, usize, usize)],
+    per: Vec<Result<Report, RobotError>>,
+) -> Result<Report, RobotError> {
     let mut rep = Report {
-        chunks: chunks.len(),
+        chunks: places.len(),
         ..Report::default()
     };
     let mut next = 0usize;
-    for (c, r) in chunks.iter().zip(per) {
-        if c.first != next {
-            let (a, b) = (next.min(c.first), next.max(c.first));
-            return Err(verr(&c.name, 0, gap(samples, a, b)));
+    for (&(name, first, count), r) in places.iter().zip(per) {
+        if first != next {
+            let (a, b) = (next.min(first), next.max(first));
+            return Err(verr(name, 0, gap(samples, a, b)));
         }
         let r = r?;
         rep.locations += r.locations;
         rep.max_focus_error = rep.max_focus_error.max(r.max_focus_error);
         rep.max_axis_error_deg = rep.max_axis_error_deg.max(r.max_axis_error_deg);
-        next = c.first.saturating_add(c.count);
+        next = first.saturating_add(count);
     }
     if next != samples.len() {
         return Err(verr(
-            chunks.last().map_or("manifest", |c| c.name.as_str()),
+            places.last().map_or("manifest", |c| c.0),
             0,
             gap(samples, next.min(samples.len()), samples.len().max(next)),
         ));
@@ -497,24 +538,156 @@ pub fn verify_threads(
     Ok(rep)
 }
 
+/// A chunk's file as verification reads it: its name, place on the path (first path
+/// location and count), text, and its number `k` (from 0) of `total`.
+#[derive(Clone, Copy)]
+struct Read<'a> {
+    name: &'a str,
+    first: usize,
+    count: usize,
+    text: &'a str,
+    k: usize,
+    total: usize,
+}
+
+/// A chunk as the manifest lists it (its text handed on by [`post_chunks`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChunkInfo {
+    /// The file's name ([`file_name`]).
+    pub name: String,
+    /// First path location.
+    pub first: usize,
+    /// Path locations.
+    pub count: usize,
+}
+
+/// Why [`post_chunks`] stopped: a chunk failed verification, or `keep` failed.
+#[derive(Debug)]
+pub enum PostError<E> {
+    /// Verification (a lampost fault: the text was just written from the plan).
+    Verify(RobotError),
+    /// What `keep` returned.
+    Keep(E),
+}
+
+/// Every chunk's location file written ([`write_chunk`]) and verified as [`verify`]
+/// verifies it, chunk by chunk on up to `threads` threads, each writing into one buffer
+/// it reuses: memory for a chunk a thread, not for the whole output, and each text read
+/// back while it is still in the cache. Each verified text is handed to `keep` with its
+/// chunk (in whatever order the threads finish; `keep` stages it, say). After a failure
+/// no new chunk is started. The chunks as the manifest lists them and the report; the
+/// first error in chunk order. The text is the same on any number of threads.
+#[allow(clippy::too_many_arguments)]
+pub fn post_chunks<E: Send>(
+    arm: &Arm,
+    cfg: Config,
+    samples: &[Sample],
+    located: &[Located],
+    ranges: &[Range<usize>],
+    tol: f64,
+    threads: usize,
+    keep: impl Fn(&ChunkInfo, &[u8]) -> Result<(), E> + Sync,
+) -> Result<(Vec<ChunkInfo>, Report), PostError<E>> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let total = ranges.len();
+    let infos: Vec<ChunkInfo> = ranges
+        .iter()
+        .enumerate()
+        .map(|(k, r)| ChunkInfo {
+            name: file_name(k + 1),
+            first: r.start,
+            count: r.len(),
+        })
+        .collect();
+    let (next, failed) = (AtomicUsize::new(0), AtomicBool::new(false));
+    let work = || {
+        let mut buf: Vec<u8> = Vec::new();
+        let mut done: Vec<(usize, Result<Report, PostError<E>>)> = Vec::new();
+        while !failed.load(Ordering::Relaxed) {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            let (Some(r), Some(info)) = (ranges.get(k), infos.get(k)) else {
+                break;
+            };
+            write_chunk_into(
+                &mut buf,
+                arm,
+                cfg,
+                samples,
+                located,
+                r.clone(),
+                k + 1,
+                total,
+            );
+            let res = match std::str::from_utf8(&buf) {
+                Ok(text) => {
+                    let read = Read {
+                        name: &info.name,
+                        first: info.first,
+                        count: info.count,
+                        text,
+                        k,
+                        total,
+                    };
+                    verify_chunk(arm, samples, cfg, read, tol).map_err(PostError::Verify)
+                }
+                Err(e) => Err(PostError::Verify(verr(&info.name, 0, e.to_string()))),
+            };
+            let res = res.and_then(|rep| keep(info, &buf).map(|()| rep).map_err(PostError::Keep));
+            failed.fetch_or(res.is_err(), Ordering::Relaxed);
+            done.push((k, res));
+        }
+        done
+    };
+    let threads = threads.clamp(1, total.max(1));
+    let mut all = std::thread::scope(|s| {
+        let others: Vec<_> = (1..threads).map(|_| s.spawn(work)).collect();
+        let mut all = work();
+        for h in others {
+            // A worker only panics if the writer or `keep` does; the panic goes on here.
+            match h.join() {
+                Ok(v) => all.extend(v),
+                Err(p) => std::panic::resume_unwind(p),
+            }
+        }
+        all
+    });
+    all.sort_unstable_by_key(|x| x.0);
+    // The first failure in chunk order (chunks after it may not have been started).
+    let mut per = Vec::with_capacity(all.len());
+    for (_, r) in all {
+        match r {
+            Ok(rep) => per.push(Ok(rep)),
+            Err(PostError::Verify(e)) => per.push(Err(e)),
+            Err(keep_failed) if per.iter().all(Result::is_ok) => return Err(keep_failed),
+            Err(_) => break,
+        }
+    }
+    if per.len() < total {
+        // Stopped early: the failure is among those gathered.
+        per.push(Err(verr("manifest", 0, "verification stopped".into())));
+    }
+    let places: Vec<(&str, usize, usize)> = infos
+        .iter()
+        .map(|c| (c.name.as_str(), c.first, c.count))
+        .collect();
+    let rep = gather(samples, &places, per).map_err(PostError::Verify)?;
+    Ok((infos, rep))
+}
+
 /// Chunk `k` alone: its header, rows and locations (everything but the chunks' order).
 fn verify_chunk(
     arm: &Arm,
     samples: &[Sample],
     cfg: Config,
-    chunks: &[ChunkFile],
-    k: usize,
+    c: Read,
     tol: f64,
 ) -> Result<Report, RobotError> {
     let mut rep = Report::default();
-    let Some(c) = chunks.get(k) else {
-        return Ok(rep);
-    };
     // The working frame's pose of the base, once: a location's part frame is this times
     // the flange times the holder.
     let head_base = arm.head.inverse().mul(&arm.base);
     let chord_tol = tol_chord();
-    let f = c.name.as_str();
+    let f = c.name;
     let mut header = Vec::new();
     let mut rows: Vec<(usize, &str)> = Vec::new();
     for (i, line) in c.text.lines().enumerate() {
@@ -527,7 +700,7 @@ fn verify_chunk(
     let want = [
         FORMAT.to_string(),
         format!("machine {}", arm.name),
-        format!("chunk {} of {}", k + 1, chunks.len()),
+        format!("chunk {} of {}", c.k + 1, c.total),
         format!("config {}", cfg.letters()),
     ];
     for (w, (line, h)) in want

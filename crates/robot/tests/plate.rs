@@ -40,8 +40,7 @@ fn plate_path(layer: f64) -> Vec<PathPoint> {
         threads: 2,
     };
     let p = lampost_plan::plan(&mesh, &slices, &opts).unwrap_or_else(|e| panic!("{e}"));
-    p.points()
-        .iter()
+    p.iter()
         .enumerate()
         .map(|(i, q)| PathPoint {
             tip: q.p,
