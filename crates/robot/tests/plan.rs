@@ -317,6 +317,93 @@ fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
     assert_eq!(verify(&bad, 2), e1);
 }
 
+/// Posting chunk by chunk (`post_chunks`: each written into a reused buffer, verified,
+/// handed on) hands on exactly `chunk_files`' texts with `verify`'s figures, on one or two
+/// threads; a plan spoiled beyond the tolerance is caught and names its chunk, that chunk
+/// never handed on; a failure to keep a chunk is returned as it is.
+#[test]
+fn chunks_posted_one_by_one_are_the_files_verified() {
+    use lampost_robot::chunk::{post_chunks, PostError};
+    use std::sync::Mutex;
+    let puma = arm();
+    let mut s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
+    for x in s.iter_mut().step_by(50) {
+        x.deposit = false;
+    }
+    let located = plan(&puma, &s, puma.config).unwrap_or_else(|e| panic!("{e}"));
+    let ranges = chunk_ranges(&s, 200).unwrap_or_else(|e| panic!("{e}"));
+    let files = chunk_files(&puma, puma.config, &s, &located, &ranges, 1);
+    let want = verify_threads(&puma, &s, puma.config, &files, puma.tolerance, 1)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let post = |located: &[lampost_robot::plan::Located], threads| {
+        let kept: Mutex<Vec<(String, usize, usize, String)>> = Mutex::new(Vec::new());
+        let r = post_chunks(
+            &puma,
+            puma.config,
+            &s,
+            located,
+            &ranges,
+            puma.tolerance,
+            threads,
+            |c, text| {
+                let text = String::from_utf8(text.to_vec()).map_err(|e| e.to_string())?;
+                kept.lock().map_err(|e| e.to_string())?.push((
+                    c.name.clone(),
+                    c.first,
+                    c.count,
+                    text,
+                ));
+                Ok::<(), String>(())
+            },
+        );
+        let mut kept = kept.into_inner().unwrap_or_else(|e| panic!("{e}"));
+        kept.sort();
+        (r, kept)
+    };
+    let files: Vec<_> = files
+        .iter()
+        .map(|c| (c.name.clone(), c.first, c.count, c.text.clone()))
+        .collect();
+    for threads in [1, 2] {
+        let (r, kept) = post(&located, threads);
+        let Ok((infos, rep)) = r else {
+            panic!("{r:?}");
+        };
+        assert_eq!(rep, want);
+        assert_eq!(kept, files);
+        assert_eq!(infos.len(), files.len());
+    }
+    // A joint of the third chunk's first location moved by 1e-3 rad: caught there.
+    let mut bad = located.clone();
+    bad[ranges[2].start + 1].q[1] += 1e-3;
+    for threads in [1, 2] {
+        let (r, kept) = post(&bad, threads);
+        assert!(
+            matches!(&r, Err(PostError::Verify(RobotError::Verify { file, .. })) if file == "chunk-003.loc"),
+            "{r:?}"
+        );
+        assert!(kept.iter().all(|k| k.0 != "chunk-003.loc"));
+    }
+    // Keeping fails at the second chunk: that failure comes back.
+    let r = post_chunks(
+        &puma,
+        puma.config,
+        &s,
+        &located,
+        &ranges,
+        puma.tolerance,
+        2,
+        |c, _| {
+            if c.name == "chunk-002.loc" {
+                Err("disk full")
+            } else {
+                Ok(())
+            }
+        },
+    );
+    assert!(matches!(r, Err(PostError::Keep("disk full"))), "{r:?}");
+}
+
 /// The plate's end in passes up its face (5 passes of 600 mm, the laser off between):
 /// 3,400 locations at 1 mm, longer than `MEET_AT`, where the tried first turns 5° apart
 /// meet.
