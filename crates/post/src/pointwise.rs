@@ -63,25 +63,56 @@ fn file_err(file: &str, line: usize, column: usize, message: String) -> PostErro
 
 /// The fields of a line of a per-point path, with their byte offsets: the text before
 /// any `#` comment, split at spaces, tabs and commas.
-fn fields(raw: &str) -> Vec<(usize, &str)> {
+fn fields(raw: &str) -> Fields<'_> {
     let code = raw.split('#').next().unwrap_or("");
-    let mut fields: Vec<(usize, &str)> = Vec::new();
+    let mut out = Fields {
+        kept: [(0, ""); KEPT],
+        n: 0,
+        rest_numeric: false,
+    };
+    let mut push = |s: usize, p: usize| {
+        let f = &code[s..p];
+        match out.kept.get_mut(out.n) {
+            Some(slot) => *slot = (s, f),
+            None => out.rest_numeric |= f.parse::<f64>().is_ok(),
+        }
+        out.n += 1;
+    };
+    // The separators are ASCII, so byte offsets between them are character boundaries.
     let mut start = None;
-    for (p, ch) in code.char_indices() {
-        let sep = matches!(ch, ' ' | '\t' | ',');
+    for (p, &b) in code.as_bytes().iter().enumerate() {
+        let sep = matches!(b, b' ' | b'\t' | b',');
         match (sep, start) {
             (false, None) => start = Some(p),
             (true, Some(s)) => {
-                fields.push((s, &code[s..p]));
+                push(s, p);
                 start = None;
             }
             _ => {}
         }
     }
     if let Some(s) = start {
-        fields.push((s, &code[s..]));
+        push(s, code.len());
     }
-    fields
+    out
+}
+
+/// The most fields of a line kept (a row has 6 to 8); more are counted.
+const KEPT: usize = 9;
+
+/// A line's fields ([`fields`]): the first [`KEPT`] as (byte offset, text), how many
+/// there are, and whether any beyond those reads as a number.
+struct Fields<'a> {
+    kept: [(usize, &'a str); KEPT],
+    n: usize,
+    rest_numeric: bool,
+}
+
+impl<'a> Fields<'a> {
+    /// The fields kept.
+    fn kept(&self) -> &[(usize, &'a str)] {
+        &self.kept[..self.n.min(KEPT)]
+    }
 }
 
 /// Whether `head` (the start of a file) reads as a per-point path rather than a
@@ -91,14 +122,15 @@ fn fields(raw: &str) -> Vec<(usize, &str)> {
 /// taken for a path: this is how `lampost post -` tells what `lampost plan path -o -`
 /// wrote from a program without `--per-point`.
 pub fn looks_like_points(head: &str) -> bool {
-    let Some(f) = head.lines().map(fields).find(|f| !f.is_empty()) else {
+    let Some(f) = head.lines().map(fields).find(|f| f.n > 0) else {
         return false;
     };
-    let header = f.len() >= 6
-        && f.iter()
+    let header = f.n >= 6
+        && f.kept()
+            .iter()
             .zip(["x", "y", "z", "i", "j", "k"])
             .all(|((_, a), b)| a.eq_ignore_ascii_case(b));
-    let row = (6..=8).contains(&f.len()) && f.iter().all(|(_, v)| v.parse::<f64>().is_ok());
+    let row = (6..=8).contains(&f.n) && f.kept().iter().all(|(_, v)| v.parse::<f64>().is_ok());
     header || row
 }
 
@@ -110,23 +142,24 @@ pub fn read_points(text: &str, file: &str) -> Result<Vec<PathPoint>, PostError> 
     let mut seen = false;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
-        let fields = fields(raw);
-        if fields.is_empty() {
+        let all = fields(raw);
+        if all.n == 0 {
             continue;
         }
-        if !seen && fields.iter().all(|(_, f)| f.parse::<f64>().is_err()) {
+        let fields = all.kept();
+        if !seen && !all.rest_numeric && fields.iter().all(|(_, f)| f.parse::<f64>().is_err()) {
             seen = true;
             continue;
         }
         seen = true;
-        if !(6..=8).contains(&fields.len()) {
+        if !(6..=8).contains(&all.n) {
             return Err(file_err(
                 file,
                 line,
                 1,
                 format!(
                     "expected x y z i j k [feed] [laser], found {} columns",
-                    fields.len()
+                    all.n
                 ),
             ));
         }
@@ -780,7 +813,61 @@ pub fn verify_points_traced<R: BufRead>(
 
 #[cfg(test)]
 mod tests {
-    use super::looks_like_points;
+    use super::{fields, looks_like_points, KEPT};
+    use proptest::prelude::*;
+
+    /// The fields of a line by characters, kept whole: the reference [`fields`] (bytes,
+    /// the first [`KEPT`] kept, the rest counted) is tested against.
+    fn fields_reference(raw: &str) -> Vec<(usize, &str)> {
+        let code = raw.split('#').next().unwrap_or("");
+        let mut out = Vec::new();
+        let mut start = None;
+        for (p, ch) in code.char_indices() {
+            match (matches!(ch, ' ' | '\t' | ','), start) {
+                (false, None) => start = Some(p),
+                (true, Some(s)) => {
+                    out.push((s, &code[s..p]));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(s) = start {
+            out.push((s, &code[s..]));
+        }
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(5_000))]
+        /// Lines of numbers, words and non-ASCII text between runs of spaces, tabs and
+        /// commas, with and without a comment: the same fields at the same byte offsets.
+        #[test]
+        fn fields_by_bytes_are_the_fields_by_characters(
+            parts in prop::collection::vec(
+                (prop_oneof![
+                    Just("1.5".to_string()), Just("-2e3".to_string()), Just("x".to_string()),
+                    Just("ø÷µ".to_string()), Just("é1".to_string()), Just("600".to_string()),
+                    "[0-9.]{1,6}",
+                ], prop_oneof![Just(" "), Just("\t"), Just(","), Just(" , "), Just("\u{a0}")]),
+                0..14,
+            ),
+            comment in prop_oneof![Just(""), Just("# note 1 2"), Just("#")],
+        ) {
+            let mut line = String::new();
+            for (f, sep) in &parts {
+                line.push_str(f);
+                line.push_str(sep);
+            }
+            line.push_str(&comment);
+            let want = fields_reference(&line);
+            let got = fields(&line);
+            prop_assert_eq!(got.n, want.len());
+            prop_assert_eq!(got.kept(), &want[..want.len().min(KEPT)]);
+            let rest = want.iter().skip(KEPT).any(|(_, f)| f.parse::<f64>().is_ok());
+            prop_assert_eq!(got.rest_numeric, rest);
+        }
+    }
 
     #[test]
     fn a_path_is_told_from_a_program_by_its_first_line() {
