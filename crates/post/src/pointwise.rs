@@ -859,7 +859,7 @@ mod tests {
                 line.push_str(f);
                 line.push_str(sep);
             }
-            line.push_str(&comment);
+            line.push_str(comment);
             let want = fields_reference(&line);
             let got = fields(&line);
             prop_assert_eq!(got.n, want.len());
