@@ -323,20 +323,18 @@ fn robot_plate(
         threads: 2,
     };
     let p = lampost_plan::plan(mesh, &s, &opts).map_err(|e| e.to_string())?;
-    let path: Vec<plan::PathPoint> = p
-        .iter()
-        .enumerate()
-        .map(|(i, q)| plan::PathPoint {
-            tip: q.p,
-            axis: q.axis,
-            feed: 600.0,
-            deposit: q.laser,
-            line: i + 3,
-        })
-        .collect();
+    // The path points as `lampost plan path` writes them (line 3 on), read as they come.
+    let path = p.iter().enumerate().map(|(i, q)| plan::PathPoint {
+        tip: q.p,
+        axis: q.axis,
+        feed: 600.0,
+        deposit: q.laser,
+        line: i + 3,
+    });
+    let points = p.iter().count();
     let arm = lampost_robot::Arm::builtin("puma-lens").ok_or("puma-lens")?;
     lap(&mut split.path);
-    let samples = plan::resample(&path, arm.spacing).map_err(|e| e.to_string())?;
+    let samples = plan::resample_iter(path, arm.spacing).map_err(|e| e.to_string())?;
     lap(&mut split.resample);
     let poses = plan::plan(&arm, &samples, arm.config).map_err(|e| e.to_string())?;
     lap(&mut split.poses);
@@ -358,7 +356,7 @@ fn robot_plate(
     })?;
     lap(&mut split.chunks);
     Ok((
-        path.len(),
+        points,
         samples.len(),
         files.iter().map(|f| f.count + 2).collect(),
     ))

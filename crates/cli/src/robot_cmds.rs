@@ -130,18 +130,15 @@ fn read_path(
         }
         _ => 1.0,
     };
-    let path: Vec<PathPoint> = pts
-        .iter()
-        .map(|p| PathPoint {
-            tip: p.tip * k,
-            axis: p.axis,
-            feed: p.feed * k,
-            deposit: p.deposit,
-            line: p.line,
-        })
-        .collect();
+    let path = pts.iter().map(|p| PathPoint {
+        tip: p.tip * k,
+        axis: p.axis,
+        feed: p.feed * k,
+        deposit: p.deposit,
+        line: p.line,
+    });
     let samples =
-        plan::resample(&path, spacing).map_err(|e| robot_error(e, Some((&name, &text))))?;
+        plan::resample_iter(path, spacing).map_err(|e| robot_error(e, Some((&name, &text))))?;
     Ok((name, text, samples))
 }
 

@@ -53,12 +53,21 @@ pub const MAX_TURN: f64 = std::f64::consts::PI / 180.0;
 /// turning the axis by at most 1° (the axis turned at constant rate on the great circle);
 /// every input point kept; a repeated point (same place and axis) dropped.
 pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotError> {
+    resample_iter(path.iter().copied(), spacing)
+}
+
+/// [`resample`] for a path read as it comes (no copy of the whole path held).
+pub fn resample_iter(
+    path: impl IntoIterator<Item = PathPoint>,
+    spacing: f64,
+) -> Result<Vec<Sample>, RobotError> {
     if !(spacing.is_finite() && spacing > 0.0) {
         return Err(RobotError::Option(format!(
             "spacing {spacing}: must be a positive number"
         )));
     }
-    let Some(first) = path.first() else {
+    let mut path = path.into_iter();
+    let Some(first) = path.next() else {
         return Err(RobotError::Option("the path has no points".into()));
     };
     let axis = first.axis.normalize();
@@ -73,8 +82,10 @@ pub fn resample(path: &[PathPoint], spacing: f64) -> Result<Vec<Sample>, RobotEr
     // The last location's axis and reference perpendicular.
     let (mut a_prev, mut u) = (axis, perpendicular(&axis));
     let mut total = 1.0;
-    for w in path.windows(2) {
-        let (a, b) = (&w[0], &w[1]);
+    let mut last = first;
+    for b in path {
+        let a = std::mem::replace(&mut last, b);
+        let (a, b) = (&a, &b);
         let (ua, ub) = (a.axis.normalize(), b.axis.normalize());
         let len = (b.tip - a.tip).norm();
         let turn = ua.cross(&ub).norm().atan2(ua.dot(&ub));
