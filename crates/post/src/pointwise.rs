@@ -165,9 +165,7 @@ pub fn read_points(text: &str, file: &str) -> Result<Vec<PathPoint>, PostError> 
         }
         let mut v = [0.0; 8];
         for (k, (col, f)) in fields.iter().enumerate() {
-            v[k] = f
-                .parse::<f64>()
-                .ok()
+            v[k] = lampost_gcode::parse_number(f)
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| {
                     file_err(file, line, col + 1, format!("`{f}` is not a finite number"))

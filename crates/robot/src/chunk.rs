@@ -997,51 +997,8 @@ fn plain_prefix(b: &[u8], start: usize) -> (Option<f64>, usize) {
     (value, i)
 }
 
-const POW10: [f64; 16] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-];
-
-/// `field` read as `str::parse::<f64>` reads it (`None` where it fails): a plain decimal
-/// `[-]digits[.digits]` of at most 15 digits by [`parse_plain`], anything else by the
-/// standard parser.
-pub fn parse_number(field: &str) -> Option<f64> {
-    parse_plain(field).or_else(|| field.parse::<f64>().ok())
-}
-
-/// The fast path of [`parse_number`], the form the location files' numbers take: a plain
-/// decimal `[-]digits[.digits]` with at most 15 digits, else `None`. The digits make an
-/// integer `m < 10^15 < 2^53` and the decimals a power of ten `10^d` (d ≤ 15), both exact
-/// in `f64`, so `m / 10^d` is one correctly rounded division: the `f64` nearest the
-/// decimal, as the standard parser gives (proptest in `tests/plan.rs`).
-pub fn parse_plain(field: &str) -> Option<f64> {
-    let b = field.as_bytes();
-    let (neg, b) = match b.split_first() {
-        Some((b'-', rest)) => (true, rest),
-        _ => (false, b),
-    };
-    let (mut m, mut digits, mut decimals, mut point) = (0u64, 0usize, 0usize, false);
-    for &c in b {
-        match c {
-            b'0'..=b'9' => {
-                m = m * 10 + u64::from(c - b'0');
-                digits += 1;
-                decimals += usize::from(point);
-            }
-            b'.' if !point => point = true,
-            _ => return None,
-        }
-        if digits > 15 {
-            return None;
-        }
-    }
-    // Digits on the point's left (`.5` and `5.` are the standard parser's too, but rare:
-    // left to it).
-    if digits == 0 || digits == decimals || (point && decimals == 0) {
-        return None;
-    }
-    let v = m as f64 / POW10[decimals];
-    Some(if neg { -v } else { v })
-}
+use lampost_gcode::POW10;
+pub use lampost_gcode::{parse_number, parse_plain};
 
 /// Whether `field` is `n` written in decimal as `n.to_string()` writes it (no sign, no
 /// leading zero).
