@@ -388,11 +388,16 @@ pub(crate) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T 
             done.push((i, f(i)));
         }
     };
+    workers(threads, work).into_iter().map(|x| x.1).collect()
+}
+
+/// `work` run on `threads` threads at once (this one among them), each returning what it
+/// did as (index, result); all of it in index order. A worker's panic goes on here.
+fn workers<T: Send>(threads: usize, work: impl Fn() -> Vec<(usize, T)> + Sync) -> Vec<(usize, T)> {
     let mut all: Vec<(usize, T)> = std::thread::scope(|s| {
-        let others: Vec<_> = (1..threads).map(|_| s.spawn(work)).collect();
+        let others: Vec<_> = (1..threads).map(|_| s.spawn(&work)).collect();
         let mut all = work();
         for h in others {
-            // A worker only panics if `f` does; the panic goes on here.
             match h.join() {
                 Ok(v) => all.extend(v),
                 Err(p) => std::panic::resume_unwind(p),
@@ -401,7 +406,7 @@ pub(crate) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T 
         all
     });
     all.sort_unstable_by_key(|x| x.0);
-    all.into_iter().map(|x| x.1).collect()
+    all
 }
 
 /// Every chunk's location file ([`write_chunk`]) named by [`file_name`], the chunks
@@ -638,20 +643,7 @@ pub fn post_chunks<E: Send>(
         }
         done
     };
-    let threads = threads.clamp(1, total.max(1));
-    let mut all = std::thread::scope(|s| {
-        let others: Vec<_> = (1..threads).map(|_| s.spawn(work)).collect();
-        let mut all = work();
-        for h in others {
-            // A worker only panics if the writer or `keep` does; the panic goes on here.
-            match h.join() {
-                Ok(v) => all.extend(v),
-                Err(p) => std::panic::resume_unwind(p),
-            }
-        }
-        all
-    });
-    all.sort_unstable_by_key(|x| x.0);
+    let all = workers(threads.clamp(1, total.max(1)), work);
     // The first failure in chunk order (chunks after it may not have been started).
     let mut per = Vec::with_capacity(all.len());
     for (_, r) in all {

@@ -1184,13 +1184,8 @@ mod tests {
     /// turns up to 170°; the result is a unit vector perpendicular to the new axis.
     #[test]
     fn the_reference_is_carried_by_the_smallest_turn() {
-        let mut seed = 5u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = lampost_testkit::XorShift(5);
+        let mut next = || rng.unit() - 0.5;
         for trial in 0..50_000 {
             let a = Vector3::new(next(), next(), next()).normalize();
             let kick = if trial % 2 == 0 { 0.05 } else { 3.0 };
@@ -1214,13 +1209,8 @@ mod tests {
     /// [`turned_by`] is `sin_cos` of the sum to 1e-15 for turns up to 8° from anywhere.
     #[test]
     fn a_small_turn_by_the_angle_sum_is_the_sum_turned() {
-        let mut seed = 99u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = lampost_testkit::XorShift(99);
+        let mut next = || rng.unit();
         for _ in 0..100_000 {
             let psi = (next() - 0.5) * 40.0;
             let x = (next() - 0.5) * 2.0 * 8f64.to_radians();

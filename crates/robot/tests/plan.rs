@@ -274,11 +274,14 @@ fn planning_on_threads_takes_the_plan_one_thread_takes() {
     }
 }
 
-/// Chunk files written on threads are the same text, verified on threads the same
-/// figures; with two chunks spoiled, the error named is the first chunk's, as one
-/// thread finds it.
-#[test]
-fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
+/// The plate's end planned at 1 mm, the laser off every 50 locations, cut into chunks of
+/// 200 (four or more): the arm, the locations, the plan and the cuts.
+fn plate_end_in_chunks() -> (
+    Arm,
+    Vec<Sample>,
+    Vec<lampost_robot::plan::Located>,
+    Vec<std::ops::Range<usize>>,
+) {
     let puma = arm();
     let mut s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
     // The laser off every 50 locations, so that chunks may be cut there.
@@ -288,6 +291,15 @@ fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
     let located = plan(&puma, &s, puma.config).unwrap_or_else(|e| panic!("{e}"));
     let ranges = chunk_ranges(&s, 200).unwrap_or_else(|e| panic!("{e}"));
     assert!(ranges.len() >= 4, "{}", ranges.len());
+    (puma, s, located, ranges)
+}
+
+/// Chunk files written on threads are the same text, verified on threads the same
+/// figures; with two chunks spoiled, the error named is the first chunk's, as one
+/// thread finds it.
+#[test]
+fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
+    let (puma, s, located, ranges) = plate_end_in_chunks();
     let one = chunk_files(&puma, puma.config, &s, &located, &ranges, 1);
     let two = chunk_files(&puma, puma.config, &s, &located, &ranges, 2);
     let text = |f: &[ChunkFile]| -> Vec<(String, usize, usize, String)> {
@@ -325,13 +337,7 @@ fn chunks_written_and_verified_on_threads_agree_with_one_thread() {
 fn chunks_posted_one_by_one_are_the_files_verified() {
     use lampost_robot::chunk::{post_chunks, PostError};
     use std::sync::Mutex;
-    let puma = arm();
-    let mut s = resample(&plate_end(), 1.0).unwrap_or_else(|e| panic!("{e}"));
-    for x in s.iter_mut().step_by(50) {
-        x.deposit = false;
-    }
-    let located = plan(&puma, &s, puma.config).unwrap_or_else(|e| panic!("{e}"));
-    let ranges = chunk_ranges(&s, 200).unwrap_or_else(|e| panic!("{e}"));
+    let (puma, s, located, ranges) = plate_end_in_chunks();
     let files = chunk_files(&puma, puma.config, &s, &located, &ranges, 1);
     let want = verify_threads(&puma, &s, puma.config, &files, puma.tolerance, 1)
         .unwrap_or_else(|e| panic!("{e}"));

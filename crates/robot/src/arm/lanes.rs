@@ -270,13 +270,8 @@ mod tests {
         let Some(arm) = Arm::builtin("puma-lens") else {
             panic!("built-in");
         };
-        let mut seed = 7u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = lampost_testkit::XorShift(7);
+        let mut next = || rng.unit();
         let head_inv = arm.head.inverse();
         let mut compared = 0;
         for _ in 0..4000 {
