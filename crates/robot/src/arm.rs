@@ -118,7 +118,7 @@ impl Link {
     }
 
     /// `f · A_i(q)` multiplied out for the DH form (the columns of `f` turned by θ and
-    /// twisted by α; no product with `A_i`'s zeros and ones): [`Link::transform`]'s
+    /// twisted by α; no product with `A_i`'s zeros and ones): `Link::transform`'s
     /// product within rounding (proptest).
     pub fn after(&self, f: &Frame, q: f64) -> Frame {
         let (st, ct) = (q + self.offset).sin_cos();
@@ -924,7 +924,7 @@ impl Arm {
         out
     }
 
-    /// [`Arm::chain`] by [`Link::after`], the DH product multiplied out: the same frames
+    /// [`Arm::chain`] by `Link::after`, the DH product multiplied out: the same frames
     /// within rounding (proptest), for verification.
     pub fn chain_dh(&self, q: &Q) -> [Frame; 7] {
         let mut out = [Frame::identity(); 7];
