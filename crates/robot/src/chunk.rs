@@ -271,20 +271,10 @@ fn compose_row(out: &mut Vec<u8>, v: &RowValues) -> Option<()> {
     Some(())
 }
 
-#[allow(clippy::too_many_arguments)]
-fn row(
-    out: &mut Vec<u8>,
-    n: usize,
-    kind: &'static str,
-    index: Option<usize>,
-    dt: f64,
-    part: &Frame,
-    laser: bool,
-    q: &Q,
-) {
-    let v = RowValues::new(n, kind, index, dt, part, laser, q);
-    if compose_row(out, &v).is_none() {
-        row_reference(out, &v);
+/// One row appended: composed on the stack, else number by number.
+fn row(out: &mut Vec<u8>, v: &RowValues) {
+    if compose_row(out, v).is_none() {
+        row_reference(out, v);
     }
 }
 
@@ -338,24 +328,20 @@ fn write_chunk_into(
     s.reserve(head.len() + (range.len() + 2) * ROW_BYTES);
     s.extend_from_slice(head.as_bytes());
     let safe = part_of(arm, &arm.safe);
-    row(s, 1, "safe", None, 0.0, &safe, false, &arm.safe);
+    let safe_row = |n| RowValues::new(n, "safe", None, 0.0, &safe, false, &arm.safe);
+    row(s, &safe_row(1));
     let mut n = 2;
     for i in range.clone() {
         let dt = if i == range.start { 0.0 } else { samples[i].dt };
         let laser = i != range.start && samples[i].deposit;
+        let part = located[i].part(&samples[i]);
         row(
             s,
-            n,
-            "path",
-            Some(i),
-            dt,
-            &located[i].part(&samples[i]),
-            laser,
-            &located[i].q,
+            &RowValues::new(n, "path", Some(i), dt, &part, laser, &located[i].q),
         );
         n += 1;
     }
-    row(s, n, "safe", None, 0.0, &safe, false, &arm.safe);
+    row(s, &safe_row(n));
 }
 
 /// The name of chunk `k` (from 1): `chunk-001.loc`, ….
