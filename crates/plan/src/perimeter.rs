@@ -158,21 +158,33 @@ pub(crate) fn check(opts: &PerimeterOptions) -> Result<(), PlanError> {
 }
 
 /// The path as the per-point file `lampost post` reads: a comment, the header `x y z i j
-/// k feed laser`, a row per point.
+/// k feed laser`, a row per point. Positions to 6 places, directions to 9, each the text
+/// `format!("{:.6}")` / `format!("{:.9}")` gives (by [`lampost_gcode::push_exact_fixed`]),
+/// -0.0 written as 0.
 pub fn to_text(points: &[PathPoint], feed: f64, comment: &str) -> String {
+    use std::fmt::Write;
     let mut s = format!("# {}\nx y z i j k feed laser\n", comment.replace('\n', " "));
+    s.reserve(points.len() * 80);
+    let feed = feed.to_string();
     for q in points {
-        s.push_str(&format!(
-            "{:.6} {:.6} {:.6} {:.9} {:.9} {:.9} {} {}\n",
-            q.p.x + 0.0,
-            q.p.y + 0.0,
-            q.p.z + 0.0,
-            q.axis.x + 0.0,
-            q.axis.y + 0.0,
-            q.axis.z + 0.0,
-            feed,
-            u8::from(q.laser)
-        ));
+        for (k, (v, places)) in [
+            (q.p.x, 6),
+            (q.p.y, 6),
+            (q.p.z, 6),
+            (q.axis.x, 9),
+            (q.axis.y, 9),
+            (q.axis.z, 9),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if k > 0 {
+                s.push(' ');
+            }
+            lampost_gcode::push_exact_fixed(&mut s, v + 0.0, places);
+        }
+        // Writing to a String cannot fail.
+        let _ = writeln!(s, " {feed} {}", u8::from(q.laser));
     }
     s
 }
