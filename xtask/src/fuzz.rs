@@ -17,10 +17,10 @@ use std::time::{Duration, Instant};
 
 /// The child's targets, in round-robin order.
 pub const TARGETS: &[&str] = &[
-    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect",
+    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect", "robot", "plan",
 ];
 
-pub const USAGE: &str = "[--target all|gcode|fmt|post|toml|points|stl|probe|numeric|inspect|selftest[,…]] [--seconds N] [--seed S] [--input-ms MS] [--mem-mb MB] [--slice-seconds N]";
+pub const USAGE: &str = "[--target all|gcode|fmt|post|toml|points|stl|probe|numeric|inspect|robot|plan|selftest[,…]] [--seconds N] [--seed S] [--input-ms MS] [--mem-mb MB] [--slice-seconds N]";
 
 /// Options of a run.
 #[derive(Debug, Clone)]

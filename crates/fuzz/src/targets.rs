@@ -35,7 +35,7 @@ use crate::gen::{chunks, mutate, read_dir, shows_nonfinite, Rng};
 
 /// Every target, in round-robin order.
 pub const TARGETS: &[&str] = &[
-    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect",
+    "gcode", "fmt", "post", "toml", "points", "stl", "probe", "numeric", "inspect", "robot", "plan",
 ];
 
 /// G-code tokens spliced into programs.
@@ -356,6 +356,8 @@ impl Ctx {
             "probe" => probe_log(self, r, input, note),
             "numeric" => numeric(self, r, input, note),
             "inspect" => inspect(self, r, input, note),
+            "robot" => robot(r, input, note),
+            "plan" => plan(r, input, note),
             "selftest" => selftest(self, r, input, note),
             other => Err(format!("no target {other}")),
         }
@@ -1313,6 +1315,318 @@ fn generated_csv(r: &mut Rng, k: f64) -> String {
         );
     }
     s
+}
+
+/// A per-point path for `puma-lens`: points near the part frame's origin (where the
+/// built-in holder brings them under the beam), the approach tilted from +z by up to
+/// `tilt`, laser runs cut by travel.
+fn generated_arm_path(r: &mut Rng) -> String {
+    let mut s = String::new();
+    if r.coin() {
+        s += "x y z i j k feed laser\n";
+    }
+    let tilt = if r.coin() { 0.0 } else { r.range(0.0, 0.4) };
+    let (x0, y0) = (r.range(-250.0, 250.0), r.range(-120.0, 120.0));
+    let radius = r.range(30.0, 150.0);
+    let step = r.range(0.2, 8.0);
+    let zigzag = r.one_in(3);
+    let z0 = r.range(0.0, 150.0);
+    for i in 0..2 + r.below(40) {
+        let (x, y, n) = if zigzag {
+            // Raster-like runs along x, the axis along +z.
+            let row = (i / 4) as f64;
+            let along = (i % 4) as f64 * step * if row % 2.0 == 0.0 { 1.0 } else { -1.0 };
+            (x0 + along, y0 + row * step, (0.0, 0.0, 1.0))
+        } else {
+            let a = i as f64 * step / radius;
+            let (sa, ca) = a.sin_cos();
+            (
+                x0 + radius * (ca - 1.0),
+                y0 + radius * sa,
+                (tilt.sin() * ca, tilt.sin() * sa, tilt.cos()),
+            )
+        };
+        let z = z0 + r.range(0.0, 2.0);
+        // The first row gives the feed; later rows may leave it out (it repeats).
+        let feed = if i == 0 {
+            *r.pick(&["600", "300", "120", "600", "1e9"])
+        } else {
+            *r.pick(&["600", "600", "300", "120", "", "", "", "1e9"])
+        };
+        let laser = if feed.is_empty() {
+            ""
+        } else {
+            *r.pick(&[" 1", " 1", " 0", ""])
+        };
+        let sep = if feed.is_empty() { "" } else { " " };
+        s += &format!(
+            "{x:.6} {y:.6} {z:.6} {:.9} {:.9} {:.9}{sep}{feed}{laser}\n",
+            n.0, n.1, n.2
+        );
+    }
+    s
+}
+
+/// The most locations a `robot` input is planned for: beyond it the input is skipped
+/// (a legitimate long path takes seconds, which is not a finding).
+const ROBOT_MAX_SAMPLES: usize = 20_000;
+
+/// `lampost post --machine puma-lens` through the libraries: a per-point path
+/// (generated within reach, or the fixtures' CSV) mutated, read, resampled at the arm's
+/// spacing, planned in a random configuration, cut into chunks of a random size, each
+/// written and verified as it is written (`post_chunks`), then the texts verified again
+/// as `lampost verify` reads them, with the chunks listed as the manifest lists them.
+/// Findings besides a panic or hang: a non-finite number or `NaN`/`inf` in a location
+/// file, a posted chunk that verification refuses, a refusal of the planner or the
+/// verifier that names no input line where the input was at fault.
+fn robot(r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    use lampost_robot::{chunk, plan as rplan, Arm, Config};
+    input.clear();
+    input.extend_from_slice(generated_arm_path(r).as_bytes());
+    // Half the inputs as generated (most of them plan and post), half mutated.
+    if r.coin() {
+        mutate(r, input, POINT_TOKENS);
+    }
+    let arm = Arm::builtin("puma-lens").ok_or("puma-lens is built in")?;
+    let cfg = if r.coin() {
+        arm.config
+    } else {
+        *r.pick(&Config::ALL)
+    };
+    let chunk_points = *r.pick(&[2, 3, 4, 7, 50, 50, 4000, 4000]);
+    let tol = *r.pick(&[arm.tolerance, arm.tolerance, arm.tolerance, 1e-9, 10.0]);
+    *note = format!(
+        "per-point path for puma-lens, config {}, --chunk-points {chunk_points}, tolerance {tol}",
+        cfg.letters()
+    );
+    let text = String::from_utf8_lossy(input).into_owned();
+    let Ok(pts) = lampost_post::pointwise::read_points(&text, "fuzz.csv") else {
+        return Ok(());
+    };
+    let path: Vec<rplan::PathPoint> = pts
+        .iter()
+        .map(|p| rplan::PathPoint {
+            tip: p.tip,
+            axis: p.axis,
+            feed: p.feed,
+            deposit: p.deposit,
+            line: p.line,
+        })
+        .collect();
+    // The count resampling would make, worked out first (a long path is skipped).
+    let length: f64 = path.windows(2).map(|w| (w[1].tip - w[0].tip).norm()).sum();
+    let count = length / arm.spacing;
+    if count.is_nan() || count >= ROBOT_MAX_SAMPLES as f64 {
+        return Ok(());
+    }
+    let samples = match rplan::resample(&path, arm.spacing) {
+        Ok(s) => s,
+        Err(e) => return named_line(&e, "resample"),
+    };
+    let located = match rplan::plan(&arm, &samples, cfg) {
+        Ok(l) => l,
+        Err(e) => return named_line(&e, "plan"),
+    };
+    let Ok(ranges) = chunk::chunk_ranges(&samples, chunk_points) else {
+        return Ok(());
+    };
+    let texts = std::sync::Mutex::new(Vec::new());
+    let posted = chunk::post_chunks(
+        &arm,
+        cfg,
+        &samples,
+        &located,
+        &ranges,
+        tol,
+        1 + r.below(2),
+        |c, t| {
+            texts.lock().map_err(|_| "poisoned".to_string())?.push((
+                c.name.clone(),
+                c.first,
+                c.count,
+                t.to_vec(),
+            ));
+            Ok::<(), String>(())
+        },
+    );
+    let (infos, _) = match posted {
+        Ok(p) => p,
+        // A plan that does not verify: the post refused its own output, a finding only
+        // where the tolerance is the arm's own (1e-9 may refuse rounding honestly).
+        Err(chunk::PostError::Verify(e)) if tol < arm.tolerance => {
+            return Ok(());
+        }
+        Err(chunk::PostError::Verify(e)) => {
+            return Err(format!("post_chunks refused its own plan: {e}"))
+        }
+        Err(chunk::PostError::Keep(e)) => return Err(e),
+    };
+    let mut texts = texts.into_inner().map_err(|_| "poisoned".to_string())?;
+    texts.sort_by_key(|t| t.1);
+    let mut files = Vec::new();
+    for (name, first, count, t) in texts {
+        let t = String::from_utf8(t).map_err(|_| format!("{name}: not UTF-8"))?;
+        if shows_nonfinite(&t) {
+            return Err(format!(
+                "{name}: a non-finite number in\n{}",
+                shown(t.as_bytes())
+            ));
+        }
+        files.push(chunk::ChunkFile {
+            name,
+            first,
+            count,
+            text: t,
+        });
+    }
+    if files.len() != infos.len() {
+        return Err(format!("{} chunks kept of {}", files.len(), infos.len()));
+    }
+    chunk::verify(&arm, &samples, cfg, &files, tol)
+        .map(|_| ())
+        .map_err(|e| format!("verify refused what post_chunks verified: {e}"))
+}
+
+/// A refusal of the robot's planning: fine when it names a place in the input (a line,
+/// or the arm's definition); a finding otherwise.
+fn named_line(e: &lampost_robot::RobotError, stage: &str) -> Result<(), String> {
+    let text = e.to_string();
+    if text.contains("line") || text.contains("point") || text.contains("joint") {
+        Ok(())
+    } else {
+        Err(format!(
+            "{stage}: a refusal that names no place in the input: {text}"
+        ))
+    }
+}
+
+/// `lampost plan path` through the libraries: a generated solid (a box, a sphere or the
+/// paper's plate, small) written as ASCII STL and mutated, read, sliced along a random
+/// build direction and layer, planned with random options (perimeter spacing, rasters,
+/// approach, offset angle), and the path written as `lampost plan path` writes it and
+/// read back as `lampost post` reads it. Findings besides a panic or hang: a planned point
+/// or axis not finite, an axis not of unit length, a point of the text read back more
+/// than the text's rounding away, or a written path that does not read back.
+fn plan(r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {
+    input.clear();
+    let solid = r.below(3);
+    let m = match solid {
+        0 => mesh::box_mesh(
+            P3::new(0.0, 0.0, 0.0),
+            P3::new(r.range(0.5, 40.0), r.range(0.5, 40.0), r.range(0.5, 20.0)),
+        ),
+        1 => mesh::uv_sphere(
+            P3::zeros(),
+            r.range(1.0, 20.0),
+            6 + r.below(20) as u32,
+            8 + r.below(30) as u32,
+        ),
+        _ => lampost_plan::demo::twisted_plate(
+            r.range(0.01, 0.1),
+            3.0,
+            8 + r.below(30),
+            2 + r.below(6),
+        )
+        .ok_or("the plate")?,
+    };
+    input.extend_from_slice(mesh::write_ascii_stl(&m, "fuzz").as_bytes());
+    mutate(
+        r,
+        input,
+        &[
+            "facet normal 0 0 1",
+            "vertex 0 0 0",
+            "endloop",
+            "endfacet",
+            "1e308",
+            "nan",
+        ],
+    );
+    let dir = *r.pick(&[P3::z(), P3::x(), P3::new(0.0, 0.3, 1.0)]);
+    let layer = *r.pick(&[0.5, 1.0, 2.0, 5.0, 1e-3]);
+    let opts = lampost_plan::PlanOptions {
+        perimeter: lampost_plan::PerimeterOptions {
+            spacing: *r.pick(&[0.5, 2.0, 50.0]),
+            max_turn_deg: *r.pick(&[0.5, 2.0, 90.0]),
+        },
+        raster: r.coin().then(|| lampost_plan::RasterOptions {
+            hatch: *r.pick(&[0.5, 1.5, 30.0]),
+            inset: *r.pick(&[0.0, 0.5, 100.0]),
+            angle_deg: r.range(-180.0, 180.0),
+            turn_deg: *r.pick(&[0.0, 90.0, 67.5]),
+        }),
+        approach: if r.coin() {
+            lampost_plan::Approach::Build
+        } else {
+            lampost_plan::Approach::Tangent
+        },
+        max_offset_deg: *r.pick(&[0.0, 45.0, 90.0]),
+        max_tilt_deg: *r.pick(&[0.0, 30.0, 90.0]),
+        threads: 1 + r.below(2),
+    };
+    *note = format!("solid {solid} (box, sphere, plate) as STL, mutated; build {dir:?}, layer {layer}; {opts:?}");
+    let Ok(m) = mesh::read(input, mesh::Format::Stl) else {
+        return Ok(());
+    };
+    // A mesh of more than 40 layers at this layer height is skipped (slow, not a finding).
+    let Some((lo, hi)) = mesh::props::bounds(&m) else {
+        return Ok(());
+    };
+    let layers = (hi - lo).norm() / layer;
+    if layers.is_nan() || layers >= 40.0 {
+        return Ok(());
+    }
+    let sopts = lampost_plan::SliceOptions {
+        planes: lampost_plan::Planes::Parallel {
+            dir,
+            layer,
+            first: None,
+        },
+        stitch: None,
+        threads: 1,
+    };
+    let Ok(s) = lampost_plan::slice(&m, &sopts) else {
+        return Ok(());
+    };
+    let Ok(p) = lampost_plan::plan(&m, &s, &opts) else {
+        return Ok(());
+    };
+    let pts = p.points();
+    for (i, q) in pts.iter().enumerate() {
+        if !q.p.iter().chain(q.axis.iter()).all(|v| v.is_finite()) {
+            return Err(format!("plan: point {i} is not finite: {q:?}"));
+        }
+        if (q.axis.norm() - 1.0).abs() > 1e-9 {
+            return Err(format!(
+                "plan: point {i}'s axis is not a unit vector: {q:?}"
+            ));
+        }
+    }
+    if pts.is_empty() {
+        return Ok(());
+    }
+    let text = lampost_plan::perimeter::to_text(&pts, 600.0, "fuzz");
+    let back = lampost_post::pointwise::read_points(&text, "fuzz.csv")
+        .map_err(|e| format!("the written path does not read back: {e}"))?;
+    if back.len() != pts.len() {
+        return Err(format!(
+            "{} points written, {} read back",
+            pts.len(),
+            back.len()
+        ));
+    }
+    for (i, (a, b)) in pts.iter().zip(&back).enumerate() {
+        // Six places for the point; nine for the axis, normalised again on reading.
+        let near = (a.p - b.tip)
+            .iter()
+            .all(|d| d.abs() <= 5.1e-7 * (1.0 + a.p.norm() * 1e-9))
+            && (a.axis - b.axis).norm() < 1e-8
+            && a.laser == b.deposit;
+        if !near {
+            return Err(format!("point {i} written {a:?}, read back {b:?}"));
+        }
+    }
+    Ok(())
 }
 
 fn probe_log(ctx: &Ctx, r: &mut Rng, input: &mut Vec<u8>, note: &mut String) -> Result<(), String> {

@@ -40,9 +40,15 @@ pub struct PerimeterOptions {
 }
 
 /// The tool axis of each segment of a loop: `n × t` with the segment's face normal `n`
-/// and its direction `t`.
+/// and its direction `t`; `None` where it is not defined by the geometry: a segment of
+/// no length against the loop's size (a doubled point, a crack stitched shut: its
+/// direction is rounding noise), or running along its face's normal.
 fn segment_axes(mesh: &Mesh, points: &[P3], faces: &[u32]) -> Vec<Option<P3>> {
     let k = points.len();
+    let size = points
+        .iter()
+        .map(|p| p - points[0])
+        .fold(0.0f64, |m, d| m.max(d.amax()));
     (0..k)
         .map(|i| {
             let t = points[(i + 1) % k] - points[i];
@@ -51,18 +57,24 @@ fn segment_axes(mesh: &Mesh, points: &[P3], faces: &[u32]) -> Vec<Option<P3>> {
             let n = (b - a).cross(&(c - a));
             let ax = n.cross(&t);
             let l = ax.norm();
-            (l > 0.0 && l.is_finite()).then(|| ax / l)
+            let defined = t.norm() > AXIS_NOISE * size && l > AXIS_NOISE * n.norm() * t.norm();
+            (defined && l.is_finite()).then(|| ax / l)
         })
         .collect()
 }
 
-/// Unit mean of two unit vectors (the first when they cancel).
+/// Below this fraction (1e-9) of the loop's size a segment is a point, and below this
+/// sine of the angle between a segment and its face's normal they are parallel: either
+/// way the segment's axis is rounding noise.
+const AXIS_NOISE: f64 = 1e-9;
+
+/// Unit mean of two vectors (the first, made unit, when they cancel).
 fn blend(a: P3, b: P3) -> P3 {
     let m = a + b;
     if m.norm() > 1e-12 {
         m / m.norm()
     } else {
-        a
+        a / a.norm()
     }
 }
 
@@ -78,12 +90,19 @@ pub(crate) fn one_loop(
 ) -> Vec<PathPoint> {
     let k = points.len();
     let seg = segment_axes(mesh, points, faces);
-    // A segment without an axis (degenerate) takes its neighbour's.
-    let fallback = seg.iter().flatten().next().copied();
-    let Some(fallback) = fallback else {
+    // A segment without an axis (degenerate) takes the last defined one before it
+    // around the loop.
+    let Some(last) = seg.iter().rposition(Option::is_some) else {
         return Vec::new();
     };
-    let seg: Vec<P3> = seg.iter().map(|a| a.unwrap_or(fallback)).collect();
+    let mut carried = seg[last];
+    let seg: Vec<P3> = seg
+        .iter()
+        .map(|a| {
+            carried = a.or(carried);
+            carried.unwrap_or_else(P3::z)
+        })
+        .collect();
     let at: Vec<P3> = (0..k)
         .map(|i| blend(seg[(i + k - 1) % k], seg[i]))
         .collect();

@@ -387,3 +387,36 @@ fn an_angle_at_the_limit_by_rounding_is_not_over_it() {
     let q = plan(&m, &s, &opts(r, Approach::Build, 44.9)).expect("plan");
     assert!(!q.violations.is_empty());
 }
+
+/// A box whose vertex on one edge was moved by 5e-14 (`fixtures/meshes/cracked-box.stl`,
+/// found by `cargo xtask fuzz --target plan`): its slices' loops hold segments of no
+/// length (3.6e-15 and 5.6e-17 mm), whose `n × t` is rounding noise (−z, ±y). Their
+/// axes had been taken as they came, so a perimeter's axis flipped to −z for half a side
+/// and was written as (0, 0, −0.5), not a unit vector. Every wall of a box is parallel
+/// to the build direction, so every tangent axis is +z.
+#[test]
+fn segments_of_no_length_do_not_turn_the_tangent_axis() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/meshes/cracked-box.stl"
+    );
+    let bytes = std::fs::read(path).expect("fixture");
+    let m = lampost_mesh::read(&bytes, lampost_mesh::Format::Stl).expect("reads");
+    let s = lampost_plan::slice(&m, &lampost_plan::SliceOptions::parallel(P3::z(), 1.0))
+        .expect("slices");
+    for spacing in [0.5, 50.0] {
+        let o = PlanOptions {
+            perimeter: lampost_plan::PerimeterOptions {
+                spacing,
+                max_turn_deg: 2.0,
+            },
+            ..opts(None, Approach::Tangent, 45.0)
+        };
+        let p = lampost_plan::plan(&m, &s, &o).expect("plans");
+        let pts = p.points();
+        assert!(pts.len() > 40, "{}", pts.len());
+        for (i, q) in pts.iter().enumerate() {
+            assert!((q.axis - P3::z()).norm() < 1e-9, "point {i}: {q:?}");
+        }
+    }
+}
