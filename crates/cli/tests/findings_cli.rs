@@ -262,3 +262,153 @@ fn haas_g110_to_g129_are_work_offsets() {
     let o = lampost(&["check", "--flavor", "haas", p.to_str().expect("utf8")]);
     assert!(stderr(&o).contains("unknown G-code G112"), "{}", stderr(&o));
 }
+
+/// A lathe's corner radius and chamfer on G1 without the comma (`G01 Z-0.5 R0.05`,
+/// `X1.5 C0.02`; Haas lathe, Fanuc): the R was dropped with no word in every flavour and
+/// the C traced as a C-axis turn of 0.02°. An R on a straight move is refused where it
+/// stands in every flavour, as rs274 refuses it ("R word with no g code that uses it");
+/// in a program recognised as a lathe's, the C of a G1 that moves X or Z alone is named
+/// as a chamfer. rs274 itself (and `linuxcnc`) moves the C axis.
+#[test]
+fn a_lathe_s_corner_words_on_g1_are_named_not_dropped() {
+    let path = finding("23-lathe-g01-r-and-c.nc");
+    let p = path.to_str().expect("utf8");
+    for flavor in ["auto", "fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+        let o = lampost(&["check", "--flavor", flavor, p]);
+        assert_eq!(o.status.code(), Some(1), "{flavor}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("error: R0.05 on a straight move") && e.contains(":3:11"),
+            "{flavor}: {e}"
+        );
+        let lathe = flavor != "linuxcnc";
+        assert_eq!(
+            e.contains("C0.02 on a straight move") && e.contains(":4:6") && e.contains("chamfer"),
+            lathe,
+            "{flavor}: {e}"
+        );
+        assert_eq!(
+            e.matches("this is a lathe (turning) program").count(),
+            usize::from(lathe)
+        );
+        let o = lampost(&["trace", "--flavor", flavor, p]);
+        assert_eq!(o.status.code(), Some(1), "{flavor}: trace stops at 3:11");
+    }
+    let dir = tempdir("findings-corner");
+    // A G0's R too, and the C of a G1 in LinuxCNC: a C-axis move, as rs274 makes it.
+    let g0 = dir.join("g0-r.nc");
+    std::fs::write(&g0, "G20 G90\nG0 X1.0 Z0.1 R0.05\nM30\n").expect("write");
+    let o = lampost(&["check", "--flavor", "linuxcnc", g0.to_str().expect("utf8")]);
+    assert!(stderr(&o).contains(":2:14"), "{}", stderr(&o));
+    let c_axis = dir.join("c-axis.nc");
+    std::fs::write(
+        &c_axis,
+        "G20 G90 G18\nG0 X1.0 Z0.1\nG01 Z-0.5 F0.01\nX1.5 C0.02\nM30\n",
+    )
+    .expect("write");
+    if require_rs274().is_some() {
+        let refused = rs274_to_end(&path, &dir).expect_err("rs274 refuses the R");
+        assert!(
+            refused.contains("R word with no g code that uses it"),
+            "{refused}"
+        );
+        let refused = rs274_to_end(&g0, &dir).expect_err("rs274 refuses the R");
+        assert!(
+            refused.contains("R word with no g code that uses it"),
+            "{refused}"
+        );
+        let canon = rs274_to_end(&c_axis, &dir).expect("rs274 runs it");
+        compare_with_rs274(&trace_json("linuxcnc", &c_axis), &canon).expect("equal to rs274");
+    }
+    // A mill program's C: G18 alone is no lathe program, so the C stays an axis.
+    let o = lampost(&["check", "--flavor", "fanuc", c_axis.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("lathe"), "{}", stderr(&o));
+}
+
+/// Fanuc and Haas lathe programs (X a diameter, `T0101`, `G50 S`, `G96`, G18) were read
+/// as a mill's with no word. Recognised (one sign only a lathe's program shows, or two
+/// different ones) and said once, at the block that shows it, by `check` and `trace`;
+/// the post refuses them and writes nothing. `G92 S500` (a lathe's spindle limit in
+/// G-code systems B and C) is no longer "G92 needs at least one axis word" outside
+/// LinuxCNC, which refuses it as rs274 does.
+#[test]
+fn a_lathe_program_is_said_once_and_not_posted() {
+    for (name, line) in [
+        ("03-lathe-diameter-arc.nc", ":2:1"),
+        ("04-lathe-g76-one-block.nc", ":2:1"),
+    ] {
+        let path = finding(name);
+        let o = lampost(&["check", path.to_str().expect("utf8")]);
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("{name}{line}")) && e.contains("`T0101`") == name.starts_with("03"),
+            "{e}"
+        );
+        assert_eq!(
+            e.matches("this is a lathe (turning) program").count(),
+            1,
+            "{e}"
+        );
+    }
+    let t = root().join("fixtures/real-programs/fanuc/FANUC0T.nc");
+    let tp = t.to_str().expect("utf8");
+    let o = lampost(&["trace", tp]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("FANUC0T.nc:4:4") && e.contains("`G50 S0600` (a lathe's spindle speed limit)"),
+        "{e}"
+    );
+    assert_eq!(
+        e.matches("this is a lathe (turning) program").count(),
+        1,
+        "{e}"
+    );
+    let dir = tempdir("findings-lathe-post");
+    let posted = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--convert-units",
+        tp,
+        "-o",
+        posted.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("FANUC0T.nc:4:") && stderr(&o).contains("posts mill programs only"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!posted.exists(), "a refused post writes nothing");
+    let g92 = dir.join("g92-s.nc");
+    std::fs::write(&g92, "G21 G90 G95\nG92 S500\nG0 X160. Z7.\nM30\n").expect("write");
+    let g = g92.to_str().expect("utf8");
+    let o = lampost(&["check", "--flavor", "fanuc", g]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":2:1") && stderr(&o).contains("`G92 S500`"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&["check", "--flavor", "linuxcnc", g]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("G92 needs at least one axis word"),
+        "{}",
+        stderr(&o)
+    );
+    if require_rs274().is_some() {
+        assert!(rs274_to_end(&g92, &dir).is_err(), "rs274 refuses G92 S");
+    }
+    // One sign that mill programs show too is not enough: G18 (finding 21) alone.
+    let o = lampost(&[
+        "check",
+        finding("21-g18-cycle-z-read-as-depth.nc")
+            .to_str()
+            .expect("utf8"),
+    ]);
+    assert!(!stderr(&o).contains("lathe"), "{}", stderr(&o));
+}
