@@ -2950,8 +2950,8 @@ impl Interpreter {
                 _ => continue,
             };
             let words = match sign {
-                Sign::Sure(_) => with(gw, &[b'X', b'Z', b'S', b'P', b'Q', b'D']),
-                Sign::IncrementalXz => with(gw, &[b'U', b'W']),
+                Sign::Sure(_) => with(gw, b"XZSPQD"),
+                Sign::IncrementalXz => with(gw, b"UW"),
                 _ => gw.display_code(),
             };
             signs.push((sign, words, gw.span));
