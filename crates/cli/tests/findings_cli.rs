@@ -412,3 +412,66 @@ fn a_lathe_program_is_said_once_and_not_posted() {
     ]);
     assert!(!stderr(&o).contains("lathe"), "{}", stderr(&o));
 }
+
+/// A drill cycle in the XZ or YZ plane (`G18 G81 Z3 X4 R0.2 Y-1.1`) drills along the
+/// plane's normal axis (Y in G18, X in G19), its hole placed by the plane's two axes, as
+/// rs274 drills it; it was refused "the hole bottom Z is above the R plane" (Z taken as
+/// the depth), in every flavour. Equal to rs274: the finding's program (`linuxcnc`, where
+/// G99 is the default), G81 and G83 in G18 and G19 with G98/G99 said (every flavour), and
+/// NIST's cycle test without its G87/G88 (passed through, warned) and its G84s outside
+/// G17 (which rs274 gets wrong); a bottom above R is refused at the depth word by both.
+#[test]
+fn a_drill_cycle_outside_g17_drills_along_the_plane_s_normal() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-g18-cycles");
+    let path = finding("21-g18-cycle-z-read-as-depth.nc");
+    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+    compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    let both = work.join("g18-g19.nc");
+    std::fs::write(
+        &both,
+        "G20 G90\nG0 X0 Y2 Z0\nG18 G99 G81 Z3 X4 R0.2 Y-1.1 F16\nX5 Z4\nG91 Z1 X0 R0 L2\n\
+         G90 G80\nG0 X6\nG19 G98 G83 Y1 Z2 X-0.5 R0.5 Q0.5\nG80\nG0 Y3\nM2\n",
+    )
+    .expect("write");
+    let canon = rs274_to_end(&both, &work).expect("rs274 runs it");
+    for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+        let doc = trace_json(flavor, &both);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+    }
+    let nist = root().join("fixtures/real-programs/nist-rs274ngc/cycle-test.gcode");
+    let text = std::fs::read_to_string(&nist).expect("read");
+    let kept: String = text
+        .lines()
+        .filter(|l| !(l.contains("g87") || l.contains("g88") || l.contains("i-0 j-3")))
+        .filter(|l| !(l.contains("j-0 k-3") || l.contains("k-0 i-3")))
+        // rs274's G84 outside G17 feeds to its coordinates in the wrong order
+        // (`n0300 g84 z6 x7 r0.2 y-1.1` in G18: a feed to X-1.1 Y6 Z7).
+        .filter(|l| !(l.starts_with("n0300 g84") || l.starts_with("n0500 g84")))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let cut = work.join("cycle-test-no-g87-g88.ngc");
+    std::fs::write(&cut, kept).expect("write");
+    let canon = rs274_to_end(&cut, &work).expect("rs274 runs it");
+    compare_with_rs274(&trace_json("linuxcnc", &cut), &canon).expect("equal to rs274");
+    eprintln!(
+        "NIST cycle test without G87/G88 (and G84 outside G17): {} moves equal to rs274",
+        canon.len()
+    );
+    let bad = work.join("bad.nc");
+    std::fs::write(
+        &bad,
+        "G20 G90\nG0 X0 Y2 Z0\nG18 G81 Z3 X4 R0.2 Y1 F16\nM2\n",
+    )
+    .expect("write");
+    let refused = rs274_to_end(&bad, &work).expect_err("rs274 refuses it");
+    assert!(refused.contains("R less than y"), "{refused}");
+    let o = lampost(&["check", "--flavor", "linuxcnc", bad.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains(":3:20") && stderr(&o).contains("hole bottom Y"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -2378,6 +2378,22 @@ impl Interpreter {
             Motion::Canned(760) if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
                 self.threading(b, w, target, out)
             }
+            Motion::Canned(760) if w.word(b'D').is_some() => {
+                // A Fanuc or Haas lathe's one-block threading cycle `G76 X Z K D F` (D:
+                // the first pass's depth; a mill's fine boring has none): named, not
+                // read as fine boring; it ends where it started.
+                let code = w.g_in(GGroup::Motion).map(|(gw, _)| gw);
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "{} with D (a Fanuc or Haas lathe's threading cycle; the trace stays where it started)",
+                        code.map_or_else(|| "G76".to_string(), |gw| gw.display_code())
+                    )),
+                    code.map(|gw| gw.span),
+                );
+                Ok(())
+            }
             Motion::Canned(c) => self.canned_cycle(b, w, c, out),
         }
     }
@@ -3319,8 +3335,13 @@ impl Interpreter {
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
         let name = code_text(code);
-        if let Some(z) = w.get(b'Z') {
-            self.canned.z = Some(z);
+        // The holes are placed in the plane, and drilled along its normal axis (Z in
+        // G17, Y in G18, X in G19), as rs274 drills them: `canned.z` holds the depth
+        // along that axis.
+        let (u, v, n) = self.modal.plane.axes();
+        let depth_letter = AXES[n];
+        if let Some(depth) = w.get(depth_letter) {
+            self.canned.z = Some(depth);
         }
         if let Some(r) = w.get(b'R').or(w.registers[0].map(|r| r.value)) {
             self.canned.r = Some(r);
@@ -3337,12 +3358,16 @@ impl Interpreter {
                 Severity::Error,
                 ErrorKind::CannedCycleIncomplete {
                     code: name,
-                    what: "Z (depth) and R (retract plane)",
+                    what: match n {
+                        2 => "Z (depth) and R (retract plane)",
+                        1 => "Y (depth, along the normal of the G18 plane) and R (retract plane)",
+                        _ => "X (depth, along the normal of the G19 plane) and R (retract plane)",
+                    },
                 },
                 None,
             ));
         };
-        let passthrough = matches!(code, 740 | 760 | 870 | 880) || self.modal.plane != Plane::XY;
+        let passthrough = matches!(code, 740 | 760 | 870 | 880);
         let needs_q = matches!(code, 730 | 830);
         let q = self.canned.q.unwrap_or(0.0);
         if needs_q && q <= 0.0 {
@@ -3389,22 +3414,26 @@ impl Interpreter {
         // `cycle_il`; Fanuc's and Haas's "initial point", the Z before the cycle was
         // first given), in every flavour: after a G99 hole the tool is at R, and a later
         // G98 still returns to that level, and G91's R still counts from it.
-        let initial = *self.canned.initial_z.get_or_insert(self.pos[Z]);
+        let initial = *self.canned.initial_z.get_or_insert(self.pos[n]);
         let (r_abs, bottom) = if incremental {
             let r = initial + rv;
             (r, r + zv)
         } else {
-            (rv + off[Z], zv + off[Z])
+            (rv + off[n], zv + off[n])
         };
         if bottom > r_abs {
             return Err(diag(
                 b,
                 Severity::Error,
                 ErrorKind::BadValue {
-                    word: format!("G{name} Z"),
-                    why: "the hole bottom Z is above the R plane",
+                    word: format!("G{name} {}", char::from(depth_letter)),
+                    why: match n {
+                        2 => "the hole bottom Z is above the R plane",
+                        1 => "the hole bottom Y (the depth in G18) is above the R plane",
+                        _ => "the hole bottom X (the depth in G19) is above the R plane",
+                    },
                 },
-                w.word(b'Z').map(|z| z.span),
+                w.word(depth_letter).map(|d| d.span),
             ));
         }
         // Pecks per hole, counted before any is made, as rs274 makes them: feeds to
@@ -3463,15 +3492,16 @@ impl Interpreter {
                 hole = p.cycle_hole(hole).map_err(refused)?;
             }
         }
+        // A point of `p` at the level `z` along the plane's normal axis.
         let at = |p: Position, z: f64| {
             let mut q = p;
-            q[Z] = z;
+            q[n] = z;
             q
         };
         // As rs274's `CYCLE_MACRO`: below the initial level's R plane, up to it first;
         // the clearance level is R (G99) or the initial level, raised to R (G98).
         let mut level = initial;
-        let mut first_z = self.pos[Z];
+        let mut first_z = self.pos[n];
         if level < r_abs && !passthrough {
             let t = at(self.pos, r_abs);
             self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
@@ -3495,17 +3525,17 @@ impl Interpreter {
                 }
                 [xy[0], xy[1]] = self.machine_xy(hole);
             }
-            for a in [0usize, 1] {
-                if let Some(v) = w.get(AXES[a]) {
+            for a in [u, v] {
+                if let Some(value) = w.get(AXES[a]) {
                     xy[a] = if incremental {
-                        self.pos[a] + v
+                        self.pos[a] + value
                     } else {
-                        v + off[a]
+                        value + off[a]
                     };
                 }
             }
             if passthrough {
-                xy[Z] = clear;
+                xy[n] = clear;
                 self.pos = xy;
                 continue;
             }
