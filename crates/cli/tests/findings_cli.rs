@@ -320,6 +320,20 @@ fn a_lathe_s_corner_words_on_g1_are_named_not_dropped() {
         let canon = rs274_to_end(&c_axis, &dir).expect("rs274 runs it");
         compare_with_rs274(&trace_json("linuxcnc", &c_axis), &canon).expect("equal to rs274");
     }
+    // Haas lathes chamfer with I or K too: named in a lathe program, warned (a missing
+    // G2/G3) in a mill's.
+    let ik = dir.join("ik.nc");
+    std::fs::write(
+        &ik,
+        "G18 G20\nT0101\nG0 X1. Z0.1\nG1 Z-0.5 F0.01\nX1.5 K-0.02\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", "--flavor", "haas", ik.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains("error: K-0.02 on a straight move") && stderr(&o).contains(":5:6"),
+        "{}",
+        stderr(&o)
+    );
     // A mill program's C: G18 alone is no lathe program, so the C stays an axis.
     let o = lampost(&["check", "--flavor", "fanuc", c_axis.to_str().expect("utf8")]);
     assert!(o.status.success(), "{}", stderr(&o));

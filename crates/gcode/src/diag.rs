@@ -376,7 +376,7 @@ impl ErrorKind {
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",
             ErrorKind::InverseTimeNeedsF => "in G93 every feed move needs its own F",
-            ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its Z depth and R plane (and Q for peck cycles)",
+            ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its depth (Z in G17, Y in G18, X in G19) and R plane (and Q for peck cycles)",
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",

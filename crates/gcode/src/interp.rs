@@ -2360,8 +2360,8 @@ impl Interpreter {
             }
             Motion::Linear | Motion::Probe => {
                 if self.modal.motion == Motion::Linear {
-                    self.centre_words_unused(b, w, out)?;
                     self.corner_words(b, w, true)?;
+                    self.centre_words_unused(b, w, out)?;
                 }
                 let feed = self.feed_for(b, w)?;
                 self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
@@ -2858,9 +2858,9 @@ impl Interpreter {
     /// refuses the block ("R word with no g code that uses it"), and a lathe control
     /// (Haas; Fanuc without the comma) rounds the corner at the move's end with it, so
     /// dropping it would move the tool where no control does: refused in every flavour
-    /// but a printer's. In a recognised lathe program, a C on a G1 (`feed`) that moves X
-    /// or Z alone is the lathe's chamfer at the move's end, not a C-axis turn: refused
-    /// too, by name.
+    /// but a printer's. In a recognised lathe program, a C (or I, K) on a G1 (`feed`)
+    /// that moves X or Z alone is the lathe's chamfer at the move's end, not a C-axis
+    /// turn (nor an arc's centre): refused too, by name.
     fn corner_words(&self, b: &Block<'_>, w: &Words<'_, '_>, feed: bool) -> Res<()> {
         let refuse = |word: &Word<'_>, what: &'static str| {
             Err(diag(
@@ -2881,7 +2881,8 @@ impl Interpreter {
                 );
             }
         }
-        if let Some(c) = w.word(b'C').filter(|_| feed && self.lathe.recognised()) {
+        let chamfer = [b'C', b'I', b'K'].into_iter().find_map(|l| w.word(l));
+        if let Some(c) = chamfer.filter(|_| feed && self.lathe.recognised()) {
             let along = |l: u8| w.word(l).is_some();
             let xz = [b'X', b'Z', b'U', b'W']
                 .into_iter()
@@ -2891,7 +2892,7 @@ impl Interpreter {
             if xz == 1 && !others {
                 return refuse(
                     c,
-                    "in a lathe program a C on a G1 that moves X or Z alone is a chamfer at the end of the move (Haas lathe; Fanuc's chamfering), not a turn of the C axis; lampost does not simulate it",
+                    "in a lathe program a C, I or K on a G1 that moves X or Z alone is a chamfer at the end of the move (Haas lathe; Fanuc's chamfering), not a turn of the C axis or an arc's centre; lampost does not simulate it",
                 );
             }
         }
@@ -3903,7 +3904,7 @@ mod tests {
         let feeds: Vec<f64> = moves
             .iter()
             .filter(|m| m.kind == MoveKind::Linear)
-            .map(|m| m.end[Z])
+            .map(|m| m.end[2])
             .collect();
         let r = -0.604 + 0.281;
         let bottom = r + -0.4;
@@ -3924,7 +3925,7 @@ mod tests {
         let feeds: Vec<f64> = moves
             .iter()
             .filter(|m| m.kind == MoveKind::Linear)
-            .map(|m| m.end[Z])
+            .map(|m| m.end[2])
             .collect();
         assert_eq!(
             feeds,
