@@ -417,6 +417,19 @@ fn a_lathe_program_is_said_once_and_not_posted() {
     if require_rs274().is_some() {
         assert!(rs274_to_end(&g92, &dir).is_err(), "rs274 refuses G92 S");
     }
+    // Feed per revolution is no sign (mills tap with it), so G18 with G95 is a mill's.
+    let mill = dir.join("g18-g95.nc");
+    std::fs::write(
+        &mill,
+        "G20 G90 G18\nG95 S500 M3\nG0 X1. Z1.\nG1 Z0. F.01\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", "--flavor", "fanuc", mill.to_str().expect("utf8")]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("lathe (turning)"),
+        "{}",
+        stderr(&o)
+    );
     // One sign that mill programs show too is not enough: G18 (finding 21) alone.
     let o = lampost(&[
         "check",

@@ -2960,7 +2960,6 @@ impl Interpreter {
                 760 if w.word(b'D').is_some() => Sign::Sure("a lathe's threading cycle"),
                 180 => Sign::PlaneXz,
                 960 => Sign::SurfaceSpeed,
-                950 => Sign::FeedPerRevolution,
                 280 | 300 if w.word(b'U').is_some() || w.word(b'W').is_some() => {
                     Sign::IncrementalXz
                 }

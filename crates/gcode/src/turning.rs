@@ -7,8 +7,9 @@
 //! refuses such a program.
 //!
 //! Conservative: one sign only a lathe's program shows ([`Sign::Sure`]) is enough; the
-//! others are each found in some mill programs (G18 for arcs in XZ, G95 for tapping, a
-//! four-digit T, a stray R), so two different ones are needed.
+//! others are each found in some mill programs (G18 for arcs in XZ, a four-digit T, a
+//! stray R), so two different ones are needed. Feed per revolution (G95) is no sign: mills
+//! tap with it.
 
 /// One sign of a lathe program.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,8 +22,6 @@ pub(crate) enum Sign {
     PlaneXz,
     /// Constant surface speed (G96).
     SurfaceSpeed,
-    /// Feed per revolution (G95).
-    FeedPerRevolution,
     /// U or W on a return to the reference point (`G28 U0 W0`: incremental X and Z).
     IncrementalXz,
     /// An R word on a straight move (a lathe's corner radius).
@@ -37,7 +36,6 @@ impl Sign {
             Sign::ToolAndOffset => "a lathe's tool and offset number",
             Sign::PlaneXz => "the XZ plane of a lathe",
             Sign::SurfaceSpeed => "constant surface speed",
-            Sign::FeedPerRevolution => "feed per revolution",
             Sign::IncrementalXz => "a lathe's incremental X and Z",
             Sign::CornerRadius => "a lathe's corner radius on a straight move",
         }
