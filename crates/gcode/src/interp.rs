@@ -2341,6 +2341,7 @@ impl Interpreter {
             Motion::Rapid => {
                 self.centre_words_unused(b, w, out)?;
                 self.corner_words(b, w, false)?;
+                self.endstop_move(b, w, out);
                 self.emit_comp(b, MoveKind::Rapid, target, 0.0, origin, out)
             }
             Motion::Thread => {
@@ -2362,6 +2363,7 @@ impl Interpreter {
                 if self.modal.motion == Motion::Linear {
                     self.corner_words(b, w, true)?;
                     self.centre_words_unused(b, w, out)?;
+                    self.endstop_move(b, w, out);
                 }
                 let feed = self.feed_for(b, w)?;
                 self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
@@ -2897,6 +2899,31 @@ impl Interpreter {
             }
         }
         Ok(())
+    }
+
+    /// RepRapFirmware's `G1 H1 X-1000` (H1, H3, H4: the move stops where an endstop
+    /// triggers, as homing macros write it; H2: each motor moved on its own): where the
+    /// head ends is not known, so the move is warned of (traced to its programmed end),
+    /// and the post refuses it. It used to be traced to X-1000 with no word.
+    fn endstop_move(&self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) {
+        if self.opts.flavor != crate::flavor::Flavor::RepRap {
+            return;
+        }
+        let Some(h) = w.word(b'H').filter(|h| h.value != 0.0) else {
+            return;
+        };
+        let code = w
+            .g_in(GGroup::Motion)
+            .map_or_else(|| "a move".to_string(), |(gw, _)| gw.display_code());
+        self.warn(
+            b,
+            out,
+            ErrorKind::NotSimulated(format!(
+                "{code} {} (RepRapFirmware: the move stops where an endstop triggers, or moves the motors one by one; the trace goes to its programmed end)",
+                h.display()
+            )),
+            Some(h.span),
+        );
     }
 
     /// A lathe's spindle speed limit `G92 S…` with no axis word (Fanuc lathe G-code
