@@ -262,3 +262,300 @@ fn haas_g110_to_g129_are_work_offsets() {
     let o = lampost(&["check", "--flavor", "haas", p.to_str().expect("utf8")]);
     assert!(stderr(&o).contains("unknown G-code G112"), "{}", stderr(&o));
 }
+
+/// A lathe's corner radius and chamfer on G1 without the comma (`G01 Z-0.5 R0.05`,
+/// `X1.5 C0.02`; Haas lathe, Fanuc): the R was dropped with no word in every flavour and
+/// the C traced as a C-axis turn of 0.02°. An R on a straight move is refused where it
+/// stands in every flavour, as rs274 refuses it ("R word with no g code that uses it");
+/// in a program recognised as a lathe's, the C of a G1 that moves X or Z alone is named
+/// as a chamfer. rs274 itself (and `linuxcnc`) moves the C axis.
+#[test]
+fn a_lathe_s_corner_words_on_g1_are_named_not_dropped() {
+    let path = finding("23-lathe-g01-r-and-c.nc");
+    let p = path.to_str().expect("utf8");
+    for flavor in ["auto", "fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+        let o = lampost(&["check", "--flavor", flavor, p]);
+        assert_eq!(o.status.code(), Some(1), "{flavor}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("error: R0.05 on a straight move") && e.contains(":3:11"),
+            "{flavor}: {e}"
+        );
+        let lathe = flavor != "linuxcnc";
+        assert_eq!(
+            e.contains("C0.02 on a straight move") && e.contains(":4:6") && e.contains("chamfer"),
+            lathe,
+            "{flavor}: {e}"
+        );
+        assert_eq!(
+            e.matches("this is a lathe (turning) program").count(),
+            usize::from(lathe)
+        );
+        let o = lampost(&["trace", "--flavor", flavor, p]);
+        assert_eq!(o.status.code(), Some(1), "{flavor}: trace stops at 3:11");
+    }
+    let dir = tempdir("findings-corner");
+    // A G0's R too, and the C of a G1 in LinuxCNC: a C-axis move, as rs274 makes it.
+    let g0 = dir.join("g0-r.nc");
+    std::fs::write(&g0, "G20 G90\nG0 X1.0 Z0.1 R0.05\nM30\n").expect("write");
+    let o = lampost(&["check", "--flavor", "linuxcnc", g0.to_str().expect("utf8")]);
+    assert!(stderr(&o).contains(":2:14"), "{}", stderr(&o));
+    let c_axis = dir.join("c-axis.nc");
+    std::fs::write(
+        &c_axis,
+        "G20 G90 G18\nG0 X1.0 Z0.1\nG01 Z-0.5 F0.01\nX1.5 C0.02\nM30\n",
+    )
+    .expect("write");
+    if require_rs274().is_some() {
+        let refused = rs274_to_end(&path, &dir).expect_err("rs274 refuses the R");
+        assert!(
+            refused.contains("R word with no g code that uses it"),
+            "{refused}"
+        );
+        let refused = rs274_to_end(&g0, &dir).expect_err("rs274 refuses the R");
+        assert!(
+            refused.contains("R word with no g code that uses it"),
+            "{refused}"
+        );
+        let canon = rs274_to_end(&c_axis, &dir).expect("rs274 runs it");
+        compare_with_rs274(&trace_json("linuxcnc", &c_axis), &canon).expect("equal to rs274");
+    }
+    // Haas lathes chamfer with I or K too: named in a lathe program, warned (a missing
+    // G2/G3) in a mill's.
+    let ik = dir.join("ik.nc");
+    std::fs::write(
+        &ik,
+        "G18 G20\nT0101\nG0 X1. Z0.1\nG1 Z-0.5 F0.01\nX1.5 K-0.02\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", "--flavor", "haas", ik.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains("error: K-0.02 on a straight move") && stderr(&o).contains(":5:6"),
+        "{}",
+        stderr(&o)
+    );
+    // A mill program's C: G18 alone is no lathe program, so the C stays an axis.
+    let o = lampost(&["check", "--flavor", "fanuc", c_axis.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("lathe"), "{}", stderr(&o));
+}
+
+/// Fanuc and Haas lathe programs (X a diameter, `T0101`, `G50 S`, `G96`, G18) were read
+/// as a mill's with no word. Recognised (one sign only a lathe's program shows, or two
+/// different ones) and said once, at the block that shows it, by `check` and `trace`;
+/// the post refuses them and writes nothing. `G92 S500` (a lathe's spindle limit in
+/// G-code systems B and C) is no longer "G92 needs at least one axis word" outside
+/// LinuxCNC, which refuses it as rs274 does.
+#[test]
+fn a_lathe_program_is_said_once_and_not_posted() {
+    for (name, line) in [
+        ("03-lathe-diameter-arc.nc", ":2:1"),
+        ("04-lathe-g76-one-block.nc", ":2:1"),
+    ] {
+        let path = finding(name);
+        let o = lampost(&["check", path.to_str().expect("utf8")]);
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("{name}{line}")) && e.contains("`T0101`") == name.starts_with("03"),
+            "{e}"
+        );
+        assert_eq!(
+            e.matches("this is a lathe (turning) program").count(),
+            1,
+            "{e}"
+        );
+    }
+    let t = root().join("fixtures/real-programs/fanuc/FANUC0T.nc");
+    let tp = t.to_str().expect("utf8");
+    let o = lampost(&["trace", tp]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("FANUC0T.nc:4:4") && e.contains("`G50 S0600` (a lathe's spindle speed limit)"),
+        "{e}"
+    );
+    assert_eq!(
+        e.matches("this is a lathe (turning) program").count(),
+        1,
+        "{e}"
+    );
+    let dir = tempdir("findings-lathe-post");
+    let posted = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--convert-units",
+        tp,
+        "-o",
+        posted.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("FANUC0T.nc:4:") && stderr(&o).contains("posts mill programs only"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!posted.exists(), "a refused post writes nothing");
+    let g92 = dir.join("g92-s.nc");
+    std::fs::write(&g92, "G21 G90 G95\nG92 S500\nG0 X160. Z7.\nM30\n").expect("write");
+    let g = g92.to_str().expect("utf8");
+    let o = lampost(&["check", "--flavor", "fanuc", g]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":2:1") && stderr(&o).contains("`G92 S500`"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&["check", "--flavor", "linuxcnc", g]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("G92 needs at least one axis word"),
+        "{}",
+        stderr(&o)
+    );
+    if require_rs274().is_some() {
+        assert!(rs274_to_end(&g92, &dir).is_err(), "rs274 refuses G92 S");
+    }
+    // Feed per revolution is no sign (mills tap with it), so G18 with G95 is a mill's.
+    let mill = dir.join("g18-g95.nc");
+    std::fs::write(
+        &mill,
+        "G20 G90 G18\nG95 S500 M3\nG0 X1. Z1.\nG1 Z0. F.01\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", "--flavor", "fanuc", mill.to_str().expect("utf8")]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("lathe (turning)"),
+        "{}",
+        stderr(&o)
+    );
+    // One sign that mill programs show too is not enough: G18 (finding 21) alone.
+    let o = lampost(&[
+        "check",
+        finding("21-g18-cycle-z-read-as-depth.nc")
+            .to_str()
+            .expect("utf8"),
+    ]);
+    assert!(!stderr(&o).contains("lathe"), "{}", stderr(&o));
+}
+
+/// A drill cycle in the XZ or YZ plane (`G18 G81 Z3 X4 R0.2 Y-1.1`) drills along the
+/// plane's normal axis (Y in G18, X in G19), its hole placed by the plane's two axes, as
+/// rs274 drills it; it was refused "the hole bottom Z is above the R plane" (Z taken as
+/// the depth), in every flavour. Equal to rs274: the finding's program (`linuxcnc`, where
+/// G99 is the default), G81 and G83 in G18 and G19 with G98/G99 said (every flavour), and
+/// NIST's cycle test without its G87/G88 (passed through, warned) and its G84s outside
+/// G17 (which rs274 gets wrong); a bottom above R is refused at the depth word by both.
+#[test]
+fn a_drill_cycle_outside_g17_drills_along_the_plane_s_normal() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-g18-cycles");
+    let path = finding("21-g18-cycle-z-read-as-depth.nc");
+    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+    compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    let both = work.join("g18-g19.nc");
+    std::fs::write(
+        &both,
+        "G20 G90\nG0 X0 Y2 Z0\nG18 G99 G81 Z3 X4 R0.2 Y-1.1 F16\nX5 Z4\nG91 Z1 X0 R0 L2\n\
+         G90 G80\nG0 X6\nG19 G98 G83 Y1 Z2 X-0.5 R0.5 Q0.5\nG80\nG0 Y3\nM2\n",
+    )
+    .expect("write");
+    let canon = rs274_to_end(&both, &work).expect("rs274 runs it");
+    for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+        let doc = trace_json(flavor, &both);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+    }
+    let nist = root().join("fixtures/real-programs/nist-rs274ngc/cycle-test.gcode");
+    let text = std::fs::read_to_string(&nist).expect("read");
+    let kept: String = text
+        .lines()
+        .filter(|l| !(l.contains("g87") || l.contains("g88") || l.contains("i-0 j-3")))
+        .filter(|l| !(l.contains("j-0 k-3") || l.contains("k-0 i-3")))
+        // rs274's G84 outside G17 feeds to its coordinates in the wrong order
+        // (`n0300 g84 z6 x7 r0.2 y-1.1` in G18: a feed to X-1.1 Y6 Z7).
+        .filter(|l| !(l.starts_with("n0300 g84") || l.starts_with("n0500 g84")))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let cut = work.join("cycle-test-no-g87-g88.ngc");
+    std::fs::write(&cut, kept).expect("write");
+    let canon = rs274_to_end(&cut, &work).expect("rs274 runs it");
+    compare_with_rs274(&trace_json("linuxcnc", &cut), &canon).expect("equal to rs274");
+    eprintln!(
+        "NIST cycle test without G87/G88 (and G84 outside G17): {} moves equal to rs274",
+        canon.len()
+    );
+    let bad = work.join("bad.nc");
+    std::fs::write(
+        &bad,
+        "G20 G90\nG0 X0 Y2 Z0\nG18 G81 Z3 X4 R0.2 Y1 F16\nM2\n",
+    )
+    .expect("write");
+    let refused = rs274_to_end(&bad, &work).expect_err("rs274 refuses it");
+    assert!(refused.contains("R less than y"), "{refused}");
+    let o = lampost(&["check", "--flavor", "linuxcnc", bad.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains(":3:20") && stderr(&o).contains("hole bottom Y"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// RepRapFirmware's endstop move `G1 H1 X-1000` (a homing macro's: the move stops where
+/// the endstop triggers) was traced to X-1000 and posted with no word. Under `reprap`
+/// (what `auto` picks for RepRapFirmware's macros) it is warned of at its H, each time,
+/// and the post refuses it, writing nothing.
+#[test]
+fn a_reprap_endstop_move_is_named_and_not_posted() {
+    let path = finding("07-rrf-h1-endstop-move.g");
+    let o = lampost(&["check", "--flavor", "reprap", path.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":2:4") && stderr(&o).contains("G1 H1 (RepRapFirmware"),
+        "{}",
+        stderr(&o)
+    );
+    let homex = root().join("fixtures/real-programs/rrf-macros/printnc-homex.g");
+    let h = homex.to_str().expect("utf8");
+    let o = lampost(&["check", h]);
+    let e = stderr(&o);
+    assert!(
+        e.contains("flavour reprap") && e.contains(":6:4") && e.contains(":8:4"),
+        "{e}"
+    );
+    let dir = tempdir("findings-rrf-h1");
+    // Posted (it used to be: the endstop move as a traverse to X-100).
+    let prog = dir.join("h1.g");
+    std::fs::write(
+        &prog,
+        "; generated by RepRapFirmware\nG21 G90\nM83\nG1 H1 X-100 F1800\nG1 X10 Y10 Z0.2 F1200\nG1 X20 Y10 E1\nG1 X20 Y20 E1\n",
+    )
+    .expect("write");
+    let posted = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        prog.to_str().expect("utf8"),
+        "-o",
+        posted.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("h1.g:4: G1 H1 (RepRapFirmware"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!posted.exists(), "a refused post writes nothing");
+    // H0 is an ordinary move.
+    let plain = dir.join("h0.g");
+    std::fs::write(&plain, "; RepRapFirmware\nG21 G91\nG1 H0 X5 F600\nG90\n").expect("write");
+    let o = lampost(&["check", "--flavor", "reprap", plain.to_str().expect("utf8")]);
+    assert!(
+        !stderr(&o).contains("RepRapFirmware: the move stops"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -20,6 +20,10 @@
 //! see docs/post.md), and nothing else is changed. Each must also be read as a slicer's
 //! program by `--flavor auto` (`marlin`, `reprap` or `makerbot` in `check --json`).
 //!
+//! A program `lampost check` says is a lathe's (Fanuc or Haas turning, read as a mill's)
+//! has `; lathe L` after its verdict, L the line where it is said: a mill program
+//! taken for a lathe's would change its verdict.
+//!
 //! A verdict that changes fails the test: an improvement is recorded by running it with
 //! `LAMPOST_UPDATE_VERDICTS=1` and reviewing the diff of `VERDICTS`.
 
@@ -77,6 +81,23 @@ fn first_error(path: &Path, e_word: &[&str]) -> String {
                 )
             },
         )
+}
+
+/// The line at which `lampost check` says the program is a lathe's (`; lathe L` in its
+/// verdict), if it does: every other program must be read as a mill's or a printer's.
+fn lathe_line(path: &Path, e_word: &[&str]) -> Option<u64> {
+    let p = path.to_str().expect("utf-8 path");
+    let mut args = vec!["check", "--json"];
+    args.extend_from_slice(e_word);
+    args.push(p);
+    let out = lampost(&args);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+    doc["diagnostics"].as_array()?.iter().find_map(|d| {
+        d["message"]
+            .as_str()
+            .filter(|m| m.contains("this is a lathe (turning) program"))
+            .and(d["line"].as_u64())
+    })
 }
 
 /// The flavour `--flavor auto` finds for a program, as `check --json` reports it.
@@ -235,6 +256,9 @@ fn real_programs_against_their_verdicts() {
             let v = post_verdict(path, &work);
             deposits += usize::from(!v.contains("refused"));
             verdict = format!("{verdict}; {v}");
+        }
+        if let Some(line) = lathe_line(path, e_word) {
+            verdict = format!("{verdict}; lathe {line}");
         }
         got.insert(format!("{gen}/{name}"), verdict);
     }

@@ -160,6 +160,21 @@ pub enum ErrorKind {
     /// lathe's cycle, which the post refuses.
     #[error("{0} is a lathe cycle: traced as the moves LinuxCNC makes of it on a lathe")]
     LatheCycle(String),
+    /// A Fanuc or Haas lathe (turning) program, recognised by its words (`G50 S`,
+    /// `T0101` with G18, …: see `turning.rs`), read here as a mill's: said once, at the
+    /// block that shows it; the post refuses it.
+    #[error("{0}: this is a lathe (turning) program, read here as a mill's: a lathe's X is a diameter (traced as a radius, twice as far from the axis), U and W are its incremental X and Z, and its cycles and corner words are not simulated (said once)")]
+    LatheProgram(String),
+    /// An R word on a straight move (G0, G1), which no code of the block reads (rs274
+    /// refuses the block), or, in a lathe program, a C on a G1 that moves X or Z alone: a
+    /// lathe's corner radius or chamfer at the move's end, not simulated.
+    #[error("{word} on a straight move: {what}")]
+    CornerWord {
+        /// The word as written.
+        word: String,
+        /// What it would be, and why it is not taken.
+        what: &'static str,
+    },
     /// A canned cycle passed through, not expanded.
     #[error("canned cycle G{0} is passed through, not expanded into moves")]
     CannedCyclePassedThrough(String),
@@ -361,7 +376,7 @@ impl ErrorKind {
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",
             ErrorKind::InverseTimeNeedsF => "in G93 every feed move needs its own F",
-            ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its Z depth and R plane (and Q for peck cycles)",
+            ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its depth (Z in G17, Y in G18, X in G19) and R plane (and Q for peck cycles)",
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
@@ -369,6 +384,8 @@ impl ErrorKind {
             ErrorKind::CutterComp(_) => "the tool does not fit the path on this side: check the radius (D), the side (G41/G42) and the entry move, or lead in and out with room to spare",
             ErrorKind::ProfileCycle(_) => "G70/G71/G72 need Q (the O-word subroutine of the profile, in this file), G18 (the XZ plane), cutter compensation off for G71/G72 (G40), I (the depth of cut) above 0, and a profile that runs one way in X and in Z",
             ErrorKind::LatheCycle(_) => "a lathe cycle cannot be posted to these machines; write its moves out as G0/G1/G2/G3",
+            ErrorKind::LatheProgram(_) => "lampost traces and posts mill programs only: check a lathe program on the lathe's own graphics (the post refuses it)",
+            ErrorKind::CornerWord { .. } => "write the corner as moves of its own (a radius as a G2/G3 arc, a chamfer as a G1 line), or remove the word; LinuxCNC refuses an R on a straight move too",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
             ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
             ErrorKind::VendorCommand(_) => "nothing to do: a vendor's line (WEEDO's W221 and W220 carry the preview image) moves nothing",

@@ -237,6 +237,8 @@ pub struct Interpreter {
     /// ([`Interpreter::position`]) stays on the programmed path, as rs274 reads the next
     /// block from it.
     comp_drawn: Position,
+    /// The signs of a lathe program seen so far (`turning.rs`).
+    lathe: crate::turning::LatheSigns,
 }
 
 /// What a compensated move keeps of its block: line, end (for the axes off the plane),
@@ -309,6 +311,9 @@ impl<'b, 'a> Words<'b, 'a> {
         }
     }
 }
+
+/// The C axis's bit (see [`AXIS_BITS`]).
+const C_AXIS: u16 = AXIS_BITS[(b'C' - b'A') as usize];
 
 /// Bit `i` for the letter `AXES[i]`, by letter (`A` first); 0 for the other letters.
 const AXIS_BITS: [u16; 26] = {
@@ -471,6 +476,7 @@ impl Interpreter {
             comp_entry: None,
             comp: None,
             comp_drawn: [0.0; 9],
+            lathe: crate::turning::LatheSigns::default(),
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -600,6 +606,9 @@ impl Interpreter {
             angle: None,
         };
         self.collect(b, &mut w)?;
+        if !self.lathe.recognised() {
+            self.lathe_signs(b, &w, out);
+        }
         // A block of an M-code lampost does not act on (a firmware or control setting:
         // `M201 X4000 Y4000`, `M205 X1 Y1 Z1 E1`) and no G-code: its words are its own.
         let levelling = self.bed_levelling(b, &w, out);
@@ -762,6 +771,10 @@ impl Interpreter {
     pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
         if self.profile.is_some() || self.comp.is_some() {
             // Compensated moves are held (`comp.rs`): the reference path makes them.
+            return None;
+        }
+        if self.lathe.recognised() && p.axes() & C_AXIS != 0 {
+            // A lathe's C may be a chamfer (`corner_words`).
             return None;
         }
         let motion = match p.motion {
@@ -1675,7 +1688,7 @@ impl Interpreter {
                     axes_used = true;
                     let extruder_only =
                         self.opts.e_word == EWord::Extrusion && w.word(b'E').is_some();
-                    if !w.has_axes() && !extruder_only {
+                    if !w.has_axes() && !extruder_only && !self.spindle_limit(w) {
                         return Err(diag(
                             b,
                             Severity::Error,
@@ -2327,6 +2340,8 @@ impl Interpreter {
             )),
             Motion::Rapid => {
                 self.centre_words_unused(b, w, out)?;
+                self.corner_words(b, w, false)?;
+                self.endstop_move(b, w, out);
                 self.emit_comp(b, MoveKind::Rapid, target, 0.0, origin, out)
             }
             Motion::Thread => {
@@ -2346,7 +2361,9 @@ impl Interpreter {
             }
             Motion::Linear | Motion::Probe => {
                 if self.modal.motion == Motion::Linear {
+                    self.corner_words(b, w, true)?;
                     self.centre_words_unused(b, w, out)?;
+                    self.endstop_move(b, w, out);
                 }
                 let feed = self.feed_for(b, w)?;
                 self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
@@ -2362,6 +2379,22 @@ impl Interpreter {
             }
             Motion::Canned(760) if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
                 self.threading(b, w, target, out)
+            }
+            Motion::Canned(760) if w.word(b'D').is_some() => {
+                // A Fanuc or Haas lathe's one-block threading cycle `G76 X Z K D F` (D:
+                // the first pass's depth; a mill's fine boring has none): named, not
+                // read as fine boring; it ends where it started.
+                let code = w.g_in(GGroup::Motion).map(|(gw, _)| gw);
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "{} with D (a Fanuc or Haas lathe's threading cycle; the trace stays where it started)",
+                        code.map_or_else(|| "G76".to_string(), |gw| gw.display_code())
+                    )),
+                    code.map(|gw| gw.span),
+                );
+                Ok(())
             }
             Motion::Canned(c) => self.canned_cycle(b, w, c, out),
         }
@@ -2823,6 +2856,166 @@ impl Interpreter {
     /// An arc centre word (I, J, K) on a straight move: a missing G2/G3, most likely.
     /// LinuxCNC refuses it (as rs274 and grbl do); elsewhere a warning (Haas lathes
     /// chamfer with I/K on G01, and printers ignore them).
+    /// An R word on a straight move (G0, G1), which no code of the block reads: rs274
+    /// refuses the block ("R word with no g code that uses it"), and a lathe control
+    /// (Haas; Fanuc without the comma) rounds the corner at the move's end with it, so
+    /// dropping it would move the tool where no control does: refused in every flavour
+    /// but a printer's. In a recognised lathe program, a C (or I, K) on a G1 (`feed`)
+    /// that moves X or Z alone is the lathe's chamfer at the move's end, not a C-axis
+    /// turn (nor an arc's centre): refused too, by name.
+    fn corner_words(&self, b: &Block<'_>, w: &Words<'_, '_>, feed: bool) -> Res<()> {
+        let refuse = |word: &Word<'_>, what: &'static str| {
+            Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::CornerWord {
+                    word: word.display(),
+                    what,
+                },
+                Some(word.span),
+            ))
+        };
+        if let Some(r) = w.word(b'R') {
+            if !self.opts.flavor.is_slicer() && self.opts.e_word != EWord::Extrusion {
+                return refuse(
+                    r,
+                    "no code of the block reads R (rs274 refuses it: \"R word with no g code that uses it\"); a lathe control rounds the corner at the end of the move with radius R, which lampost does not simulate",
+                );
+            }
+        }
+        let chamfer = [b'C', b'I', b'K'].into_iter().find_map(|l| w.word(l));
+        if let Some(c) = chamfer.filter(|_| feed && self.lathe.recognised()) {
+            let along = |l: u8| w.word(l).is_some();
+            let xz = [b'X', b'Z', b'U', b'W']
+                .into_iter()
+                .filter(|&l| along(l))
+                .count();
+            let others = [b'Y', b'A', b'B', b'V'].into_iter().any(along);
+            if xz == 1 && !others {
+                return refuse(
+                    c,
+                    "in a lathe program a C, I or K on a G1 that moves X or Z alone is a chamfer at the end of the move (Haas lathe; Fanuc's chamfering), not a turn of the C axis or an arc's centre; lampost does not simulate it",
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// RepRapFirmware's `G1 H1 X-1000` (H1, H3, H4: the move stops where an endstop
+    /// triggers, as homing macros write it; H2: each motor moved on its own): where the
+    /// head ends is not known, so the move is warned of (traced to its programmed end),
+    /// and the post refuses it. It used to be traced to X-1000 with no word.
+    fn endstop_move(&self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) {
+        if self.opts.flavor != crate::flavor::Flavor::RepRap {
+            return;
+        }
+        let Some(h) = w.word(b'H').filter(|h| h.value != 0.0) else {
+            return;
+        };
+        let code = w
+            .g_in(GGroup::Motion)
+            .map_or_else(|| "a move".to_string(), |(gw, _)| gw.display_code());
+        self.warn(
+            b,
+            out,
+            ErrorKind::NotSimulated(format!(
+                "{code} {} (RepRapFirmware: the move stops where an endstop triggers, or moves the motors one by one; the trace goes to its programmed end)",
+                h.display()
+            )),
+            Some(h.span),
+        );
+    }
+
+    /// A lathe's spindle speed limit `G92 S…` with no axis word (Fanuc lathe G-code
+    /// systems B and C), outside LinuxCNC and printers: nothing moves, and the block is
+    /// one of the signs of a lathe program (said by `lathe_signs`).
+    fn spindle_limit(&self, w: &Words<'_, '_>) -> bool {
+        self.reads_lathe_signs() && !w.has_axes() && w.word(b'S').is_some()
+    }
+
+    /// Whether the flavour's programs may be a Fanuc or Haas lathe's (not LinuxCNC's,
+    /// whose lathe programs rs274 reads as lampost does, nor a printer's).
+    fn reads_lathe_signs(&self) -> bool {
+        self.opts.flavor != crate::flavor::Flavor::LinuxCnc
+            && !self.opts.flavor.is_slicer()
+            && self.opts.e_word != EWord::Extrusion
+    }
+
+    /// The signs of a lathe program in a block (`turning.rs`), said once, at the block
+    /// that completes them, as a warning at the word that showed it.
+    fn lathe_signs(&mut self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) {
+        if !self.reads_lathe_signs() {
+            return;
+        }
+        for (sign, words, span) in self.signs_of(w) {
+            if let Some(evidence) = self.lathe.observe(b.line, sign, &words) {
+                self.warn(b, out, ErrorKind::LatheProgram(evidence), Some(span));
+                return;
+            }
+        }
+    }
+
+    /// A block's signs of a lathe program, with the words that show each and where.
+    fn signs_of(
+        &self,
+        w: &Words<'_, '_>,
+    ) -> smallvec::SmallVec<[(crate::turning::Sign, String, crate::ast::Span); 2]> {
+        use crate::turning::Sign;
+        let mut signs = smallvec::SmallVec::new();
+        let with = |code: &Word<'_>, letters: &[u8]| {
+            let mut text = code.display_code();
+            for word in letters.iter().filter_map(|&l| w.word(l)) {
+                text.push(' ');
+                text.push_str(&word.display());
+            }
+            text
+        };
+        for &(gw, c, _) in &w.gs {
+            let sign = match c {
+                500 if w.word(b'S').is_some() && !w.has_axes() => {
+                    Sign::Sure("a lathe's spindle speed limit")
+                }
+                500 if w.word(b'X').is_some() || w.word(b'Z').is_some() => {
+                    Sign::Sure("a lathe's coordinate system setting")
+                }
+                920 if self.spindle_limit(w) => {
+                    Sign::Sure("a lathe's spindle speed limit, G-code systems B and C")
+                }
+                700 | 710 | 720 if w.word(b'P').is_some() && w.word(b'Q').is_some() => {
+                    Sign::Sure("a lathe's finishing or roughing cycle over the blocks P to Q")
+                }
+                760 if w.word(b'D').is_some() => Sign::Sure("a lathe's threading cycle"),
+                180 => Sign::PlaneXz,
+                960 => Sign::SurfaceSpeed,
+                280 | 300 if w.word(b'U').is_some() || w.word(b'W').is_some() => {
+                    Sign::IncrementalXz
+                }
+                _ => continue,
+            };
+            let words = match sign {
+                Sign::Sure(_) => with(gw, b"XZSPQD"),
+                Sign::IncrementalXz => with(gw, b"UW"),
+                _ => gw.display_code(),
+            };
+            signs.push((sign, words, gw.span));
+        }
+        if let Some(t) = w.word(b'T') {
+            if crate::turning::tool_and_offset(t.text) {
+                signs.push((Sign::ToolAndOffset, t.display(), t.span));
+            }
+        }
+        if let Some(r) = w.word(b'R') {
+            let straight = match w.g_in(GGroup::Motion) {
+                Some((_, c)) => matches!(c, 0 | 10),
+                None => w.has_axes() && matches!(self.modal.motion, Motion::Rapid | Motion::Linear),
+            };
+            if straight && w.gs.iter().all(|g| g.2 != GGroup::NonModal) {
+                signs.push((Sign::CornerRadius, r.display(), r.span));
+            }
+        }
+        signs
+    }
+
     fn centre_words_unused(
         &self,
         b: &Block<'_>,
@@ -3169,8 +3362,13 @@ impl Interpreter {
         out: &mut impl FnMut(Event),
     ) -> Res<()> {
         let name = code_text(code);
-        if let Some(z) = w.get(b'Z') {
-            self.canned.z = Some(z);
+        // The holes are placed in the plane, and drilled along its normal axis (Z in
+        // G17, Y in G18, X in G19), as rs274 drills them: `canned.z` holds the depth
+        // along that axis.
+        let (u, v, n) = self.modal.plane.axes();
+        let depth_letter = AXES[n];
+        if let Some(depth) = w.get(depth_letter) {
+            self.canned.z = Some(depth);
         }
         if let Some(r) = w.get(b'R').or(w.registers[0].map(|r| r.value)) {
             self.canned.r = Some(r);
@@ -3187,12 +3385,16 @@ impl Interpreter {
                 Severity::Error,
                 ErrorKind::CannedCycleIncomplete {
                     code: name,
-                    what: "Z (depth) and R (retract plane)",
+                    what: match n {
+                        2 => "Z (depth) and R (retract plane)",
+                        1 => "Y (depth, along the normal of the G18 plane) and R (retract plane)",
+                        _ => "X (depth, along the normal of the G19 plane) and R (retract plane)",
+                    },
                 },
                 None,
             ));
         };
-        let passthrough = matches!(code, 740 | 760 | 870 | 880) || self.modal.plane != Plane::XY;
+        let passthrough = matches!(code, 740 | 760 | 870 | 880);
         let needs_q = matches!(code, 730 | 830);
         let q = self.canned.q.unwrap_or(0.0);
         if needs_q && q <= 0.0 {
@@ -3239,22 +3441,26 @@ impl Interpreter {
         // `cycle_il`; Fanuc's and Haas's "initial point", the Z before the cycle was
         // first given), in every flavour: after a G99 hole the tool is at R, and a later
         // G98 still returns to that level, and G91's R still counts from it.
-        let initial = *self.canned.initial_z.get_or_insert(self.pos[Z]);
+        let initial = *self.canned.initial_z.get_or_insert(self.pos[n]);
         let (r_abs, bottom) = if incremental {
             let r = initial + rv;
             (r, r + zv)
         } else {
-            (rv + off[Z], zv + off[Z])
+            (rv + off[n], zv + off[n])
         };
         if bottom > r_abs {
             return Err(diag(
                 b,
                 Severity::Error,
                 ErrorKind::BadValue {
-                    word: format!("G{name} Z"),
-                    why: "the hole bottom Z is above the R plane",
+                    word: format!("G{name} {}", char::from(depth_letter)),
+                    why: match n {
+                        2 => "the hole bottom Z is above the R plane",
+                        1 => "the hole bottom Y (the depth in G18) is above the R plane",
+                        _ => "the hole bottom X (the depth in G19) is above the R plane",
+                    },
                 },
-                w.word(b'Z').map(|z| z.span),
+                w.word(depth_letter).map(|d| d.span),
             ));
         }
         // Pecks per hole, counted before any is made, as rs274 makes them: feeds to
@@ -3313,15 +3519,16 @@ impl Interpreter {
                 hole = p.cycle_hole(hole).map_err(refused)?;
             }
         }
+        // A point of `p` at the level `z` along the plane's normal axis.
         let at = |p: Position, z: f64| {
             let mut q = p;
-            q[Z] = z;
+            q[n] = z;
             q
         };
         // As rs274's `CYCLE_MACRO`: below the initial level's R plane, up to it first;
         // the clearance level is R (G99) or the initial level, raised to R (G98).
         let mut level = initial;
-        let mut first_z = self.pos[Z];
+        let mut first_z = self.pos[n];
         if level < r_abs && !passthrough {
             let t = at(self.pos, r_abs);
             self.emit(b.line, MoveKind::Rapid, t, 0.0, Origin::CannedCycle, out);
@@ -3345,17 +3552,17 @@ impl Interpreter {
                 }
                 [xy[0], xy[1]] = self.machine_xy(hole);
             }
-            for a in [0usize, 1] {
-                if let Some(v) = w.get(AXES[a]) {
+            for a in [u, v] {
+                if let Some(value) = w.get(AXES[a]) {
                     xy[a] = if incremental {
-                        self.pos[a] + v
+                        self.pos[a] + value
                     } else {
-                        v + off[a]
+                        value + off[a]
                     };
                 }
             }
             if passthrough {
-                xy[Z] = clear;
+                xy[n] = clear;
                 self.pos = xy;
                 continue;
             }
@@ -3723,7 +3930,7 @@ mod tests {
         let feeds: Vec<f64> = moves
             .iter()
             .filter(|m| m.kind == MoveKind::Linear)
-            .map(|m| m.end[Z])
+            .map(|m| m.end[2])
             .collect();
         let r = -0.604 + 0.281;
         let bottom = r + -0.4;
@@ -3744,7 +3951,7 @@ mod tests {
         let feeds: Vec<f64> = moves
             .iter()
             .filter(|m| m.kind == MoveKind::Linear)
-            .map(|m| m.end[Z])
+            .map(|m| m.end[2])
             .collect();
         assert_eq!(
             feeds,

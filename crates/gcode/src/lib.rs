@@ -40,6 +40,7 @@ mod parse;
 mod polar;
 mod program;
 mod stream;
+mod turning;
 
 pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Text, Word};
 pub use decimal::{parse_number, parse_plain, push_exact_fixed, POW10};

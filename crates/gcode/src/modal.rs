@@ -4,8 +4,6 @@ use serde::Serialize;
 
 /// Axis letters in the order positions are stored.
 pub const AXES: [u8; 9] = *b"XYZABCUVW";
-/// Index of Z in [`AXES`].
-pub const Z: usize = 2;
 /// True for the rotary axes A, B, C.
 pub fn is_rotary(axis: usize) -> bool {
     (3..6).contains(&axis)

@@ -417,6 +417,9 @@ impl<'a> Intended<'a> {
                         ErrorKind::FirmwareMacro(what) => Some(format!(
                             "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; remove the printer's start and end code from the slicer's custom G-code"
                         )),
+                        ErrorKind::LatheProgram(evidence) => Some(format!(
+                            "{evidence} makes this a lathe (turning) program; lampost posts mill programs only (a lathe's X is a diameter, its cycles and corner words a lathe's)"
+                        )),
                         ErrorKind::LatheCycle(c) => Some(format!(
                             "{c} is a lathe's roughing or finishing cycle; the post does not write lathe cycles"
                         )),
