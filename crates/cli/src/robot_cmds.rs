@@ -107,7 +107,6 @@ fn read_path(
     let mut text = String::new();
     std::io::Read::read_to_string(&mut crate::io::open_input(input)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
-    let pts = lampost_post::pointwise::read_points(&text, &name).map_err(post_error)?;
     let arm_mm = arm.units == lampost_robot::Units::Mm;
     let k = match pl.units {
         Some(u) if matches!(u, crate::UnitsArg::Mm) != arm_mm => {
@@ -130,16 +129,63 @@ fn read_path(
         }
         _ => 1.0,
     };
-    let path = pts.iter().map(|p| PathPoint {
-        tip: p.tip * k,
-        axis: p.axis,
-        feed: p.feed * k,
-        deposit: p.deposit,
-        line: p.line,
-    });
-    let samples =
-        plan::resample_iter(path, spacing).map_err(|e| robot_error(e, Some((&name, &text))))?;
+    let samples = read_and_resample(&text, &name, k, spacing)?;
     Ok((name, text, samples))
+}
+
+/// The path's rows read ([`lampost_post::pointwise::points`]) on one thread and
+/// resampled as they come on this one, in batches: the same samples, and the same
+/// error, as reading the whole path and then resampling it (a row's error comes first,
+/// as it would when the file is read before it is resampled).
+fn read_and_resample(
+    text: &str,
+    name: &str,
+    k: f64,
+    spacing: f64,
+) -> Result<Vec<lampost_robot::plan::Sample>, CliError> {
+    use lampost_post::pointwise::{points, read_points};
+    const BATCH: usize = 4096;
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<lampost_post::pointwise::PathPoint>>(4);
+    let (read, samples) = std::thread::scope(|s| {
+        let reader = s.spawn(move || -> Result<(), lampost_post::PostError> {
+            let mut batch = Vec::with_capacity(BATCH);
+            for p in points(text, name) {
+                batch.push(p?);
+                if batch.len() == BATCH {
+                    let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                    // The resampler stopped (its own error): the rest is not needed.
+                    if tx.send(full).is_err() {
+                        return Ok(());
+                    }
+                }
+            }
+            let _ = tx.send(batch);
+            Ok(())
+        });
+        let path = rx.iter().flatten().map(|p| PathPoint {
+            tip: p.tip * k,
+            axis: p.axis,
+            feed: p.feed * k,
+            deposit: p.deposit,
+            line: p.line,
+        });
+        let samples = plan::resample_iter(path, spacing);
+        drop(rx);
+        let read = reader
+            .join()
+            .unwrap_or_else(|_| Err(lampost_post::PostError::Empty(name.to_string())));
+        (read, samples)
+    });
+    read.map_err(post_error)?;
+    match samples {
+        Ok(s) => Ok(s),
+        Err(e) => {
+            // A row the reader did not reach (it stopped with the resampler) may hold
+            // an error of its own, which reading the file first would have reported.
+            read_points(text, name).map_err(post_error)?;
+            Err(robot_error(e, Some((name, text))))
+        }
+    }
 }
 
 fn werr(e: std::io::Error) -> CliError {

@@ -482,3 +482,42 @@ fn an_arm_without_the_closed_form_posts_and_verifies() {
     ]));
     assert!(e.contains("posted for offset-wrist"), "{e}");
 }
+
+/// The path is read on one thread and resampled on another as its rows come: a bad row
+/// far into the file (after several batches) is refused at its line as when the file
+/// was read whole first, and a bad row after one that resampling refuses (a jump needing
+/// more than the most locations) is still the error reported, as reading first reports
+/// it; nothing is written.
+#[test]
+fn a_bad_row_is_refused_at_its_line_whatever_the_resampler_met_first() {
+    let dir = tempdir("robot-stream");
+    let mut long = String::from("x y z i j k feed laser\n");
+    for i in 0..10_000 {
+        long.push_str(&format!("{} 0 0 0 0 1 600 1\n", f64::from(i) * 0.01));
+    }
+    long.push_str("100 0 nan 0 0 1 600 1\n");
+    std::fs::write(dir.join("long.txt"), &long).unwrap_or_default();
+    let e = err(&post(&dir, "long.txt", "long", &[]));
+    assert!(
+        e.contains("long.txt:10002:") && e.contains("`nan` is not a finite number"),
+        "{e}"
+    );
+    assert!(!dir.join("long").exists());
+    // The jump alone is refused by resampling.
+    let jump = "x y z i j k feed laser\n0 0 0 0 0 1 600 0\n3000000 0 0 0 0 1 600 1\n";
+    std::fs::write(dir.join("jump.txt"), jump).unwrap_or_default();
+    let e = err(&post(&dir, "jump.txt", "jump", &[]));
+    assert!(e.contains("more than 2000000 locations"), "{e}");
+    // With a bad row after it, the bad row is the error.
+    std::fs::write(
+        dir.join("both.txt"),
+        format!("{jump}1 2 3 0 0 1 600 1 9 9\n"),
+    )
+    .unwrap_or_default();
+    let e = err(&post(&dir, "both.txt", "both", &[]));
+    assert!(
+        e.contains("both.txt:4:") && e.contains("found 10 columns"),
+        "{e}"
+    );
+    assert!(!dir.join("both").exists() && !dir.join("jump").exists());
+}

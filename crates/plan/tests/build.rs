@@ -388,7 +388,7 @@ fn an_angle_at_the_limit_by_rounding_is_not_over_it() {
     assert!(!q.violations.is_empty());
 }
 
-/// A box whose vertex on one edge was moved by 5e-14 (`fixtures/meshes/cracked-box.stl`,
+/// A box whose vertex on one edge was moved by 5e-14 (`fixtures/meshes/findings/cracked-box.stl`,
 /// found by `cargo xtask fuzz --target plan`): its slices' loops hold segments of no
 /// length (3.6e-15 and 5.6e-17 mm), whose `n × t` is rounding noise (−z, ±y). Their
 /// axes had been taken as they came, so a perimeter's axis flipped to −z for half a side
@@ -398,7 +398,7 @@ fn an_angle_at_the_limit_by_rounding_is_not_over_it() {
 fn segments_of_no_length_do_not_turn_the_tangent_axis() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/meshes/cracked-box.stl"
+        "/../../fixtures/meshes/findings/cracked-box.stl"
     );
     let bytes = std::fs::read(path).expect("fixture");
     let m = lampost_mesh::read(&bytes, lampost_mesh::Format::Stl).expect("reads");

@@ -135,82 +135,136 @@ pub fn looks_like_points(head: &str) -> bool {
 }
 
 /// Read `x y z i j k [feed] [laser]` rows (spaces, tabs or commas; an optional header;
-/// `#` comments). A missing feed repeats the last; laser defaults to on.
+/// `#` comments). A missing feed repeats the last; laser defaults to on. All of
+/// [`points`] or its first error.
 pub fn read_points(text: &str, file: &str) -> Result<Vec<PathPoint>, PostError> {
-    let mut out = Vec::new();
-    let mut feed: Option<f64> = None;
-    let mut seen = false;
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let all = fields(raw);
-        if all.n == 0 {
-            continue;
+    points(text, file).collect()
+}
+
+/// [`read_points`] as the rows come: each point, or the first error (then nothing
+/// more); an empty path is [`PostError::Empty`] at the end. A reader that works on the
+/// points as they are read (the robot cell's resampling, on another thread) stops at
+/// the same error on the same line.
+pub fn points<'a>(text: &'a str, file: &'a str) -> Points<'a> {
+    Points {
+        lines: text.lines().enumerate(),
+        file,
+        feed: None,
+        seen: false,
+        any: false,
+        done: false,
+    }
+}
+
+/// The rows of a per-point path ([`points`]).
+#[derive(Debug)]
+pub struct Points<'a> {
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    file: &'a str,
+    /// The feed so far (a row without one repeats it).
+    feed: Option<f64>,
+    /// A line with fields was met (only the first may be the header).
+    seen: bool,
+    /// A point was given.
+    any: bool,
+    /// An error was given, or the end.
+    done: bool,
+}
+
+impl Iterator for Points<'_> {
+    type Item = Result<PathPoint, PostError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
         }
-        let fields = all.kept();
-        if !seen && !all.rest_numeric && fields.iter().all(|(_, f)| f.parse::<f64>().is_err()) {
-            seen = true;
-            continue;
-        }
-        seen = true;
-        if !(6..=8).contains(&all.n) {
-            return Err(file_err(
-                file,
-                line,
-                1,
-                format!(
-                    "expected x y z i j k [feed] [laser], found {} columns",
-                    all.n
-                ),
-            ));
-        }
-        let mut v = [0.0; 8];
-        for (k, (col, f)) in fields.iter().enumerate() {
-            v[k] = lampost_gcode::parse_number(f)
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| {
-                    file_err(file, line, col + 1, format!("`{f}` is not a finite number"))
-                })?;
-        }
-        let axis = Vector3::new(v[3], v[4], v[5]);
-        if axis.norm() < 1e-12 {
-            return Err(file_err(
-                file,
-                line,
-                fields[3].0 + 1,
-                "the tool axis i j k has zero length".into(),
-            ));
-        }
-        if fields.len() >= 7 {
-            if v[6] <= 0.0 {
-                return Err(file_err(
-                    file,
-                    line,
-                    fields[6].0 + 1,
-                    "the feed must be positive".into(),
-                ));
+        for (i, raw) in self.lines.by_ref() {
+            let line = i + 1;
+            let all = fields(raw);
+            if all.n == 0 {
+                continue;
             }
-            feed = Some(v[6]);
+            let fields = all.kept();
+            if !self.seen
+                && !all.rest_numeric
+                && fields.iter().all(|(_, f)| f.parse::<f64>().is_err())
+            {
+                self.seen = true;
+                continue;
+            }
+            self.seen = true;
+            let row = row(&all, fields, line, self.file, &mut self.feed);
+            self.done = row.is_err();
+            self.any |= row.is_ok();
+            return Some(row);
         }
-        let Some(f) = feed else {
+        self.done = true;
+        (!self.any).then(|| Err(PostError::Empty(self.file.to_string())))
+    }
+}
+
+/// One row's point (`feed`: the feed so far, set by a row that gives one).
+fn row(
+    all: &Fields,
+    fields: &[(usize, &str)],
+    line: usize,
+    file: &str,
+    feed: &mut Option<f64>,
+) -> Result<PathPoint, PostError> {
+    if !(6..=8).contains(&all.n) {
+        return Err(file_err(
+            file,
+            line,
+            1,
+            format!(
+                "expected x y z i j k [feed] [laser], found {} columns",
+                all.n
+            ),
+        ));
+    }
+    let mut v = [0.0; 8];
+    for (k, (col, f)) in fields.iter().enumerate() {
+        v[k] = lampost_gcode::parse_number(f)
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| {
+                file_err(file, line, col + 1, format!("`{f}` is not a finite number"))
+            })?;
+    }
+    let axis = Vector3::new(v[3], v[4], v[5]);
+    if axis.norm() < 1e-12 {
+        return Err(file_err(
+            file,
+            line,
+            fields[3].0 + 1,
+            "the tool axis i j k has zero length".into(),
+        ));
+    }
+    if fields.len() >= 7 {
+        if v[6] <= 0.0 {
             return Err(file_err(
                 file,
                 line,
-                1,
-                "no feed yet: give the feed in the 7th column of the first point".into(),
+                fields[6].0 + 1,
+                "the feed must be positive".into(),
             ));
-        };
-        out.push(PathPoint {
-            tip: Vector3::new(v[0], v[1], v[2]),
-            axis: axis.normalize(),
-            feed: f,
-            deposit: fields.len() < 8 || v[7] != 0.0,
+        }
+        *feed = Some(v[6]);
+    }
+    let Some(f) = *feed else {
+        return Err(file_err(
+            file,
             line,
-        });
-    }
-    if out.is_empty() {
-        return Err(PostError::Empty(file.to_string()));
-    }
-    Ok(out)
+            1,
+            "no feed yet: give the feed in the 7th column of the first point".into(),
+        ));
+    };
+    Ok(PathPoint {
+        tip: Vector3::new(v[0], v[1], v[2]),
+        axis: axis.normalize(),
+        feed: f,
+        deposit: fields.len() < 8 || v[7] != 0.0,
+        line,
+    })
 }
 
 /// The points in the part frame.
