@@ -20,7 +20,7 @@ pub fn align_error(file: &str, e: AlignError) -> CliError {
 pub fn read_points(file: &str) -> Result<(String, Vec<Point>), CliError> {
     let name = display_name(file);
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut open_input(file)?, &mut text).map_err(|e| {
+    crate::io::read_to_string_checked(&mut open_input(file)?, &mut text).map_err(|e| {
         CliError::usage(format!(
             "error: cannot read {name}: {e}\n  = help: point files are text: x y z per line\n"
         ))
@@ -525,7 +525,7 @@ pub fn probe_plane(
 pub fn probe_read(log: &str, output: Option<&str>, json: bool) -> Result<(), CliError> {
     let name = display_name(log);
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut open_input(log)?, &mut text)
+    crate::io::read_to_string_checked(&mut open_input(log)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     let log_error = |e| {
         match e {

@@ -26,7 +26,7 @@ fn row_fields(code: &str) -> Vec<&str> {
 fn read_text(file: &str) -> Result<(String, String), CliError> {
     let name = display_name(file);
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+    crate::io::read_to_string_checked(&mut open_input(file)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     Ok((name, text))
 }
@@ -460,7 +460,7 @@ pub fn pivot(
         // layout kept), or of the built-in it names.
         let original = match lampost_kinematics::builtin_text(machine) {
             Some(t) => t.to_string(),
-            None => std::fs::read_to_string(machine)
+            None => crate::io::read_file_to_string(machine)
                 .map_err(|e| CliError::usage(format!("error: cannot read {machine}: {e}\n")))?,
         };
         let text = lampost_align::calibrated_text(&original, &m, &res, &name)

@@ -12,7 +12,7 @@ use crate::report::CliError;
 fn read(file: &str) -> Result<(String, String), CliError> {
     let name = display_name(file);
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+    crate::io::read_to_string_checked(&mut open_input(file)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     Ok((name, text))
 }

@@ -66,6 +66,70 @@ pub fn spool(path: &str) -> Result<TempFile, CliError> {
 /// Copy `from` to `to`, stopping with an error at [`MAX_NUL_RUN`] NUL bytes in a row:
 /// binary data is not a program, and a device such as `/dev/zero` never ends.
 fn copy_text(from: &mut dyn Read, to: &mut File) -> io::Result<u64> {
+    copy_checked(from, u64::MAX, "not a program", |chunk| to.write_all(chunk))
+}
+
+/// The most bytes an input read whole (a mesh, a per-point path, a log, a point file, a
+/// machine, setup or job file) is read to: 2 GiB. A program is streamed instead.
+pub const MAX_INPUT_BYTES: u64 = 2 << 30;
+
+/// `from` read to its end into `out`, as `Read::read_to_end` reads it, but stopping with
+/// an `InvalidData` error at [`MAX_NUL_RUN`] NUL bytes in a row (binary data, or a
+/// device such as `/dev/zero`, which never ends) or past [`MAX_INPUT_BYTES`]: no input
+/// read whole makes a command hang or fill the memory.
+pub fn read_to_end_checked(from: &mut dyn Read, out: &mut Vec<u8>) -> io::Result<usize> {
+    read_checked(from, out, MAX_INPUT_BYTES)
+}
+
+/// [`read_to_end_checked`] as text, as `Read::read_to_string` reads it (not UTF-8: an
+/// `InvalidData` error).
+pub fn read_to_string_checked(from: &mut dyn Read, out: &mut String) -> io::Result<usize> {
+    let mut bytes = Vec::new();
+    let n = read_to_end_checked(from, &mut bytes)?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            "stream did not contain valid UTF-8",
+        )
+    })?;
+    out.push_str(&text);
+    Ok(n)
+}
+
+/// The file at `path` read whole by [`read_to_end_checked`] (as `fs::read` reads it).
+pub fn read_file(path: impl AsRef<Path>) -> io::Result<Vec<u8>> {
+    let mut out = Vec::new();
+    read_to_end_checked(&mut File::open(path)?, &mut out)?;
+    Ok(out)
+}
+
+/// The file at `path` read whole as text by [`read_to_string_checked`] (as
+/// `fs::read_to_string` reads it).
+pub fn read_file_to_string(path: impl AsRef<Path>) -> io::Result<String> {
+    let mut out = String::new();
+    read_to_string_checked(&mut File::open(path)?, &mut out)?;
+    Ok(out)
+}
+
+/// [`read_to_end_checked`] with the bound on size given.
+fn read_checked(from: &mut dyn Read, out: &mut Vec<u8>, limit: u64) -> io::Result<usize> {
+    let start = out.len();
+    copy_checked(from, limit, "not an input lampost reads", |chunk| {
+        out.extend_from_slice(chunk);
+        Ok(())
+    })?;
+    Ok(out.len() - start)
+}
+
+/// Copy `from` to `sink` in pieces, stopping with an `InvalidData` error at
+/// [`MAX_NUL_RUN`] NUL bytes in a row (binary data, `what` it is not) or when more than
+/// `limit` bytes come.
+fn copy_checked(
+    from: &mut dyn Read,
+    limit: u64,
+    what: &str,
+    mut sink: impl FnMut(&[u8]) -> io::Result<()>,
+) -> io::Result<u64> {
     let mut buf = vec![0u8; 1 << 16];
     let (mut total, mut run) = (0u64, 0usize);
     loop {
@@ -84,12 +148,20 @@ fn copy_text(from: &mut dyn Read, to: &mut File) -> io::Result<u64> {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidData,
                 format!(
-                    "{MAX_NUL_RUN} NUL bytes in a row (byte {} on): binary data, not a program; reading stopped",
+                    "{MAX_NUL_RUN} NUL bytes in a row (byte {} on): binary data, {what}; reading stopped",
                     (total + n as u64).saturating_sub(run as u64)
                 ),
             ));
         }
-        to.write_all(chunk)?;
+        if total + n as u64 > limit {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "more than {limit} bytes: larger than lampost reads whole; reading stopped"
+                ),
+            ));
+        }
+        sink(chunk)?;
         total += n as u64;
     }
 }
@@ -398,5 +470,52 @@ impl Drop for Output {
         // The writer first (it holds the file), then the temporary file goes.
         self.writer.take();
         self.temp.take();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A reader that never ends: `byte` forever.
+    struct Endless(u8);
+
+    impl Read for Endless {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            buf.fill(self.0);
+            Ok(buf.len())
+        }
+    }
+
+    #[test]
+    fn an_endless_input_stops_at_a_nul_run_or_the_size_bound() {
+        let mut out = Vec::new();
+        let e = read_to_end_checked(&mut Endless(0), &mut out).expect_err("stops");
+        assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+        assert!(e.to_string().contains("NUL bytes in a row"), "{e}");
+        let mut out = Vec::new();
+        let e = read_checked(&mut Endless(b'1'), &mut out, 1 << 20).expect_err("stops");
+        assert!(e.to_string().contains("more than 1048576 bytes"), "{e}");
+        assert!(out.len() <= 1 << 20);
+    }
+
+    #[test]
+    fn a_file_reads_as_the_standard_readers_read_it() {
+        let text = "x y z i j k feed laser\n1 2 3 0 0 1 600 1\n";
+        let mut s = String::new();
+        read_to_string_checked(&mut text.as_bytes(), &mut s).expect("reads");
+        assert_eq!(s, text);
+        let bad = [b'a', 0xff, b'b'];
+        let e = read_to_string_checked(&mut &bad[..], &mut String::new()).expect_err("not UTF-8");
+        assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+        // NUL bytes short of the run are data.
+        let mut v = vec![0u8; MAX_NUL_RUN - 1];
+        v.push(1);
+        let mut out = Vec::new();
+        assert_eq!(
+            read_to_end_checked(&mut &v[..], &mut out).expect("reads"),
+            v.len()
+        );
+        assert_eq!(out, v);
     }
 }

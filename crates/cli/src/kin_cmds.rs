@@ -150,7 +150,7 @@ pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
     if builtin_text(spec).is_some() {
         return Machine::builtin(spec, &ov).map_err(kin_error);
     }
-    let text = std::fs::read_to_string(spec).map_err(|e| {
+    let text = crate::io::read_file_to_string(spec).map_err(|e| {
         let names = builtin_names();
         CliError::usage(format!(
             "error: --machine {spec}: not a built-in machine and not a readable file ({e})\n  = help: built-in machines: {}; or give the path of a machine file\n",
@@ -433,7 +433,7 @@ pub fn ik_points(
         None => [0.0, 0.0],
     };
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+    crate::io::read_to_string_checked(&mut open_input(file)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {file}: {e}\n")))?;
     let name = display_name(file);
     let pts = parse_points(&text, &name)?;
@@ -537,7 +537,7 @@ pub fn rotate(
         }
     }
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut open_input(file)?, &mut text)
+    crate::io::read_to_string_checked(&mut open_input(file)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {file}: {e}\n")))?;
     let name = display_name(file);
     let pts = parse_points(&text, &name)?;

@@ -74,9 +74,9 @@ pub fn read_mesh_file(path: &str) -> Result<Mesh, CliError> {
 fn read_mesh_format(path: &str) -> Result<(Mesh, Format), CliError> {
     let bytes = if path == "-" {
         let mut b = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::stdin(), &mut b).map(|_| b)
+        crate::io::read_to_end_checked(&mut std::io::stdin(), &mut b).map(|_| b)
     } else {
-        std::fs::read(path)
+        crate::io::read_file(path)
     }
     .map_err(|e| {
         CliError::usage(format!(

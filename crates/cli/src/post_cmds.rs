@@ -294,7 +294,7 @@ fn per_point_input(
         ),
     };
     let name = input.name.clone();
-    let text = std::fs::read_to_string(&input.path)
+    let text = crate::io::read_file_to_string(&input.path)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     let pts = lampost_post::pointwise::read_points(&text, &name).map_err(post_error)?;
     Ok((frame, pts, name))
@@ -327,7 +327,7 @@ fn file_error(file: &str, text: &str, e: &toml::de::Error) -> CliError {
 }
 
 fn setup_frame(path: &str) -> Result<Frame, CliError> {
-    let text = std::fs::read_to_string(path)
+    let text = crate::io::read_file_to_string(path)
         .map_err(|e| CliError::usage(format!("error: cannot read {path}: {e}\n")))?;
     lampost_post::read_setup(&text, path).map_err(post_error)
 }
@@ -496,7 +496,7 @@ pub fn sections(
         .transpose()?
         .unwrap_or_else(Vector3::zeros);
     if let Some(job) = &pl.job {
-        let text = std::fs::read_to_string(job)
+        let text = crate::io::read_file_to_string(job)
             .map_err(|e| CliError::usage(format!("error: cannot read {job}: {e}\n")))?;
         let jf = lampost_post::read_job(&text).map_err(|e| file_error(job, &text, &e))?;
         let dir = Path::new(job).parent().unwrap_or(Path::new("."));

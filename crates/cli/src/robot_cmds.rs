@@ -25,7 +25,7 @@ pub fn arm_for(spec: &str) -> Result<Option<Arm>, CliError> {
     if lampost_kinematics::builtin_text(spec).is_some() {
         return Ok(None);
     }
-    let Ok(text) = std::fs::read_to_string(spec) else {
+    let Ok(text) = crate::io::read_file_to_string(spec) else {
         return Ok(None);
     };
     if !lampost_robot::is_arm_text(&text) {
@@ -105,7 +105,7 @@ fn read_path(
 ) -> Result<(String, String, Vec<Sample>), CliError> {
     let name = display_name(input);
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut crate::io::open_input(input)?, &mut text)
+    crate::io::read_to_string_checked(&mut crate::io::open_input(input)?, &mut text)
         .map_err(|e| CliError::usage(format!("error: cannot read {name}: {e}\n")))?;
     let arm_mm = arm.units == lampost_robot::Units::Mm;
     let k = match pl.units {
@@ -375,7 +375,7 @@ pub fn verify(
             None,
         )
     };
-    let mtext = std::fs::read_to_string(&mpath)
+    let mtext = crate::io::read_file_to_string(&mpath)
         .map_err(|e| CliError::usage(format!("error: cannot read {mname}: {e}\n  = help: give the folder `lampost post --machine {} … -o DIR` wrote\n", arm.name)))?;
     let m: serde_json::Value =
         serde_json::from_str(&mtext).map_err(|e| bad(e.line(), format!("not JSON: {e}")))?;
@@ -420,7 +420,7 @@ pub fn verify(
                 .ok_or_else(|| bad(0, format!("chunk {}: `{key}` is not a count", k + 1)))
         };
         let path = Path::new(dir).join(&file);
-        let text = std::fs::read_to_string(&path).map_err(|e| {
+        let text = crate::io::read_file_to_string(&path).map_err(|e| {
             bad(
                 0,
                 format!(

@@ -261,3 +261,61 @@ fn post_and_verify_spool_a_program_from_a_pipe_instead_of_holding_it() {
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// Every input that is read whole (meshes, per-point paths, point files, logs, machine,
+/// setup and job files) stops at once on an endless device (`/dev/zero`: a run of NUL
+/// bytes is binary data) with an error naming the file, exit 2, and nothing written;
+/// before, each of these commands read on until the memory ran out.
+#[test]
+fn an_endless_device_as_any_input_stops_at_once() {
+    let dir = tempdir("endless");
+    let nc = dir.join("t.nc");
+    std::fs::write(&nc, "G0 X0 Y0 Z1\nM30\n").unwrap_or_default();
+    let path = dir.join("p.txt");
+    std::fs::write(
+        &path,
+        "x y z i j k feed laser\n0 0 0 0 0 1 600 0\n10 0 0 0 0 1 600 1\n",
+    )
+    .unwrap_or_default();
+    let cell = dir.join("cell");
+    let posted = lampost(&[
+        "post",
+        "--machine",
+        "puma-lens",
+        &path.display().to_string(),
+        "-o",
+        &cell.display().to_string(),
+    ]);
+    assert!(posted.status.success(), "{}", stderr(&posted));
+    let out = dir.join("out");
+    let (nc, out, cell) = (nc.display(), out.display(), cell.display());
+    let z = "/dev/zero";
+    for cmd in [
+        format!("post --machine puma-lens {z} -o {out}"),
+        format!("post --machine {z} {nc} -o {out}"),
+        format!("post --machine nrc-lc --job {z} {nc} -o {out}"),
+        format!("post --machine nrc-lc --part {z} {nc} -o {out}"),
+        format!("plan path {z} --layer 1 -o {out}"),
+        format!("plan slice {z} --layer 1"),
+        format!("mesh info {z}"),
+        format!("fit sphere {z}"),
+        format!("probe read {z}"),
+        format!("align angle {z}"),
+        format!("align level --machine nrc-lc {z}"),
+        format!("align register --mesh {z} {z}"),
+        format!("calibrate pivot --machine fadal-lamp {z}"),
+        format!("calibrate laser {z}"),
+        format!("inspect compare {z}"),
+        format!("verify --machine puma-lens {cell} --input {z}"),
+    ] {
+        let o = limited(&format!("timeout $TIMEOUT \"$LAMPOST\" {cmd}"), 400_000, 20);
+        let e = stderr(&o);
+        assert!(
+            matches!(o.status.code(), Some(1 | 2)),
+            "{cmd}: {:?} {e}",
+            o.status.code()
+        );
+        assert!(e.contains("NUL bytes in a row"), "{cmd}: {e}");
+        assert!(!dir.join("out").exists(), "{cmd}: an output was written");
+    }
+}
