@@ -50,6 +50,23 @@ pub fn parse_plain(field: &str) -> Option<f64> {
     Some(if neg { -v } else { v })
 }
 
+/// A number as a message shows it: as Rust writes it where that is short (0, and
+/// magnitudes from 1e-6 to below 1e15), in exponent form beyond (`1e-300`, not a point
+/// and 300 digits).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Readable(pub f64);
+
+impl std::fmt::Display for Readable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v == 0.0 || !v.is_finite() || (1e-6..1e15).contains(&v.abs()) {
+            write!(f, "{v}")
+        } else {
+            write!(f, "{v:e}")
+        }
+    }
+}
+
 /// The largest number of places [`push_exact_fixed`] writes by its fast path.
 const EXACT_MAX_PLACES: usize = 9;
 
@@ -168,6 +185,24 @@ mod tests {
         let mut s = String::new();
         push_exact_fixed(&mut s, v, places);
         s
+    }
+
+    #[test]
+    fn readable_numbers_are_short() {
+        for (v, shown) in [
+            (0.0, "0"),
+            (1.0, "1"),
+            (0.5, "0.5"),
+            (-2.25, "-2.25"),
+            (1e-6, "0.000001"),
+            (1e-300, "1e-300"),
+            (-1e-9, "-1e-9"),
+            (1e300, "1e300"),
+            (f64::NAN, "NaN"),
+            (f64::INFINITY, "inf"),
+        ] {
+            assert_eq!(Readable(v).to_string(), shown);
+        }
     }
 
     #[test]

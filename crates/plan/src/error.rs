@@ -19,7 +19,7 @@ pub enum PlanError {
         v: [f64; 3],
     },
     /// A layer height or fan step that is zero, negative, not finite or too small.
-    #[error("the {what} {value} is {why}")]
+    #[error("the {what} {} is {why}", lampost_gcode::Readable(*.value))]
     Layer {
         /// `layer height` or `fan step`.
         what: &'static str,
@@ -30,7 +30,9 @@ pub enum PlanError {
     },
     /// A layer height larger than the part along the build direction.
     #[error(
-        "the layer height {layer} is larger than the part ({extent} along the build direction)"
+        "the layer height {} is larger than the part ({} along the build direction)",
+        lampost_gcode::Readable(*.layer),
+        lampost_gcode::Readable(*.extent)
     )]
     LayerTooLarge {
         /// The layer height.

@@ -104,14 +104,9 @@ pub fn resample_iter(
             .max(1.0);
         total += n;
         if total > MAX_SAMPLES {
-            // An extreme spacing in exponent form (1e-300 has 300 zeros as a decimal).
-            let shown = if (1e-4..1e9).contains(&spacing) {
-                spacing.to_string()
-            } else {
-                format!("{spacing:e}")
-            };
             return Err(RobotError::Option(format!(
-                "the path would become more than {MAX_SAMPLES} locations at spacing {shown} (line {}): give a larger --spacing, or check the points around that line",
+                "the path would become more than {MAX_SAMPLES} locations at spacing {} (line {}): give a larger --spacing, or check the points around that line",
+                lampost_gcode::Readable(spacing),
                 b.line
             )));
         }
