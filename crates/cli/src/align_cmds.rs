@@ -314,7 +314,7 @@ pub fn angle(
     };
     let r = lampost_align::plane_angle(&P3::from(pl.normal), &cad);
     let origin = match origin {
-        Some(o) => crate::kin_cmds::vector("--origin", o)?,
+        Some(o) => crate::kin_cmds::position("--origin", o)?,
         None => P3::from(pl.point),
     };
     // The program frame turned by the rotation that takes the CAD plane's normal onto the

@@ -63,6 +63,24 @@ pub fn vector(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
     ))
 }
 
+/// The largest coordinate a place given on the command line may have (1e9 units: a
+/// thousand kilometres in millimetres): beyond it no machine reaches, and the
+/// numbers would be written with hundreds of digits.
+pub const MAX_PLACE: f64 = 1e9;
+
+/// `x,y,z` as a place ([`vector`], each coordinate within [`MAX_PLACE`]).
+pub fn position(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {
+    let v = vector(flag, text)?;
+    if v.iter().any(|c| c.abs() > MAX_PLACE) {
+        return Err(usage(
+            flag,
+            format!("`{text}` lies more than 1e9 from the origin"),
+            "give the place in the machine's units (in or mm), e.g. 0,0,25",
+        ));
+    }
+    Ok(v)
+}
+
 /// `i,j,k` as a unit direction: scaled by its largest component before its length is
 /// taken, so `1e300,1e300,1e300` is (1,1,1)/√3, not an overflow; zero length refused.
 pub fn direction(flag: &str, text: &str) -> Result<Vector3<f64>, CliError> {

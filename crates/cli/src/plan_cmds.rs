@@ -103,7 +103,7 @@ fn machine_reach(
     let origin = a
         .origin
         .as_deref()
-        .map(|o| crate::kin_cmds::vector("--origin", o))
+        .map(|o| crate::kin_cmds::position("--origin", o))
         .transpose()?
         .unwrap_or_else(lampost_kinematics::Vector3::zeros);
     let near = crate::kin_cmds::near_rotary(&m, a.near.as_deref())?;

@@ -288,7 +288,7 @@ fn per_point_input(
         None => Frame::translation(
             pl.origin
                 .as_deref()
-                .map(|o| vector("--origin", o))
+                .map(|o| crate::kin_cmds::position("--origin", o))
                 .transpose()?
                 .unwrap_or_else(Vector3::zeros),
         ),
@@ -492,7 +492,7 @@ pub fn sections(
     let origin = pl
         .origin
         .as_deref()
-        .map(|o| vector("--origin", o))
+        .map(|o| crate::kin_cmds::position("--origin", o))
         .transpose()?
         .unwrap_or_else(Vector3::zeros);
     if let Some(job) = &pl.job {

@@ -319,3 +319,28 @@ fn an_endless_device_as_any_input_stops_at_once() {
         assert!(!dir.join("out").exists(), "{cmd}: an output was written");
     }
 }
+
+/// A place on the command line beyond any machine (`--origin 1e300,0,0`) is refused
+/// with the option's name; it had been taken, and the header comment written with the
+/// origin's 300 digits.
+#[test]
+fn an_origin_beyond_any_machine_is_refused() {
+    let dir = tempdir("far-origin");
+    let nc = dir.join("t.nc");
+    std::fs::write(&nc, "G21 G90\nG0 X0 Y0 Z1\nG1 Z0 F100\nG1 X10\nM30\n").unwrap_or_default();
+    let out = dir.join("t.out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--origin",
+        "1e300,0,0",
+        &nc.display().to_string(),
+        "-o",
+        &out.display().to_string(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--origin") && e.contains("more than 1e9"), "{e}");
+    assert!(!out.exists());
+}
