@@ -171,9 +171,10 @@ fn read_and_resample(
         });
         let samples = plan::resample_iter(path, spacing);
         drop(rx);
+        // A panic of the reader is a fault of lampost's: raised again here.
         let read = reader
             .join()
-            .unwrap_or_else(|_| Err(lampost_post::PostError::Empty(name.to_string())));
+            .unwrap_or_else(|p| std::panic::resume_unwind(p));
         (read, samples)
     });
     read.map_err(post_error)?;
