@@ -262,3 +262,82 @@ fn haas_g110_to_g129_are_work_offsets() {
     let o = lampost(&["check", "--flavor", "haas", p.to_str().expect("utf8")]);
     assert!(stderr(&o).contains("unknown G-code G112"), "{}", stderr(&o));
 }
+
+/// A program framed by `%` lines ends at the closing `%` (30): rs274 ends the file there
+/// (percent mode), Fanuc, Haas and FADAL read no further (end of record). The moves after
+/// it were traced (and posted) with no word; now they are left out with a warning at
+/// the first, in every flavour but the slicers'. Equal to rs274's moves; a `%` line rs274
+/// cannot read (`% text`, or one in a program that did not open with `%`) is refused
+/// under `linuxcnc`, as rs274 refuses it.
+#[test]
+fn a_closing_percent_ends_the_program() {
+    let path = finding("30-closing-percent-ends-the-program.nc");
+    let want = vec![[10.0, 10.0, 5.0], [10.0, 10.0, 0.0], [20.0, 10.0, 0.0]];
+    for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+        assert_eq!(ends(&trace_json(flavor, &path)), want, "{flavor}");
+        let o = lampost(&["check", "--flavor", flavor, path.to_str().expect("utf8")]);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{flavor}: {err}");
+        assert!(
+            err.contains("closing `%`") && err.contains(":8:"),
+            "{flavor}: {err}"
+        );
+    }
+    if let Some(_rs274) = require_rs274() {
+        let work = tempdir("findings-percent");
+        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+        compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    }
+    let work = tempdir("findings-percent-refused");
+    for (name, text, at) in [
+        ("text.nc", "%\nG0 X1\n% vfd enable\nG0 X2\nM2\n", ":3:1"),
+        ("unframed.nc", "G0 X1\n%\nG0 X2\nM2\n", ":2:1"),
+    ] {
+        let p = work.join(name);
+        std::fs::write(&p, text).expect("writes");
+        let o = lampost(&["check", "--flavor", "linuxcnc", p.to_str().expect("utf8")]);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && err.contains("unexpected character `%`") && err.contains(at),
+            "{name}: {err}"
+        );
+        // Other controls end the program there.
+        let e = ends(&trace_json("fadal", &p));
+        assert_eq!(e, vec![[1.0, 0.0, 0.0]], "{name} as fadal");
+    }
+}
+
+/// `G43.1 Z2.5` (LinuxCNC's and grbl's dynamic tool length offset, set after a tool
+/// change) was refused, "axis words but no motion mode", so a valid program stopped
+/// there (31). Its axis words are the offset: traced with a warning, the moves after it
+/// equal to rs274's.
+#[test]
+fn a_dynamic_tool_length_offset_is_not_a_move() {
+    let path = finding("31-g43-1-dynamic-tool-length.nc");
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        path.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        o.status.success() && err.contains("G43.1") && err.contains(":4:"),
+        "{err}"
+    );
+    let want = vec![
+        [10.0, 10.0, 5.0],
+        [10.0, 10.0, 3.0],
+        [10.0, 10.0, -1.0],
+        [20.0, 10.0, -1.0],
+        [20.0, 10.0, 5.0],
+    ];
+    for flavor in ["linuxcnc", "fadal", "mach3"] {
+        assert_eq!(ends(&trace_json(flavor, &path)), want, "{flavor}");
+    }
+    if require_rs274().is_some() {
+        let work = tempdir("findings-g43-1");
+        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+        compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    }
+}
