@@ -341,3 +341,47 @@ fn a_dynamic_tool_length_offset_is_not_a_move() {
         compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
     }
 }
+
+/// A laser program's feed at zero power (`G1 X20 S0`: LightBurn's and LaserGRBL's raster
+/// gaps under M4) or with the laser off again (M5, then `G1 X40`) burns nothing, but the
+/// post deposited along it: one run of 40 mm where the program burns two of 10 (32).
+/// Now such feeds are travel, noted once, as a slicer's G1 that does not extrude; a
+/// program that never turns its laser on still deposits along every feed.
+#[test]
+fn a_laser_feed_at_zero_power_deposits_nothing() {
+    let path = finding("32-laser-s0-gaps-deposited.nc");
+    let work = tempdir("findings-laser-s0");
+    let out = work.join("p.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains(":7: a feed made with the laser off"), "{err}");
+    let (ons, deposited) = posted_deposition(&std::fs::read_to_string(&out).expect("posted"));
+    assert_eq!(ons, 2, "laser-on events");
+    assert!((deposited - 20.0).abs() < 1e-9, "deposited {deposited}");
+    // The same moves without M4/M5/S: every feed deposits, as before.
+    let plain = work.join("plain.nc");
+    std::fs::write(
+        &plain,
+        "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X10 F1500\nG1 X20\nG1 X30\nG1 X40\nM2\n",
+    )
+    .expect("writes");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        plain.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (ons, deposited) = posted_deposition(&std::fs::read_to_string(&out).expect("posted"));
+    assert_eq!((ons, deposited), (1, 40.0));
+}
