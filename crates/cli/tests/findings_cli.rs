@@ -385,3 +385,30 @@ fn a_laser_feed_at_zero_power_deposits_nothing() {
     let (ons, deposited) = posted_deposition(&std::fs::read_to_string(&out).expect("posted"));
     assert_eq!((ons, deposited), (1, 40.0));
 }
+
+/// Cura for QIDI printers writes the extruders as A and B (`G1 X270 Y5 A13`): read as a
+/// Marlin program, the A word was traced as a 13° rotation with no word (34). Now the
+/// first A, B or C word of a printer's program is warned of, once, at its column (the
+/// trace is unchanged; the post refuses the rotation, or the program for not extruding).
+#[test]
+fn a_printer_s_a_word_is_warned_of() {
+    let path = finding("34-qidi-extruder-a.gcode");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("in a printer's program").count(), 1, "{err}");
+    assert!(
+        err.contains(":6:12") && err.contains("flavour marlin"),
+        "{err}"
+    );
+    // A CAM program's A word is an axis, as ever.
+    let work = tempdir("findings-printer-axes");
+    let p = work.join("rotary.nc");
+    std::fs::write(&p, "G21 G90\nG0 X0 Y0 Z5 A0\nG1 A90 F100\nM2\n").expect("writes");
+    let o = lampost(&["check", "--flavor", "fadal", p.to_str().expect("utf8")]);
+    assert!(
+        !stderr(&o).contains("in a printer's program"),
+        "{}",
+        stderr(&o)
+    );
+}

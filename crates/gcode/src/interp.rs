@@ -203,6 +203,9 @@ pub struct Interpreter {
     /// The program opened with a `%` line (rs274's percent mode: the next bare `%` line
     /// ends the file).
     percent_framed: bool,
+    /// A printer's program (E as extrusion, not MakerBot's A/B extruder) whose A, B or C
+    /// word has not been warned of yet: the fast lane stands aside for such a line.
+    watch_printer_axes: bool,
     calls: Calls,
     /// `O` programs started and not yet closed by an M99 (calls nest: in execution
     /// order the called program's `O` line comes inside the caller).
@@ -466,6 +469,8 @@ impl Interpreter {
             warned_after_end: false,
             started: false,
             percent_framed: false,
+            watch_printer_axes: opts.e_word == EWord::Extrusion
+                && !opts.flavor.extruder_is_a_or_b(),
             calls: Calls::NotFollowed,
             open_programs: 0,
             axes_named: 0,
@@ -802,6 +807,7 @@ impl Interpreter {
         let modal_feed = p.feed().unwrap_or(self.modal.feed);
         let runs_plainly = !self.ended
             && self.started
+            && !(self.watch_printer_axes && p.axes() & 0b11_1000 != 0)
             && !self.nurbs
             && p.axes() != 0
             && self.modal.feed_mode != FeedMode::InverseTime
@@ -1830,6 +1836,17 @@ impl Interpreter {
         // In slicer programs (E is extrusion) a motion code with no axis words moves
         // nothing: `G1 E.8 F2400` (unretract) and `G1 F1200` set E and F only.
         let explicit_motion = explicit_motion && self.opts.e_word != EWord::Extrusion;
+        if self.watch_printer_axes && !axes_used {
+            if let Some(word) = [b'A', b'B', b'C'].iter().find_map(|&l| w.word(l)) {
+                self.watch_printer_axes = false;
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::PrinterRotaryAxis(word.display()),
+                    Some(word.span),
+                );
+            }
+        }
         if !axes_used && (w.has_axes() || explicit_motion) {
             let probe = w.has_g(310) || w.has_g(311);
             self.motion(b, w, g53, probe, out)?;
