@@ -805,9 +805,12 @@ impl Interpreter {
             None => self.modal.motion,
         };
         let modal_feed = p.feed().unwrap_or(self.modal.feed);
+        // The program's first line (a `%` after it ends the program) and a printer's A, B
+        // or C word not yet warned of take the reference path.
+        if !self.started || self.watch_printer_axes && p.axes() & 0b11_1000 != 0 {
+            return None;
+        }
         let runs_plainly = !self.ended
-            && self.started
-            && !(self.watch_printer_axes && p.axes() & 0b11_1000 != 0)
             && !self.nurbs
             && p.axes() != 0
             && self.modal.feed_mode != FeedMode::InverseTime
