@@ -412,3 +412,17 @@ fn a_printer_s_a_word_is_warned_of() {
         stderr(&o)
     );
 }
+
+/// Centroid CNC12 macros (`IF #50010`, `IF #4201 || #4202 THEN GOTO 1000`) were refused
+/// as "the letter I has no number after it" (35); the line is now named as Centroid's.
+#[test]
+fn centroid_macros_are_named() {
+    let path = finding("35-centroid-cnc12.cnc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("Centroid CNC12") && err.contains(":3:1"),
+        "{err}"
+    );
+}
