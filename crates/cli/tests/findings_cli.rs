@@ -559,3 +559,167 @@ fn a_reprap_endstop_move_is_named_and_not_posted() {
         stderr(&o)
     );
 }
+
+/// A program framed by `%` lines ends at the closing `%` (30): rs274 ends the file there
+/// (percent mode), Fanuc, Haas and FADAL read no further (end of record). The moves after
+/// it were traced (and posted) with no word; now they are left out with a warning at
+/// the first, in every flavour but the slicers'. Equal to rs274's moves; a `%` line rs274
+/// cannot read (`% text`, or one in a program that did not open with `%`) is refused
+/// under `linuxcnc`, as rs274 refuses it.
+#[test]
+fn a_closing_percent_ends_the_program() {
+    let path = finding("30-closing-percent-ends-the-program.nc");
+    let want = vec![[10.0, 10.0, 5.0], [10.0, 10.0, 0.0], [20.0, 10.0, 0.0]];
+    for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+        assert_eq!(ends(&trace_json(flavor, &path)), want, "{flavor}");
+        let o = lampost(&["check", "--flavor", flavor, path.to_str().expect("utf8")]);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{flavor}: {err}");
+        assert!(
+            err.contains("closing `%`") && err.contains(":8:"),
+            "{flavor}: {err}"
+        );
+    }
+    if let Some(_rs274) = require_rs274() {
+        let work = tempdir("findings-percent");
+        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+        compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    }
+    let work = tempdir("findings-percent-refused");
+    for (name, text, at) in [
+        ("text.nc", "%\nG0 X1\n% vfd enable\nG0 X2\nM2\n", ":3:1"),
+        ("unframed.nc", "G0 X1\n%\nG0 X2\nM2\n", ":2:1"),
+    ] {
+        let p = work.join(name);
+        std::fs::write(&p, text).expect("writes");
+        let o = lampost(&["check", "--flavor", "linuxcnc", p.to_str().expect("utf8")]);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && err.contains("unexpected character `%`") && err.contains(at),
+            "{name}: {err}"
+        );
+        // Other controls end the program there.
+        let e = ends(&trace_json("fadal", &p));
+        assert_eq!(e, vec![[1.0, 0.0, 0.0]], "{name} as fadal");
+    }
+}
+
+/// `G43.1 Z2.5` (LinuxCNC's and grbl's dynamic tool length offset, set after a tool
+/// change) was refused, "axis words but no motion mode", so a valid program stopped
+/// there (31). Its axis words are the offset: traced with a warning, the moves after it
+/// equal to rs274's.
+#[test]
+fn a_dynamic_tool_length_offset_is_not_a_move() {
+    let path = finding("31-g43-1-dynamic-tool-length.nc");
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        path.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        o.status.success() && err.contains("G43.1") && err.contains(":4:"),
+        "{err}"
+    );
+    let want = vec![
+        [10.0, 10.0, 5.0],
+        [10.0, 10.0, 3.0],
+        [10.0, 10.0, -1.0],
+        [20.0, 10.0, -1.0],
+        [20.0, 10.0, 5.0],
+    ];
+    for flavor in ["linuxcnc", "fadal", "mach3"] {
+        assert_eq!(ends(&trace_json(flavor, &path)), want, "{flavor}");
+    }
+    if require_rs274().is_some() {
+        let work = tempdir("findings-g43-1");
+        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+        compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    }
+}
+
+/// A laser program's feed at zero power (`G1 X20 S0`: LightBurn's and LaserGRBL's raster
+/// gaps under M4) or with the laser off again (M5, then `G1 X40`) burns nothing, but the
+/// post deposited along it: one run of 40 mm where the program burns two of 10 (32).
+/// Now such feeds are travel, noted once, as a slicer's G1 that does not extrude; a
+/// program that never turns its laser on still deposits along every feed.
+#[test]
+fn a_laser_feed_at_zero_power_deposits_nothing() {
+    let path = finding("32-laser-s0-gaps-deposited.nc");
+    let work = tempdir("findings-laser-s0");
+    let out = work.join("p.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains(":7: a feed made with the laser off"), "{err}");
+    let (ons, deposited) = posted_deposition(&std::fs::read_to_string(&out).expect("posted"));
+    assert_eq!(ons, 2, "laser-on events");
+    assert!((deposited - 20.0).abs() < 1e-9, "deposited {deposited}");
+    // The same moves without M4/M5/S: every feed deposits, as before.
+    let plain = work.join("plain.nc");
+    std::fs::write(
+        &plain,
+        "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X10 F1500\nG1 X20\nG1 X30\nG1 X40\nM2\n",
+    )
+    .expect("writes");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        plain.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (ons, deposited) = posted_deposition(&std::fs::read_to_string(&out).expect("posted"));
+    assert_eq!((ons, deposited), (1, 40.0));
+}
+
+/// Cura for QIDI printers writes the extruders as A and B (`G1 X270 Y5 A13`): read as a
+/// Marlin program, the A word was traced as a 13° rotation with no word (34). Now the
+/// first A, B or C word of a printer's program is warned of, once, at its column (the
+/// trace is unchanged; the post refuses the rotation, or the program for not extruding).
+#[test]
+fn a_printer_s_a_word_is_warned_of() {
+    let path = finding("34-qidi-extruder-a.gcode");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("in a printer's program").count(), 1, "{err}");
+    assert!(
+        err.contains(":6:12") && err.contains("flavour marlin"),
+        "{err}"
+    );
+    // A CAM program's A word is an axis, as ever.
+    let work = tempdir("findings-printer-axes");
+    let p = work.join("rotary.nc");
+    std::fs::write(&p, "G21 G90\nG0 X0 Y0 Z5 A0\nG1 A90 F100\nM2\n").expect("writes");
+    let o = lampost(&["check", "--flavor", "fadal", p.to_str().expect("utf8")]);
+    assert!(
+        !stderr(&o).contains("in a printer's program"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Centroid CNC12 macros (`IF #50010`, `IF #4201 || #4202 THEN GOTO 1000`) were refused
+/// as "the letter I has no number after it" (35); the line is now named as Centroid's.
+#[test]
+fn centroid_macros_are_named() {
+    let path = finding("35-centroid-cnc12.cnc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("Centroid CNC12") && err.contains(":3:1"),
+        "{err}"
+    );
+}

@@ -178,6 +178,10 @@ pub enum ErrorKind {
     /// A canned cycle passed through, not expanded.
     #[error("canned cycle G{0} is passed through, not expanded into moves")]
     CannedCyclePassedThrough(String),
+    /// In a printer (slicer) program, an A, B or C word: an axis most printers do not
+    /// have; QIDI's and MakerBot's firmware drive an extruder with it (reported once).
+    #[error("{0} in a printer's program: most printers have no such axis, and QIDI's and MakerBot's firmware drive an extruder with A and B; traced as a rotary axis (reported once)")]
+    PrinterRotaryAxis(String),
     /// In a printer (slicer) program, a firmware's extended command that is a setting
     /// and moves nothing (Klipper's `SET_PRESSURE_ADVANCE ADVANCE=0.05`,
     /// `EXCLUDE_OBJECT_START NAME=part`): ignored.
@@ -387,6 +391,7 @@ impl ErrorKind {
             ErrorKind::LatheProgram(_) => "lampost traces and posts mill programs only: check a lathe program on the lathe's own graphics (the post refuses it)",
             ErrorKind::CornerWord { .. } => "write the corner as moves of its own (a radius as a G2/G3 arc, a chamfer as a G1 line), or remove the word; LinuxCNC refuses an R on a straight move too",
             ErrorKind::CannedCyclePassedThrough(_) => "check the cycle on the controller; lampost does not trace it",
+            ErrorKind::PrinterRotaryAxis(_) => "if A and B are the printer's extruders (QIDI, MakerBot), --flavor makerbot reads them as E (one head: a block naming both is refused); otherwise check that the printer was built with that axis",
             ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
             ErrorKind::VendorCommand(_) => "nothing to do: a vendor's line (WEEDO's W221 and W220 carry the preview image) moves nothing",
             ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",

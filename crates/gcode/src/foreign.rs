@@ -24,6 +24,10 @@ const APT: Foreign = Foreign {
     name: "APT cutter-location (CL) data, a CAM system's output before posting",
     hint: "post the CL file in the CAM system for a G-code control, then give lampost the G-code",
 };
+const CENTROID: Foreign = Foreign {
+    name: "Centroid CNC12 macro syntax (C-style conditions: `IF #4201 || #4202 THEN GOTO 1000`)",
+    hint: "post the job for an ISO G-code control; lampost does not run Centroid's macro statements (the job's own moves read as G-code once they are left out)",
+};
 const SHOPBOT: Foreign = Foreign {
     name: "ShopBot OpenSBP (two-letter commands and comma-separated values)",
     hint: "post the job from the CAM system for a G-code control (Vectric and Fusion have G-code posts for ShopBot's and other routers); lampost reads no OpenSBP",
@@ -150,6 +154,18 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     {
         return Some(SHOPBOT);
     }
+    // Centroid CNC12: a condition on a bare variable (`IF #50010`, which stops its
+    // look-ahead) or with C's operators (`IF #4201 || #4202 THEN GOTO 1000`); Fanuc's
+    // and LinuxCNC's conditions are bracketed and spell EQ, AND, OR.
+    // RepRapFirmware's meta commands (`if state.currentTool != -1`) are lower case and
+    // name the object model, not `#` variables.
+    if t.starts_with("IF #")
+        || t.starts_with("IF")
+            && t.contains('#')
+            && ["||", "&&", "==", "!="].iter().any(|k| t.contains(k))
+    {
+        return Some(CENTROID);
+    }
     // Sinumerik: its cycles, messages, tool names, `NAME=` values and frame statements.
     let code = u.split(';').next().unwrap_or("");
     const SIN: [&str; 24] = [
@@ -193,6 +209,11 @@ mod tests {
             ("J3,1.239209,1.139149,0.200000", Some(SHOPBOT)),
             ("CG, ,1.2,2.1,-1.0,0.0,T,-1", Some(SHOPBOT)),
             ("SA", Some(SHOPBOT)),
+            ("IF #50010", Some(CENTROID)),
+            ("IF #4201 || #4202 THEN GOTO 1000 ;Skip", Some(CENTROID)),
+            ("IF [#1 EQ 2] GOTO 10", None),
+            ("if state.currentTool != -1", None),
+            ("if !move.axes[0].homed || !move.axes[1].homed", None),
             (
                 "SA                             \t'Set program to absolute",
                 Some(SHOPBOT),

@@ -193,7 +193,19 @@ pub struct Interpreter {
     /// M83 in force (relative extrusion).
     e_relative: bool,
     ended: bool,
+    /// The program ended at its closing `%` (not at M2/M30): named in the warning.
+    ended_at_percent: bool,
     warned_after_end: bool,
+    /// A line that starts the program has been read (`linuxcnc`: any line that is not
+    /// blank, as rs274 takes its first; others: a line with words or a macro statement).
+    /// Until then a `%` line opens the program; after it, one ends the program.
+    started: bool,
+    /// The program opened with a `%` line (rs274's percent mode: the next bare `%` line
+    /// ends the file).
+    percent_framed: bool,
+    /// A printer's program (E as extrusion, not MakerBot's A/B extruder) whose A, B or C
+    /// word has not been warned of yet: the fast lane stands aside for such a line.
+    watch_printer_axes: bool,
     calls: Calls,
     /// `O` programs started and not yet closed by an M99 (calls nest: in execution
     /// order the called program's `O` line comes inside the caller).
@@ -458,7 +470,12 @@ impl Interpreter {
             pending_e: 0.0,
             e_relative: false,
             ended: false,
+            ended_at_percent: false,
             warned_after_end: false,
+            started: false,
+            percent_framed: false,
+            watch_printer_axes: opts.e_word == EWord::Extrusion
+                && !opts.flavor.extruder_is_a_or_b(),
             calls: Calls::NotFollowed,
             open_programs: 0,
             axes_named: 0,
@@ -548,6 +565,16 @@ impl Interpreter {
         if self.profile.is_some() {
             return self.record_profile(b);
         }
+        if b.kind == BlockKind::Percent {
+            return self.percent_line(b, out);
+        }
+        if !self.started
+            && (b.has_words()
+                || matches!(b.kind, BlockKind::Macro(_))
+                || self.opts.flavor == crate::flavor::Flavor::LinuxCnc && !b.items.is_empty())
+        {
+            self.started = true;
+        }
         match b.kind {
             BlockKind::Percent => return Ok(()),
             BlockKind::Macro(k) => {
@@ -578,15 +605,21 @@ impl Interpreter {
         {
             // Read in file order, the next program of the file starts here.
             self.ended = false;
+            self.ended_at_percent = false;
             self.warned_after_end = false;
         }
         if self.ended {
             if !self.warned_after_end {
                 self.warned_after_end = true;
+                let after = if self.ended_at_percent {
+                    "a block after the program's closing `%` (the end of the tape: the control reads no further)"
+                } else {
+                    "a block after M2/M30"
+                };
                 out(Event::Diagnostic(diag(
                     b,
                     Severity::Warning,
-                    ErrorKind::NotSimulated("a block after M2/M30".into()),
+                    ErrorKind::NotSimulated(after.into()),
                     None,
                 )));
             }
@@ -785,6 +818,11 @@ impl Interpreter {
             None => self.modal.motion,
         };
         let modal_feed = p.feed().unwrap_or(self.modal.feed);
+        // The program's first line (a `%` after it ends the program) and a printer's A, B
+        // or C word not yet warned of take the reference path.
+        if !self.started || self.watch_printer_axes && p.axes() & 0b11_1000 != 0 {
+            return None;
+        }
         let runs_plainly = !self.ended
             && !self.nurbs
             && p.axes() != 0
@@ -843,6 +881,50 @@ impl Interpreter {
     /// A line that is no G-code block: a grbl console command (`$H`, `$$`, `$32=1`, `?`).
     /// Homing (`$H`) and jogging (`$J=…`) move the machine: a warning says so, and the
     /// post refuses them; settings and queries change no path.
+    /// A `%` line. Before the program starts it opens the tape (rs274's percent mode when
+    /// it is the first line, bare); after, it ends the program as M2/M30 do: Fanuc, Haas
+    /// and FADAL controls read no further than the closing `%` (end of record), and rs274
+    /// ends the file at a bare `%` line in percent mode and refuses any other `%` line
+    /// ("Bad character '%' used"), as `linuxcnc` does. Slicer flavours skip the line as a
+    /// printer's firmware does (an unknown command).
+    #[inline(never)]
+    fn percent_line(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
+        use crate::flavor::Flavor;
+        let f = self.opts.flavor;
+        if f.is_slicer() {
+            return Ok(());
+        }
+        let bare = b.raw.trim_matches([' ', '\t', '\r']) == "%";
+        if !self.started {
+            self.started = true;
+            if f != Flavor::LinuxCnc || bare {
+                self.percent_framed = true;
+                return Ok(());
+            }
+        } else if self.ended {
+            return Ok(());
+        } else if f != Flavor::LinuxCnc || bare && self.percent_framed {
+            if let Some(c) = self.comp.take() {
+                self.comp_release(*c, out)
+                    .map_err(|e| comp_diag(b, e, None))?;
+            }
+            self.ended = true;
+            self.ended_at_percent = true;
+            self.open_programs = 0;
+            return Ok(());
+        }
+        let at = b.raw.find('%').unwrap_or(0);
+        Err(diag(
+            b,
+            Severity::Error,
+            ErrorKind::UnexpectedCharacter('%'),
+            Some(crate::ast::Span::new(
+                b.span.start + at,
+                b.span.start + at + 1,
+            )),
+        ))
+    }
+
     fn console_line(&self, b: &Block<'_>, out: &mut impl FnMut(Event)) {
         let Some(Item::Text(t)) = b.items.first() else {
             return;
@@ -1745,6 +1827,22 @@ impl Interpreter {
                 _ => {}
             }
         }
+        // G43.1 (LinuxCNC's and grbl's dynamic tool length offset): its axis words are
+        // the offset, not a move (`G43.1 Z2.5` after a tool change). The offset shifts
+        // where a later move without that axis word goes, which the trace does not follow:
+        // it is named. With a motion code in the block the words are the move's too.
+        if let Some((gw, 431)) = w.g_in(GGroup::ToolLength) {
+            self.warn(
+                b,
+                out,
+                ErrorKind::NotSimulated(
+                    "G43.1 (dynamic tool length offset: its axis words are the offset, not a move)"
+                        .into(),
+                ),
+                Some(gw.span),
+            );
+            axes_used |= w.g_in(GGroup::Motion).is_none();
+        }
         // An explicit motion code with no axis words still runs its motion, to where
         // the tool already is (as LinuxCNC does: `G0` alone is a zero-length rapid).
         let explicit_motion = w.g_in(GGroup::Motion).is_some_and(|(_, c)| c != 800);
@@ -1754,6 +1852,17 @@ impl Interpreter {
         // In slicer programs (E is extrusion) a motion code with no axis words moves
         // nothing: `G1 E.8 F2400` (unretract) and `G1 F1200` set E and F only.
         let explicit_motion = explicit_motion && self.opts.e_word != EWord::Extrusion;
+        if self.watch_printer_axes && !axes_used {
+            if let Some(word) = [b'A', b'B', b'C'].iter().find_map(|&l| w.word(l)) {
+                self.watch_printer_axes = false;
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::PrinterRotaryAxis(word.display()),
+                    Some(word.span),
+                );
+            }
+        }
         if !axes_used && (w.has_axes() || explicit_motion) {
             let probe = w.has_g(310) || w.has_g(311);
             self.motion(b, w, g53, probe, out)?;

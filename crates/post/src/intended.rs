@@ -212,6 +212,9 @@ pub struct Intended<'a> {
     warned: Vec<(std::mem::Discriminant<ErrorKind>, u32, usize)>,
     /// A rotary or extra axis word at zero has been noted (see `extra_axes_at_zero`).
     noted_zero_axes: bool,
+    /// The laser (spindle) state the section's moves have shown: (section, turned on
+    /// by M3/M4, run at a power S above 0, a feed with it off noted).
+    laser_seen: (usize, bool, bool, bool),
 }
 
 /// The axes past X, Y, Z (A, B, C, U, V, W), as bits of [`lampost_gcode::AXES`].
@@ -252,6 +255,7 @@ impl<'a> Intended<'a> {
             warned_wet_rapid: None,
             warned: Vec::new(),
             noted_zero_axes: false,
+            laser_seen: (usize::MAX, false, false, false),
         }
     }
 
@@ -498,6 +502,12 @@ impl<'a> Intended<'a> {
                     sec.name, m.line
                 ));
             }
+            // A laser (or spindle) program's feed made with the laser off again (M5 after
+            // M3/M4) or at zero power (S0 after a power above 0: LightBurn's and
+            // LaserGRBL's raster gaps, `G1 X0.62 S0`) burns nothing: travel, as a slicer's
+            // G1 that does not extrude. A program that never turns it on deposits along
+            // every feed, as before.
+            let dry = dry || self.laser_off_feed(sec, &m);
             let is_feed = !matches!(m.kind, MoveKind::Rapid) && !dry;
             // Layers: a feed move ending at a new Z level starts a new layer.
             if is_feed && sec.layers.is_some() {
@@ -601,6 +611,34 @@ impl<'a> Intended<'a> {
 }
 
 impl Intended<'_> {
+    /// Whether `m` is a feed made with the laser (spindle) off again or at zero power,
+    /// after the section turned it on and ran it at a power (see its call); noted once a
+    /// section. Slicer programs (E as extrusion) go by E alone.
+    fn laser_off_feed(&mut self, sec: &Section, m: &lampost_gcode::Move) -> bool {
+        if self.opts.e_extrusion || !matches!(m.kind, MoveKind::Linear | MoveKind::Arc { .. }) {
+            return false;
+        }
+        if self.laser_seen.0 != self.idx {
+            self.laser_seen = (self.idx, false, false, false);
+        }
+        let on = m.modal.spindle != lampost_gcode::Spindle::Off;
+        self.laser_seen.1 |= on;
+        self.laser_seen.2 |= on && m.modal.speed > 0.0;
+        let off = if on {
+            self.laser_seen.2 && m.modal.speed == 0.0
+        } else {
+            self.laser_seen.1
+        };
+        if off && !self.laser_seen.3 {
+            self.laser_seen.3 = true;
+            self.notes.push(format!(
+                "{}:{}: a feed made with the laser off (M5) or at zero power (S0) is posted as travel (laser off), not deposited; so is every such feed",
+                sec.name, m.line
+            ));
+        }
+        off
+    }
+
     /// A G53, G28 or G30 move: a retract step when it only moves Z (every other axis
     /// within 1e-9 of where it was), a refusal otherwise; `None` for program moves.
     fn machine_coordinate_move(
