@@ -195,6 +195,8 @@ pub struct Interpreter {
     ended: bool,
     /// The program ended at its closing `%` (not at M2/M30): named in the warning.
     ended_at_percent: bool,
+    /// A `%` line with text after it was read past and said so (once).
+    warned_percent_text: bool,
     warned_after_end: bool,
     /// A line that starts the program has been read (`linuxcnc`: any line that is not
     /// blank, as rs274 takes its first; others: a line with words or a macro statement).
@@ -471,6 +473,7 @@ impl Interpreter {
             e_relative: false,
             ended: false,
             ended_at_percent: false,
+            warned_percent_text: false,
             warned_after_end: false,
             started: false,
             percent_framed: false,
@@ -902,6 +905,22 @@ impl Interpreter {
                 return Ok(());
             }
         } else if self.ended {
+            return Ok(());
+        } else if f != Flavor::LinuxCnc && !bare {
+            // `% vfd enable`: a line a post wrote for its own firmware (Fusion's MPCNC
+            // post), not the end-of-record mark, which stands alone. Read past, once said:
+            // ending the program here would drop everything after it without a move.
+            if !self.warned_percent_text {
+                self.warned_percent_text = true;
+                out(Event::Diagnostic(diag(
+                    b,
+                    Severity::Warning,
+                    ErrorKind::NotSimulated(
+                        "a `%` line with text after it, read past as a comment (a Fanuc, Haas or FADAL control stops reading at any `%`: a program for one must end at its closing `%`)".into(),
+                    ),
+                    None,
+                )));
+            }
             return Ok(());
         } else if f != Flavor::LinuxCnc || bare && self.percent_framed {
             if let Some(c) = self.comp.take() {
