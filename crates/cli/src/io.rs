@@ -92,7 +92,11 @@ pub fn read_to_string_checked(from: &mut dyn Read, out: &mut String) -> io::Resu
             "stream did not contain valid UTF-8",
         )
     })?;
-    out.push_str(&text);
+    if out.is_empty() {
+        *out = text;
+    } else {
+        out.push_str(&text);
+    }
     Ok(n)
 }
 
@@ -140,11 +144,14 @@ fn copy_checked(
             Err(e) => return Err(e),
         };
         let chunk = &buf[..n];
+        // The run carried over goes on through the chunk's leading NULs.
+        let leading = chunk.iter().position(|&c| c != 0).unwrap_or(n);
+        let through = run.saturating_add(leading);
         run = match chunk.iter().rposition(|&c| c != 0) {
             Some(i) => n - 1 - i,
-            None => run.saturating_add(n),
+            None => through,
         };
-        if run >= MAX_NUL_RUN {
+        if run.max(through) >= MAX_NUL_RUN {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidData,
                 format!(
@@ -508,6 +515,27 @@ mod tests {
         let bad = [b'a', 0xff, b'b'];
         let e = read_to_string_checked(&mut &bad[..], &mut String::new()).expect_err("not UTF-8");
         assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+        // A run spanning two reads is one run: 65,535 NULs at the end of one read and
+        // 65,535 at the start of the next.
+        struct Two(Vec<Vec<u8>>);
+        impl Read for Two {
+            fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+                match self.0.first().cloned() {
+                    Some(c) => {
+                        self.0.remove(0);
+                        buf[..c.len()].copy_from_slice(&c);
+                        Ok(c.len())
+                    }
+                    None => Ok(0),
+                }
+            }
+        }
+        let mut a = vec![0u8; MAX_NUL_RUN];
+        a[0] = b'x';
+        let mut b = vec![0u8; MAX_NUL_RUN];
+        b[MAX_NUL_RUN - 1] = b'x';
+        let e = read_to_end_checked(&mut Two(vec![a, b]), &mut Vec::new()).expect_err("a run");
+        assert!(e.to_string().contains("NUL bytes in a row"), "{e}");
         // NUL bytes short of the run are data.
         let mut v = vec![0u8; MAX_NUL_RUN - 1];
         v.push(1);

@@ -505,6 +505,14 @@ pub fn sections(
             let path = dir.join(&s.program);
             let name = path.to_string_lossy().into_owned();
             let axes_frame = || {
+                if s.origin
+                    .is_some_and(|o| o.iter().any(|c| c.abs() > crate::kin_cmds::MAX_PLACE))
+                {
+                    return Err(CliError::failed(format!(
+                        "error: {job}: section {}: the origin lies more than 1e9 from the part's origin\n  = help: give it in the machine's units (in or mm)\n",
+                        k + 1
+                    )));
+                }
                 Frame::from_axes(
                     Vector3::from(s.origin.unwrap_or([0.0; 3])),
                     Vector3::from(s.x_axis.unwrap_or([1.0, 0.0, 0.0])),

@@ -520,4 +520,19 @@ fn a_bad_row_is_refused_at_its_line_whatever_the_resampler_met_first() {
         "{e}"
     );
     assert!(!dir.join("both").exists() && !dir.join("jump").exists());
+    // The same with 60,000 good rows between: resampling stops at the jump in the first
+    // batch, and the reader, held by the full channel, never reaches the bad row; it is
+    // still the error reported (the file read again to find it).
+    let mut far = String::from(jump);
+    for i in 0..60_000 {
+        far.push_str(&format!("3000000 {} 0 0 0 1 600 1\n", f64::from(i) * 0.01));
+    }
+    far.push_str("1 2 3 0 0 1 600 1 9 9\n");
+    std::fs::write(dir.join("far.txt"), far).unwrap_or_default();
+    let e = err(&post(&dir, "far.txt", "far", &[]));
+    assert!(
+        e.contains("far.txt:60004:") && e.contains("found 10 columns"),
+        "{e}"
+    );
+    assert!(!dir.join("far").exists());
 }

@@ -437,7 +437,8 @@ pub fn plan(mesh: &Mesh, slicing: &Slicing, opts: &PlanOptions) -> Result<Plan, 
             what: "point spacing",
             value: opts.perimeter.spacing,
             why: format!(
-                "so small that the perimeters ({length:.1} mm long) would have more than {MAX_POINTS:e} points"
+                "so small that the perimeters ({} long) would have more than {MAX_POINTS:e} points",
+                lampost_gcode::Readable(length)
             ),
         });
     }
