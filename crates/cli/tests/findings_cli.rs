@@ -737,3 +737,25 @@ fn centroid_macros_are_named() {
         "{err}"
     );
 }
+
+/// Sinumerik R parameters (`R20=200`, `R101=R101+1`) were "unexpected character `=`"
+/// (11), and Okuma OSP programs were never named: `VC1=20` and `IF [VC1 EQ 20] NDTM8`
+/// gave "the letter V has no number", the `$O0137.MIN%` header was read as a grbl
+/// console line (12). Both languages are now named at their first line.
+#[test]
+fn sinumerik_r_parameters_and_okuma_programs_are_named() {
+    for (name, language, at) in [
+        (
+            "08-sinumerik-r-parameters.nc",
+            "Siemens Sinumerik syntax",
+            ":1:1",
+        ),
+        ("09-okuma-osp.nc", "Okuma OSP syntax", ":1:1"),
+    ] {
+        let path = finding(name);
+        let o = lampost(&["check", path.to_str().expect("utf8")]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{name}: {err}");
+        assert!(err.contains(language) && err.contains(at), "{name}: {err}");
+    }
+}

@@ -20,6 +20,10 @@ const SINUMERIK: Foreign = Foreign {
     name: "Siemens Sinumerik syntax",
     hint: "post the job for an ISO G-code control (Fanuc, LinuxCNC or FADAL), without Sinumerik cycles, `NAME=` values and `T=\"…\"` tools",
 };
+const OKUMA: Foreign = Foreign {
+    name: "Okuma OSP syntax (`VC` variables, `IF [VC1 EQ 20] NLABEL` branches, named labels)",
+    hint: "post the job from the CAM system for an ISO G-code control (Fanuc, LinuxCNC or FADAL); lampost reads no OSP user task statements",
+};
 const APT: Foreign = Foreign {
     name: "APT cutter-location (CL) data, a CAM system's output before posting",
     hint: "post the CL file in the CAM system for a G-code control, then give lampost the G-code",
@@ -166,8 +170,40 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     {
         return Some(CENTROID);
     }
-    // Sinumerik: its cycles, messages, tool names, `NAME=` values and frame statements.
+    // Okuma OSP: user task variables (`VC1=20`, `IF [VC1 EQ 20] NDTM8`), a branch to a
+    // named label (`GOTO NLOOP`), the file's header (`$O0137.MIN%`, `$OKUMA.SSB%`).
+    let words: Vec<&str> = u.split_whitespace().collect();
+    let vc = |w: &str| {
+        w.strip_prefix("VC")
+            .is_some_and(|r| r.bytes().next().is_some_and(|c| c.is_ascii_digit()))
+    };
+    if words.iter().any(|w| vc(w) && w.contains('='))
+        || u.starts_with("IF [VC")
+        || u.starts_with('$') && u.contains('.') && u.ends_with('%')
+        || words.windows(2).any(|w| {
+            w[0] == "GOTO"
+                && w[1].len() > 1
+                && w[1].starts_with('N')
+                && w[1][1..]
+                    .bytes()
+                    .next()
+                    .is_some_and(|c| c.is_ascii_uppercase())
+        })
+    {
+        return Some(OKUMA);
+    }
+    // Sinumerik: its cycles, messages, tool names, `NAME=` values, R parameters
+    // (`R20=200`, `R101=R101+1`) and frame statements.
     let code = u.split(';').next().unwrap_or("");
+    let r_parameter = code.split_whitespace().any(|w| {
+        w.strip_prefix('R').is_some_and(|r| {
+            let d = r.bytes().take_while(u8::is_ascii_digit).count();
+            d > 0 && r[d..].starts_with('=')
+        })
+    });
+    if r_parameter {
+        return Some(SINUMERIK);
+    }
     const SIN: [&str; 24] = [
         "CYCLE", "MSG(", "MSG (", "T=\"", "=AC(", "=IC(", "=DC(", "=ACP(", "=ACN(", "CR=", "AP=",
         "RP=", "TURN=", "SUPA", "TRANS", "AROT", "TRAORI", "ORIWKS", "CFTCP", "GOTOF", "GOTOB",
@@ -212,6 +248,18 @@ mod tests {
             ("IF #50010", Some(CENTROID)),
             ("IF #4201 || #4202 THEN GOTO 1000 ;Skip", Some(CENTROID)),
             ("IF [#1 EQ 2] GOTO 10", None),
+            ("N1 R20=200", Some(SINUMERIK)),
+            ("N6 R101=R101+1", Some(SINUMERIK)),
+            ("VC1=20", Some(OKUMA)),
+            ("IF [VC1 EQ 20] NDTM8", Some(OKUMA)),
+            ("$O0137.MIN%", Some(OKUMA)),
+            ("$OKUMA.SSB%", Some(OKUMA)),
+            ("$$", None),
+            ("$32=1", None),
+            ("GOTO NLOOP", Some(OKUMA)),
+            ("G2 X1 Y1 R2.5", None),
+            ("G81 X1 Y1 Z-1 R0.1", None),
+            ("#1=20", None),
             ("if state.currentTool != -1", None),
             ("if !move.axes[0].homed || !move.axes[1].homed", None),
             (

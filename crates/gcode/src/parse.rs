@@ -883,6 +883,16 @@ fn words_reference_items<'a>(
             block.block_delete = true;
             i += 1;
         }
+        b'$' if crate::foreign_language(text).is_some() => {
+            // Not a grbl console line: another language's header (Okuma's `$O0137.MIN%`).
+            if let Some(f) = crate::foreign_language(text) {
+                return Err(err(
+                    ErrorKind::ForeignLanguage(f),
+                    i,
+                    text.trim_end().len().max(i + 1),
+                ));
+            }
+        }
         b'$' | b'?' => {
             // A grbl console line (`$H`, `$$`, `$32=1`, `?`), kept verbatim; a `;` or `(`
             // comment after it stays a comment.
