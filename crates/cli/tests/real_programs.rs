@@ -54,14 +54,20 @@ const SLICERS: [&str; 18] = [
     "weedo",
 ];
 
-/// The first error `lampost check` reports, as `L:C message`.
-fn first_error(path: &Path, e_word: &[&str]) -> String {
+/// `lampost check --json` of a program (with `e_word`'s options): the report and the run.
+fn check_json(path: &Path, e_word: &[&str]) -> (serde_json::Value, std::process::Output) {
     let p = path.to_str().expect("utf-8 path");
     let mut args = vec!["check", "--json"];
     args.extend_from_slice(e_word);
     args.push(p);
     let out = lampost(&args);
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+    let doc = serde_json::from_slice(&out.stdout).unwrap_or_default();
+    (doc, out)
+}
+
+/// The first error `lampost check` reports, as `L:C message`.
+fn first_error(path: &Path, e_word: &[&str]) -> String {
+    let (doc, out) = check_json(path, e_word);
     doc["diagnostics"]
         .as_array()
         .and_then(|d| d.iter().find(|d| d["severity"] == "error"))
@@ -86,12 +92,7 @@ fn first_error(path: &Path, e_word: &[&str]) -> String {
 /// The line at which `lampost check` says the program is a lathe's (`; lathe L` in its
 /// verdict), if it does: every other program must be read as a mill's or a printer's.
 fn lathe_line(path: &Path, e_word: &[&str]) -> Option<u64> {
-    let p = path.to_str().expect("utf-8 path");
-    let mut args = vec!["check", "--json"];
-    args.extend_from_slice(e_word);
-    args.push(p);
-    let out = lampost(&args);
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+    let (doc, _) = check_json(path, e_word);
     doc["diagnostics"].as_array()?.iter().find_map(|d| {
         d["message"]
             .as_str()
