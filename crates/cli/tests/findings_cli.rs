@@ -759,3 +759,81 @@ fn sinumerik_r_parameters_and_okuma_programs_are_named() {
         assert!(err.contains(language) && err.contains(at), "{name}: {err}");
     }
 }
+
+/// A pen or laser program for a 3D printer (Inkscape gcodetools with a Marlin start
+/// code: `M104 S210`, `M109 S210`, `G28`, `G90 E0`) extrudes nothing and names no slicer:
+/// `auto` took its first `;` comment for LinuxCNC and refused `G90 E0` at 5:5 ("E0:
+/// LinuxCNC reads E only with G76"), pointing at `--flavor fadal` (36). A printer's
+/// temperature code with its S now reads it as Marlin's, as the firmware runs it; a
+/// Haas `M109 P…` (its interactive input) does not.
+#[test]
+fn a_printer_s_start_code_reads_as_a_printer_s() {
+    let path = finding("36-printer-start-code-pen-plotter.gcode");
+    let doc = trace_json("auto", &path);
+    assert_eq!(doc["flavor"]["flavor"], "marlin", "{}", doc["flavor"]);
+    assert!(
+        doc["flavor"]["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("temperature code") && r.contains("line 2")),
+        "{}",
+        doc["flavor"]
+    );
+    // The first lift, G28's move home, the lift, the approach, the plunge, the arc, the
+    // last lift.
+    let e = ends(&doc);
+    assert_eq!(e.len(), 7, "{e:?}");
+    let arc_end = e[5];
+    assert!(
+        (arc_end[0] - 82.1721).abs() < 1e-9 && (arc_end[1] - 148.2757).abs() < 1e-9,
+        "{e:?}"
+    );
+    // Read as LinuxCNC's (what `auto` chose before), the program is refused at `G90 E0`.
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        path.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains(":5:5"),
+        "{}",
+        stderr(&o)
+    );
+    // A Haas program's M109 (interactive input, a P and no S) is not a printer's.
+    let work = tempdir("findings-haas-m109");
+    let p = work.join("m109.nc");
+    std::fs::write(&p, "O1000 (HAAS)\nG0 X1\nM109 P501\nM30\n").expect("writes");
+    let doc = trace_json("auto", &p);
+    assert_eq!(doc["flavor"]["flavor"], "haas", "{}", doc["flavor"]);
+}
+
+/// A sign with blanks before an expression (`Y - [10. - #4]`, a hand-written Macro B
+/// program's spelling) was refused "the letter Y has no number after it" in every
+/// flavour (a number after them, `Z - 1.`, was read); rs274 reads the blanks as
+/// nothing, as Fanuc's controls do (37). Equal to rs274 under `linuxcnc`, `fanuc` and
+/// `haas`.
+#[test]
+fn a_sign_with_blanks_after_it_signs_its_value() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-sign-blanks");
+    let path = finding("37-sign-then-blanks.nc");
+    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+    assert_eq!(canon.len(), 5);
+    for flavor in ["linuxcnc", "fanuc", "haas"] {
+        let doc = trace_json(flavor, &path);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+    }
+    // The same lines with their expressions worked out by hand trace the same path.
+    let p = work.join("by-hand.nc");
+    std::fs::write(
+        &p,
+        "G21 G90 G17\nG0 X50 Y-6 Z5\nG1 Z-1 F100\nX-50\nY-7\nG0 Z5\nM30\n",
+    )
+    .expect("writes");
+    assert_eq!(
+        ends(&trace_json("fanuc", &p)),
+        ends(&trace_json("fanuc", &path))
+    );
+}

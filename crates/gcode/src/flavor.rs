@@ -187,12 +187,22 @@ struct Codes {
     /// fine boring, with no J or K; Fanuc's lathe G76 has no J).
     j: bool,
     k: bool,
+    /// `M104`, `M109`, `M140` or `M190`: a printer's hot end or bed temperature (with an
+    /// S word; Haas's `M109 P…` is its interactive input, with no S).
+    heater: bool,
+    /// An S word with a number.
+    s: bool,
 }
 
 impl Codes {
     /// A G0 or G1 with a fractional E: a slicer's extruding move.
     fn e_move(&self) -> bool {
         self.g0_1 && self.e_fraction
+    }
+
+    /// A printer's temperature code with its S (`M104 S210`, `M190 S60`).
+    fn heater_temperature(&self) -> bool {
+        self.heater && self.s
     }
 }
 
@@ -212,6 +222,7 @@ impl Codes {
                 .is_some_and(|d| d.is_ascii_digit() || matches!(d, b'.' | b'-' | b'+'));
             c.j |= letter == b'J' && numeric;
             c.k |= letter == b'K' && numeric;
+            c.s |= letter == b'S' && numeric;
             if letter == b'E' {
                 let num = b[i + 1..].strip_prefix(b"-").unwrap_or(&b[i + 1..]);
                 let int = num.iter().take_while(|d| d.is_ascii_digit()).count();
@@ -234,6 +245,7 @@ impl Codes {
                     (b'M', 97) => c.m97 = true,
                     (b'G', 0 | 1) => c.g0_1 = true,
                     (b'G', 76) => c.g76 = true,
+                    (b'M', 104 | 109 | 140 | 190) => c.heater = true,
                     _ => {}
                 }
             }
@@ -263,7 +275,8 @@ impl Codes {
 /// - PrusaSlicer's binary G-code (the magic `GCDE` at the start): Marlin.
 ///
 /// Without any of those, weaker evidence decides, the strongest kind found first: a G0
-/// or G1 with a fractional E word (a slicer's extrusion): Marlin; numbered parameters
+/// or G1 with a fractional E word (a slicer's extrusion), or a printer's temperature code
+/// with its S (`M104`, `M109`, `M140`, `M190`): Marlin; numbered parameters
 /// (`#1 = …`), `[…]` expressions or polar coordinates (`@`, `^`): LinuxCNC; a `;` comment, which FADAL programs do not
 /// hold (grbl, Mach3 and hobby CAM write them): LinuxCNC, whose reading is ISO's.
 pub fn detect(head: &[u8]) -> (Flavor, String) {
@@ -406,6 +419,12 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
         // comes in the head.
         let found = if c.e_move() {
             Some((3, Flavor::Marlin, "a move with a fractional E (extrusion)"))
+        } else if c.heater_temperature() {
+            Some((
+                3,
+                Flavor::Marlin,
+                "a printer's temperature code (M104/M109/M140/M190 with S)",
+            ))
         } else if code.contains('#') || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
         } else if code
@@ -535,6 +554,16 @@ mod tests {
             ("#V1 = 2 'A\n", Flavor::Fadal),
             ("N80 #:S1\n", Flavor::Fadal),
             ("G0 X1\nG1 Y2 F10\n", Flavor::Fadal),
+            // A printer's start code in a pen-plotter program (Inkscape gcodetools for a
+            // Marlin printer): no extrusion, a `;` comment first, temperatures after it.
+            (
+                "G1 Z5.5 F1200; S0\nM104 S210\nM109 S210\nG28\nG90 E0\n",
+                Flavor::Marlin,
+            ),
+            ("M140 S60\nM190 S60\nG1 X1\n", Flavor::Marlin),
+            // Haas's M109 (interactive user input) has a P, no S.
+            ("G0 X1 ; note\nM109 P501\n", Flavor::LinuxCnc),
+            ("O1000\nM104\nG0 X1\nM30\n", Flavor::Fadal),
             ("O1000\nG0 X1\nM30\n", Flavor::Fadal),
             ("", Flavor::Fadal),
         ] {

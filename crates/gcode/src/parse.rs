@@ -1084,6 +1084,12 @@ fn words_reference_items<'a>(
                 let mut k = j;
                 if k < bytes.len() && (bytes[k] == b'+' || bytes[k] == b'-') {
                     k += 1;
+                    // Blanks after the sign are nothing, as for a number (`Z - 5`, read
+                    // by `number`): `X - [#1 + 2]` and `Y - #1` are expressions too,
+                    // as rs274 and Fanuc's controls read them.
+                    while k < bytes.len() && (bytes[k] == b' ' || bytes[k] == b'\t') {
+                        k += 1;
+                    }
                 }
                 if k < bytes.len() {
                     let v = bytes[k];
@@ -1262,6 +1268,42 @@ mod tests {
         b.words()
             .map(|w| (w.letter_char(), w.register, w.value, w.text.to_string()))
             .collect()
+    }
+
+    /// A sign with blanks after it (`X - 5`, `Y- 2.5`, `X - [1 + 4]`): rs274 and Fanuc
+    /// read the blanks as nothing (finding 37: the expression was refused).
+    #[test]
+    fn a_sign_with_blanks_after_it_signs_the_number() {
+        let w = words("G0 X - 5 Y- 2.5 Z +\t.5 A -1");
+        let v: Vec<_> = w.iter().map(|w| (w.0, w.2)).collect();
+        assert_eq!(
+            v,
+            [
+                ('G', 0.0),
+                ('X', -5.0),
+                ('Y', -2.5),
+                ('Z', 0.5),
+                ('A', -1.0)
+            ]
+        );
+        // An expression or a parameter after the blanks makes a macro line, as without,
+        // in every reading.
+        for slicer in [false, true] {
+            let reading = Reading {
+                slicer,
+                polar: false,
+                colon_program: false,
+            };
+            for s in ["G0 X - [1 + 4]", "G0 Y - #1", "G0 Z -\t[2]"] {
+                let mut b = Block::empty(1, 0);
+                parse_line_with(s.as_bytes(), 1, 0, &mut b, reading).expect("parses");
+                assert!(matches!(b.kind, BlockKind::Macro(_)), "{s}");
+            }
+        }
+        // A second sign, or nothing after the blanks, is no number.
+        for s in ["G0 X - -5", "G0 X - ", "G0 X -", "G0 X - -[1]"] {
+            assert!(parse_line(s.as_bytes(), 1, 0).is_err(), "{s}");
+        }
     }
 
     #[test]
