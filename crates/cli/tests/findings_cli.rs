@@ -697,6 +697,72 @@ fn a_laser_feed_at_zero_power_deposits_nothing() {
     assert_eq!((ons, deposited), (1, 40.0));
 }
 
+/// A laser job whose paths start with a feed to their start, laser off (jscut: `G1
+/// X10 F1500`, then `M3 S80`), was posted with that first feed deposited: the laser
+/// went on before it, a first run of 20 mm where the program burns 10 (38). A program
+/// that turns its laser on (looked for ahead, on a reader of its own) burns nothing
+/// along a feed made with it off, before its first M3 as after an M5: travel, noted.
+/// One that never turns it on still deposits along every feed (the test of 32); one
+/// that first does after `LASER_LOOK` moves fed with it off is refused at that line,
+/// nothing written.
+#[test]
+fn a_feed_before_the_first_laser_on_deposits_nothing() {
+    let path = finding("38-feed-before-first-laser-on.nc");
+    let work = tempdir("findings-laser-first");
+    let out = work.join("p.nc");
+    let post = |input: &Path| {
+        lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            input.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+    };
+    let o = post(&path);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(":4: a feed made with the laser off (before the program's first M3/M4"),
+        "{err}"
+    );
+    let nc = std::fs::read_to_string(&out).expect("posted");
+    let (ons, deposited) = posted_deposition(&nc);
+    assert_eq!(ons, 2, "laser-on events");
+    assert!((deposited - 20.0).abs() < 1e-9, "deposited {deposited}");
+    let v = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(v.status.success(), "{}", stderr(&v));
+    // Fed with the laser off for longer than the look ahead, then turned on: refused at
+    // the M3's move, naming the first of those feeds; nothing written.
+    let mut long = String::from("G21 G90 G17\nG0 X0 Y0 Z0\n");
+    let n = lampost_post::LASER_LOOK + 10;
+    for k in 0..n {
+        long += &format!("G1 X{} F1500\n", if k % 2 == 0 { 1 } else { 0 });
+    }
+    long += "M3 S80\nG1 X5\nM5\nM2\n";
+    let input = work.join("long.nc");
+    std::fs::write(&input, long).expect("writes");
+    std::fs::remove_file(&out).expect("removes");
+    let o = post(&input);
+    let err = stderr(&o);
+    let m3_move = n + 4;
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!("long.nc:{m3_move}"))
+            && err.contains("first on here")
+            && err.contains("from line 3"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing written");
+}
+
 /// Cura for QIDI printers writes the extruders as A and B (`G1 X270 Y5 A13`): read as a
 /// Marlin program, the A word was traced as a 13° rotation with no word (34). Now the
 /// first A, B or C word of a printer's program is warned of, once, at its column (the

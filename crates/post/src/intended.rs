@@ -215,6 +215,55 @@ pub struct Intended<'a> {
     /// The laser (spindle) state the section's moves have shown: (section, turned on
     /// by M3/M4, run at a power S above 0, a feed with it off noted).
     laser_seen: (usize, bool, bool, bool),
+    /// What the look at the section's first moves found of its laser ([`laser_ahead`]).
+    laser_ahead: LaserAhead,
+    /// The input line of the section's first feed deposited with the laser off (in a
+    /// program not seen to turn it on within [`LASER_LOOK`] moves).
+    dark_deposit: Option<u32>,
+}
+
+/// How many of a section's moves the post reads ahead at most (20,000) to learn whether
+/// the program turns its laser (spindle) on: a feed made with it off is travel in a
+/// program that does, a deposit in one that never does; a program that feeds longer than
+/// that with it off before it first turns it on is refused at that line.
+pub const LASER_LOOK: usize = 20_000;
+
+/// Whether a section's program turns its laser (spindle) on, as [`laser_ahead`] found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LaserAhead {
+    /// A move at this input line is made with it on (M3/M4 before it).
+    On(u32),
+    /// No move is: the program ends (or stops at an error) first.
+    Never,
+    /// None of the first [`LASER_LOOK`] moves is.
+    NotWithin,
+}
+
+/// The section's program read ahead, on a reader of its own, until a move is made with
+/// the laser (spindle) on: what the post decides its feeds with the laser off by (a
+/// program that turns it on burns nothing along them; one that never does is a bare
+/// path and deposits along every feed). Reads at most [`LASER_LOOK`] moves; the
+/// program's own errors are left to the post's reading, which meets them first.
+fn laser_ahead(source: &Source, opts: Options) -> Result<LaserAhead, PostError> {
+    let src = ProgramReader::new(source.open()?, Order::Execution);
+    let mut moves = 0usize;
+    for ev in Stream::new(src, opts, true) {
+        match ev {
+            Ok(Event::Move(m)) => {
+                if m.modal.spindle != lampost_gcode::Spindle::Off {
+                    return Ok(LaserAhead::On(m.line));
+                }
+                moves += 1;
+                if moves >= LASER_LOOK {
+                    return Ok(LaserAhead::NotWithin);
+                }
+            }
+            Ok(Event::Diagnostic(d)) if d.severity == Severity::Error => break,
+            Ok(Event::Diagnostic(_)) => {}
+            Err(_) => break,
+        }
+    }
+    Ok(LaserAhead::Never)
 }
 
 /// The axes past X, Y, Z (A, B, C, U, V, W), as bits of [`lampost_gcode::AXES`].
@@ -256,6 +305,8 @@ impl<'a> Intended<'a> {
             warned: Vec::new(),
             noted_zero_axes: false,
             laser_seen: (usize::MAX, false, false, false),
+            laser_ahead: LaserAhead::Never,
+            dark_deposit: None,
         }
     }
 
@@ -342,6 +393,13 @@ impl<'a> Intended<'a> {
                     flavor: self.opts.flavor,
                     ..Options::default()
                 };
+                // Slicer programs go by E alone (see `laser_off_feed`).
+                self.laser_ahead = if self.opts.e_extrusion {
+                    LaserAhead::Never
+                } else {
+                    laser_ahead(&sec.source, opts)?
+                };
+                self.dark_deposit = None;
                 // In execution order, as `trace` reads it: subprogram calls (M98, M97,
                 // LinuxCNC O-word calls) and loops are followed by the one reader, and
                 // the flavour's parameters evaluated by the stream.
@@ -507,7 +565,7 @@ impl<'a> Intended<'a> {
             // LaserGRBL's raster gaps, `G1 X0.62 S0`) burns nothing: travel, as a slicer's
             // G1 that does not extrude. A program that never turns it on deposits along
             // every feed, as before.
-            let dry = dry || self.laser_off_feed(sec, &m);
+            let dry = dry || self.laser_off_feed(sec, &m)?;
             let is_feed = !matches!(m.kind, MoveKind::Rapid) && !dry;
             // Layers: a feed move ending at a new Z level starts a new layer.
             if is_feed && sec.layers.is_some() {
@@ -611,32 +669,52 @@ impl<'a> Intended<'a> {
 }
 
 impl Intended<'_> {
-    /// Whether `m` is a feed made with the laser (spindle) off again or at zero power,
-    /// after the section turned it on and ran it at a power (see its call); noted once a
-    /// section. Slicer programs (E as extrusion) go by E alone.
-    fn laser_off_feed(&mut self, sec: &Section, m: &lampost_gcode::Move) -> bool {
+    /// Whether `m` is a feed that burns nothing (see its call): made with the laser
+    /// (spindle) off in a program that turns it on (before its first M3/M4, as
+    /// [`laser_ahead`] found, or after an M5), or at zero power after the section ran it
+    /// at a power; noted once a section. A program that never turns it on deposits along
+    /// every feed; one that first does after [`LASER_LOOK`] moves, having fed with it off
+    /// before, is refused at that line (those feeds were taken for deposits). Slicer
+    /// programs (E as extrusion) go by E alone.
+    fn laser_off_feed(
+        &mut self,
+        sec: &Section,
+        m: &lampost_gcode::Move,
+    ) -> Result<bool, PostError> {
         if self.opts.e_extrusion || !matches!(m.kind, MoveKind::Linear | MoveKind::Arc { .. }) {
-            return false;
+            return Ok(false);
         }
         if self.laser_seen.0 != self.idx {
             self.laser_seen = (self.idx, false, false, false);
         }
         let on = m.modal.spindle != lampost_gcode::Spindle::Off;
+        if let (true, Some(dark)) = (on, self.dark_deposit) {
+            return Err(PostError::Unsupported {
+                file: sec.name.clone(),
+                line: m.line,
+                what: format!(
+                    "the laser (spindle) is first on here, after more than {LASER_LOOK} moves; the feeds before it (from line {dark}) were made with it off and taken for deposits, as in a program that never turns it on; turn it on (M3/M4) before the first feed, or leave M3/M4 out of a bare path"
+                ),
+            });
+        }
         self.laser_seen.1 |= on;
         self.laser_seen.2 |= on && m.modal.speed > 0.0;
         let off = if on {
             self.laser_seen.2 && m.modal.speed == 0.0
         } else {
-            self.laser_seen.1
+            self.laser_seen.1 || matches!(self.laser_ahead, LaserAhead::On(_))
         };
+        if !on && !off && self.laser_ahead == LaserAhead::NotWithin {
+            self.dark_deposit.get_or_insert(m.line);
+        }
         if off && !self.laser_seen.3 {
             self.laser_seen.3 = true;
             self.notes.push(format!(
-                "{}:{}: a feed made with the laser off (M5) or at zero power (S0) is posted as travel (laser off), not deposited; so is every such feed",
+                "{}:{}: a feed made with the laser off (before the program's first M3/M4, or after M5) or at zero power (S0) is posted as travel (laser off), not deposited; so is every such feed",
                 sec.name, m.line
             ));
         }
-        off
+        Ok(off)
     }
 
     /// A G53, G28 or G30 move: a retract step when it only moves Z (every other axis

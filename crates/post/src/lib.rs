@@ -42,7 +42,7 @@ mod writer;
 
 pub use error::PostError;
 pub use frame::{read_setup, Frame};
-pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source};
+pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source, LASER_LOOK};
 pub use job::{parse as read_job, JobFile, JobSection};
 pub use pipeline::{post, Rewind};
 pub use post::{default_head, PostConfig, PostDialect, PostReport, Process};
