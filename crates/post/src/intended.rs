@@ -222,11 +222,11 @@ pub struct Intended<'a> {
     dark_deposit: Option<u32>,
 }
 
-/// How many of a section's moves the post reads ahead at most (20,000) to learn whether
+/// How many of a section's moves the post reads ahead at most (5,000) to learn whether
 /// the program turns its laser (spindle) on: a feed made with it off is travel in a
 /// program that does, a deposit in one that never does; a program that feeds longer than
 /// that with it off before it first turns it on is refused at that line.
-pub const LASER_LOOK: usize = 20_000;
+pub const LASER_LOOK: usize = 5_000;
 
 /// Whether a section's program turns its laser (spindle) on, as [`laser_ahead`] found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
