@@ -7,7 +7,7 @@
 
 use std::io::{BufRead, Write};
 
-use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, AXES};
+use lampost_gcode::{Event, MoveKind, AXES};
 use lampost_kinematics::{Joints, Machine};
 use nalgebra::{Rotation3, Unit, Vector3};
 
@@ -742,25 +742,21 @@ pub fn verify_points_traced<R: BufRead>(
     // the feeds are the approach onto it. `live`: the readings still possible (the next
     // point to reach), ascending.
     let mut live: Vec<usize> = vec![0];
-    let mut stream = Stream::from_reader(
-        posted,
-        Options {
-            units,
-            ..Options::default()
-        },
-        true,
-    );
+    let screen = crate::verify::Screen::default();
+    let mut stream = screen.stream(posted, units);
+    let mut rules = crate::verify::PostedRules::new(machine.units, true);
     for ev in stream.by_ref() {
-        match ev.map_err(|e| PostError::Io(e.to_string()))? {
-            Event::Diagnostic(d) if d.severity == Severity::Error => {
-                return Err(PostError::Input {
-                    file: "the posted program".into(),
-                    diag: Box::new(d),
-                })
+        let ev = ev.map_err(|e| PostError::Io(e.to_string()))?;
+        screen.check()?;
+        match ev {
+            Event::Diagnostic(d) => {
+                if let Some(e) = crate::verify::posted_diagnostic(d) {
+                    return Err(e);
+                }
             }
-            Event::Diagnostic(_) => {}
             Event::Move(m) => {
                 rep.moves += 1;
+                rules.check(&m, &ix[3..])?;
                 let lin = |p: &[f64; 9]| [p[ix[0]], p[ix[1]], p[ix[2]]];
                 let rot = |p: &[f64; 9]| [p[ix[3]], p[ix[4]]];
                 safety.travel(&lin(&m.end), &rot(&m.end), m.line)?;
@@ -774,7 +770,7 @@ pub fn verify_points_traced<R: BufRead>(
                     )?;
                     continue;
                 }
-                safety.feed(&lin(&m.end), m.line)?;
+                safety.feed(&lin(&m.start), &lin(&m.end), m.line)?;
                 let j = Joints {
                     linear: [m.end[ix[0]], m.end[ix[1]], m.end[ix[2]]],
                     rotary: [m.end[ix[3]], m.end[ix[4]]],
@@ -859,6 +855,7 @@ pub fn verify_points_traced<R: BufRead>(
             placed[k].line
         )));
     }
+    screen.finish()?;
     safety.finish(stream.interpreter().ended())?;
     Ok(rep)
 }
