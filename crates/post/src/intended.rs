@@ -298,7 +298,8 @@ impl<'a> Intended<'a> {
 
     /// A program moves the frame it is placed by only before its first move: after it,
     /// an offset change (`G92`, `G52`, a `G10` setting the work offset in force) or
-    /// another work offset (`G55`…, FADAL `E2`…) is refused at its line. A control
+    /// another work offset (`G55`…, FADAL `E2`…) is refused at the first move made in
+    /// it. A control
     /// applies them (LinuxCNC's canonical positions are in the work system in force, and
     /// the machine goes there plus the offsets), so such a program's later moves are
     /// somewhere else on the machine than the same numbers before; the post places one
@@ -315,9 +316,9 @@ impl<'a> Intended<'a> {
             Some((sec, first, modal)) if *sec == self.idx => {
                 let moved = off.iter().zip(first).any(|(a, b)| a != b);
                 let what = if modal.work_offset != m.modal.work_offset {
-                    "another work offset (G54…G59, FADAL E…) is selected after the first move: the post places the program's frame once, and the other offsets are not known here"
+                    "this move is in another work offset (G54…G59, FADAL E…) than the first move: the post places the program's frame once, and the other offsets are not known here"
                 } else if moved {
-                    "the program's frame moves after the first move (G92, G52, or G10 setting the work offset in force): the control would run the later moves shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job"
+                    "the program's frame moved before this move, after the first one (G92, G52, or G10 setting the work offset in force): the control would run the later moves shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job"
                 } else {
                     return Ok(());
                 };
