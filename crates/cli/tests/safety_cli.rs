@@ -886,3 +886,274 @@ fn machine_resolution_is_honoured() {
     let v = lampost(&verify);
     assert!(v.status.success(), "{}", stderr(&v));
 }
+
+/// Audit of verify's independence (2026-11-24): edits of a posted program that change
+/// where the control puts the head while every feed point verify used to compare still
+/// lies on the path. Each passed verify before; each must fail now, and the program as
+/// posted still passes.
+#[test]
+fn verify_rejects_deviations_the_moves_alone_hide() {
+    let dir = tempdir("safety-hidden");
+    let posted = post_patch(&dir, "A=0,B=0");
+    let good = verify(&dir, "A=0,B=0", &posted, &[]);
+    assert!(good.status.success(), "{}", stderr(&good));
+    let lines: Vec<String> = posted.lines().map(str::to_string).collect();
+    let at = |want: &str| {
+        lines
+            .iter()
+            .position(|l| l == want)
+            .unwrap_or_else(|| panic!("no line {want}"))
+    };
+    // `f` edits the lines; the result must fail with `why` in the message.
+    let check = |name: &str, f: &dyn Fn(&mut Vec<String>), why: &str| {
+        let mut t = lines.clone();
+        f(&mut t);
+        let o = verify(&dir, "A=0,B=0", &(t.join("\n") + "\n"), &[]);
+        assert!(
+            !o.status.success() && stderr(&o).contains(why),
+            "{name}: {}",
+            stderr(&o)
+        );
+    };
+    let after =
+        |k: usize, text: &'static str| move |t: &mut Vec<String>| t.insert(k + 1, text.into());
+    let header = at("G70 G90 G94 G17 G40 G80");
+    let on = at("M73");
+    let off = at("M74");
+    // A is continuous about the tool axis at B = 0: two turns during a feed end where
+    // they began, and the feed's middle and end are on the path; between, the table
+    // sweeps the work under the head.
+    check(
+        "A720 on a feed",
+        &|t| t[on + 2] = format!("{} A720.", t[on + 2]),
+        "a feed turns the table",
+    );
+    // A rapid straight down into the work and back up: both vertical.
+    check("plunge and back", &after(off, "G0 Z5."), "goes back up");
+    // The approach comes down half an inch beside the start; the feed-in crosses over.
+    let feed_in = lines
+        .iter()
+        .position(|l| l.starts_with("G1 Z"))
+        .expect("feed-in");
+    check(
+        "approach beside the start",
+        &|t| {
+            let x: f64 = t[feed_in - 2][1..8].parse().expect("traverse X");
+            t[feed_in - 2] =
+                t[feed_in - 2].replacen(&t[feed_in - 2][..8], &format!("X{:.4}", x + 0.5), 1);
+            t[feed_in] = t[feed_in].replacen("G1 ", &format!("G1 X{x:.4} "), 1);
+        },
+        "not straight down onto the start",
+    );
+    // Codes that move the frame: the reader starts from zero, so a G92 at the top
+    // changes nothing it sees; the control makes wherever it stands the origin.
+    check("G92 at the top", &after(header, "G92 X0 Y0 Z0"), "G92");
+    check("G52", &after(header, "G52 X1."), "G52");
+    check(
+        "G10 L2 and G54",
+        &|t| {
+            t.insert(header + 1, "G54".into());
+            t.insert(header + 1, "G10 L2 P1 X1.".into());
+        },
+        "G10",
+    );
+    check("G44", &after(header, "G44 H1"), "G44");
+    // Codes the reader warns it does not simulate: the control would run them.
+    check("G68 rotation", &after(on, "G68 X0 Y0 R90."), "G68");
+    check("G51 scaling", &after(on, "G51 X0 Y0 Z0 P2."), "G51");
+    check("G16 polar", &after(header, "G16"), "G16");
+    check("G41 compensation", &after(on, "G41 D1"), "G41");
+    // State the moves carry: tool length and work offsets, machine coordinates.
+    check(
+        "G43 H5 mid-program",
+        &after(on, "G43 H5"),
+        "tool length offset changes",
+    );
+    check("E2 mid-program", &after(on, "E2"), "work offset changes");
+    check(
+        "G53 plunge",
+        &after(at("M72"), "G53 G0 Z-5."),
+        "machine coordinates",
+    );
+    // The program's end and block delete.
+    check(
+        "M99 for M30",
+        &|t| {
+            let k = t.iter().position(|l| l == "M30").expect("M30");
+            t[k] = "M99".into();
+        },
+        "ends with M99",
+    );
+    check(
+        "block delete",
+        &|t| t[on + 2] = format!("/{}", t[on + 2]),
+        "block-delete",
+    );
+    // A kept full circle: run twice (P2), or the other way round.
+    let input = write(
+        &dir,
+        "circle.nc",
+        "G20 G90 G17\nG0 X0.5 Y0 Z0.1\nG1 Z0 F10.\nG2 X0.5 Y0 I-0.5 J0\nG0 Z0.2\nM30\n",
+    );
+    let out = dir.join("circle.out");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        &input,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let circle = std::fs::read_to_string(&out).expect("posted");
+    assert!(circle.lines().any(|l| l.starts_with("G2 ")), "{circle}");
+    for (name, bad, why) in [
+        (
+            "P2",
+            circle.replace("J0.0000\n", "J0.0000 P2\n"),
+            "more than one turn",
+        ),
+        (
+            "G3 for G2",
+            circle.replace("\nG2 ", "\nG3 "),
+            "other way round",
+        ),
+    ] {
+        let p = write(&dir, "circle-bad.nc", &bad);
+        let o = lampost(&[
+            "verify",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            &input,
+            &p,
+        ]);
+        assert!(
+            !o.status.success() && stderr(&o).contains(why),
+            "{name}: {}",
+            stderr(&o)
+        );
+    }
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        &input,
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// The post refuses a program whose frame moves after its first move (G92, G52, G10
+/// on the work offset in force, another work offset): LinuxCNC's rs274 reports the later
+/// moves in the moved frame (its SET_G92_OFFSET / SET_G5X_OFFSET lines), so the same
+/// numbers land elsewhere on the machine, and posting them where the first frame puts
+/// them deposits over what was deposited (the post used to do that). The refusal names
+/// the first move made in the moved frame. A G92 before the first move places the
+/// frame and is accepted. Nothing is written on refusal.
+#[test]
+fn a_frame_moved_after_the_first_move_is_refused() {
+    let dir = tempdir("safety-frame");
+    let out = dir.join("out.nc");
+    for (name, body, line) in [
+        ("G92", "G92 X0", 6),
+        ("G52", "G52 X5", 6),
+        ("G10 L20", "G10 L20 P1 X0", 6),
+        ("G10 L2, G55", "G10 L2 P2 X5\nG55", 7),
+        ("G55", "G55", 6),
+    ] {
+        let input = write(
+            &dir,
+            "frame.ngc",
+            &format!(
+                "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z0 F100\nG1 X10 Y0\n{body}\nG1 X20\nG0 Z5\nM2\n"
+            ),
+        );
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--index",
+            "B=0,C=0",
+            &input,
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        assert!(!o.status.success(), "{name}: posted");
+        assert!(
+            stderr(&o).contains(&format!("frame.ngc:{line}:")),
+            "{name}: {}",
+            stderr(&o)
+        );
+        assert!(!out.exists(), "{name}: written");
+    }
+    // Before the first move: the frame the program is placed by.
+    let input = write(
+        &dir,
+        "top.ngc",
+        "G21 G90 G17\nG92 X5 Y0 Z0\nG0 X0 Y0 Z5\nG1 Z0 F100\nG1 X10 Y0\nG0 Z5\nM2\n",
+    );
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        &input,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// A per-point program whose continuous C is turned a whole turn (or two) more at one
+/// point: its end poses are those intended, but between them the table spins under the
+/// head. verify compared only each move's end, and passed it; now the points between
+/// (every 45° of rotary turn, in a move that turns more than that) must be on the path
+/// too.
+#[test]
+fn per_point_verify_follows_the_table_between_points() {
+    let dir = tempdir("safety-spin");
+    let out = dir.join("p.nc");
+    let csv = fx("tilted-arc.csv");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &csv,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = posted.lines().collect();
+    // A G93 feed in the middle of the run, its C word.
+    let k = lines
+        .iter()
+        .position(|l| l.contains(" C-11.250 "))
+        .expect("a point at C-11.25");
+    for spin in [360.0, 720.0, -360.0] {
+        let mut t: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        t[k] = t[k].replace(" C-11.250 ", &format!(" C{:.3} ", -11.25 + spin));
+        let p = write(&dir, "spun.nc", &(t.join("\n") + "\n"));
+        let o = lampost(&["verify", "--machine", "nrc-lc", &csv, &p]);
+        assert!(
+            !o.status.success() && stderr(&o).contains("of the way along the move"),
+            "C turned {spin} more: {}",
+            stderr(&o)
+        );
+    }
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        &csv,
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

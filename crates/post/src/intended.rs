@@ -220,6 +220,10 @@ pub struct Intended<'a> {
     /// The input line of the section's first feed deposited with the laser off (in a
     /// program not seen to turn it on within [`LASER_LOOK`] moves).
     dark_deposit: Option<u32>,
+    /// The section's frame on the machine at its first move: the X, Y, Z offsets in
+    /// force (G92, G52, a work offset set by G10) and the work offset selected (see
+    /// `frame_kept`).
+    frame_at_first: Option<(usize, [f64; 3], lampost_gcode::Modal)>,
 }
 
 /// How many of a section's moves the post reads ahead at most (5,000) to learn whether
@@ -307,6 +311,7 @@ impl<'a> Intended<'a> {
             laser_seen: (usize::MAX, false, false, false),
             laser_ahead: LaserAhead::Never,
             dark_deposit: None,
+            frame_at_first: None,
         }
     }
 
@@ -340,6 +345,45 @@ impl<'a> Intended<'a> {
             ));
         }
         Ok(())
+    }
+
+    /// A program moves the frame it is placed by only before its first move: after it,
+    /// an offset change (`G92`, `G52`, a `G10` setting the work offset in force) or
+    /// another work offset (`G55`…, FADAL `E2`…) is refused at the first move made in
+    /// it. A control
+    /// applies them (LinuxCNC's canonical positions are in the work system in force, and
+    /// the machine goes there plus the offsets), so such a program's later moves are
+    /// somewhere else on the machine than the same numbers before; the post places one
+    /// program frame on the part, and the offsets of another work system are not known.
+    /// Checked on the offsets in X, Y and Z (a MakerBot program's `G92 A0` resets its
+    /// extruder).
+    fn frame_kept(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
+        let Some(interp) = self.stream.as_ref().map(|s| s.interpreter()) else {
+            return Ok(());
+        };
+        let (here, prog) = (interp.position(), interp.program_position());
+        let off = [here[0] - prog[0], here[1] - prog[1], here[2] - prog[2]];
+        match &self.frame_at_first {
+            Some((sec, first, modal)) if *sec == self.idx => {
+                let moved = off.iter().zip(first).any(|(a, b)| a != b);
+                let what = if modal.work_offset != m.modal.work_offset {
+                    "this move is in another work offset (G54…G59, FADAL E…) than the first move: the post places the program's frame once, and the other offsets are not known here"
+                } else if moved {
+                    "the program's frame moved before this move, after the first one (G92, G52, or G10 setting the work offset in force): the control would run the later moves shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job"
+                } else {
+                    return Ok(());
+                };
+                Err(PostError::Unsupported {
+                    file: file.to_string(),
+                    line: m.line,
+                    what: what.into(),
+                })
+            }
+            _ => {
+                self.frame_at_first = Some((self.idx, off, m.modal));
+                Ok(())
+            }
+        }
     }
 
     /// Notes for the report, so far: each section whose program gave no G20/G21, with the
@@ -517,6 +561,7 @@ impl<'a> Intended<'a> {
             if m.axes_named & EXTRA_AXES != 0 {
                 self.extra_axes_at_zero(&sec.name, &m)?;
             }
+            self.frame_kept(&sec.name, &m)?;
             if let Some(step) = self.machine_coordinate_move(&m)? {
                 self.moves_in_section += 1;
                 return Ok(Some(step));

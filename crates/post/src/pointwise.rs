@@ -7,7 +7,7 @@
 
 use std::io::{BufRead, Write};
 
-use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, AXES};
+use lampost_gcode::{Event, MoveKind, AXES};
 use lampost_kinematics::{Joints, Machine};
 use nalgebra::{Rotation3, Unit, Vector3};
 
@@ -742,25 +742,21 @@ pub fn verify_points_traced<R: BufRead>(
     // the feeds are the approach onto it. `live`: the readings still possible (the next
     // point to reach), ascending.
     let mut live: Vec<usize> = vec![0];
-    let mut stream = Stream::from_reader(
-        posted,
-        Options {
-            units,
-            ..Options::default()
-        },
-        true,
-    );
+    let screen = crate::verify::Screen::default();
+    let mut stream = screen.stream(posted, units);
+    let mut rules = crate::verify::PostedRules::new(machine.units, true);
     for ev in stream.by_ref() {
-        match ev.map_err(|e| PostError::Io(e.to_string()))? {
-            Event::Diagnostic(d) if d.severity == Severity::Error => {
-                return Err(PostError::Input {
-                    file: "the posted program".into(),
-                    diag: Box::new(d),
-                })
+        let ev = ev.map_err(|e| PostError::Io(e.to_string()))?;
+        screen.check()?;
+        match ev {
+            Event::Diagnostic(d) => {
+                if let Some(e) = crate::verify::posted_diagnostic(d) {
+                    return Err(e);
+                }
             }
-            Event::Diagnostic(_) => {}
             Event::Move(m) => {
                 rep.moves += 1;
+                rules.check(&m, &ix[3..])?;
                 let lin = |p: &[f64; 9]| [p[ix[0]], p[ix[1]], p[ix[2]]];
                 let rot = |p: &[f64; 9]| [p[ix[3]], p[ix[4]]];
                 safety.travel(&lin(&m.end), &rot(&m.end), m.line)?;
@@ -774,7 +770,8 @@ pub fn verify_points_traced<R: BufRead>(
                     )?;
                     continue;
                 }
-                safety.feed(&lin(&m.end), m.line)?;
+                safety.feed(&lin(&m.start), &lin(&m.end), m.line)?;
+                within_between(machine, head, &m, &ix, &placed, &live, tolerance)?;
                 let j = Joints {
                     linear: [m.end[ix[0]], m.end[ix[1]], m.end[ix[2]]],
                     rotary: [m.end[ix[3]], m.end[ix[4]]],
@@ -859,8 +856,81 @@ pub fn verify_points_traced<R: BufRead>(
             placed[k].line
         )));
     }
+    screen.finish()?;
     safety.finish(stream.interpreter().ended())?;
     Ok(rep)
+}
+
+/// The most a rotary may turn between two samples of one feed move that
+/// [`within_between`] takes.
+const SAMPLE_TURN_DEG: f64 = 45.0;
+
+/// The most samples [`within_between`] takes of one move: a feed turning a rotary by
+/// more than `SAMPLE_TURN_DEG` times this is refused outright.
+const MAX_SAMPLES: usize = 720;
+
+/// A feed move's points between its ends, as the control runs it (every joint
+/// linearly), where a rotary turns by more than [`SAMPLE_TURN_DEG`] in it: points at
+/// most that turn apart, each on the segment of one of the `live` readings (the
+/// approach onto the first point is not judged here). Only the ends were compared
+/// before, so a continuous rotary turned a whole turn more at one point (C348.75 for
+/// C−11.25) passed, the table spinning under the head between two points of the path.
+/// (A move that ends where it should after turning less than that cannot have turned a
+/// whole turn more; its middle is not judged, as the post's dropped tail pieces near a
+/// singular pose leave middles just beyond the tolerance: `fuzz_regressions.rs`.)
+fn within_between(
+    machine: &Machine,
+    head: usize,
+    m: &lampost_gcode::Move,
+    ix: &[usize],
+    placed: &[PathPoint],
+    live: &[usize],
+    tolerance: f64,
+) -> Result<(), PostError> {
+    let turn = ix[3..]
+        .iter()
+        .map(|&r| (m.end[r] - m.start[r]).abs())
+        .fold(0.0f64, f64::max);
+    if turn <= SAMPLE_TURN_DEG {
+        return Ok(());
+    }
+    let n = (turn / SAMPLE_TURN_DEG).ceil().max(2.0);
+    if n.is_nan() || n > MAX_SAMPLES as f64 {
+        return Err(PostError::Verify(format!(
+            "posted line {}: a feed turns a rotary by {turn:.3}°, more than the post ever writes in one move",
+            m.line
+        )));
+    }
+    let n = n as usize;
+    for s in 1..n {
+        let t = s as f64 / n as f64;
+        let at = |a: usize| m.start[a] + (m.end[a] - m.start[a]) * t;
+        let pose = machine.forward(
+            &Joints {
+                linear: [at(ix[0]), at(ix[1]), at(ix[2])],
+                rotary: [at(ix[3]), at(ix[4])],
+            },
+            head,
+        );
+        let on = live.iter().any(|&k| {
+            k == 0
+                || (k < placed.len()
+                    && on_segment(&placed[k - 1], &placed[k], &pose.tip, &pose.axis, tolerance)
+                        .is_some())
+        });
+        if !on {
+            let k = live.last().copied().unwrap_or(1).clamp(1, placed.len() - 1);
+            let (err, ang) = nearest_miss(&placed[k - 1], &placed[k], &pose.tip, &pose.axis);
+            return Err(PostError::Verify(format!(
+                "posted line {}: {:.0} % of the way along the move, the tool is {err:.3e} and {ang:.3}° off the path between points on lines {} and {}",
+                m.line,
+                t * 100.0,
+                placed[k - 1].line,
+                placed[k].line
+            )));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1,9 +1,15 @@
 //! Verification: replay a posted program through the interpreter and forward kinematics
 //! and compare every feed point's tool tip and tool axis with the intended path.
 
+use std::cell::Cell;
+use std::f64::consts::FRAC_PI_4;
 use std::io::BufRead;
+use std::rc::Rc;
 
-use lampost_gcode::{Event, MoveKind, Options, Severity, Stream, Units, AXES};
+use lampost_gcode::{
+    Diagnostic, ErrorKind, Event, Line, LineReader, LineSource, Modal, Move, MoveKind, Options,
+    Origin, Plane, Severity, Stream, Units, AXES,
+};
 use lampost_kinematics::{Joints, Machine, Units as MUnits};
 use nalgebra::Vector3;
 
@@ -420,28 +426,23 @@ pub fn verify_traced<R: BufRead>(
         }
         Ok(())
     };
-    let stream = Stream::from_reader(
-        posted,
-        Options {
-            units,
-            ..Options::default()
-        },
-        true,
-    );
-    let mut stream = stream;
+    let screen = Screen::default();
+    let mut stream = screen.stream(posted, units);
+    let mut rules = PostedRules::new(machine.units, false);
     // The last move was travel (the next feed must come onto a start).
     let mut after_travel = true;
     for ev in stream.by_ref() {
-        match ev.map_err(|e| PostError::Io(e.to_string()))? {
-            Event::Diagnostic(d) if d.severity == Severity::Error => {
-                return Err(PostError::Input {
-                    file: "the posted program".into(),
-                    diag: Box::new(d),
-                });
+        let ev = ev.map_err(|e| PostError::Io(e.to_string()))?;
+        screen.check()?;
+        match ev {
+            Event::Diagnostic(d) => {
+                if let Some(e) = posted_diagnostic(d) {
+                    return Err(e);
+                }
             }
-            Event::Diagnostic(_) => {}
             Event::Move(m) => {
                 rep.moves += 1;
+                rules.check(&m, &rot_idx)?;
                 let j = |p: &[f64; 9]| {
                     (
                         [p[lin_idx[0]], p[lin_idx[1]], p[lin_idx[2]]],
@@ -456,11 +457,11 @@ pub fn verify_traced<R: BufRead>(
                     MoveKind::Arc {
                         clockwise, center, ..
                     } => {
-                        safety.feed(&le, m.line)?;
+                        safety.feed(&ls, &le, m.line)?;
                         let c = [center[lin_idx[0]], center[lin_idx[1]]];
                         safety.arc_travel(&ls, &le, &c, clockwise, &re, m.line)?;
                     }
-                    _ => safety.feed(&le, m.line)?,
+                    _ => safety.feed(&ls, &le, m.line)?,
                 }
                 let entering = after_travel;
                 after_travel = matches!(m.kind, MoveKind::Rapid);
@@ -533,6 +534,20 @@ pub fn verify_traced<R: BufRead>(
                             &mut current,
                             &mut rep,
                         )?;
+                        // The way round: a point an eighth of a turn (at most) from the
+                        // start, against the intended arc's sense (a full circle run
+                        // the other way has its points on the path too).
+                        let a = sy.atan2(sx) + sweep.signum() * (sweep.abs() / 4.0).min(FRAC_PI_4);
+                        let mut near_start = m.start;
+                        near_start[0] = center[0] + r * a.cos();
+                        near_start[1] = center[1] + r * a.sin();
+                        arc_sense(
+                            current.as_ref(),
+                            &fk(&m.start).tip,
+                            &fk(&near_start).tip,
+                            tolerance,
+                            m.line,
+                        )?;
                         let pe = fk(&m.end);
                         check(pe.tip, pe.axis, m.line, true, false, &mut current, &mut rep)?;
                     }
@@ -550,8 +565,279 @@ pub fn verify_traced<R: BufRead>(
             s.line, s.end.x, s.end.y, s.end.z
         )));
     }
+    screen.finish()?;
     safety.finish(stream.interpreter().ended())?;
     Ok(rep)
+}
+
+/// A diagnostic of the posted program fails the verification: an error, and any
+/// warning, since the post writes nothing lampost's reader warns about, and a warned
+/// code (`G68` rotation, `G51` scaling, `G16` polar words, `G43.4`, a macro, an `M99`
+/// ending the main program…) means the control would run something other than the
+/// moves the reader reports.
+pub(crate) fn posted_diagnostic(d: Diagnostic) -> Option<PostError> {
+    // A FADAL subprogram call: the text verify is given is read in execution order (the
+    // CLI's `ProgramReader` follows the calls), so the interpreter, which is not told,
+    // says it does not follow them. A call left unfollowed misses its moves, which the
+    // walk along the intended path finds.
+    if matches!(d.kind, ErrorKind::SubprogramNotFollowed(_)) {
+        return None;
+    }
+    if d.severity == Severity::Error {
+        return Some(PostError::Input {
+            file: "the posted program".into(),
+            diag: Box::new(d),
+        });
+    }
+    Some(PostError::Verify(format!(
+        "posted line {}: {}; the post writes no such code, and the control would not run the moves verify reads",
+        d.line, d.kind
+    )))
+}
+
+/// The posted text's lines as they are read, screened for the codes that move the
+/// program's frame on the machine without showing in the moves the reader reports:
+/// `G92` (all forms), `G52`, `G10` and `G44`. (A `G92 X0 Y0 Z0` before the first move
+/// changes nothing the reader can see, which starts from zero, but makes wherever the
+/// machine stands the origin.) The first such line found is kept for [`Screen::check`].
+/// Also kept: the last program end or return (`M2`, `M30`, `M99`) read, in execution
+/// order, for [`Screen::finish`].
+#[derive(Default, Clone)]
+pub(crate) struct Screen {
+    found: Rc<Cell<Option<(u32, u16)>>>,
+    last_end: Rc<Cell<Option<(u32, u16)>>>,
+}
+
+struct Screened<R> {
+    lines: LineReader<R>,
+    found: Rc<Cell<Option<(u32, u16)>>>,
+    last_end: Rc<Cell<Option<(u32, u16)>>>,
+}
+
+impl Screen {
+    /// A stream of the posted text through this screen, in the machine's units.
+    pub(crate) fn stream<R: BufRead>(&self, posted: R, units: Units) -> Stream<impl LineSource> {
+        let src = Screened {
+            lines: LineReader::new(posted),
+            found: Rc::clone(&self.found),
+            last_end: Rc::clone(&self.last_end),
+        };
+        Stream::new(
+            src,
+            Options {
+                units,
+                ..Options::default()
+            },
+            true,
+        )
+    }
+
+    /// The first screened code read so far, as a failure.
+    pub(crate) fn check(&self) -> Result<(), PostError> {
+        match self.found.get() {
+            None => Ok(()),
+            Some((line, BLOCK_DELETE)) => Err(PostError::Verify(format!(
+                "posted line {line}: a block-delete line (`/`): whether the control runs it depends on its switch; the post writes none"
+            ))),
+            Some((line, code)) => Err(PostError::Verify(format!(
+                "posted line {line}: G{}{} {}; the post writes no such code, and the moves verify reads would not be where the control runs them",
+                code / 10,
+                if code % 10 == 0 { String::new() } else { format!(".{}", code % 10) },
+                frame_code(code).unwrap_or("moves the program's frame")
+            ))),
+        }
+    }
+}
+
+impl Screen {
+    /// At the end of the posted text: the program ends with M2 or M30. (Read in
+    /// execution order, a FADAL subprogram's `M99` returns into the main program, whose
+    /// end comes after it; an `M99` read last ends the main program, and a control runs
+    /// such a program again without end.)
+    pub(crate) fn finish(&self) -> Result<(), PostError> {
+        self.check()?;
+        match self.last_end.get() {
+            Some((line, 990)) => Err(PostError::Verify(format!(
+                "posted line {line}: the program ends with M99, and a control runs such a main program again without end (the post ends with M30)"
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// What a G-code (in tenths, as [`lampost_gcode::Word::code`]) does to the frame, if it
+/// is one the screen refuses.
+fn frame_code(code: u16) -> Option<&'static str> {
+    match code {
+        100..=109 => Some("sets a work or tool offset"),
+        520 => Some("shifts the local coordinate system"),
+        920..=929 => Some("sets or restores a coordinate-system offset"),
+        440..=449 => Some("applies a tool length offset the other way"),
+        _ => None,
+    }
+}
+
+/// The code [`Screen`] keeps for a block-delete line (`/…`).
+const BLOCK_DELETE: u16 = u16::MAX;
+
+/// A line's first refused G-code (or [`BLOCK_DELETE`]: whether a control runs the line
+/// depends on its block-delete switch), and its program end or return (M2, M30, M99),
+/// if any; lines with neither a `G` nor an `M` are not parsed.
+fn screen_line(bytes: &[u8], number: u32, offset: usize) -> (Option<u16>, Option<u16>) {
+    if bytes.iter().find(|c| !c.is_ascii_whitespace()) == Some(&b'/') {
+        return (Some(BLOCK_DELETE), None);
+    }
+    let (g, m) = bytes.iter().fold((false, false), |(g, m), &c| {
+        (g || c | 0x20 == b'g', m || c | 0x20 == b'm')
+    });
+    if !(g || m) {
+        return (None, None);
+    }
+    let Ok(block) = lampost_gcode::parse_line(bytes, number, offset) else {
+        return (None, None);
+    };
+    let refused = block
+        .words()
+        .filter(|w| w.letter == b'G')
+        .filter_map(|w| w.code())
+        .find(|&c| frame_code(c).is_some());
+    let end = block
+        .words()
+        .filter(|w| w.letter == b'M')
+        .filter_map(|w| w.code())
+        .find(|c| matches!(c, 20 | 300 | 990));
+    (refused, end)
+}
+
+impl<R: BufRead> LineSource for Screened<R> {
+    fn next_line(&mut self) -> std::io::Result<Option<Line<'_>>> {
+        let line = self.lines.next_line()?;
+        if let Some(l) = &line {
+            let (refused, end) = screen_line(l.bytes, l.number, l.offset);
+            if let (Some(code), None) = (refused, self.found.get()) {
+                self.found.set(Some((l.number, code)));
+            }
+            if let Some(code) = end {
+                self.last_end.set(Some((l.number, code)));
+            }
+        }
+        Ok(line)
+    }
+}
+
+/// What every posted move's own state must be: written by the block itself (no `G53`,
+/// `G28`/`G30` or canned cycle, whose machine positions the reader cannot know), in the
+/// machine's units, without cutter compensation, arcs in the XY plane (the plane of the
+/// joints verify replays), feeds per minute (or inverse time on a per-point path), and
+/// the work offset and tool length offset of the first move throughout. In a planar
+/// program no feed turns the table (the post turns it only in rapids, at a height safe
+/// over the sweep).
+pub(crate) struct PostedRules {
+    units: Units,
+    per_point: bool,
+    first: Option<Modal>,
+}
+
+impl PostedRules {
+    pub(crate) fn new(units: lampost_kinematics::Units, per_point: bool) -> Self {
+        PostedRules {
+            units: match units {
+                lampost_kinematics::Units::Inch => Units::Inch,
+                lampost_kinematics::Units::Mm => Units::Mm,
+            },
+            per_point,
+            first: None,
+        }
+    }
+
+    pub(crate) fn check(&mut self, m: &Move, rot_idx: &[usize]) -> Result<(), PostError> {
+        let fail = |what: &str| Err(PostError::Verify(format!("posted line {}: {what}", m.line)));
+        match m.origin {
+            Origin::Block => {}
+            Origin::MachineCoords => {
+                return fail("a move in machine coordinates (G53): the post writes none, and where it goes on the part is not known")
+            }
+            Origin::Home => {
+                return fail("a move to a home position (G28/G30): the post writes none, and where it goes on the part is not known")
+            }
+            Origin::CannedCycle => {
+                return fail("a canned cycle: the post writes none; its moves depend on the control's reading of it")
+            }
+        }
+        let md = &m.modal;
+        if md.units != self.units {
+            return fail("a move in other units than the machine's (G20/G21, G70/G71 changed)");
+        }
+        if md.cutter_comp != Modal::new(self.units).cutter_comp {
+            return fail("a move under cutter radius compensation (G41/G42): the control would offset the path");
+        }
+        let feed = !matches!(m.kind, MoveKind::Rapid);
+        if matches!(m.kind, MoveKind::Arc { turns, .. } if turns > 1) {
+            return fail("an arc of more than one turn (P): the post writes none, and the turns would run the path again");
+        }
+        if matches!(m.kind, MoveKind::Arc { .. }) && md.plane != Plane::XY {
+            return fail("an arc outside the XY plane (G18/G19): the post writes arcs in G17 only");
+        }
+        let mode_ok = match md.feed_mode {
+            lampost_gcode::FeedMode::PerMinute => true,
+            lampost_gcode::FeedMode::InverseTime => self.per_point,
+            _ => false,
+        };
+        if feed && !mode_ok {
+            return fail("a feed in a feed mode the post does not write here (G93/G95)");
+        }
+        if feed && !self.per_point && rot_idx.iter().any(|&r| m.start[r] != m.end[r]) {
+            return fail("a feed turns the table: the post turns it only in rapids, at a height safe over the whole sweep");
+        }
+        match &self.first {
+            None => self.first = Some(*md),
+            Some(f) if f.work_offset != md.work_offset => {
+                return fail("the work offset changes (G54…/FADAL E…): the program is placed on the first one")
+            }
+            Some(f) if f.tool_length != md.tool_length => {
+                return fail("the tool length offset changes (G43 H…/G49): the program is placed on the first one")
+            }
+            Some(_) => {}
+        }
+        Ok(())
+    }
+}
+
+/// A posted arc from `p0` through `p1` (a little way along it, part frame) turns the
+/// way the intended arc `step` does, about its normal; a turn the other way by more than
+/// the tolerance allows at its radius fails.
+fn arc_sense(
+    step: Option<&Step>,
+    p0: &Vector3<f64>,
+    p1: &Vector3<f64>,
+    tolerance: f64,
+    line: u32,
+) -> Result<(), PostError> {
+    let Some(Step {
+        kind: StepKind::Arc {
+            center,
+            normal,
+            sweep,
+        },
+        line: input_line,
+        ..
+    }) = step
+    else {
+        return Ok(());
+    };
+    let flat = |p: &Vector3<f64>| {
+        let v = p - center;
+        v - normal * normal.dot(&v)
+    };
+    let (u0, u1) = (flat(p0), flat(p1));
+    let r = u0.norm().max(u1.norm());
+    let turn = normal.dot(&u0.cross(&u1)).atan2(u0.dot(&u1));
+    if turn * sweep < 0.0 && turn.abs() * r > tolerance {
+        return Err(PostError::Verify(format!(
+            "posted line {line}: the arc runs the other way round from the intended one of input line {input_line}"
+        )));
+    }
+    Ok(())
 }
 
 /// A verification tolerance must be finite and positive.
@@ -706,9 +992,24 @@ impl<'m> Safety<'m> {
         Ok(())
     }
 
-    /// A feed to `x`.
-    pub(crate) fn feed(&mut self, x: &[f64; 3], line: u32) -> Result<(), PostError> {
+    /// A feed from `from` to `x`.
+    pub(crate) fn feed(
+        &mut self,
+        from: &[f64; 3],
+        x: &[f64; 3],
+        line: u32,
+    ) -> Result<(), PostError> {
         self.started = true;
+        if let Some((_, l)) = self.approach {
+            // Below the safe height only straight down onto the start: the feed the
+            // approach makes way for goes along the tool axis, not across the work.
+            if (from[0] - x[0]).abs() > self.eps || (from[1] - x[1]).abs() > self.eps {
+                return Err(Self::fail(
+                    l,
+                    format!("a rapid comes down below the safe height, and the feed after it (line {line}) moves across, not straight down onto the start it approaches"),
+                ));
+            }
+        }
         if let Some((z, _)) = self.entering.take() {
             if z - x[2] > self.lift + self.eps {
                 return Err(Self::fail(
@@ -760,9 +1061,18 @@ impl<'m> Safety<'m> {
                 if !self.is_safe(xe, re) {
                     self.approach = Some((xe[2], line));
                 }
-            } else if self.is_safe(xe, re) {
-                self.down = None;
-                self.approach = None;
+            } else {
+                if let Some((_, l)) = self.approach {
+                    // Down below the safe height and up again without the feed: a
+                    // plunge into the work at rapid.
+                    return Err(Self::fail(
+                        l,
+                        format!("a rapid comes down below the safe height and goes back up (line {line}) without the feed it approaches: it may go through the work"),
+                    ));
+                }
+                if self.is_safe(xe, re) {
+                    self.down = None;
+                }
             }
             return Ok(());
         }
