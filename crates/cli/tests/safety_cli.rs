@@ -989,6 +989,8 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
         },
         "a rapid with the laser on",
     );
+    // A FADAL `L` call (subroutine 1, twice), which lampost's reader does not follow.
+    check("FADAL L call", &after(on, "L0102"), "L0102");
     // The program's end and block delete.
     check(
         "M99 for M30",

@@ -580,8 +580,9 @@ pub(crate) fn posted_diagnostic(d: Diagnostic) -> Option<PostError> {
     // A FADAL subprogram call: the text verify is given is read in execution order (the
     // CLI's `ProgramReader` follows the calls), so the interpreter, which is not told,
     // says it does not follow them. A call left unfollowed misses its moves, which the
-    // walk along the intended path finds.
-    if matches!(d.kind, ErrorKind::SubprogramNotFollowed(_)) {
+    // walk along the intended path finds. (Only M98: a FADAL `L` call, which the reader
+    // does not follow, fails.)
+    if matches!(&d.kind, ErrorKind::SubprogramNotFollowed(w) if w.starts_with("M98")) {
         return None;
     }
     if d.severity == Severity::Error {
