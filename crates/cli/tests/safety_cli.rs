@@ -262,7 +262,7 @@ fn verify_rejects_wrong_programs() {
     let lines: Vec<&str> = posted.lines().collect();
     let k = lines.iter().position(|l| *l == "M72").expect("laser off");
     let mut through = lines.clone();
-    through.insert(k, "G0 X13.0 Y0.5 Z5.0");
+    through.insert(k + 1, "G0 X13.0 Y0.5 Z5.0");
     let o = verify(&dir, "A=0,B=-30", &(through.join("\n") + "\n"), &[]);
     assert!(
         !o.status.success() && stderr(&o).contains("below the safe height"),
@@ -975,6 +975,22 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
         &after(at("M72"), "G53 G0 Z-5."),
         "machine coordinates",
     );
+    // The laser left on over the lift (its M72 moved after it): deposits along travel.
+    check(
+        "laser off after the lift",
+        &|t| {
+            let k = t.iter().position(|l| l == "M72").expect("M72");
+            let m72 = t.remove(k);
+            let lift = t[k..]
+                .iter()
+                .position(|l| l.starts_with("G0 Z"))
+                .expect("lift");
+            t.insert(k + lift + 1, m72);
+        },
+        "a rapid with the laser on",
+    );
+    // A FADAL `L` call (subroutine 1, twice), which lampost's reader does not follow.
+    check("FADAL L call", &after(on, "L0102"), "L0102");
     // The program's end and block delete.
     check(
         "M99 for M30",

@@ -742,7 +742,7 @@ pub fn verify_points_traced<R: BufRead>(
     // the feeds are the approach onto it. `live`: the readings still possible (the next
     // point to reach), ascending.
     let mut live: Vec<usize> = vec![0];
-    let screen = crate::verify::Screen::default();
+    let screen = crate::verify::Screen::new(machine)?;
     let mut stream = screen.stream(posted, units);
     let mut rules = crate::verify::PostedRules::new(machine.units, true);
     for ev in stream.by_ref() {
@@ -760,6 +760,7 @@ pub fn verify_points_traced<R: BufRead>(
                 let lin = |p: &[f64; 9]| [p[ix[0]], p[ix[1]], p[ix[2]]];
                 let rot = |p: &[f64; 9]| [p[ix[3]], p[ix[4]]];
                 safety.travel(&lin(&m.end), &rot(&m.end), m.line)?;
+                crate::verify::laser_off_for_travel(&m, screen.laser())?;
                 if matches!(m.kind, MoveKind::Rapid) {
                     safety.rapid(
                         &lin(&m.start),

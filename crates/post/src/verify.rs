@@ -426,7 +426,7 @@ pub fn verify_traced<R: BufRead>(
         }
         Ok(())
     };
-    let screen = Screen::default();
+    let screen = Screen::new(machine)?;
     let mut stream = screen.stream(posted, units);
     let mut rules = PostedRules::new(machine.units, false);
     // The last move was travel (the next feed must come onto a start).
@@ -452,6 +452,7 @@ pub fn verify_traced<R: BufRead>(
                 let (ls, rs) = j(&m.start);
                 let (le, re) = j(&m.end);
                 safety.travel(&le, &re, m.line)?;
+                laser_off_for_travel(&m, screen.laser())?;
                 match m.kind {
                     MoveKind::Rapid => safety.rapid(&ls, &rs, &le, &re, m.line)?,
                     MoveKind::Arc {
@@ -579,8 +580,9 @@ pub(crate) fn posted_diagnostic(d: Diagnostic) -> Option<PostError> {
     // A FADAL subprogram call: the text verify is given is read in execution order (the
     // CLI's `ProgramReader` follows the calls), so the interpreter, which is not told,
     // says it does not follow them. A call left unfollowed misses its moves, which the
-    // walk along the intended path finds.
-    if matches!(d.kind, ErrorKind::SubprogramNotFollowed(_)) {
+    // walk along the intended path finds. (Only M98: a FADAL `L` call, which the reader
+    // does not follow, fails.)
+    if matches!(&d.kind, ErrorKind::SubprogramNotFollowed(w) if w.starts_with("M98")) {
         return None;
     }
     if d.severity == Severity::Error {
@@ -602,25 +604,57 @@ pub(crate) fn posted_diagnostic(d: Diagnostic) -> Option<PostError> {
 /// machine stands the origin.) The first such line found is kept for [`Screen::check`].
 /// Also kept: the last program end or return (`M2`, `M30`, `M99`) read, in execution
 /// order, for [`Screen::finish`].
+/// And the machine's laser: on after a line holding every word of its `laser_on` code,
+/// off after one holding every word of `laser_off` (as `preview` reads them), for
+/// [`Screen::laser`].
 #[derive(Default, Clone)]
 pub(crate) struct Screen {
     found: Rc<Cell<Option<(u32, u16)>>>,
     last_end: Rc<Cell<Option<(u32, u16)>>>,
+    laser: Rc<Cell<Option<u32>>>,
+    codes: Rc<LaserCodes>,
+}
+
+/// The words of the machine's laser codes.
+#[derive(Default)]
+pub(crate) struct LaserCodes {
+    on: Vec<(u8, f64)>,
+    off: Vec<(u8, f64)>,
 }
 
 struct Screened<R> {
     lines: LineReader<R>,
     found: Rc<Cell<Option<(u32, u16)>>>,
     last_end: Rc<Cell<Option<(u32, u16)>>>,
+    laser: Rc<Cell<Option<u32>>>,
+    codes: Rc<LaserCodes>,
 }
 
 impl Screen {
+    /// A screen that also follows `machine`'s laser codes.
+    pub(crate) fn new(machine: &Machine) -> Result<Screen, PostError> {
+        Ok(Screen {
+            codes: Rc::new(LaserCodes {
+                on: crate::post::code_words(&machine.def.process.laser_on)?,
+                off: crate::post::code_words(&machine.def.process.laser_off)?,
+            }),
+            ..Screen::default()
+        })
+    }
+
+    /// The line that turned the laser on, while it is on.
+    pub(crate) fn laser(&self) -> Option<u32> {
+        self.laser.get()
+    }
+
     /// A stream of the posted text through this screen, in the machine's units.
     pub(crate) fn stream<R: BufRead>(&self, posted: R, units: Units) -> Stream<impl LineSource> {
         let src = Screened {
             lines: LineReader::new(posted),
             found: Rc::clone(&self.found),
             last_end: Rc::clone(&self.last_end),
+            laser: Rc::clone(&self.laser),
+            codes: Rc::clone(&self.codes),
         };
         Stream::new(
             src,
@@ -683,7 +717,14 @@ const BLOCK_DELETE: u16 = u16::MAX;
 /// A line's first refused G-code (or [`BLOCK_DELETE`]: whether a control runs the line
 /// depends on its block-delete switch), and its program end or return (M2, M30, M99),
 /// if any; lines with neither a `G` nor an `M` are not parsed.
-fn screen_line(bytes: &[u8], number: u32, offset: usize) -> (Option<u16>, Option<u16>) {
+/// A line's laser switch (`Some(true)` on, `Some(false)` off) is `laser`'s result.
+fn screen_line(
+    bytes: &[u8],
+    number: u32,
+    offset: usize,
+    codes: &LaserCodes,
+    laser: &mut Option<bool>,
+) -> (Option<u16>, Option<u16>) {
     if bytes.iter().find(|c| !c.is_ascii_whitespace()) == Some(&b'/') {
         return (Some(BLOCK_DELETE), None);
     }
@@ -696,6 +737,17 @@ fn screen_line(bytes: &[u8], number: u32, offset: usize) -> (Option<u16>, Option
     let Ok(block) = lampost_gcode::parse_line(bytes, number, offset) else {
         return (None, None);
     };
+    let holds = |code: &[(u8, f64)]| {
+        !code.is_empty()
+            && code
+                .iter()
+                .all(|c| block.words().any(|w| (w.letter, w.value) == *c))
+    };
+    if holds(&codes.off) {
+        *laser = Some(false);
+    } else if holds(&codes.on) {
+        *laser = Some(true);
+    }
     let refused = block
         .words()
         .filter(|w| w.letter == b'G')
@@ -713,7 +765,13 @@ impl<R: BufRead> LineSource for Screened<R> {
     fn next_line(&mut self) -> std::io::Result<Option<Line<'_>>> {
         let line = self.lines.next_line()?;
         if let Some(l) = &line {
-            let (refused, end) = screen_line(l.bytes, l.number, l.offset);
+            let mut switch = None;
+            let (refused, end) = screen_line(l.bytes, l.number, l.offset, &self.codes, &mut switch);
+            match switch {
+                Some(true) if self.laser.get().is_none() => self.laser.set(Some(l.number)),
+                Some(false) => self.laser.set(None),
+                _ => {}
+            }
             if let (Some(code), None) = (refused, self.found.get()) {
                 self.found.set(Some((l.number, code)));
             }
@@ -800,6 +858,18 @@ impl PostedRules {
             Some(_) => {}
         }
         Ok(())
+    }
+}
+
+/// No rapid while the laser is on (switched on at posted line `on`): the post turns it
+/// off before any travel, and a rapid with it on deposits along the way.
+pub(crate) fn laser_off_for_travel(m: &Move, on: Option<u32>) -> Result<(), PostError> {
+    match (m.kind, on) {
+        (MoveKind::Rapid, Some(l)) => Err(PostError::Verify(format!(
+            "posted line {}: a rapid with the laser on (turned on at posted line {l}): it would deposit along the travel",
+            m.line
+        ))),
+        _ => Ok(()),
     }
 }
 
