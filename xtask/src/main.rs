@@ -429,30 +429,34 @@ fn bench_robot() -> Result<(), String> {
     let bin = std::env::var_os("CARGO_TARGET_DIR")
         .map_or_else(|| root().join("target"), PathBuf::from)
         .join("release/lampost");
-    for args in [
-        vec![
-            "plan".as_ref(),
-            "demo".as_ref(),
-            "-o".as_ref(),
-            stl.as_os_str(),
-        ],
-        vec![
-            "plan".as_ref(),
-            "path".as_ref(),
-            stl.as_os_str(),
-            "--layer".as_ref(),
-            "20".as_ref(),
-            "--approach".as_ref(),
-            "build".as_ref(),
-            "--hatch".as_ref(),
-            "1.5".as_ref(),
-            "--spacing".as_ref(),
-            "2".as_ref(),
-            "-o".as_ref(),
-            input.as_os_str(),
-        ],
-    ] {
-        let args: Vec<&std::ffi::OsStr> = args;
+    // `lampost plan path` of the plate at a layer height, as the tests and docs plan it.
+    let plan_path = |layer: &'static str, to: &PathBuf| -> Vec<std::ffi::OsString> {
+        let mut a: Vec<std::ffi::OsString> = ["plan", "path"].map(Into::into).to_vec();
+        a.push(stl.clone().into_os_string());
+        a.extend(
+            [
+                "--layer",
+                layer,
+                "--approach",
+                "build",
+                "--hatch",
+                "1.5",
+                "--spacing",
+                "2",
+                "-o",
+            ]
+            .map(Into::into),
+        );
+        a.push(to.clone().into_os_string());
+        a
+    };
+    let demo: Vec<std::ffi::OsString> = vec![
+        "plan".into(),
+        "demo".into(),
+        "-o".into(),
+        stl.clone().into_os_string(),
+    ];
+    for args in [demo, plan_path("20", &input)] {
         let o = Command::new(&bin)
             .args(&args)
             .output()
@@ -517,21 +521,8 @@ fn bench_robot() -> Result<(), String> {
     // through the binary rather than in one process.
     let input2 = dir.join("twisted-plate-2.csv");
     let out2 = dir.join("twisted-plate-2.robot");
-    let (tplan2, _) = best(&[
-        "plan".as_ref(),
-        "path".as_ref(),
-        stl.as_os_str(),
-        "--layer".as_ref(),
-        "2".as_ref(),
-        "--approach".as_ref(),
-        "build".as_ref(),
-        "--hatch".as_ref(),
-        "1.5".as_ref(),
-        "--spacing".as_ref(),
-        "2".as_ref(),
-        "-o".as_ref(),
-        input2.as_os_str(),
-    ])?;
+    let plan2 = plan_path("2", &input2);
+    let (tplan2, _) = best(&plan2.iter().map(|a| a.as_os_str()).collect::<Vec<_>>())?;
     let (tpost2, _) = best(&[
         "post".as_ref(),
         "--machine".as_ref(),
