@@ -186,6 +186,11 @@ fn real_programs_against_their_verdicts() {
     }
     files.sort();
     assert!(files.len() >= 60, "{} programs", files.len());
+    let want_text = std::fs::read_to_string(&verdicts_path).unwrap_or_default();
+    let want: BTreeMap<&str, &str> = want_text
+        .lines()
+        .filter_map(|l| l.split_once(' '))
+        .collect();
     let mut got: BTreeMap<String, String> = BTreeMap::new();
     let (mut equal, mut moves, mut deposits) = (0usize, 0usize, 0usize);
     let mut generators = std::collections::BTreeSet::new();
@@ -229,7 +234,22 @@ fn real_programs_against_their_verdicts() {
                         String::from_utf8_lossy(&std::fs::read(path).expect("read")).into_owned();
                     let prog = work.join(format!("{gen}-{name}"));
                     std::fs::write(&prog, prepare(&text)).expect("write");
-                    rs274_to_end(&prog, &work).ok()
+                    let key = format!("{gen}/{name}");
+                    let runs_to_end = want
+                        .get(key.as_str())
+                        .is_some_and(|v| v.starts_with("equal") || v.starts_with("differs"));
+                    match rs274_to_end(&prog, &work) {
+                        Ok(c) => Some(c),
+                        // rs274 is an outside program: on a loaded machine it has ended
+                        // a run early once (CI, `dxf2gcode/erin7-b02.ngc`, which it runs
+                        // to the end otherwise). A program the verdicts say it runs to
+                        // the end is run once more, said, before its verdict changes.
+                        Err(e) if runs_to_end => {
+                            eprintln!("{key}: rs274 stopped early ({e}); running it once more");
+                            rs274_to_end(&prog, &work).ok()
+                        }
+                        Err(_) => None,
+                    }
                 };
                 match canon {
                     None => format!("traced {n}"),
@@ -284,8 +304,6 @@ fn real_programs_against_their_verdicts() {
         std::fs::write(&verdicts_path, &text).expect("write VERDICTS");
         return;
     }
-    let want = std::fs::read_to_string(&verdicts_path).unwrap_or_default();
-    let want: BTreeMap<&str, &str> = want.lines().filter_map(|l| l.split_once(' ')).collect();
     let mut changed = Vec::new();
     for (k, v) in &got {
         if want.get(k.as_str()) != Some(&v.as_str()) {
