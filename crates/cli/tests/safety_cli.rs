@@ -1126,3 +1126,50 @@ fn a_frame_moved_after_the_first_move_is_refused() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// A per-point program whose continuous C is turned a whole turn (or two) more at one
+/// point: its end poses are those intended, but between them the table spins under the
+/// head. verify compared only each move's end, and passed it; now the points between
+/// (every 45° of rotary turn, in a move that turns more than that) must be on the path
+/// too.
+#[test]
+fn per_point_verify_follows_the_table_between_points() {
+    let dir = tempdir("safety-spin");
+    let out = dir.join("p.nc");
+    let csv = fx("tilted-arc.csv");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &csv,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = posted.lines().collect();
+    // A G93 feed in the middle of the run, its C word.
+    let k = lines
+        .iter()
+        .position(|l| l.contains(" C-11.250 "))
+        .expect("a point at C-11.25");
+    for spin in [360.0, 720.0, -360.0] {
+        let mut t: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        t[k] = t[k].replace(" C-11.250 ", &format!(" C{:.3} ", -11.25 + spin));
+        let p = write(&dir, "spun.nc", &(t.join("\n") + "\n"));
+        let o = lampost(&["verify", "--machine", "nrc-lc", &csv, &p]);
+        assert!(
+            !o.status.success() && stderr(&o).contains("of the way along the move"),
+            "C turned {spin} more: {}",
+            stderr(&o)
+        );
+    }
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        &csv,
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

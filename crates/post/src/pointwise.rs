@@ -772,6 +772,7 @@ pub fn verify_points_traced<R: BufRead>(
                     continue;
                 }
                 safety.feed(&lin(&m.start), &lin(&m.end), m.line)?;
+                within_between(machine, head, &m, &ix, &placed, &live, tolerance)?;
                 let j = Joints {
                     linear: [m.end[ix[0]], m.end[ix[1]], m.end[ix[2]]],
                     rotary: [m.end[ix[3]], m.end[ix[4]]],
@@ -859,6 +860,78 @@ pub fn verify_points_traced<R: BufRead>(
     screen.finish()?;
     safety.finish(stream.interpreter().ended())?;
     Ok(rep)
+}
+
+/// The most a rotary may turn between two samples of one feed move that
+/// [`within_between`] takes.
+const SAMPLE_TURN_DEG: f64 = 45.0;
+
+/// The most samples [`within_between`] takes of one move: a feed turning a rotary by
+/// more than `SAMPLE_TURN_DEG` times this is refused outright.
+const MAX_SAMPLES: usize = 720;
+
+/// A feed move's points between its ends, as the control runs it (every joint
+/// linearly), where a rotary turns by more than [`SAMPLE_TURN_DEG`] in it: points at
+/// most that turn apart, each on the segment of one of the `live` readings (the
+/// approach onto the first point is not judged here). Only the ends were compared
+/// before, so a continuous rotary turned a whole turn more at one point (C348.75 for
+/// C−11.25) passed, the table spinning under the head between two points of the path.
+/// (A move that ends where it should after turning less than that cannot have turned a
+/// whole turn more; its middle is not judged, as the post's dropped tail pieces near a
+/// singular pose leave middles just beyond the tolerance: `fuzz_regressions.rs`.)
+fn within_between(
+    machine: &Machine,
+    head: usize,
+    m: &lampost_gcode::Move,
+    ix: &[usize],
+    placed: &[PathPoint],
+    live: &[usize],
+    tolerance: f64,
+) -> Result<(), PostError> {
+    let turn = ix[3..]
+        .iter()
+        .map(|&r| (m.end[r] - m.start[r]).abs())
+        .fold(0.0f64, f64::max);
+    if turn <= SAMPLE_TURN_DEG {
+        return Ok(());
+    }
+    let n = (turn / SAMPLE_TURN_DEG).ceil().max(2.0);
+    if !(n <= MAX_SAMPLES as f64) {
+        return Err(PostError::Verify(format!(
+            "posted line {}: a feed turns a rotary by {turn:.3}°, more than the post ever writes in one move",
+            m.line
+        )));
+    }
+    let n = n as usize;
+    for s in 1..n {
+        let t = s as f64 / n as f64;
+        let at = |a: usize| m.start[a] + (m.end[a] - m.start[a]) * t;
+        let pose = machine.forward(
+            &Joints {
+                linear: [at(ix[0]), at(ix[1]), at(ix[2])],
+                rotary: [at(ix[3]), at(ix[4])],
+            },
+            head,
+        );
+        let on = live.iter().any(|&k| {
+            k == 0
+                || (k < placed.len()
+                    && on_segment(&placed[k - 1], &placed[k], &pose.tip, &pose.axis, tolerance)
+                        .is_some())
+        });
+        if !on {
+            let k = live.last().copied().unwrap_or(1).clamp(1, placed.len() - 1);
+            let (err, ang) = nearest_miss(&placed[k - 1], &placed[k], &pose.tip, &pose.axis);
+            return Err(PostError::Verify(format!(
+                "posted line {}: {:.0} % of the way along the move, the tool is {err:.3e} and {ang:.3}° off the path between points on lines {} and {}",
+                m.line,
+                t * 100.0,
+                placed[k - 1].line,
+                placed[k].line
+            )));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
