@@ -896,7 +896,7 @@ fn within_between(
         return Ok(());
     }
     let n = (turn / SAMPLE_TURN_DEG).ceil().max(2.0);
-    if !(n <= MAX_SAMPLES as f64) {
+    if n.is_nan() || n > MAX_SAMPLES as f64 {
         return Err(PostError::Verify(format!(
             "posted line {}: a feed turns a rotary by {turn:.3}°, more than the post ever writes in one move",
             m.line
