@@ -369,7 +369,8 @@ impl Ctx<'_> {
 
     /// At a singular pose `j0` (tip `a`), turn the inner rotary to that of `j1` with the
     /// tip standing: the linear axes follow the table round, split until straight joint
-    /// interpolation keeps the tip within the tolerance.
+    /// interpolation keeps the tip within the tolerance (at the move's middle, or every
+    /// [`SAMPLE_TURN_DEG`] of a longer turn: [`fractions`]).
     fn turn_in_place(
         &self,
         a: &PathPoint,
@@ -378,20 +379,25 @@ impl Ctx<'_> {
         depth: u32,
         out: &mut Vec<[f64; 5]>,
     ) {
-        let mut jm = [0.0; 5];
-        for k in 0..5 {
-            jm[k] = (j0[k] + j1[k]) / 2.0;
-        }
-        if depth >= 24 || (self.fk(&jm).0 - a.tip).norm() <= self.tol {
+        let stands = fractions(&j0, &j1)
+            .all(|f| (self.fk(&lerp5(&j0, &j1, f)).0 - a.tip).norm() <= self.tol);
+        if depth >= 24 || stands {
             out.push(j1);
             return;
         }
+        let jm = lerp5(&j0, &j1, 0.5);
         let js = self.at_table(&a.tip, [jm[3], jm[4]]);
         self.turn_in_place(a, j0, js, depth + 1, out);
         self.turn_in_place(a, js, j1, depth + 1, out);
     }
 
-    /// Split (t0, j0)–(t1, j1) until straight joint interpolation stays on the segment.
+    /// Split (t0, j0)–(t1, j1) until straight joint interpolation stays on the segment:
+    /// at the move's middle, or every [`SAMPLE_TURN_DEG`] of a longer rotary turn
+    /// ([`fractions`]). Where halving ends (24 times) on a piece still off the segment,
+    /// the joints jump there (the inverse changes branch between two fractions 6e-8
+    /// apart, the rotaries half a turn apart: found by the fuzzer as a feed whose table
+    /// turned 180° with the tool 5.6 mm off the path at its middle): that piece is a
+    /// [`Piece::jump`], reached by a retract, index and approach, never a feed.
     #[allow(clippy::too_many_arguments)]
     fn split(
         &self,
@@ -403,28 +409,69 @@ impl Ctx<'_> {
         j1: [f64; 5],
         branch: i8,
         depth: u32,
-        out: &mut Vec<(f64, [f64; 5])>,
+        out: &mut Vec<Piece>,
     ) -> Result<(), PostError> {
-        let tm = (t0 + t1) / 2.0;
-        let mut jm = [0.0; 5];
-        for k in 0..5 {
-            jm[k] = (j0[k] + j1[k]) / 2.0;
-        }
-        let (tip, ax) = self.fk(&jm);
-        let want_tip = a.tip + (b.tip - a.tip) * tm;
-        let want_ax = slerp(&a.axis, &b.axis, tm);
         let rotary_moves = (j0[3] - j1[3]).abs() + (j0[4] - j1[4]).abs() > 1e-9;
-        if !rotary_moves
-            || depth >= 24
-            || ((tip - want_tip).norm() <= self.tol && angle(&ax, &want_ax) <= AXIS_TOLERANCE_DEG)
-        {
-            out.push((t1, j1));
+        let on = |f: f64| {
+            let (tip, ax) = self.fk(&lerp5(&j0, &j1, f));
+            let t = t0 + (t1 - t0) * f;
+            let want_tip = a.tip + (b.tip - a.tip) * t;
+            (tip - want_tip).norm() <= self.tol
+                && angle(&ax, &slerp(&a.axis, &b.axis, t)) <= AXIS_TOLERANCE_DEG
+        };
+        if !rotary_moves || fractions(&j0, &j1).all(on) {
+            out.push(Piece {
+                t: t1,
+                j: j1,
+                jump: false,
+            });
             return Ok(());
         }
+        if depth >= 24 {
+            out.push(Piece {
+                t: t1,
+                j: j1,
+                jump: true,
+            });
+            return Ok(());
+        }
+        let tm = (t0 + t1) / 2.0;
+        let jm = lerp5(&j0, &j1, 0.5);
+        let want_tip = a.tip + (b.tip - a.tip) * tm;
+        let want_ax = slerp(&a.axis, &b.axis, tm);
         let (js, _, _) = self.solve(&want_tip, &want_ax, &[jm[3], jm[4]], Some(branch), b.line)?;
         self.split(a, b, t0, j0, tm, js, branch, depth + 1, out)?;
         self.split(a, b, tm, js, t1, j1, branch, depth + 1, out)
     }
+}
+
+/// One piece of a split segment: the fraction `t` of the segment it ends at and the
+/// joints there; `jump`: the joints cannot be fed to from the last piece's (see
+/// [`Ctx::split`]).
+#[derive(Debug, Clone, Copy)]
+struct Piece {
+    t: f64,
+    j: [f64; 5],
+    jump: bool,
+}
+
+/// The joints a fraction `f` of the way from `j0` to `j1`, every joint linearly (as the
+/// control runs a five-axis feed).
+fn lerp5(j0: &[f64; 5], j1: &[f64; 5], f: f64) -> [f64; 5] {
+    std::array::from_fn(|k| j0[k] + (j1[k] - j0[k]) * f)
+}
+
+/// The fractions of a move from `j0` to `j1` at which the post checks the tool: the
+/// middle, or, where a rotary turns by more than [`SAMPLE_TURN_DEG`], points at most that
+/// turn apart (as `verify` follows such a move).
+fn fractions(j0: &[f64; 5], j1: &[f64; 5]) -> impl Iterator<Item = f64> {
+    let turn = (j1[3] - j0[3]).abs().max((j1[4] - j0[4]).abs());
+    let n = if turn > SAMPLE_TURN_DEG {
+        (turn / SAMPLE_TURN_DEG).ceil().min(MAX_SAMPLES as f64) as usize
+    } else {
+        2
+    };
+    (1..n).map(move |k| k as f64 / n as f64)
 }
 
 /// Post a path of points with their own tool axis (program frame `frame`), through the
@@ -524,7 +571,22 @@ pub fn post_points<W: Write>(
         w.process_for(cfg, q.deposit)?;
         let mut t_prev = 0.0;
         let mut j_prev = j0;
-        for (t, jp) in pieces {
+        for Piece { t, j: jp, jump } in pieces {
+            if jump {
+                // The joints jump here: off the run, up, index, and back down onto the
+                // same point of the path, the process on again for the rest.
+                w.report.warnings.push(format!(
+                    "{name}:{}: the rotaries jump {:.3}° between two points of this move (the inverse changes branch); the tool retracts and re-approaches there",
+                    q.line,
+                    (jp[3] - j_prev[3]).abs().max((jp[4] - j_prev[4]).abs())
+                ));
+                w.index([jp[3], jp[4]], cfg.near, name, line)?;
+                w.approach(&[jp[0], jp[1], jp[2]], q.feed, name, line)?;
+                w.process_for(cfg, q.deposit)?;
+                t_prev = t;
+                j_prev = jp;
+                continue;
+            }
             let seg = (q.tip - a.tip).norm() * (t - t_prev);
             let dr = (jp[3] - j_prev[3]).abs().max((jp[4] - j_prev[4]).abs());
             // Rotaries turning: inverse time, long enough for the rotary feed.
@@ -548,27 +610,27 @@ pub fn post_points<W: Write>(
 /// halving toward a singular pose leaves a tail of such pieces, each of which would be
 /// written as the same block with an inverse-time feed of a move lasting nanoseconds.
 /// The segment's last piece always ends where the segment ends.
-fn without_unwritable_pieces(
-    pieces: Vec<(f64, [f64; 5])>,
-    j0: [f64; 5],
-    scale: f64,
-) -> Vec<(f64, [f64; 5])> {
+fn without_unwritable_pieces(pieces: Vec<Piece>, j0: [f64; 5], scale: f64) -> Vec<Piece> {
     let unwritable = |a: &[f64; 5], b: &[f64; 5]| {
         (0..3).all(|k| ((a[k] - b[k]) * scale).abs() < 0.5)
             && (3..5).all(|k| (a[k] - b[k]).abs() < 0.0005)
     };
-    let mut kept: Vec<(f64, [f64; 5])> = Vec::with_capacity(pieces.len());
+    let mut kept: Vec<Piece> = Vec::with_capacity(pieces.len());
     let n = pieces.len();
-    for (i, (t, jp)) in pieces.into_iter().enumerate() {
-        let last_kept = kept.last().map_or(j0, |k| k.1);
-        if !unwritable(&last_kept, &jp) {
-            kept.push((t, jp));
+    for (i, p) in pieces.into_iter().enumerate() {
+        let last_kept = kept.last().map_or(j0, |k| k.j);
+        if !unwritable(&last_kept, &p.j) {
+            kept.push(p);
         } else if i + 1 == n {
             // The end itself: it replaces the last piece kept (which the output cannot
-            // tell from it), or is the only piece.
+            // tell from it; a jump to it stays a jump), or is the only piece.
             match kept.last_mut() {
-                Some(k) => *k = (t, jp),
-                None => kept.push((t, jp)),
+                Some(k) => {
+                    k.t = p.t;
+                    k.j = p.j;
+                    k.jump |= p.jump;
+                }
+                None => kept.push(p),
             }
         }
     }

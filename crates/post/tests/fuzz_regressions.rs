@@ -238,6 +238,81 @@ fn an_inverse_time_feed_that_rounds_to_zero_is_refused_at_its_line() {
     }
 }
 
+/// Seed 1, input 100159 (and 25 more in 20 s once `verify` followed long rotary turns):
+/// on fadal-lamp's head 2 the segment from line 11 to line 12 crosses the circle of axes
+/// where the inverse's two branches meet. Halving towards it, the branch changed between
+/// two fractions 6e-8 apart, and the post fed the last piece as it was: A turned 180° and
+/// B went from +3.04° to −3.04°, the tool 5.6 mm off the path at the move's middle and
+/// 2.9 mm off a quarter of the way. Such a jump is now reached by a retract, index and
+/// approach. What the post wrote before (`branch-jump-fed.nc`, its first 274 lines, as
+/// the fuzzer kept it) fails `verify` at that move.
+#[test]
+fn a_branch_jump_inside_a_segment_is_not_fed() {
+    let m = Machine::builtin("fadal-lamp", &[]).expect("machine");
+    let csv = std::fs::read_to_string(root().join("fixtures/post/findings/branch-jump.csv"))
+        .expect("fixture");
+    let origin = [0.04314354390229824, 0.6109860719563176, 0.886323999191928];
+    for process in [machining(), Process::Deposit { power: 500.0 }] {
+        let cfg = config(2, process.clone(), PostDialect::Nrc, 0.0005);
+        let text = post_and_verify(&m, &csv, origin, &cfg).expect("posts and verifies");
+        // Independently of the verifier: no feed turns a rotary by 90° or more.
+        let mut last = [0.0f64; 2];
+        let mut rapid = true;
+        for l in text.lines() {
+            let word = |c: char| {
+                l.split_whitespace()
+                    .find(|w| w.starts_with(c))
+                    .and_then(|w| w[1..].parse::<f64>().ok())
+            };
+            if word('G') == Some(0.0) {
+                rapid = true;
+            } else if l.contains("G1 ") || l.contains(" G1") {
+                rapid = false;
+            }
+            for (k, c) in ['A', 'B'].into_iter().enumerate() {
+                if let Some(v) = word(c) {
+                    assert!(
+                        rapid || (v - last[k]).abs() < 90.0,
+                        "{process:?}: a feed turns {c} from {} to {v}: {l}",
+                        last[k]
+                    );
+                    last[k] = v;
+                }
+            }
+        }
+    }
+    let before =
+        std::fs::read(root().join("fixtures/post/findings/branch-jump-fed.nc")).expect("fixture");
+    let pts = read_points(&csv, "fuzz.csv").expect("points read");
+    let cfg = config(2, machining(), PostDialect::Nrc, 0.0005);
+    let err = verify_points(
+        &m,
+        &pts,
+        &Frame::translation(Vector3::from(origin)),
+        2,
+        std::io::Cursor::new(before.as_slice()),
+        verify_tol(&m, &cfg),
+        None,
+    )
+    .expect_err("the 180° feed fails");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("posted line 250") && msg.contains("of the way along the move"),
+        "{msg}"
+    );
+}
+
+/// The fuzz target's machining process (spindle, G54).
+fn machining() -> Process {
+    Process::Machine {
+        tool: None,
+        length_offset: None,
+        work_offset: Some("G54".into()),
+        spindle: 1000.0,
+        coolant: false,
+    }
+}
+
 /// `on_segment` against a direct search: a pose is on the segment exactly when some
 /// fraction t (sampled every 1e-4) puts the tip within the tolerance of the straight tip
 /// path and the axis within 0.5° of the slerped axis (away from the boundaries, where
