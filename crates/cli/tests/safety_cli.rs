@@ -1173,3 +1173,73 @@ fn per_point_verify_follows_the_table_between_points() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// One segment of a per-point path whose straight joint move is off the path (the table
+/// turns C by 40° under a tip 20 mm from its axis: the joints' straight line is an arc,
+/// 1.2 mm from the chord at its middle): the post splits it into 15 pieces. With all but
+/// the last piece deleted, the one feed left has both ends on the path, and verify,
+/// comparing ends only, passed it; now the middle of every feed that turns a rotary is
+/// on the path too.
+#[test]
+fn a_feed_whose_middle_leaves_the_path_fails_verify() {
+    let dir = tempdir("safety-middle");
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let mut csv = String::from("x y z i j k feed laser\n");
+    for a in [0.0f64, 40.0] {
+        let (sa, ca) = a.to_radians().sin_cos();
+        csv += &format!(
+            "{:.6} {:.6} 0 {:.6} {:.6} {c:.6} 600 1\n",
+            20.0 * ca,
+            20.0 * sa,
+            s * ca,
+            s * sa
+        );
+    }
+    let input = write(&dir, "chord.csv", &csv);
+    let out = dir.join("chord.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        &input,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let ok = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        &input,
+        &out.to_string_lossy(),
+    ]);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    // The segment's feeds: every G93 line (the first names G93, the others follow it).
+    let lines: Vec<&str> = posted.lines().collect();
+    let feeds: Vec<usize> = (0..lines.len())
+        .filter(|&i| {
+            lines[i].contains("G93")
+                || (i > 0 && lines[i].contains(" C") && lines[i].contains(" F"))
+        })
+        .collect();
+    assert!(feeds.len() >= 4, "the segment is split: {posted}");
+    let (first, last) = (feeds[0], feeds[feeds.len() - 1]);
+    let mut kept: Vec<String> = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        if i == last {
+            // The last piece, now the segment's only feed, in inverse time.
+            let (n, rest) = l.split_once(' ').expect("a numbered line");
+            kept.push(format!("{n} G93 {rest}"));
+        } else if !(first..last).contains(&i) {
+            kept.push(l.to_string());
+        }
+    }
+    let tampered = write(&dir, "one-feed.nc", &(kept.join("\n") + "\n"));
+    let o = lampost(&["verify", "--machine", "nrc-lc", &input, &tampered]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("50 % of the way along the move"),
+        "one feed for the whole segment: {}",
+        stderr(&o)
+    );
+}

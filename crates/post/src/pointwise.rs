@@ -933,14 +933,14 @@ const SAMPLE_TURN_DEG: f64 = 45.0;
 const MAX_SAMPLES: usize = 720;
 
 /// A feed move's points between its ends, as the control runs it (every joint
-/// linearly), where a rotary turns by more than [`SAMPLE_TURN_DEG`] in it: points at
-/// most that turn apart, each on the segment of one of the `live` readings (the
-/// approach onto the first point is not judged here). Only the ends were compared
-/// before, so a continuous rotary turned a whole turn more at one point (C348.75 for
-/// C−11.25) passed, the table spinning under the head between two points of the path.
-/// (A move that ends where it should after turning less than that cannot have turned a
-/// whole turn more; its middle is not judged, as the post's dropped tail pieces near a
-/// singular pose leave middles just beyond the tolerance: `fuzz_regressions.rs`.)
+/// linearly), where a rotary turns in it: its middle, or, where a rotary turns by more
+/// than [`SAMPLE_TURN_DEG`], points at most that turn apart, each on the segment of one
+/// of the `live` readings (the approach onto the first point is not judged here). Only
+/// the ends were compared before, so a continuous rotary turned a whole turn more at one
+/// point (C348.75 for C−11.25) passed, the table spinning under the head between two
+/// points of the path; and so did one feed left of a segment's split pieces, its ends on
+/// the path and its middle 1.2 mm off (`safety_cli.rs`). A feed whose rotaries stand
+/// moves the tip straight at a fixed axis: its ends decide.
 fn within_between(
     machine: &Machine,
     head: usize,
@@ -954,7 +954,7 @@ fn within_between(
         .iter()
         .map(|&r| (m.end[r] - m.start[r]).abs())
         .fold(0.0f64, f64::max);
-    if turn <= SAMPLE_TURN_DEG {
+    if turn == 0.0 {
         return Ok(());
     }
     let n = (turn / SAMPLE_TURN_DEG).ceil().max(2.0);
