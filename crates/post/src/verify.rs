@@ -230,6 +230,12 @@ pub fn verify<R: BufRead>(
     )
 }
 
+/// Whether a posted feed `f` is the intended `want`: the post writes the input's feed
+/// (scaled to the machine's units) with 5 decimals.
+fn same_feed(f: f64, want: f64) -> bool {
+    (f - want).abs() <= 0.5e-5 + 1e-12 * want.abs()
+}
+
 /// [`verify`], telling `on_point` the posted line and deviation of every feed point it
 /// compares (for a picture of the deviations: `verify --preview`).
 #[allow(clippy::too_many_arguments)]
@@ -324,6 +330,7 @@ pub fn verify_traced<R: BufRead>(
     };
     let mut check = |p: Vector3<f64>,
                      a: Vector3<f64>,
+                     feed: f64,
                      line: u32,
                      is_end: bool,
                      entering: bool,
@@ -410,6 +417,14 @@ pub fn verify_traced<R: BufRead>(
             }
         };
         on_point(line, err);
+        if !same_feed(feed, step.feed) {
+            return Err(PostError::Verify(format!(
+                "posted line {line}: feed F{} along the move of input line {}, which asks F{} (the post writes the input's feed, in the machine's units)",
+                lampost_gcode::Readable(feed),
+                step.line,
+                lampost_gcode::Readable(step.feed)
+            )));
+        }
         let want = intended_axis(&step);
         let ang = a.cross(&want).norm().atan2(a.dot(&want)).to_degrees();
         rep.compared += 1;
@@ -479,6 +494,7 @@ pub fn verify_traced<R: BufRead>(
                             check(
                                 pm.tip,
                                 pm.axis,
+                                m.feed,
                                 m.line,
                                 false,
                                 false,
@@ -490,6 +506,7 @@ pub fn verify_traced<R: BufRead>(
                         check(
                             pose.tip,
                             pose.axis,
+                            m.feed,
                             m.line,
                             true,
                             entering,
@@ -529,6 +546,7 @@ pub fn verify_traced<R: BufRead>(
                         check(
                             pm.tip,
                             pm.axis,
+                            m.feed,
                             m.line,
                             false,
                             entering,
@@ -550,7 +568,16 @@ pub fn verify_traced<R: BufRead>(
                             m.line,
                         )?;
                         let pe = fk(&m.end);
-                        check(pe.tip, pe.axis, m.line, true, false, &mut current, &mut rep)?;
+                        check(
+                            pe.tip,
+                            pe.axis,
+                            m.feed,
+                            m.line,
+                            true,
+                            false,
+                            &mut current,
+                            &mut rep,
+                        )?;
                     }
                 }
             }

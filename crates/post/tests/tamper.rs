@@ -5,6 +5,7 @@
 //! 003's formulas (not the crate's kinematics) confirms that no rapid but a vertical one
 //! goes below the work's top plus the margin. Then each posted program is tampered with
 //! (a feed or rotary value moved beyond tolerance, a rapid added to a point of the work,
+//! a feed's F word changed,
 //! a motion block removed) and `verify` must catch at least 99 % of the tampered
 //! programs. Seeded, so a failure reproduces.
 
@@ -174,7 +175,7 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
         }
     };
     let tol = if mm { 0.025 } else { 0.001 };
-    match r.below(3) {
+    match r.below(4) {
         0 => {
             // One value moved beyond tolerance: an axis word of a feed, or a rotary.
             let feeds: Vec<&Mv> = mv
@@ -227,6 +228,42 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
             );
             Some((lines.join("\n") + "\n", "rapid through the work"))
         }
+        2 => {
+            // A feed changed: the F word of a feed block (per minute) scaled by 0.1-0.9
+            // or 1.1-10, or an F word given to a feed block without one.
+            let feeds: Vec<&Mv> = mv
+                .iter()
+                .filter(|m| !matches!(m.1, MoveKind::Rapid))
+                .collect();
+            let m = feeds[r.below(feeds.len())];
+            let idx = (m.0 - 1) as usize;
+            if text.contains("G93") {
+                return None;
+            }
+            let factor = if r.below(2) == 0 {
+                r.range(0.1, 0.9)
+            } else {
+                r.range(1.1, 10.0)
+            };
+            let mut words: Vec<String> = lines[idx].split(' ').map(str::to_string).collect();
+            match words.iter().position(|w| w.starts_with('F')) {
+                Some(k) => {
+                    let v: f64 = words[k][1..].parse().ok()?;
+                    words[k] = format!("F{:.1}", v * factor);
+                }
+                None => {
+                    // The feed in force: the last F word before this line.
+                    let v: f64 = lines[..idx].iter().rev().find_map(|l| {
+                        l.split(' ')
+                            .find(|w| w.starts_with('F'))
+                            .and_then(|w| w[1..].parse().ok())
+                    })?;
+                    words.push(format!("F{:.1}", v * factor));
+                }
+            }
+            lines[idx] = words.join(" ");
+            Some((lines.join("\n") + "\n", "feed changed"))
+        }
         _ => {
             // A motion block removed.
             let m = &mv[r.below(mv.len())];
@@ -256,6 +293,8 @@ fn random_programs_post_verify_and_tampering_is_caught() {
     ];
     let mut r = Rng(0x1A3B_5C7D_9E0F_1234);
     let (mut posted, mut refused, mut tampered, mut caught) = (0, 0, 0, 0);
+    // Per kind of change: (tampered, caught).
+    let mut kinds: std::collections::BTreeMap<&str, (usize, usize)> = Default::default();
     let mut missed: Vec<String> = Vec::new();
     for case in 0..240 {
         let (m, name) = &machines[case % 3];
@@ -367,8 +406,11 @@ fn random_programs_post_verify_and_tampering_is_caught() {
                 continue;
             }
             tampered += 1;
+            let kind = kinds.entry(what).or_default();
+            kind.0 += 1;
             if v(&bad).is_err() {
                 caught += 1;
+                kind.1 += 1;
             } else {
                 let changed: Vec<String> = diff_lines(&out, &bad);
                 missed.push(format!(
@@ -383,9 +425,15 @@ fn random_programs_post_verify_and_tampering_is_caught() {
         "posted {posted}, refused {refused} (travel, safe height, reach); tampered {tampered}, caught {caught} ({:.2} %)",
         100.0 * rate
     );
+    for (what, (t, c)) in &kinds {
+        eprintln!("  {what}: {c} of {t} caught");
+    }
     for m in missed.iter().take(20) {
         eprintln!("missed: {m}");
     }
+    // A feed 10 % or more off is never within anything: every one is caught.
+    let (t, c) = kinds.get("feed changed").copied().unwrap_or_default();
+    assert!(t > 0 && c == t, "feed changes caught: {c} of {t}");
     assert!(posted >= 100, "too few programs posted: {posted}");
     assert!(
         rate >= 0.99,
