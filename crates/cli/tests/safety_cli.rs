@@ -1174,15 +1174,11 @@ fn per_point_verify_follows_the_table_between_points() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-/// One segment of a per-point path whose straight joint move is off the path (the table
-/// turns C by 40° under a tip 20 mm from its axis: the joints' straight line is an arc,
-/// 1.2 mm from the chord at its middle): the post splits it into 15 pieces. With all but
-/// the last piece deleted, the one feed left has both ends on the path, and verify,
-/// comparing ends only, passed it; now the middle of every feed that turns a rotary is
-/// on the path too.
-#[test]
-fn a_feed_whose_middle_leaves_the_path_fails_verify() {
-    let dir = tempdir("safety-middle");
+/// A per-point path of two points 40° apart on a circle of 20 mm about C, the axis
+/// leaning 30° outward, posted for nrc-lc and verified: (the directory, the input, the
+/// posted text).
+fn chord_posted(name: &str) -> (std::path::PathBuf, String, String) {
+    let dir = tempdir(name);
     let (s, c) = 30f64.to_radians().sin_cos();
     let mut csv = String::from("x y z i j k feed laser\n");
     for a in [0.0f64, 40.0] {
@@ -1197,24 +1193,24 @@ fn a_feed_whose_middle_leaves_the_path_fails_verify() {
     }
     let input = write(&dir, "chord.csv", &csv);
     let out = dir.join("chord.nc");
-    let o = lampost(&[
-        "post",
-        "--machine",
-        "nrc-lc",
-        &input,
-        "-o",
-        &out.to_string_lossy(),
-    ]);
+    let out = out.to_string_lossy();
+    let o = lampost(&["post", "--machine", "nrc-lc", &input, "-o", &out]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let posted = std::fs::read_to_string(&out).expect("posted");
-    let ok = lampost(&[
-        "verify",
-        "--machine",
-        "nrc-lc",
-        &input,
-        &out.to_string_lossy(),
-    ]);
+    let ok = lampost(&["verify", "--machine", "nrc-lc", &input, &out]);
     assert!(ok.status.success(), "{}", stderr(&ok));
+    let posted = std::fs::read_to_string(&*out).expect("posted");
+    (dir, input, posted)
+}
+
+/// One segment of a per-point path whose straight joint move is off the path (the table
+/// turns C by 40° under a tip 20 mm from its axis: the joints' straight line is an arc,
+/// 1.2 mm from the chord at its middle): the post splits it into 15 pieces. With all but
+/// the last piece deleted, the one feed left has both ends on the path, and verify,
+/// comparing ends only, passed it; now the middle of every feed that turns a rotary is
+/// on the path too.
+#[test]
+fn a_feed_whose_middle_leaves_the_path_fails_verify() {
+    let (dir, input, posted) = chord_posted("safety-middle");
     // The segment's feeds: every G93 line (the first names G93, the others follow it).
     let lines: Vec<&str> = posted.lines().collect();
     let feeds: Vec<usize> = (0..lines.len())
@@ -1240,6 +1236,32 @@ fn a_feed_whose_middle_leaves_the_path_fails_verify() {
     assert!(
         !o.status.success() && stderr(&o).contains("50 % of the way along the move"),
         "one feed for the whole segment: {}",
+        stderr(&o)
+    );
+}
+
+/// The same segment's pieces with their inverse-time feeds ten times what the post wrote:
+/// every end and middle on the path, the tool ten times faster than the path's F600.
+/// verify did not look at per-point feeds; now no move is faster than its point's feed.
+#[test]
+fn a_per_point_move_faster_than_its_feed_fails_verify() {
+    let (dir, input, posted) = chord_posted("safety-fast");
+    let fast: String = posted
+        .lines()
+        .map(|l| match l.rsplit_once(" F") {
+            Some((head, f)) if l.contains(" C") => {
+                let v: f64 = f.parse().expect("an F value");
+                format!("{head} F{:.5}\n", v * 10.0)
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    assert_ne!(fast, posted);
+    let tampered = write(&dir, "fast.nc", &fast);
+    let o = lampost(&["verify", "--machine", "nrc-lc", &input, &tampered]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("faster than the feed F600"),
+        "ten times the feed: {}",
         stderr(&o)
     );
 }

@@ -840,6 +840,26 @@ pub fn verify_points_traced<R: BufRead>(
                     rotary: [m.end[ix[3]], m.end[ix[4]]],
                 };
                 let pose = machine.forward(&j, head);
+                let from = machine.forward(
+                    &Joints {
+                        linear: lin(&m.start),
+                        rotary: rot(&m.start),
+                    },
+                    head,
+                );
+                let minutes = move_minutes(&m, &lin(&m.start), &lin(&m.end));
+                let chord = (pose.tip - from.tip).norm();
+                // Not faster than the feed of the point a reading goes to asks (the post
+                // writes that feed, or slower where the rotaries or a block's shortest
+                // time bound it); the tip's chord in the part frame, against the time the
+                // text gives the move, with the tolerance at each end.
+                let slow_enough = |k: usize| {
+                    placed
+                        .get(k)
+                        .is_none_or(|q| chord <= q.feed * minutes * (1.0 + 1e-6) + 2.0 * tolerance)
+                };
+                let mut too_fast: Option<usize> = None;
+                let mut paced = false;
                 // Each live reading of the program so far (the next point to reach)
                 // takes this move: reaching that point moves it on; a move on the way to
                 // it (or the approach onto the first) keeps it. A point may be reached
@@ -866,6 +886,11 @@ pub fn verify_points_traced<R: BufRead>(
                     if reached {
                         next.push(k + 1);
                         keep_best(&mut best, (d_tip, d_ax));
+                        if slow_enough(k) {
+                            paced = true;
+                        } else {
+                            too_fast.get_or_insert(k);
+                        }
                     }
                     if k == 0 {
                         // The approach onto the first point: straight down to it (it
@@ -880,6 +905,11 @@ pub fn verify_points_traced<R: BufRead>(
                         Some(e) => {
                             next.push(k);
                             keep_best(&mut best, e);
+                            if slow_enough(k) {
+                                paced = true;
+                            } else {
+                                too_fast.get_or_insert(k);
+                            }
                         }
                         None if !reached => {
                             miss.get_or_insert_with(|| {
@@ -894,6 +924,15 @@ pub fn verify_points_traced<R: BufRead>(
                 next.dedup();
                 if next.is_empty() {
                     return Err(PostError::Verify(miss.unwrap_or_default()));
+                }
+                if let (false, Some(k)) = (paced, too_fast) {
+                    return Err(PostError::Verify(format!(
+                        "posted line {}: the tool moves along the path at {} units/min, faster than the feed F{} of the point on line {}",
+                        m.line,
+                        lampost_gcode::Readable((chord / minutes * 10.0).round() / 10.0),
+                        lampost_gcode::Readable(placed[k].feed),
+                        placed[k].line
+                    )));
                 }
                 // Bounded work per move: the readings that have come furthest.
                 if next.len() > MAX_READINGS {
@@ -922,6 +961,17 @@ pub fn verify_points_traced<R: BufRead>(
     screen.finish()?;
     safety.finish(stream.interpreter().ended())?;
     Ok(rep)
+}
+
+/// How long the posted feed `m` takes, as the text gives it (minutes): 1 / F under
+/// G93, else its linear axes' distance (`a` to `b`) over F.
+fn move_minutes(m: &lampost_gcode::Move, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    if m.modal.feed_mode == lampost_gcode::FeedMode::InverseTime {
+        1.0 / m.feed
+    } else {
+        let d = (0..3).map(|k| (b[k] - a[k]).powi(2)).sum::<f64>().sqrt();
+        d / m.feed
+    }
 }
 
 /// The most a rotary may turn between two samples of one feed move that
