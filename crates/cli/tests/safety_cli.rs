@@ -991,6 +991,23 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
     );
     // A FADAL `L` call (subroutine 1, twice), which lampost's reader does not follow.
     check("FADAL L call", &after(on, "L0102"), "L0102");
+    // The head standing still with the laser on: a dwell, a program stop.
+    check("G4 dwell", &after(on + 2, "G4 P2."), "a dwell (G4)");
+    check(
+        "M0 with the laser on",
+        &after(on + 2, "M0"),
+        "a program stop",
+    );
+    check(
+        "M1 with the laser on",
+        &after(on + 2, "M01"),
+        "a program stop",
+    );
+    // A stop with the laser off (after M74) is the operator's: it passes.
+    let mut stopped = lines.clone();
+    stopped.insert(off + 1, "M1".into());
+    let o = verify(&dir, "A=0,B=0", &(stopped.join("\n") + "\n"), &[]);
+    assert!(o.status.success(), "M1 with the laser off: {}", stderr(&o));
     // The program's end and block delete.
     check(
         "M99 for M30",

@@ -700,6 +700,12 @@ impl Screen {
             Some((line, BLOCK_DELETE)) => Err(PostError::Verify(format!(
                 "posted line {line}: a block-delete line (`/`): whether the control runs it depends on its switch; the post writes none"
             ))),
+            Some((line, DWELL)) => Err(PostError::Verify(format!(
+                "posted line {line}: a dwell (G4): the head stands still for it (with the laser on, over one spot of the work); the post writes none"
+            ))),
+            Some((line, LASER_STOP)) => Err(PostError::Verify(format!(
+                "posted line {line}: a program stop (M0, M1 or M60) with the laser on: it stays on over one spot while the program waits; the post turns it off first"
+            ))),
             Some((line, code)) => Err(PostError::Verify(format!(
                 "posted line {line}: G{}{} {}; the post writes no such code, and the moves verify reads would not be where the control runs them",
                 code / 10,
@@ -741,9 +747,16 @@ fn frame_code(code: u16) -> Option<&'static str> {
 /// The code [`Screen`] keeps for a block-delete line (`/…`).
 const BLOCK_DELETE: u16 = u16::MAX;
 
-/// A line's first refused G-code (or [`BLOCK_DELETE`]: whether a control runs the line
-/// depends on its block-delete switch), and its program end or return (M2, M30, M99),
-/// if any; lines with neither a `G` nor an `M` are not parsed.
+/// The code [`Screen`] keeps for a dwell (G4, in tenths).
+const DWELL: u16 = 40;
+
+/// The code [`Screen`] keeps for a program stop (M0, M1, M60) with the laser on.
+const LASER_STOP: u16 = u16::MAX - 1;
+
+/// A line's first refused G-code (a frame code, or [`DWELL`]; or [`BLOCK_DELETE`]:
+/// whether a control runs the line depends on its block-delete switch), its program end
+/// or return (M2, M30, M99), if any, and whether it stops the program (M0, M1, M60);
+/// lines with neither a `G` nor an `M` are not parsed.
 /// A line's laser switch (`Some(true)` on, `Some(false)` off) is `laser`'s result.
 fn screen_line(
     bytes: &[u8],
@@ -751,18 +764,18 @@ fn screen_line(
     offset: usize,
     codes: &LaserCodes,
     laser: &mut Option<bool>,
-) -> (Option<u16>, Option<u16>) {
+) -> (Option<u16>, Option<u16>, bool) {
     if bytes.iter().find(|c| !c.is_ascii_whitespace()) == Some(&b'/') {
-        return (Some(BLOCK_DELETE), None);
+        return (Some(BLOCK_DELETE), None, false);
     }
     let (g, m) = bytes.iter().fold((false, false), |(g, m), &c| {
         (g || c | 0x20 == b'g', m || c | 0x20 == b'm')
     });
     if !(g || m) {
-        return (None, None);
+        return (None, None, false);
     }
     let Ok(block) = lampost_gcode::parse_line(bytes, number, offset) else {
-        return (None, None);
+        return (None, None, false);
     };
     let holds = |code: &[(u8, f64)]| {
         !code.is_empty()
@@ -779,13 +792,16 @@ fn screen_line(
         .words()
         .filter(|w| w.letter == b'G')
         .filter_map(|w| w.code())
-        .find(|&c| frame_code(c).is_some());
-    let end = block
-        .words()
-        .filter(|w| w.letter == b'M')
-        .filter_map(|w| w.code())
-        .find(|c| matches!(c, 20 | 300 | 990));
-    (refused, end)
+        .find(|&c| frame_code(c).is_some() || c == DWELL);
+    let ms = || {
+        block
+            .words()
+            .filter(|w| w.letter == b'M')
+            .filter_map(|w| w.code())
+    };
+    let end = ms().find(|c| matches!(c, 20 | 300 | 990));
+    let stop = ms().any(|c| matches!(c, 0 | 10 | 600));
+    (refused, end, stop)
 }
 
 impl<R: BufRead> LineSource for Screened<R> {
@@ -793,12 +809,14 @@ impl<R: BufRead> LineSource for Screened<R> {
         let line = self.lines.next_line()?;
         if let Some(l) = &line {
             let mut switch = None;
-            let (refused, end) = screen_line(l.bytes, l.number, l.offset, &self.codes, &mut switch);
+            let (refused, end, stop) =
+                screen_line(l.bytes, l.number, l.offset, &self.codes, &mut switch);
             match switch {
                 Some(true) if self.laser.get().is_none() => self.laser.set(Some(l.number)),
                 Some(false) => self.laser.set(None),
                 _ => {}
             }
+            let refused = refused.or((stop && self.laser.get().is_some()).then_some(LASER_STOP));
             if let (Some(code), None) = (refused, self.found.get()) {
                 self.found.set(Some((l.number, code)));
             }
