@@ -1282,3 +1282,48 @@ fn a_per_point_move_faster_than_its_feed_fails_verify() {
         stderr(&o)
     );
 }
+
+/// The same segment's pieces, every inverse-time feed halved (slower than asked, which
+/// passes), then two pieces swapped: every end and middle on the path, no move too fast,
+/// but the tool goes forward two pieces, back one, and on (the stretch between deposited
+/// three times). verify took each move on its own; now the tool may not go back along
+/// the path by more than the tolerance.
+#[test]
+fn a_per_point_move_back_along_the_path_fails_verify() {
+    let (dir, input, posted) = chord_posted("safety-back");
+    let slow: Vec<String> = posted
+        .lines()
+        .map(|l| match l.rsplit_once(" F") {
+            Some((head, f)) if l.contains(" C") => {
+                let v: f64 = f.parse().expect("an F value");
+                format!("{head} F{:.5}", v / 2.0)
+            }
+            _ => l.to_string(),
+        })
+        .collect();
+    let text = |t: &[String]| t.join("\n") + "\n";
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        &input,
+        &write(&dir, "slow.nc", &text(&slow)),
+    ]);
+    assert!(o.status.success(), "half the feed: {}", stderr(&o));
+    // The second and third pieces (the first names G93), swapped.
+    let g93 = slow.iter().position(|l| l.contains("G93")).expect("G93");
+    let mut swapped = slow.clone();
+    swapped.swap(g93 + 1, g93 + 2);
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        &input,
+        &write(&dir, "back.nc", &text(&swapped)),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("goes back along the path"),
+        "two pieces swapped: {}",
+        stderr(&o)
+    );
+}

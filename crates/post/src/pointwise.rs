@@ -651,6 +651,18 @@ pub fn on_segment(
     axis: &Vector3<f64>,
     tolerance: f64,
 ) -> Option<(f64, f64)> {
+    segment_span(a, b, tip, axis, tolerance).map(|s| (s.0, s.1))
+}
+
+/// [`on_segment`], and the interval of fractions `[lo, hi]` where both conditions hold:
+/// (tip error, axis angle, lo, hi).
+fn segment_span(
+    a: &PathPoint,
+    b: &PathPoint,
+    tip: &Vector3<f64>,
+    axis: &Vector3<f64>,
+    tolerance: f64,
+) -> Option<(f64, f64, f64, f64)> {
     let d = b.tip - a.tip;
     let rel = tip - a.tip;
     let len2 = d.norm_squared();
@@ -708,7 +720,7 @@ pub fn on_segment(
     // The closed forms above and the measured values can differ by rounding at the
     // interval's ends: the measured ones decide.
     (err <= tolerance * (1.0 + 1e-9) && ang <= 10.0 * AXIS_TOLERANCE_DEG * (1.0 + 1e-9))
-        .then_some((err, ang))
+        .then_some((err, ang, lo, hi))
 }
 
 /// The most readings of a per-point program [`verify_points`] follows at once (each a
@@ -803,7 +815,9 @@ pub fn verify_points_traced<R: BufRead>(
     // Segment k runs from placed[k-1] to placed[k]; before the first point is reached,
     // the feeds are the approach onto it. `live`: the readings still possible (the next
     // point to reach), ascending.
-    let mut live: Vec<usize> = vec![0];
+    // Each reading carries the least fraction of its segment the tool can have come to
+    // so far: moves go forward along the path (each within the tolerance), never back.
+    let mut live: Vec<(usize, f64)> = vec![(0, 0.0)];
     let screen = crate::verify::Screen::new(machine)?;
     let mut stream = screen.stream(posted, units);
     let mut rules = crate::verify::PostedRules::new(machine.units, true);
@@ -866,10 +880,10 @@ pub fn verify_points_traced<R: BufRead>(
                 // by more than one move (a piece of a segment within the tolerance of
                 // its end, then the end itself; repeated points), so every reading is
                 // kept until a move rules it out.
-                let mut next: Vec<usize> = Vec::with_capacity(live.len() + 1);
+                let mut next: Vec<(usize, f64)> = Vec::with_capacity(live.len() + 1);
                 let mut best: Option<(f64, f64)> = None;
                 let mut miss: Option<String> = None;
-                for &k in live.iter().rev() {
+                for &(k, at) in live.iter().rev() {
                     let Some(target) = placed.get(k) else {
                         miss.get_or_insert_with(|| {
                             format!("posted line {} feeds on after the last point", m.line)
@@ -884,7 +898,7 @@ pub fn verify_points_traced<R: BufRead>(
                     // about a standing tip).
                     let reached = d_tip <= tolerance && d_ax <= AXIS_TOLERANCE_DEG;
                     if reached {
-                        next.push(k + 1);
+                        next.push((k + 1, 0.0));
                         keep_best(&mut best, (d_tip, d_ax));
                         if slow_enough(k) {
                             paced = true;
@@ -896,15 +910,22 @@ pub fn verify_points_traced<R: BufRead>(
                         // The approach onto the first point: straight down to it (it
                         // ends once the point is reached).
                         if !reached {
-                            next.push(0);
+                            next.push((0, 0.0));
                         }
                         continue;
                     }
                     let a = &placed[k - 1];
-                    match on_segment(a, target, &pose.tip, &pose.axis, tolerance) {
-                        Some(e) => {
-                            next.push(k);
-                            keep_best(&mut best, e);
+                    match segment_span(a, target, &pose.tip, &pose.axis, tolerance) {
+                        // Back along the segment from where the tool had come to.
+                        Some((.., hi)) if hi < at && !reached => {
+                            miss.get_or_insert_with(|| {
+                                format!("posted line {}: the tool goes back along the path between points on lines {} and {} (to {:.4} of the way, from {:.4} or more)", m.line, a.line, target.line, hi, at)
+                            });
+                        }
+                        Some((.., hi)) if hi < at => {}
+                        Some((err, ang, lo, _)) => {
+                            next.push((k, at.max(lo)));
+                            keep_best(&mut best, (err, ang));
                             if slow_enough(k) {
                                 paced = true;
                             } else {
@@ -920,8 +941,9 @@ pub fn verify_points_traced<R: BufRead>(
                         None => {}
                     }
                 }
-                next.sort_unstable();
-                next.dedup();
+                // One reading per point to reach: the one that has come least far.
+                next.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
+                next.dedup_by_key(|r| r.0);
                 if next.is_empty() {
                     return Err(PostError::Verify(miss.unwrap_or_default()));
                 }
@@ -951,8 +973,8 @@ pub fn verify_points_traced<R: BufRead>(
             }
         }
     }
-    if !live.contains(&placed.len()) {
-        let k = live.last().copied().unwrap_or(0).min(placed.len() - 1);
+    if !live.iter().any(|r| r.0 == placed.len()) {
+        let k = live.last().map_or(0, |r| r.0).min(placed.len() - 1);
         return Err(PostError::Verify(format!(
             "the posted program ends before the point on line {}",
             placed[k].line
@@ -997,7 +1019,7 @@ fn within_between(
     m: &lampost_gcode::Move,
     ix: &[usize],
     placed: &[PathPoint],
-    live: &[usize],
+    live: &[(usize, f64)],
     tolerance: f64,
 ) -> Result<(), PostError> {
     let turn = ix[3..]
@@ -1025,14 +1047,14 @@ fn within_between(
             },
             head,
         );
-        let on = live.iter().any(|&k| {
+        let on = live.iter().any(|&(k, _)| {
             k == 0
                 || (k < placed.len()
                     && on_segment(&placed[k - 1], &placed[k], &pose.tip, &pose.axis, tolerance)
                         .is_some())
         });
         if !on {
-            let k = live.last().copied().unwrap_or(1).clamp(1, placed.len() - 1);
+            let k = live.last().map_or(1, |r| r.0).clamp(1, placed.len() - 1);
             let (err, ang) = nearest_miss(&placed[k - 1], &placed[k], &pose.tip, &pose.axis);
             return Err(PostError::Verify(format!(
                 "posted line {}: {:.0} % of the way along the move, the tool is {err:.3e} and {ang:.3}° off the path between points on lines {} and {}",
