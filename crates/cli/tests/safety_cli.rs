@@ -991,6 +991,18 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
     );
     // A FADAL `L` call (subroutine 1, twice), which lampost's reader does not follow.
     check("FADAL L call", &after(on, "L0102"), "L0102");
+    // Back along a straight feed and on (X10.1031 to X11.1031): every point and middle
+    // on the path, the stretch between deposited three times.
+    assert_eq!(lines[on + 2], "X11.1031");
+    check(
+        "back along a feed",
+        &|t| {
+            t[on + 2] = "X10.8531".into();
+            t.insert(on + 3, "X10.6031".into());
+            t.insert(on + 4, "X11.1031".into());
+        },
+        "goes back along the intended move",
+    );
     // The head standing still with the laser on: a dwell, a program stop.
     check("G4 dwell", &after(on + 2, "G4 P2."), "a dwell (G4)");
     check(

@@ -230,6 +230,42 @@ pub fn verify<R: BufRead>(
     )
 }
 
+/// The fractions of `step` whose points can be the tool at `p` (within `tolerance`
+/// along the move), for a straight feed or a flat arc of less than a turn less 0.1 rad
+/// (a circle's start and end are one point); `None` for other moves, not followed.
+fn progress(step: &Step, p: &Vector3<f64>, tolerance: f64) -> Option<(f64, f64)> {
+    let (t, len) = match step.kind {
+        StepKind::Feed => {
+            let d = step.end - step.start;
+            let len2 = d.norm_squared();
+            ((p - step.start).dot(&d) / len2, len2.sqrt())
+        }
+        StepKind::Arc {
+            center,
+            normal,
+            sweep,
+        } if sweep.abs() < std::f64::consts::TAU - 0.1
+            && (step.end - step.start).dot(&normal).abs() <= tolerance =>
+        {
+            let rel = step.start - center;
+            let q = p - center;
+            let q = q - normal * normal.dot(&q);
+            let ang = normal.dot(&rel.cross(&q)).atan2(rel.dot(&q));
+            // From the start in the sweep's sense, the way round past the end counted
+            // back from the start (a point just before the start is at a small negative).
+            let tau = std::f64::consts::TAU;
+            let mut a = ang * sweep.signum();
+            if a < -(tau - sweep.abs()) / 2.0 {
+                a += tau;
+            }
+            (a / sweep.abs(), rel.norm() * sweep.abs())
+        }
+        _ => return None,
+    };
+    let band = tolerance / len;
+    (t.is_finite() && band.is_finite()).then_some((t - band, t + band))
+}
+
 /// Whether a posted feed `f` is the intended `want`: the post writes the input's feed
 /// (scaled to the machine's units) with 5 decimals.
 fn same_feed(f: f64, want: f64) -> bool {
@@ -288,6 +324,8 @@ pub fn verify_traced<R: BufRead>(
     let mut held: Option<Step> = None;
     // The angle the current move (an arc) has swept so far, along its sweep.
     let mut swept = 0.0f64;
+    // The least fraction of the current move the tool can have come to (see `progress`).
+    let mut reach = 0.0f64;
     let mut rep = VerifyReport::default();
     let intended_axis = |s: &Step| match s.orient(sections) {
         Orient::ToolAxis => s.program_z(sections).normalize(),
@@ -353,6 +391,7 @@ pub fn verify_traced<R: BufRead>(
                 None => intended.next().transpose()?,
             };
             swept = 0.0;
+            reach = 0.0;
         }
         let Some(step) = *current else {
             return Err(PostError::Verify(format!("posted line {line} feeds to ({:.5}, {:.5}, {:.5}) after the intended path has ended", p.x, p.y, p.z)));
@@ -413,6 +452,17 @@ pub fn verify_traced<R: BufRead>(
                 )));
             } else {
                 ended = None;
+                // Forward along the move: the fractions within the tolerance of p lie
+                // wholly before where the tool had come to, it went back.
+                if let Some((lo, hi)) = progress(&step, &p, tolerance) {
+                    if hi < reach {
+                        return Err(PostError::Verify(format!(
+                            "posted line {line}: the tool goes back along the intended move of input line {} (to {:.4} of the way, from {:.4} or more)",
+                            step.line, hi, reach
+                        )));
+                    }
+                    reach = reach.max(lo);
+                }
                 (d, step)
             }
         };
