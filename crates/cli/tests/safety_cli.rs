@@ -1269,22 +1269,28 @@ fn a_feed_whose_middle_leaves_the_path_fails_verify() {
     );
 }
 
+/// The lines of a posted per-point program with every rotary feed's F (inverse time)
+/// multiplied by `k`.
+fn inverse_time_scaled(posted: &str, k: f64) -> Vec<String> {
+    posted
+        .lines()
+        .map(|l| match l.rsplit_once(" F") {
+            Some((head, f)) if l.contains(" C") => {
+                let v: f64 = f.parse().expect("an F value");
+                format!("{head} F{:.5}", v * k)
+            }
+            _ => l.to_string(),
+        })
+        .collect()
+}
+
 /// The same segment's pieces with their inverse-time feeds ten times what the post wrote:
 /// every end and middle on the path, the tool ten times faster than the path's F600.
 /// verify did not look at per-point feeds; now no move is faster than its point's feed.
 #[test]
 fn a_per_point_move_faster_than_its_feed_fails_verify() {
     let (dir, input, posted) = chord_posted("safety-fast");
-    let fast: String = posted
-        .lines()
-        .map(|l| match l.rsplit_once(" F") {
-            Some((head, f)) if l.contains(" C") => {
-                let v: f64 = f.parse().expect("an F value");
-                format!("{head} F{:.5}\n", v * 10.0)
-            }
-            _ => format!("{l}\n"),
-        })
-        .collect();
+    let fast = inverse_time_scaled(&posted, 10.0).join("\n") + "\n";
     assert_ne!(fast, posted);
     let tampered = write(&dir, "fast.nc", &fast);
     let o = lampost(&["verify", "--machine", "nrc-lc", &input, &tampered]);
@@ -1303,16 +1309,7 @@ fn a_per_point_move_faster_than_its_feed_fails_verify() {
 #[test]
 fn a_per_point_move_back_along_the_path_fails_verify() {
     let (dir, input, posted) = chord_posted("safety-back");
-    let slow: Vec<String> = posted
-        .lines()
-        .map(|l| match l.rsplit_once(" F") {
-            Some((head, f)) if l.contains(" C") => {
-                let v: f64 = f.parse().expect("an F value");
-                format!("{head} F{:.5}", v / 2.0)
-            }
-            _ => l.to_string(),
-        })
-        .collect();
+    let slow = inverse_time_scaled(&posted, 0.5);
     let text = |t: &[String]| t.join("\n") + "\n";
     let o = lampost(&[
         "verify",

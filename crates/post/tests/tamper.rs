@@ -175,13 +175,13 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
         }
     };
     let tol = if mm { 0.025 } else { 0.001 };
+    let feeds: Vec<&Mv> = mv
+        .iter()
+        .filter(|m| !matches!(m.1, MoveKind::Rapid))
+        .collect();
     match r.below(4) {
         0 => {
             // One value moved beyond tolerance: an axis word of a feed, or a rotary.
-            let feeds: Vec<&Mv> = mv
-                .iter()
-                .filter(|m| !matches!(m.1, MoveKind::Rapid))
-                .collect();
             let m = feeds[r.below(feeds.len())];
             let idx = (m.0 - 1) as usize;
             let words: Vec<String> = lines[idx].split(' ').map(str::to_string).collect();
@@ -212,10 +212,6 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
         }
         1 => {
             // A rapid added to a point of the work (another feed's end), after a feed.
-            let feeds: Vec<&Mv> = mv
-                .iter()
-                .filter(|m| !matches!(m.1, MoveKind::Rapid))
-                .collect();
             let at = feeds[r.below(feeds.len())];
             let to = feeds[r.below(feeds.len())];
             if (0..3).all(|k| (at.3[k] - to.3[k]).abs() < 1e-3) {
@@ -231,10 +227,6 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
         2 => {
             // A feed changed: the F word of a feed block (per minute) scaled by 0.1-0.9
             // or 1.1-10, or an F word given to a feed block without one.
-            let feeds: Vec<&Mv> = mv
-                .iter()
-                .filter(|m| !matches!(m.1, MoveKind::Rapid))
-                .collect();
             let m = feeds[r.below(feeds.len())];
             let idx = (m.0 - 1) as usize;
             if text.contains("G93") {
