@@ -238,14 +238,15 @@ fn an_inverse_time_feed_that_rounds_to_zero_is_refused_at_its_line() {
     }
 }
 
-/// Seed 1, input 100159 (and 25 more in 20 s once `verify` followed long rotary turns):
-/// on fadal-lamp's head 2 the segment from line 11 to line 12 crosses the circle of axes
-/// where the inverse's two branches meet. Halving towards it, the branch changed between
-/// two fractions 6e-8 apart, and the post fed the last piece as it was: A turned 180° and
-/// B went from +3.04° to −3.04°, the tool 5.6 mm off the path at the move's middle and
-/// 2.9 mm off a quarter of the way. Such a jump is now reached by a retract, index and
-/// approach. What the post wrote before (`branch-jump-fed.nc`, its first 274 lines, as
-/// the fuzzer kept it) fails `verify` at that move.
+/// Seed 1, input 100159 (and 25 more in 20 s once `verify` followed long rotary turns): on
+/// fadal-lamp's laser head (head 2) the segment from line 11 to line 12 crosses the circle
+/// of axes where the inverse's two branches meet (its feeds of 1e9 made 600 here, as the
+/// re-approach's feed must be writable). Halving towards it, the branch changed between two
+/// fractions 6e-8 apart, and the post fed the last piece as it was: A turned 180° and B
+/// went from +3.04° to −3.04°, the tool 5.6 mm off the path at the move's middle and 2.9 mm
+/// off a quarter of the way. Such a jump is now reached by a retract, index and approach.
+/// What the post wrote before (`branch-jump-fed.nc`, its first 274 lines, as the fuzzer
+/// kept it) fails `verify` at that move.
 #[test]
 fn a_branch_jump_inside_a_segment_is_not_fed() {
     let m = Machine::builtin("fadal-lamp", &[]).expect("machine");
