@@ -680,6 +680,14 @@ enum Command {
         /// deposit or machine (chooses the default head).
         #[arg(long, default_value = "deposit")]
         process: String,
+        /// The work offset the program was posted with (`post --work-offset`, e.g. E1 or
+        /// G55): every move must be in it. Without it the program may select none.
+        #[arg(long)]
+        work_offset: Option<String>,
+        /// The tool length offset register it was posted with (`post --length-offset`):
+        /// every move must have it. Without it the program may apply none.
+        #[arg(long)]
+        length_offset: Option<u32>,
         /// Override a machine parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
@@ -965,6 +973,8 @@ fn run(cli: Cli) -> Result<(), CliError> {
             place,
             head,
             process,
+            work_offset,
+            length_offset,
             set,
             tolerance,
             input,
@@ -973,6 +983,12 @@ fn run(cli: Cli) -> Result<(), CliError> {
             view,
         } => {
             if let Some(arm) = robot_cmds::arm_for(&machine)? {
+                if work_offset.is_some() || length_offset.is_some() {
+                    return Err(CliError::usage(format!(
+                        "error: --work-offset and --length-offset are for table machines' programs; {} is an arm\n",
+                        arm.name
+                    )));
+                }
                 if preview.is_some() {
                     return Err(CliError::usage(format!(
                         "error: --preview draws table machines' programs; {} is an arm\n",
@@ -1018,6 +1034,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 &place,
                 head.as_deref(),
                 &process,
+                &lampost_post::Offsets {
+                    work: work_offset,
+                    length: length_offset,
+                },
                 input.as_deref(),
                 &posted,
                 tolerance,

@@ -43,8 +43,8 @@ fn post(name: &str, args: &[&str], src: &str) -> (bool, String) {
 fn path_changing_codes_warn_and_the_post_refuses_their_line() {
     let cases = [
         ("G31 Z-1 F10", "G31"), // Fanuc/Mach3 skip after a G0
-        ("G54.1 P1 G0 X2", "G54.1"),
-        ("G154 P3", "G154"),
+        ("G54.1 P0 G0 X2", "G54.1"),
+        ("G154 P100", "G154"),
         ("G43.4 H1", "G43.4"),
         ("G68.2 X0 Y0 Z0 I0 J45 K0", "G68.2"),
         ("G12 I1 D1 F10", "G12"),
@@ -66,6 +66,20 @@ fn path_changing_codes_warn_and_the_post_refuses_their_line() {
         let (ok, err) = post("path", &[], &src);
         assert!(!ok, "{line}: posted");
         assert!(err.contains("path.nc:4:"), "{line}: {err}");
+    }
+    // An extended work offset is selected as G55 is: no warning, and after the first
+    // move the post refuses the first move in it as in another work offset (its values
+    // are the control's).
+    for (line, at) in [("G54.1 P1 G0 X2", 4), ("G154 P3", 5)] {
+        let src = format!("G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z1 F100\n{line}\nG1 X10 F100\nM30\n");
+        let (ok, err) = check(&[], &src);
+        assert!(ok && !err.contains("warning:"), "{line}: {err}");
+        let (ok, err) = post("path", &[], &src);
+        assert!(!ok, "{line}: posted");
+        assert!(
+            err.contains(&format!("path.nc:{at}:")) && err.contains("another work offset"),
+            "{line}: {err}"
+        );
     }
     // A Fanuc macro call: where macros are not evaluated (`--flavor fadal`) warned and
     // refused by the post; under Macro B (`fanuc`, `haas`, and `auto`, which G65 decides)

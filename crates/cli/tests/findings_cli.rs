@@ -243,8 +243,9 @@ fn shopbot_opensbp_is_named() {
     assert!(!e.contains("has no number"), "{e}");
 }
 
-/// Haas's additional work offsets G110–G129 (G154 P1–P20) are warned as G154 is under
-/// `--flavor haas`, where G110 was "unknown G-code"; G112 (a Haas lathe's XC
+/// Haas's additional work offsets G110–G129 (G154 P1–P20) are selected as G154 is under
+/// `--flavor haas` (a work offset like G55, with no warning), where G110 was "unknown
+/// G-code"; G154 with a P that names no offset is warned of; G112 (a Haas lathe's XC
 /// interpolation) stays unknown.
 #[test]
 fn haas_g110_to_g129_are_work_offsets() {
@@ -252,8 +253,16 @@ fn haas_g110_to_g129_are_work_offsets() {
     let o = lampost(&["check", "--flavor", "haas", path.to_str().expect("utf8")]);
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
+    assert!(!e.contains("G110") && !e.contains(":4:1"), "{e}");
+    let dir = tempdir("findings-g154");
+    let p = dir.join("g154.nc");
+    std::fs::write(&p, "G20 G90\nG154 P7\nG0 X1. Y1.\nG154 P100\nM30\n").expect("write");
+    let o = lampost(&["check", "--flavor", "haas", p.to_str().expect("utf8")]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(!e.contains(":2:1"), "{e}");
     assert!(
-        e.contains("G110 (an extended work offset") && e.contains(":4:1"),
+        e.contains("G154 P100 (no extended work offset") && e.contains(":4:1"),
         "{e}"
     );
     let dir = tempdir("findings-g112");

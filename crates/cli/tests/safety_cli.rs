@@ -967,9 +967,13 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
     check(
         "G43 H5 mid-program",
         &after(on, "G43 H5"),
-        "tool length offset changes",
+        "a move with tool length offset H5, and the program was posted with none",
     );
-    check("E2 mid-program", &after(on, "E2"), "work offset changes");
+    check(
+        "E2 mid-program",
+        &after(on, "E2"),
+        "a move in work offset E2, and the program was posted with none",
+    );
     check(
         "G53 plunge",
         &after(at("M72"), "G53 G0 Z-5."),
@@ -1334,5 +1338,178 @@ fn a_per_point_move_back_along_the_path_fails_verify() {
         !o.status.success() && stderr(&o).contains("goes back along the path"),
         "two pieces swapped: {}",
         stderr(&o)
+    );
+}
+
+/// The work offset and tool length offset place a program on the table: a program moved
+/// onto another work offset runs elsewhere, whatever its moves say. `verify` holds the
+/// posted text to the offsets it was posted with (`--work-offset`, `--length-offset`, as
+/// `post` takes them): a program posted with G55 and H2 passes only when told so; one
+/// edited to G56, to select `G54` or `E3` where none was posted, or to apply `G43 H4`,
+/// fails at that line; `G54.1 P3` (an extended offset) is read as one. The per-point post
+/// checks its own output the same way.
+#[test]
+fn verify_holds_the_program_to_the_offsets_it_was_posted_with() {
+    let dir = tempdir("safety-offsets");
+    let post = |name: &str, extra: &[&str]| -> String {
+        let out = dir.join(name);
+        let mut args = vec![
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--process",
+            "machine",
+            "--index",
+            "A=0,B=-20",
+            "--origin",
+            "0,0,1",
+        ];
+        args.extend_from_slice(extra);
+        let input = fx("issue11-patch.nc");
+        let o_path = out.to_string_lossy().into_owned();
+        args.extend_from_slice(&[input.as_str(), "-o", o_path.as_str()]);
+        let o = lampost(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(&out).expect("posted")
+    };
+    let check = |text: &str, extra: &[&str]| -> std::process::Output {
+        let p = write(&dir, "check.nc", text);
+        let input = fx("issue11-patch.nc");
+        let mut args = vec![
+            "verify",
+            "--machine",
+            "fadal-lamp",
+            "--process",
+            "machine",
+            "--index",
+            "A=0,B=-20",
+            "--origin",
+            "0,0,1",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[input.as_str(), p.as_str()]);
+        lampost(&args)
+    };
+    let fails_at = |o: &std::process::Output, what: &str| {
+        let e = stderr(o);
+        assert!(!o.status.success(), "passed, expected `{what}`");
+        assert!(e.contains(what), "expected `{what}`:\n{e}");
+    };
+    let g55 = post("g55.nc", &["--work-offset", "G55", "--length-offset", "2"]);
+    assert!(g55.contains("G55") && g55.contains("G43 H2"), "{g55}");
+    let told = ["--work-offset", "G55", "--length-offset", "2"];
+    let o = check(&g55, &told);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line = |text: &str, code: &str| {
+        1 + text
+            .lines()
+            .position(|l| l.starts_with(code))
+            .expect("the code")
+    };
+    fails_at(
+        &check(&g55, &[]),
+        &format!(
+            "posted line {}: G55 selects a work offset, and the program was posted with none",
+            line(&g55, "G55")
+        ),
+    );
+    fails_at(
+        &check(&g55, &["--work-offset", "G56", "--length-offset", "2"]),
+        "a move in work offset G55, and the program was posted for G56",
+    );
+    fails_at(
+        &check(&g55, &["--work-offset", "G55"]),
+        "a move with tool length offset H2, and the program was posted with none",
+    );
+    fails_at(
+        &check(&g55.replacen("G55", "G56", 1), &told),
+        "a move in work offset G56, and the program was posted for G55",
+    );
+    fails_at(
+        &check(&g55.replacen("G43 H2", "G43 H5", 1), &told),
+        "a move with tool length offset H5, and the program was posted with H2",
+    );
+    // Posted with no offsets: selecting one, even G54, or applying a length offset fails.
+    let none = post("none.nc", &[]);
+    let o = check(&none, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let at = line(&none, "S3000");
+    let with = |extra: &str| {
+        let mut l: Vec<&str> = none.lines().collect();
+        l.insert(at, extra);
+        l.join("\n") + "\n"
+    };
+    fails_at(
+        &check(&with("G54"), &[]),
+        &format!("posted line {}: G54 selects a work offset", at + 1),
+    );
+    fails_at(&check(&with("E3"), &[]), "a move in work offset E3");
+    fails_at(
+        &check(&with("G43 H4"), &[]),
+        "a move with tool length offset H4, and the program was posted with none",
+    );
+    // An extended work offset is one: P3 passes as P3, not as P4.
+    let ext = post("ext.nc", &["--work-offset", "G54.1 P3"]);
+    let o = check(&ext, &["--work-offset", "G54.1 P3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails_at(
+        &check(&ext, &["--work-offset", "G54.1 P4"]),
+        "a move in work offset G54.1 P3, and the program was posted for G54.1 P4",
+    );
+    fails_at(
+        &check(&ext, &["--work-offset", "G54.1 P0"]),
+        "--work-offset `G54.1 P0`",
+    );
+    // The per-point post: posted with G55 and H3, verified with them, not without.
+    let out = dir.join("pp.nc");
+    let pp_args = |extra: &[&str]| -> Vec<String> {
+        let mut a: Vec<String> = [
+            "--machine",
+            "fadal-lamp",
+            "--head",
+            "spindle",
+            "--process",
+            "machine",
+            "--origin",
+            "0,0,0.5",
+        ]
+        .map(String::from)
+        .to_vec();
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let mut a = vec!["post".to_string()];
+    a.extend(pp_args(&["--work-offset", "G55", "--length-offset", "3"]));
+    a.extend([
+        fx("tilted-arc.csv"),
+        "-o".into(),
+        out.to_string_lossy().into(),
+    ]);
+    let o = lampost(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (extra, ok) in [
+        (&["--work-offset", "G55", "--length-offset", "3"][..], true),
+        (&[][..], false),
+    ] {
+        let mut a = vec!["verify".to_string()];
+        a.extend(pp_args(extra));
+        a.extend([fx("tilted-arc.csv"), out.to_string_lossy().into()]);
+        let o = lampost(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert_eq!(o.status.success(), ok, "{extra:?}: {}", stderr(&o));
+    }
+    // An arm's program has no offsets to hold.
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "puma-lens",
+        "--work-offset",
+        "G55",
+        dir.to_string_lossy().as_ref(),
+        "--input",
+        &fx("tilted-arc.csv"),
+    ]);
+    fails_at(
+        &o,
+        "--work-offset and --length-offset are for table machines",
     );
 }

@@ -549,6 +549,8 @@ impl Interpreter {
         let base = match self.modal.work_offset {
             WorkOffset::G5x(i) => self.g5x[usize::from(i)],
             WorkOffset::Fixture(i) => self.fixture[usize::from(i)],
+            // Set on the control only: program coordinates.
+            WorkOffset::Extended(_) => [0.0; 9],
         };
         let mut o = [0.0; 9];
         for a in 0..9 {
@@ -1121,10 +1123,28 @@ impl Interpreter {
                 Some(OtherCode::Unsimulated(what)) => {
                     ErrorKind::NotSimulated(format!("{name} ({what})"))
                 }
-                Some(OtherCode::ExtendedOffset) => ErrorKind::NotSimulated(format!(
-                    "{} (an extended work offset set on the machine; the trace stays in the active work system)",
-                    with_p()
-                )),
+                Some(OtherCode::ExtendedOffset) => {
+                    // Selected as G55 is (its values live on the control); a P that
+                    // names none is warned of, the work system left as it was.
+                    let p = w.word(b'P').map(|p| p.value);
+                    let linuxcnc = self.opts.flavor == crate::flavor::Flavor::LinuxCnc;
+                    match crate::modal::extended_offset(c, p) {
+                        Some(n) if !linuxcnc => {
+                            self.modal.work_offset = WorkOffset::Extended(n);
+                            self.refresh_offset();
+                            continue;
+                        }
+                        _ => ErrorKind::NotSimulated(format!(
+                            "{} ({}; the trace stays in the active work system)",
+                            with_p(),
+                            if linuxcnc {
+                                "LinuxCNC has no extended work offsets"
+                            } else {
+                                "no extended work offset: G54.1 takes P1 to P300, G154 P1 to P99"
+                            }
+                        )),
+                    }
+                }
                 Some(OtherCode::DiameterMode) => ErrorKind::NotSimulated(format!(
                     "{name} (lathe diameter mode; X is traced as a radius)"
                 )),
@@ -2160,7 +2180,7 @@ impl Interpreter {
         let idx = if p == 0.0 {
             match self.modal.work_offset {
                 WorkOffset::G5x(i) => usize::from(i),
-                WorkOffset::Fixture(_) => 1,
+                WorkOffset::Fixture(_) | WorkOffset::Extended(_) => 1,
             }
         } else {
             p as usize

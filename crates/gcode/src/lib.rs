@@ -57,7 +57,7 @@ pub use interp::{
     ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE,
 };
 pub use lines::{Line, LineReader, Lines, CHECKED_CHUNK, MAX_NUL_RUN};
-pub use modal::{FeedMode, Modal, Plane, Position, Spindle, Units, AXES};
+pub use modal::{FeedMode, Modal, Plane, Position, Spindle, Units, WorkOffset, AXES};
 pub use ngc::MAX_BLOCKS;
 pub use parse::{
     comment_not_utf8, comments_made_utf8, parse_line, parse_line_into, parse_line_lenient,

@@ -145,6 +145,10 @@ pub enum WorkOffset {
     G5x(u8),
     /// FADAL fixture offset E1 … E48 (E0: none).
     Fixture(u8),
+    /// An extended work offset: Fanuc `G54.1 P1`–`P300`, Haas `G154 P1`–`P99` (and its
+    /// `G110`–`G129`, which are `G154 P1`–`P20`). Its values live on the control: a
+    /// trace stays in program coordinates, as it does for G55.
+    Extended(u16),
 }
 
 /// The modal state that goes with each move.
@@ -363,7 +367,8 @@ pub enum OtherCode {
     Spline,
     /// LinuxCNC `G5.2` (NURBS start) and `G5.3` (end).
     Nurbs(bool),
-    /// An extended work offset (Fanuc `G54.1 P…`, Haas `G154 P…`): set on the machine.
+    /// An extended work offset (Fanuc `G54.1 P…`, Haas `G154 P…`, `G110`–`G129`):
+    /// selected as [`WorkOffset::Extended`] when its number is one ([`extended_offset`]).
     ExtendedOffset,
     /// LinuxCNC lathe diameter mode `G7`: X words are diameters.
     DiameterMode,
@@ -390,6 +395,22 @@ pub fn haas_pattern(code: u16) -> Option<&'static str> {
 /// lathe's XY-to-XC interpolation), which stay unknown.
 pub fn haas_work_offset(code: u16) -> bool {
     code % 10 == 0 && matches!(code, 1100 | 1110 | 1140..=1290)
+}
+
+/// The extended work offset a block selects with code `code` (in tenths) and P word `p`:
+/// `G54.1 P1`–`P300` (Fanuc), `G154 P1`–`P99` (Haas), Haas `G110`–`G129` (`G154 P1`–`P20`,
+/// no P); `None` for a P that is no such number.
+pub fn extended_offset(code: u16, p: Option<f64>) -> Option<u16> {
+    let whole = |hi: f64| {
+        p.filter(|p| p.fract() == 0.0 && (1.0..=hi).contains(p))
+            .map(|p| p as u16)
+    };
+    match code {
+        541 => whole(300.0),
+        1540 => whole(99.0),
+        c if haas_work_offset(c) => Some(c / 10 - 109),
+        _ => None,
+    }
 }
 
 /// What a code of [`GGroup::Other`] is (`None` for any other code).

@@ -758,11 +758,13 @@ fn nearest_miss(
 /// Replay a posted program and compare every feed point with the path of `points`
 /// (placed by `frame`): tip on the current segment (or at its end), tool axis on the
 /// interpolated axis.
+#[allow(clippy::too_many_arguments)]
 pub fn verify_points<R: BufRead>(
     machine: &Machine,
     points: &[PathPoint],
     frame: &Frame,
     head: usize,
+    offsets: &crate::verify::Offsets,
     posted: R,
     tolerance: f64,
     work_extra: Option<&WorkBounds>,
@@ -772,6 +774,7 @@ pub fn verify_points<R: BufRead>(
         points,
         frame,
         head,
+        offsets,
         posted,
         tolerance,
         work_extra,
@@ -787,6 +790,7 @@ pub fn verify_points_traced<R: BufRead>(
     points: &[PathPoint],
     frame: &Frame,
     head: usize,
+    offsets: &crate::verify::Offsets,
     posted: R,
     tolerance: f64,
     work_extra: Option<&WorkBounds>,
@@ -818,9 +822,9 @@ pub fn verify_points_traced<R: BufRead>(
     // Each reading carries the least fraction of its segment the tool can have come to
     // so far: moves go forward along the path (each within the tolerance), never back.
     let mut live: Vec<(usize, f64)> = vec![(0, 0.0)];
-    let screen = crate::verify::Screen::new(machine)?;
+    let screen = crate::verify::Screen::new(machine, offsets)?;
     let mut stream = screen.stream(posted, units);
-    let mut rules = crate::verify::PostedRules::new(machine.units, true);
+    let mut rules = crate::verify::PostedRules::new(machine.units, true, offsets)?;
     for ev in stream.by_ref() {
         let ev = ev.map_err(|e| PostError::Io(e.to_string()))?;
         screen.check()?;

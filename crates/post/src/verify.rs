@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use lampost_gcode::{
     Diagnostic, ErrorKind, Event, Line, LineReader, LineSource, Modal, Move, MoveKind, Options,
-    Origin, Plane, Severity, Stream, Units, AXES,
+    Origin, Plane, Severity, Stream, Units, WorkOffset, AXES,
 };
 use lampost_kinematics::{Joints, Machine, Units as MUnits};
 use nalgebra::Vector3;
@@ -16,6 +16,67 @@ use nalgebra::Vector3;
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
 use crate::safety::WorkBounds;
+
+/// The codes that place a program on the machine, as it was posted with them (`post
+/// --work-offset`, `--length-offset`, which `verify` takes too): the posted text is held
+/// to them. Without a work offset the post selects none (the control's active one places
+/// the program) and the text may select none; without a length offset it applies none.
+/// A program moved onto another work offset runs somewhere else on the table, whatever
+/// its moves say.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Offsets {
+    /// The work offset as `post --work-offset` takes it: `G54`–`G59.3`, `G54.1 P1`–`P300`,
+    /// a FADAL fixture offset `E0`–`E48`.
+    pub work: Option<String>,
+    /// The tool length offset register (`G43 H…`).
+    pub length: Option<u32>,
+}
+
+impl Offsets {
+    /// The offsets `process` posts: a machining process's options; none for deposition.
+    pub fn of(process: &crate::Process) -> Offsets {
+        match process {
+            crate::Process::Machine {
+                length_offset,
+                work_offset,
+                ..
+            } => Offsets {
+                work: work_offset.clone(),
+                length: *length_offset,
+            },
+            crate::Process::Deposit { .. } => Offsets::default(),
+        }
+    }
+
+    /// The work offset every move must be read in (the reader's G54 where none is
+    /// posted: then none may be selected, [`Screen`]), refused as the post refuses it.
+    fn work_offset(&self) -> Result<WorkOffset, PostError> {
+        let Some(text) = &self.work else {
+            return Ok(Modal::new(Units::Mm).work_offset);
+        };
+        Ok(match crate::writer::work_offset_words(text)?.as_slice() {
+            [(b'E', e)] => WorkOffset::Fixture(*e as u8),
+            [(b'G', _), (b'P', p)] => WorkOffset::Extended(*p as u16),
+            [(b'G', g)] => WorkOffset::G5x(match (g * 10.0).round() as u16 {
+                591 => 7,
+                592 => 8,
+                593 => 9,
+                c => (c / 10 - 53) as u8,
+            }),
+            _ => return Err(PostError::Options(format!("--work-offset `{text}`"))),
+        })
+    }
+}
+
+/// A work offset as a program selects it.
+fn offset_name(w: WorkOffset) -> String {
+    match w {
+        WorkOffset::G5x(i @ 1..=6) => format!("G{}", 53 + u32::from(i)),
+        WorkOffset::G5x(i) => format!("G59.{}", i.saturating_sub(6)),
+        WorkOffset::Fixture(e) => format!("E{e}"),
+        WorkOffset::Extended(p) => format!("G54.1 P{p}"),
+    }
+}
 
 /// What a verification found.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -211,6 +272,7 @@ pub fn verify<R: BufRead>(
     machine: &Machine,
     sections: &[Section],
     head: usize,
+    offsets: &Offsets,
     opts: IntendedOptions,
     posted: R,
     tolerance: f64,
@@ -221,6 +283,7 @@ pub fn verify<R: BufRead>(
         machine,
         sections,
         head,
+        offsets,
         opts,
         posted,
         tolerance,
@@ -279,6 +342,7 @@ pub fn verify_traced<R: BufRead>(
     machine: &Machine,
     sections: &[Section],
     head: usize,
+    offsets: &Offsets,
     opts: IntendedOptions,
     posted: R,
     tolerance: f64,
@@ -491,9 +555,9 @@ pub fn verify_traced<R: BufRead>(
         }
         Ok(())
     };
-    let screen = Screen::new(machine)?;
+    let screen = Screen::new(machine, offsets)?;
     let mut stream = screen.stream(posted, units);
-    let mut rules = PostedRules::new(machine.units, false);
+    let mut rules = PostedRules::new(machine.units, false, offsets)?;
     // The last move was travel (the next feed must come onto a start).
     let mut after_travel = true;
     for ev in stream.by_ref() {
@@ -692,11 +756,14 @@ pub(crate) struct Screen {
     codes: Rc<LaserCodes>,
 }
 
-/// The words of the machine's laser codes.
+/// The words of the machine's laser codes, and whether the program was posted without a
+/// work offset (then a line selecting one, `G54` included, is refused: the reader's
+/// moves would not show it).
 #[derive(Default)]
 pub(crate) struct LaserCodes {
     on: Vec<(u8, f64)>,
     off: Vec<(u8, f64)>,
+    no_work_offset: bool,
 }
 
 struct Screened<R> {
@@ -708,12 +775,14 @@ struct Screened<R> {
 }
 
 impl Screen {
-    /// A screen that also follows `machine`'s laser codes.
-    pub(crate) fn new(machine: &Machine) -> Result<Screen, PostError> {
+    /// A screen that also follows `machine`'s laser codes, for a program posted with
+    /// `offsets`.
+    pub(crate) fn new(machine: &Machine, offsets: &Offsets) -> Result<Screen, PostError> {
         Ok(Screen {
             codes: Rc::new(LaserCodes {
                 on: crate::post::code_words(&machine.def.process.laser_on)?,
                 off: crate::post::code_words(&machine.def.process.laser_off)?,
+                no_work_offset: offsets.work.is_none(),
             }),
             ..Screen::default()
         })
@@ -756,6 +825,11 @@ impl Screen {
             Some((line, LASER_STOP)) => Err(PostError::Verify(format!(
                 "posted line {line}: a program stop (M0, M1 or M60) with the laser on: it stays on over one spot while the program waits; the post turns it off first"
             ))),
+            Some((line, code)) if selects_work_offset(code) => Err(PostError::Verify(format!(
+                "posted line {line}: G{}{} selects a work offset, and the program was posted with none (the control's active one places it; give verify the post's --work-offset)",
+                code / 10,
+                if code % 10 == 0 { String::new() } else { format!(".{}", code % 10) },
+            ))),
             Some((line, code)) => Err(PostError::Verify(format!(
                 "posted line {line}: G{}{} {}; the post writes no such code, and the moves verify reads would not be where the control runs them",
                 code / 10,
@@ -792,6 +866,11 @@ fn frame_code(code: u16) -> Option<&'static str> {
         440..=449 => Some("applies a tool length offset the other way"),
         _ => None,
     }
+}
+
+/// Whether a G-code (in tenths) selects a work offset: `G54`–`G59.3`, `G54.1`, `G154`.
+fn selects_work_offset(code: u16) -> bool {
+    matches!(code, 540 | 541 | 550 | 560 | 570 | 580 | 590..=593 | 1540)
 }
 
 /// The code [`Screen`] keeps for a block-delete line (`/…`).
@@ -842,7 +921,11 @@ fn screen_line(
         .words()
         .filter(|w| w.letter == b'G')
         .filter_map(|w| w.code())
-        .find(|&c| frame_code(c).is_some() || c == DWELL);
+        .find(|&c| {
+            frame_code(c).is_some()
+                || c == DWELL
+                || (codes.no_work_offset && selects_work_offset(c))
+        });
     let ms = || {
         block
             .words()
@@ -882,25 +965,35 @@ impl<R: BufRead> LineSource for Screened<R> {
 /// `G28`/`G30` or canned cycle, whose machine positions the reader cannot know), in the
 /// machine's units, without cutter compensation, arcs in the XY plane (the plane of the
 /// joints verify replays), feeds per minute (or inverse time on a per-point path), and
-/// the work offset and tool length offset of the first move throughout. In a planar
+/// the work offset and tool length offset it was posted with ([`Offsets`]). In a planar
 /// program no feed turns the table (the post turns it only in rapids, at a height safe
 /// over the sweep).
 pub(crate) struct PostedRules {
     units: Units,
     per_point: bool,
-    first: Option<Modal>,
+    /// The work offset and the tool length offset every move is read in.
+    work_offset: WorkOffset,
+    tool_length: Option<u32>,
+    /// Where none was posted, the tool length offset named for the message.
+    offsets: Offsets,
 }
 
 impl PostedRules {
-    pub(crate) fn new(units: lampost_kinematics::Units, per_point: bool) -> Self {
-        PostedRules {
+    pub(crate) fn new(
+        units: lampost_kinematics::Units,
+        per_point: bool,
+        offsets: &Offsets,
+    ) -> Result<Self, PostError> {
+        Ok(PostedRules {
             units: match units {
                 lampost_kinematics::Units::Inch => Units::Inch,
                 lampost_kinematics::Units::Mm => Units::Mm,
             },
             per_point,
-            first: None,
-        }
+            work_offset: offsets.work_offset()?,
+            tool_length: offsets.length,
+            offsets: offsets.clone(),
+        })
     }
 
     pub(crate) fn check(&mut self, m: &Move, rot_idx: &[usize]) -> Result<(), PostError> {
@@ -942,15 +1035,26 @@ impl PostedRules {
         if feed && !self.per_point && rot_idx.iter().any(|&r| m.start[r] != m.end[r]) {
             return fail("a feed turns the table: the post turns it only in rapids, at a height safe over the whole sweep");
         }
-        match &self.first {
-            None => self.first = Some(*md),
-            Some(f) if f.work_offset != md.work_offset => {
-                return fail("the work offset changes (G54…/FADAL E…): the program is placed on the first one")
-            }
-            Some(f) if f.tool_length != md.tool_length => {
-                return fail("the tool length offset changes (G43 H…/G49): the program is placed on the first one")
-            }
-            Some(_) => {}
+        if md.work_offset != self.work_offset {
+            let posted = match &self.offsets.work {
+                Some(w) => format!("for {w} (verify --work-offset {w})"),
+                None => {
+                    "with none (the control's active one places it; verify --work-offset names one)"
+                        .to_string()
+                }
+            };
+            return fail(&format!(
+                "a move in work offset {}, and the program was posted {posted}: it would run elsewhere on the table",
+                offset_name(md.work_offset),
+            ));
+        }
+        if md.tool_length != self.tool_length {
+            let h = |h: Option<u32>| h.map_or("none".to_string(), |h| format!("H{h}"));
+            return fail(&format!(
+                "a move with tool length offset {}, and the program was posted with {} (verify --length-offset): the tool would stand off by the difference",
+                h(md.tool_length),
+                h(self.tool_length)
+            ));
         }
         Ok(())
     }

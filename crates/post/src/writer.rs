@@ -842,7 +842,7 @@ fn at_line(e: std::io::Error, file: &str, line: u32) -> PostError {
 
 /// A work offset as words: `G54`–`G59.3`, `G54.1 Pn` or a FADAL fixture offset `E0`–`E48`;
 /// anything else (a motion word, say) is refused.
-fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
+pub(crate) fn work_offset_words(text: &str) -> Result<Vec<(u8, f64)>, PostError> {
     let bad = || {
         PostError::Options(format!(
             "--work-offset `{text}`: give one of G54 to G59.3, G54.1 P1 to P300, or a FADAL fixture offset E0 to E48"
