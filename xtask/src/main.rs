@@ -396,13 +396,7 @@ impl RobotSplit {
 fn bench_robot() -> Result<(), String> {
     println!("== paper 001's twisted plate at full size (600 x 200 mm), planned and posted for puma-lens in this process (slicing, plan, resampling, poses, chunks of {ROBOT_CHUNK}, location text, in-process verification; no files)");
     let mesh = lampost_plan::demo::twisted_plate(1.0, 3.0, 120, 20).ok_or("plate")?;
-    let only = std::env::var("TMP_ONLY").is_ok();
-    let sched: &[(f64, usize)] = if only {
-        &[(2.0, 5)]
-    } else {
-        &[(20.0, 5), (2.0, 1)]
-    };
-    for &(layer, runs) in sched {
+    for (layer, runs) in [(20.0, 5), (2.0, 1)] {
         let mut wall = Duration::MAX;
         let c0 = crate::plan::cpu_seconds();
         let mut last = None;
@@ -423,9 +417,6 @@ fn bench_robot() -> Result<(), String> {
             cpu * 1e6 / locations.max(1) as f64
         );
         println!("  {}", split.show(runs));
-    }
-    if only {
-        return Ok(());
     }
     println!("\n== lampost post/verify --machine puma-lens (the binary, files written) on the plate planned at --layer 20 (and plan then post at --layer 2), against the Robotics Toolbox's ikine_a on the same poses, same run");
     let mut c = cargo();
