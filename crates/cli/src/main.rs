@@ -677,17 +677,11 @@ enum Command {
         /// Head (default: laser for deposit, spindle for machine).
         #[arg(long)]
         head: Option<String>,
-        /// deposit or machine (chooses the default head).
-        #[arg(long, default_value = "deposit")]
-        process: String,
-        /// The work offset the program was posted with (`post --work-offset`, e.g. E1 or
-        /// G55): every move must be in it. Without it the program may select none.
-        #[arg(long)]
-        work_offset: Option<String>,
-        /// The tool length offset register it was posted with (`post --length-offset`):
-        /// every move must have it. Without it the program may apply none.
-        #[arg(long)]
-        length_offset: Option<u32>,
+        /// The process options the program was posted with, as `post` takes them (the
+        /// process chooses the default head): every move must be in its work offset,
+        /// under its length offset and tool, at its laser power or spindle speed.
+        #[command(flatten)]
+        proc: post_cmds::ProcessArgs,
         /// Override a machine parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
@@ -972,9 +966,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
             machine,
             place,
             head,
-            process,
-            work_offset,
-            length_offset,
+            proc,
             set,
             tolerance,
             input,
@@ -983,9 +975,9 @@ fn run(cli: Cli) -> Result<(), CliError> {
             view,
         } => {
             if let Some(arm) = robot_cmds::arm_for(&machine)? {
-                if work_offset.is_some() || length_offset.is_some() {
+                if let Some(flag) = proc.machining_options().first() {
                     return Err(CliError::usage(format!(
-                        "error: --work-offset and --length-offset are for table machines' programs; {} is an arm\n",
+                        "error: {flag} is for table machines' programs; {} is an arm\n",
                         arm.name
                     )));
                 }
@@ -1033,11 +1025,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
                 &set,
                 &place,
                 head.as_deref(),
-                &process,
-                &lampost_post::Offsets {
-                    work: work_offset,
-                    length: length_offset,
-                },
+                &proc,
                 input.as_deref(),
                 &posted,
                 tolerance,

@@ -578,32 +578,13 @@ pub fn sections(
     }])
 }
 
-/// Options of `lampost post`.
+/// The process options: what `post` writes, and what `verify` holds the posted text to
+/// (the same flags for both).
 #[derive(clap::Args, Debug, Clone)]
-pub struct PostArgs {
-    /// Built-in machine name or machine file.
-    #[arg(long)]
-    pub machine: String,
-    /// Also draw the posted program (part frame, one colour per index, rapids dashed, the travel at each index) as SVG into this file; needs -o.
-    #[arg(long, value_name = "FILE.svg")]
-    pub preview: Option<String>,
-    /// The preview's view: top (part XY) or iso.
-    #[arg(long, default_value = "top", value_name = "top|iso")]
-    pub view: String,
-    #[command(flatten)]
-    pub place: Placement,
-    /// Head: laser, spindle, … (default: laser for deposit, spindle/probe for machine).
-    #[arg(long)]
-    pub head: Option<String>,
+pub struct ProcessArgs {
     /// deposit or machine.
     #[arg(long, default_value = "deposit")]
     pub process: String,
-    /// fadal, iso or nrc (default: fadal for an inch machine, nrc for nrc-lc, else iso).
-    #[arg(long)]
-    pub dialect: Option<String>,
-    /// Override a machine parameter (repeatable).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
     /// Laser power for deposition.
     #[arg(long, default_value_t = 1000.0)]
     pub power: f64,
@@ -622,6 +603,65 @@ pub struct PostArgs {
     /// Machining: coolant on.
     #[arg(long)]
     pub coolant: bool,
+}
+
+impl ProcessArgs {
+    /// The library's process from the flags.
+    pub fn to_process(&self) -> Result<Process, CliError> {
+        match self.process.as_str() {
+            "deposit" => Ok(Process::Deposit { power: self.power }),
+            "machine" => Ok(Process::Machine {
+                tool: self.tool,
+                length_offset: self.length_offset,
+                work_offset: self.work_offset.clone(),
+                spindle: self.spindle,
+                coolant: self.coolant,
+            }),
+            other => Err(CliError::usage(format!(
+                "error: --process {other}: use deposit or machine\n"
+            ))),
+        }
+    }
+
+    /// Whether a machining option is given (an arm's post has none).
+    pub fn machining_options(&self) -> Vec<&'static str> {
+        [
+            (self.tool.is_some(), "--tool"),
+            (self.length_offset.is_some(), "--length-offset"),
+            (self.work_offset.is_some(), "--work-offset"),
+            (self.coolant, "--coolant"),
+        ]
+        .into_iter()
+        .filter_map(|(given, flag)| given.then_some(flag))
+        .collect()
+    }
+}
+
+/// Options of `lampost post`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PostArgs {
+    /// Built-in machine name or machine file.
+    #[arg(long)]
+    pub machine: String,
+    /// Also draw the posted program (part frame, one colour per index, rapids dashed, the travel at each index) as SVG into this file; needs -o.
+    #[arg(long, value_name = "FILE.svg")]
+    pub preview: Option<String>,
+    /// The preview's view: top (part XY) or iso.
+    #[arg(long, default_value = "top", value_name = "top|iso")]
+    pub view: String,
+    #[command(flatten)]
+    pub place: Placement,
+    /// Head: laser, spindle, … (default: laser for deposit, spindle/probe for machine).
+    #[arg(long)]
+    pub head: Option<String>,
+    #[command(flatten)]
+    pub proc: ProcessArgs,
+    /// fadal, iso or nrc (default: fadal for an inch machine, nrc for nrc-lc, else iso).
+    #[arg(long)]
+    pub dialect: Option<String>,
+    /// Override a machine parameter (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
     /// Chord tolerance for linearised arcs (default 0.0005 in / 0.01 mm).
     #[arg(long)]
     pub tolerance: Option<f64>,
@@ -657,21 +697,7 @@ fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
 /// The post configuration from the options.
 pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostConfig, CliError> {
     let part = part_mesh(&a.place, m)?;
-    let process = match a.process.as_str() {
-        "deposit" => Process::Deposit { power: a.power },
-        "machine" => Process::Machine {
-            tool: a.tool,
-            length_offset: a.length_offset,
-            work_offset: a.work_offset.clone(),
-            spindle: a.spindle,
-            coolant: a.coolant,
-        },
-        other => {
-            return Err(CliError::usage(format!(
-                "error: --process {other}: use deposit or machine\n"
-            )))
-        }
-    };
+    let process = a.proc.to_process()?;
     // The library's defaults (head, dialect, tolerances), then what the flags say.
     let defaults = PostConfig::new(m, process.clone());
     let head = match a.head.as_deref() {
@@ -710,7 +736,7 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         .transpose()?;
     let near = crate::kin_cmds::near_rotary(m, a.place.near.as_deref())?;
     let mut header = defaults.header.clone();
-    header.push(format!("head {head_name}, process {}", a.process));
+    header.push(format!("head {head_name}, process {}", a.proc.process));
     for s in sections {
         let f = &s.frame;
         let place = match s.orient {
@@ -846,7 +872,7 @@ pub fn post(
             &pts,
             &frame,
             cfg.head,
-            &lampost_post::Offsets::of(&cfg.process),
+            &cfg.process,
             BufReader::new(posted),
             cfg.verify_tolerance,
             cfg.work.as_ref(),
@@ -962,9 +988,9 @@ pub fn post(
     if let Some(svg) = &a.preview {
         // Drawn from the program as written (read back as verify reads it); the program
         // stays written whatever happens here.
-        let head_name = default_head(&m, &a.process, a.head.as_deref());
+        let head_name = default_head(&m, &a.proc.process, a.head.as_deref());
         let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
-        preview_files(&m, h, &written, svg, a.process == "deposit", view).map_err(|e| {
+        preview_files(&m, h, &written, svg, a.proc.process == "deposit", view).map_err(|e| {
             CliError::failed(format!(
                 "{}  = note: the program was written ({}); only the preview failed\n",
                 e.message,
@@ -1105,8 +1131,7 @@ pub fn verify(
     sets: &[String],
     place: &Placement,
     head: Option<&str>,
-    process: &str,
-    offsets: &lampost_post::Offsets,
+    proc: &ProcessArgs,
     input: Option<&str>,
     posted: &[String],
     tolerance: Option<f64>,
@@ -1117,7 +1142,8 @@ pub fn verify(
     let t0 = std::time::Instant::now();
     let view = view_arg(view)?;
     let m = load_machine(machine, sets)?;
-    let head_name = default_head(&m, process, head);
+    let process = proc.to_process()?;
+    let head_name = default_head(&m, &proc.process, head);
     let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
     let tol = tolerance.unwrap_or(match m.units {
         lampost_kinematics::Units::Inch => 0.001,
@@ -1145,7 +1171,7 @@ pub fn verify(
             &pts,
             &frame,
             h,
-            offsets,
+            &process,
             f,
             tol,
             extra_work(place, None)?.as_ref(),
@@ -1159,7 +1185,7 @@ pub fn verify(
             &m,
             &secs,
             h,
-            offsets,
+            &process,
             opts,
             f,
             tol,
@@ -1171,7 +1197,16 @@ pub fn verify(
     if let Some(svg) = preview {
         // Drawn whether or not the check passed: a failed check's picture shows how far
         // it got and how close the path was until then.
-        let drawn = deviation_preview(&m, h, posted, svg, process == "deposit", view, &errors, tol);
+        let drawn = deviation_preview(
+            &m,
+            h,
+            posted,
+            svg,
+            proc.process == "deposit",
+            view,
+            &errors,
+            tol,
+        );
         match (&checked, drawn) {
             (_, Ok(())) if !place.quiet => eprintln!("preview: {svg}"),
             (Ok(_), Err(e)) => return Err(e),

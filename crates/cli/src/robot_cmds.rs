@@ -210,12 +210,14 @@ pub fn post(
         (a.dialect.is_some(), "--dialect"),
         (a.renumber.is_some(), "--renumber"),
         (a.tolerance.is_some(), "--tolerance"),
-        (a.tool.is_some(), "--tool"),
-        (a.length_offset.is_some(), "--length-offset"),
-        (a.work_offset.is_some(), "--work-offset"),
-        (a.coolant, "--coolant"),
     ];
-    if let Some((_, flag)) = table_only.iter().find(|(g, _)| *g) {
+    let machining = a.proc.machining_options();
+    let flag = table_only
+        .iter()
+        .find(|(g, _)| *g)
+        .map(|(_, f)| *f)
+        .or(machining.first().copied());
+    if let Some(flag) = flag {
         return Err(CliError::usage(format!(
             "error: {flag} is for programs of table machines; {} is an arm\n  = help: an arm's settings are in its file (`lampost machines show {}`); the arm options are --config, --spacing, --chunk-points\n",
             arm.name, arm.name

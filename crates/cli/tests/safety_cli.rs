@@ -1343,13 +1343,15 @@ fn a_per_point_move_back_along_the_path_fails_verify() {
 
 /// The work offset and tool length offset place a program on the table: a program moved
 /// onto another work offset runs elsewhere, whatever its moves say. `verify` holds the
-/// posted text to the offsets it was posted with (`--work-offset`, `--length-offset`, as
-/// `post` takes them): a program posted with G55 and H2 passes only when told so; one
-/// edited to G56, to select `G54` or `E3` where none was posted, or to apply `G43 H4`,
-/// fails at that line; `G54.1 P3` (an extended offset) is read as one. The per-point post
-/// checks its own output the same way.
+/// posted text to the process options it was posted with (`--work-offset`,
+/// `--length-offset`, `--tool`, `--spindle`, `--power`, as `post` takes them): a program
+/// posted with G55 and H2 passes only when told so; one edited to G56, to select `G54` or
+/// `E3` where none was posted, to apply `G43 H4`, to change tools or the spindle speed,
+/// fails at that line; `G54.1 P3` (an extended offset) is read as one. The laser goes on
+/// at the power posted, and stays at it. The per-point post checks its own output the
+/// same way.
 #[test]
-fn verify_holds_the_program_to_the_offsets_it_was_posted_with() {
+fn verify_holds_the_program_to_the_process_it_was_posted_with() {
     let dir = tempdir("safety-offsets");
     let post = |name: &str, extra: &[&str]| -> String {
         let out = dir.join(name);
@@ -1497,7 +1499,76 @@ fn verify_holds_the_program_to_the_offsets_it_was_posted_with() {
         let o = lampost(&a.iter().map(String::as_str).collect::<Vec<_>>());
         assert_eq!(o.status.success(), ok, "{extra:?}: {}", stderr(&o));
     }
-    // An arm's program has no offsets to hold.
+    // The tool and the spindle speed.
+    let t3 = post("t3.nc", &["--tool", "3", "--spindle", "5000"]);
+    let o = check(&t3, &["--tool", "3", "--spindle", "5000"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails_at(
+        &check(&t3, &["--spindle", "5000"]),
+        "a move with tool T3 in the spindle, and the program was posted with none",
+    );
+    fails_at(
+        &check(&t3, &["--tool", "3"]),
+        "a move with S5000 in force, and the program was posted with the spindle speed S3000",
+    );
+    // The laser's power: on at the power posted, and kept there.
+    let dep = |name: &str, extra: &[&str]| -> String {
+        let out = dir.join(name);
+        let mut args = vec![
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=-20",
+            "--origin",
+            "0,0,1",
+        ];
+        args.extend_from_slice(extra);
+        let input = fx("issue11-patch.nc");
+        let o_path = out.to_string_lossy().into_owned();
+        args.extend_from_slice(&[input.as_str(), "-o", o_path.as_str()]);
+        let o = lampost(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(&out).expect("posted")
+    };
+    let vdep = |text: &str, extra: &[&str]| -> std::process::Output {
+        let p = write(&dir, "dep.nc", text);
+        let input = fx("issue11-patch.nc");
+        let mut args = vec![
+            "verify",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=-20",
+            "--origin",
+            "0,0,1",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[input.as_str(), p.as_str()]);
+        lampost(&args)
+    };
+    let p500 = dep("p500.nc", &["--power", "500"]);
+    let on = line(&p500, "M71 S500");
+    let o = vdep(&p500, &["--power", "500"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails_at(
+        &vdep(&p500, &[]),
+        &format!("posted line {on}: the laser goes on at another power than the program was posted with (S1000"),
+    );
+    fails_at(
+        &vdep(
+            &p500.replacen("M71 S500", "M71 S5000", 1),
+            &["--power", "500"],
+        ),
+        &format!("posted line {on}: the laser goes on at another power"),
+    );
+    let mut l: Vec<&str> = p500.lines().collect();
+    l.insert(on + 2, "S900");
+    fails_at(
+        &vdep(&(l.join("\n") + "\n"), &["--power", "500"]),
+        "a move with S900 in force, and the program was posted with the laser power S500 (verify --power)",
+    );
+    // An arm's program has no machining options to hold.
     let o = lampost(&[
         "verify",
         "--machine",
@@ -1508,8 +1579,5 @@ fn verify_holds_the_program_to_the_offsets_it_was_posted_with() {
         "--input",
         &fx("tilted-arc.csv"),
     ]);
-    fails_at(
-        &o,
-        "--work-offset and --length-offset are for table machines",
-    );
+    fails_at(&o, "--work-offset is for table machines' programs");
 }

@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &m,
         &sections,
         cfg.head,
-        &lampost_post::Offsets::of(&cfg.process),
+        &cfg.process,
         cfg.intended,
         out.as_slice(),
         cfg.verify_tolerance,

@@ -46,4 +46,4 @@ pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source, LASE
 pub use job::{parse as read_job, JobFile, JobSection};
 pub use pipeline::{post, Rewind};
 pub use post::{default_head, PostConfig, PostDialect, PostReport, Process};
-pub use verify::{verify, verify_traced, Offsets, VerifyReport};
+pub use verify::{verify, verify_traced, VerifyReport};

@@ -764,7 +764,7 @@ pub fn verify_points<R: BufRead>(
     points: &[PathPoint],
     frame: &Frame,
     head: usize,
-    offsets: &crate::verify::Offsets,
+    process: &crate::Process,
     posted: R,
     tolerance: f64,
     work_extra: Option<&WorkBounds>,
@@ -774,7 +774,7 @@ pub fn verify_points<R: BufRead>(
         points,
         frame,
         head,
-        offsets,
+        process,
         posted,
         tolerance,
         work_extra,
@@ -790,7 +790,7 @@ pub fn verify_points_traced<R: BufRead>(
     points: &[PathPoint],
     frame: &Frame,
     head: usize,
-    offsets: &crate::verify::Offsets,
+    process: &crate::Process,
     posted: R,
     tolerance: f64,
     work_extra: Option<&WorkBounds>,
@@ -822,9 +822,9 @@ pub fn verify_points_traced<R: BufRead>(
     // Each reading carries the least fraction of its segment the tool can have come to
     // so far: moves go forward along the path (each within the tolerance), never back.
     let mut live: Vec<(usize, f64)> = vec![(0, 0.0)];
-    let screen = crate::verify::Screen::new(machine, offsets)?;
+    let screen = crate::verify::Screen::new(machine, process)?;
     let mut stream = screen.stream(posted, units);
-    let mut rules = crate::verify::PostedRules::new(machine.units, true, offsets)?;
+    let mut rules = crate::verify::PostedRules::new(machine.units, true, process)?;
     for ev in stream.by_ref() {
         let ev = ev.map_err(|e| PostError::Io(e.to_string()))?;
         screen.check()?;

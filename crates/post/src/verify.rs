@@ -15,57 +15,32 @@ use nalgebra::Vector3;
 
 use crate::error::PostError;
 use crate::intended::{Intended, IntendedOptions, Orient, Section, Step, StepKind};
+use crate::post::Process;
 use crate::safety::WorkBounds;
 
-/// The codes that place a program on the machine, as it was posted with them (`post
-/// --work-offset`, `--length-offset`, which `verify` takes too): the posted text is held
-/// to them. Without a work offset the post selects none (the control's active one places
-/// the program) and the text may select none; without a length offset it applies none.
-/// A program moved onto another work offset runs somewhere else on the table, whatever
-/// its moves say.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Offsets {
-    /// The work offset as `post --work-offset` takes it: `G54`–`G59.3`, `G54.1 P1`–`P300`,
-    /// a FADAL fixture offset `E0`–`E48`.
-    pub work: Option<String>,
-    /// The tool length offset register (`G43 H…`).
-    pub length: Option<u32>,
-}
-
-impl Offsets {
-    /// The offsets `process` posts: a machining process's options; none for deposition.
-    pub fn of(process: &crate::Process) -> Offsets {
-        match process {
-            crate::Process::Machine {
-                length_offset,
-                work_offset,
-                ..
-            } => Offsets {
-                work: work_offset.clone(),
-                length: *length_offset,
-            },
-            crate::Process::Deposit { .. } => Offsets::default(),
-        }
-    }
-
-    /// The work offset every move must be read in (the reader's G54 where none is
-    /// posted: then none may be selected, [`Screen`]), refused as the post refuses it.
-    fn work_offset(&self) -> Result<WorkOffset, PostError> {
-        let Some(text) = &self.work else {
-            return Ok(Modal::new(Units::Mm).work_offset);
-        };
-        Ok(match crate::writer::work_offset_words(text)?.as_slice() {
-            [(b'E', e)] => WorkOffset::Fixture(*e as u8),
-            [(b'G', _), (b'P', p)] => WorkOffset::Extended(*p as u16),
-            [(b'G', g)] => WorkOffset::G5x(match (g * 10.0).round() as u16 {
-                591 => 7,
-                592 => 8,
-                593 => 9,
-                c => (c / 10 - 53) as u8,
-            }),
-            _ => return Err(PostError::Options(format!("--work-offset `{text}`"))),
-        })
-    }
+/// The work offset every move of a program posted for `process` is read in (the
+/// reader's G54 where none is posted: then none may be selected, [`Screen`]), and the
+/// text it was given as (`None`: none posted). Refused as the post refuses it.
+fn posted_work_offset(process: &Process) -> Result<(WorkOffset, Option<String>), PostError> {
+    let text = match process {
+        Process::Machine {
+            work_offset: Some(w),
+            ..
+        } => w,
+        _ => return Ok((Modal::new(Units::Mm).work_offset, None)),
+    };
+    let w = match crate::writer::work_offset_words(text)?.as_slice() {
+        [(b'E', e)] => WorkOffset::Fixture(*e as u8),
+        [(b'G', _), (b'P', p)] => WorkOffset::Extended(*p as u16),
+        [(b'G', g)] => WorkOffset::G5x(match (g * 10.0).round() as u16 {
+            591 => 7,
+            592 => 8,
+            593 => 9,
+            c => (c / 10 - 53) as u8,
+        }),
+        _ => return Err(PostError::Options(format!("--work-offset `{text}`"))),
+    };
+    Ok((w, Some(text.clone())))
 }
 
 /// A work offset as a program selects it.
@@ -272,7 +247,7 @@ pub fn verify<R: BufRead>(
     machine: &Machine,
     sections: &[Section],
     head: usize,
-    offsets: &Offsets,
+    process: &Process,
     opts: IntendedOptions,
     posted: R,
     tolerance: f64,
@@ -283,7 +258,7 @@ pub fn verify<R: BufRead>(
         machine,
         sections,
         head,
-        offsets,
+        process,
         opts,
         posted,
         tolerance,
@@ -342,7 +317,7 @@ pub fn verify_traced<R: BufRead>(
     machine: &Machine,
     sections: &[Section],
     head: usize,
-    offsets: &Offsets,
+    process: &Process,
     opts: IntendedOptions,
     posted: R,
     tolerance: f64,
@@ -555,9 +530,9 @@ pub fn verify_traced<R: BufRead>(
         }
         Ok(())
     };
-    let screen = Screen::new(machine, offsets)?;
+    let screen = Screen::new(machine, process)?;
     let mut stream = screen.stream(posted, units);
-    let mut rules = PostedRules::new(machine.units, false, offsets)?;
+    let mut rules = PostedRules::new(machine.units, false, process)?;
     // The last move was travel (the next feed must come onto a start).
     let mut after_travel = true;
     for ev in stream.by_ref() {
@@ -756,13 +731,15 @@ pub(crate) struct Screen {
     codes: Rc<LaserCodes>,
 }
 
-/// The words of the machine's laser codes, and whether the program was posted without a
-/// work offset (then a line selecting one, `G54` included, is refused: the reader's
-/// moves would not show it).
+/// The words of the machine's laser codes; for deposition, the power word the laser-on
+/// line must hold (its letter and the power posted); and whether the program was posted
+/// without a work offset (then a line selecting one, `G54` included, is refused: the
+/// reader's moves would not show it).
 #[derive(Default)]
 pub(crate) struct LaserCodes {
     on: Vec<(u8, f64)>,
     off: Vec<(u8, f64)>,
+    power: Option<(u8, f64)>,
     no_work_offset: bool,
 }
 
@@ -775,14 +752,27 @@ struct Screened<R> {
 }
 
 impl Screen {
-    /// A screen that also follows `machine`'s laser codes, for a program posted with
-    /// `offsets`.
-    pub(crate) fn new(machine: &Machine, offsets: &Offsets) -> Result<Screen, PostError> {
+    /// A screen that also follows `machine`'s laser codes, for a program posted for
+    /// `process`.
+    pub(crate) fn new(machine: &Machine, process: &Process) -> Result<Screen, PostError> {
+        let p = &machine.def.process;
+        let power = match process {
+            Process::Deposit { power } => Some((
+                p.laser_power_word
+                    .bytes()
+                    .next()
+                    .unwrap_or(b'S')
+                    .to_ascii_uppercase(),
+                *power,
+            )),
+            Process::Machine { .. } => None,
+        };
         Ok(Screen {
             codes: Rc::new(LaserCodes {
-                on: crate::post::code_words(&machine.def.process.laser_on)?,
-                off: crate::post::code_words(&machine.def.process.laser_off)?,
-                no_work_offset: offsets.work.is_none(),
+                on: crate::post::code_words(&p.laser_on)?,
+                off: crate::post::code_words(&p.laser_off)?,
+                power,
+                no_work_offset: posted_work_offset(process)?.1.is_none(),
             }),
             ..Screen::default()
         })
@@ -824,6 +814,11 @@ impl Screen {
             ))),
             Some((line, LASER_STOP)) => Err(PostError::Verify(format!(
                 "posted line {line}: a program stop (M0, M1 or M60) with the laser on: it stays on over one spot while the program waits; the post turns it off first"
+            ))),
+            Some((line, LASER_POWER)) => Err(PostError::Verify(format!(
+                "posted line {line}: the laser goes on at another power than the program was posted with ({}{}; verify --power names it)",
+                char::from(self.codes.power.map_or(b'S', |p| p.0)),
+                lampost_gcode::Readable(self.codes.power.map_or(0.0, |p| p.1))
             ))),
             Some((line, code)) if selects_work_offset(code) => Err(PostError::Verify(format!(
                 "posted line {line}: G{}{} selects a work offset, and the program was posted with none (the control's active one places it; give verify the post's --work-offset)",
@@ -882,6 +877,9 @@ const DWELL: u16 = 40;
 /// The code [`Screen`] keeps for a program stop (M0, M1, M60) with the laser on.
 const LASER_STOP: u16 = u16::MAX - 1;
 
+/// The code [`Screen`] keeps for a laser-on line without the power posted.
+const LASER_POWER: u16 = u16::MAX - 2;
+
 /// A line's first refused G-code (a frame code, or [`DWELL`]; or [`BLOCK_DELETE`]:
 /// whether a control runs the line depends on its block-delete switch), its program end
 /// or return (M2, M30, M99), if any, and whether it stops the program (M0, M1, M60);
@@ -912,10 +910,17 @@ fn screen_line(
                 .iter()
                 .all(|c| block.words().any(|w| (w.letter, w.value) == *c))
     };
+    let mut wrong_power = false;
     if holds(&codes.off) {
         *laser = Some(false);
     } else if holds(&codes.on) {
         *laser = Some(true);
+        // The power posted, as written (the emitter's rounding allowed).
+        if let Some((letter, want)) = codes.power {
+            wrong_power = !block.words().any(|w| {
+                w.letter == letter && (w.value - want).abs() <= SPEED_SLACK * want.abs().max(1.0)
+            });
+        }
     }
     let refused = block
         .words()
@@ -934,7 +939,7 @@ fn screen_line(
     };
     let end = ms().find(|c| matches!(c, 20 | 300 | 990));
     let stop = ms().any(|c| matches!(c, 0 | 10 | 600));
-    (refused, end, stop)
+    (refused.or(wrong_power.then_some(LASER_POWER)), end, stop)
 }
 
 impl<R: BufRead> LineSource for Screened<R> {
@@ -965,34 +970,58 @@ impl<R: BufRead> LineSource for Screened<R> {
 /// `G28`/`G30` or canned cycle, whose machine positions the reader cannot know), in the
 /// machine's units, without cutter compensation, arcs in the XY plane (the plane of the
 /// joints verify replays), feeds per minute (or inverse time on a per-point path), and
-/// the work offset and tool length offset it was posted with ([`Offsets`]). In a planar
+/// the work offset, tool length offset, tool and S word it was posted with. In a planar
 /// program no feed turns the table (the post turns it only in rapids, at a height safe
 /// over the sweep).
 pub(crate) struct PostedRules {
     units: Units,
     per_point: bool,
-    /// The work offset and the tool length offset every move is read in.
+    /// The work offset every move is read in, and its text as posted (`None`: none).
     work_offset: WorkOffset,
+    work_text: Option<String>,
+    /// The tool length offset and the tool (0: no tool change) of every move.
     tool_length: Option<u32>,
-    /// Where none was posted, the tool length offset named for the message.
-    offsets: Offsets,
+    tool: u32,
+    /// The S word in force on every move: the laser power, the spindle speed; with
+    /// the laser, S is 0 until it first goes on (`speed_set` once it has been).
+    speed: f64,
+    deposit: bool,
+    speed_set: bool,
 }
+
+/// How far a posted S (or laser power word) may lie from the value posted: the emitter's
+/// rounding, relative to the value (at least 1).
+const SPEED_SLACK: f64 = 1e-6;
 
 impl PostedRules {
     pub(crate) fn new(
         units: lampost_kinematics::Units,
         per_point: bool,
-        offsets: &Offsets,
+        process: &Process,
     ) -> Result<Self, PostError> {
+        let (work_offset, work_text) = posted_work_offset(process)?;
+        let (tool_length, tool, speed) = match process {
+            Process::Deposit { power } => (None, None, *power),
+            Process::Machine {
+                length_offset,
+                tool,
+                spindle,
+                ..
+            } => (*length_offset, *tool, *spindle),
+        };
         Ok(PostedRules {
             units: match units {
                 lampost_kinematics::Units::Inch => Units::Inch,
                 lampost_kinematics::Units::Mm => Units::Mm,
             },
             per_point,
-            work_offset: offsets.work_offset()?,
-            tool_length: offsets.length,
-            offsets: offsets.clone(),
+            work_offset,
+            work_text,
+            tool_length,
+            tool: tool.unwrap_or(0),
+            speed,
+            deposit: matches!(process, Process::Deposit { .. }),
+            speed_set: false,
         })
     }
 
@@ -1036,7 +1065,7 @@ impl PostedRules {
             return fail("a feed turns the table: the post turns it only in rapids, at a height safe over the whole sweep");
         }
         if md.work_offset != self.work_offset {
-            let posted = match &self.offsets.work {
+            let posted = match &self.work_text {
                 Some(w) => format!("for {w} (verify --work-offset {w})"),
                 None => {
                     "with none (the control's active one places it; verify --work-offset names one)"
@@ -1054,6 +1083,35 @@ impl PostedRules {
                 "a move with tool length offset {}, and the program was posted with {} (verify --length-offset): the tool would stand off by the difference",
                 h(md.tool_length),
                 h(self.tool_length)
+            ));
+        }
+        if md.tool != self.tool {
+            let t = |t: u32| {
+                if t == 0 {
+                    "none".to_string()
+                } else {
+                    format!("T{t}")
+                }
+            };
+            return fail(&format!(
+                "a move with tool {} in the spindle, and the program was posted with {} (verify --tool)",
+                t(md.tool),
+                t(self.tool)
+            ));
+        }
+        let same = (md.speed - self.speed).abs() <= SPEED_SLACK * self.speed.abs().max(1.0);
+        if same {
+            self.speed_set = true;
+        } else if !(self.deposit && !self.speed_set && md.speed == 0.0) {
+            let (what, flag) = if self.deposit {
+                ("the laser power", "--power")
+            } else {
+                ("the spindle speed", "--spindle")
+            };
+            return fail(&format!(
+                "a move with S{} in force, and the program was posted with {what} S{} (verify {flag})",
+                lampost_gcode::Readable(md.speed),
+                lampost_gcode::Readable(self.speed)
             ));
         }
         Ok(())

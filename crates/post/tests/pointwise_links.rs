@@ -29,7 +29,7 @@ fn post_and_verify(m: &Machine, pts: &[PathPoint]) -> (String, PostReport) {
         pts,
         &frame,
         cfg.head,
-        &lampost_post::Offsets::of(&cfg.process),
+        &cfg.process,
         std::io::Cursor::new(out.as_slice()),
         cfg.verify_tolerance,
         None,

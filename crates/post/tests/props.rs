@@ -43,7 +43,7 @@ proptest! {
         let mut out = Vec::new();
         match post(&m, &secs, &cfg, &mut out, |_| {}) {
             Ok(_) => {
-                let v = verify(&m, &secs, cfg.head, &lampost_post::Offsets::of(&cfg.process), cfg.intended, &out[..], 0.001, None, None).expect("verifies");
+                let v = verify(&m, &secs, cfg.head, &cfg.process, cfg.intended, &out[..], 0.001, None, None).expect("verifies");
                 // Chord midpoints are compared too: up to the chord tolerance, plus rounding.
                 prop_assert!(v.max_position_error < cfg.tolerance + 2e-4, "{v:?}");
                 prop_assert!(v.max_axis_error_deg < 1e-3, "{v:?}");
@@ -91,7 +91,7 @@ fn a_grid_of_indexes_all_post_and_verify() {
                 &m,
                 &secs,
                 cfg.head,
-                &lampost_post::Offsets::of(&cfg.process),
+                &cfg.process,
                 cfg.intended,
                 &out[..],
                 0.001,

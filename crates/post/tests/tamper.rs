@@ -362,7 +362,7 @@ fn random_programs_post_verify_and_tampering_is_caught() {
                 m,
                 &secs,
                 cfg.head,
-                &lampost_post::Offsets::of(&cfg.process),
+                &cfg.process,
                 cfg.intended,
                 t.as_bytes(),
                 cfg.verify_tolerance,
