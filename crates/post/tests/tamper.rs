@@ -5,8 +5,9 @@
 //! 003's formulas (not the crate's kinematics) confirms that no rapid but a vertical one
 //! goes below the work's top plus the margin. Then each posted program is tampered with
 //! (a feed or rotary value moved beyond tolerance, a rapid added to a point of the work,
-//! a feed's F word changed,
-//! a motion block removed) and `verify` must catch at least 99 % of the tampered
+//! a feed's F word changed, the process changed before a feed (a work offset, a tool
+//! length offset, a tool change, another S), a motion block removed) and `verify` must
+//! catch at least 99 % of the tampered
 //! programs. Seeded, so a failure reproduces.
 
 mod papers;
@@ -179,7 +180,7 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
         .iter()
         .filter(|m| !matches!(m.1, MoveKind::Rapid))
         .collect();
-    match r.below(4) {
+    match r.below(5) {
         0 => {
             // One value moved beyond tolerance: an axis word of a feed, or a rotary.
             let m = feeds[r.below(feeds.len())];
@@ -255,6 +256,15 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
             }
             lines[idx] = words.join(" ");
             Some((lines.join("\n") + "\n", "feed changed"))
+        }
+        3 => {
+            // The process changed before a feed: another work offset, a tool length
+            // offset, a tool change, or another S (the programs are posted with no
+            // offsets or tool, S1000 for the spindle, the laser at 500).
+            let m = feeds[r.below(feeds.len())];
+            let code = ["G55", "E2", "G43 H7", "T4 M6", "S2500"][r.below(5)];
+            lines.insert((m.0 - 1) as usize, code.to_string());
+            Some((lines.join("\n") + "\n", "process changed"))
         }
         _ => {
             // A motion block removed.
@@ -424,9 +434,12 @@ fn random_programs_post_verify_and_tampering_is_caught() {
     for m in missed.iter().take(20) {
         eprintln!("missed: {m}");
     }
-    // A feed 10 % or more off is never within anything: every one is caught.
-    let (t, c) = kinds.get("feed changed").copied().unwrap_or_default();
-    assert!(t > 0 && c == t, "feed changes caught: {c} of {t}");
+    // A feed 10 % or more off is never within anything, nor is a program moved to
+    // another offset, tool or S: every one is caught.
+    for what in ["feed changed", "process changed"] {
+        let (t, c) = kinds.get(what).copied().unwrap_or_default();
+        assert!(t > 0 && c == t, "{what}: caught {c} of {t}");
+    }
     assert!(posted >= 100, "too few programs posted: {posted}");
     assert!(
         rate >= 0.99,
