@@ -1353,44 +1353,42 @@ fn a_per_point_move_back_along_the_path_fails_verify() {
 #[test]
 fn verify_holds_the_program_to_the_process_it_was_posted_with() {
     let dir = tempdir("safety-offsets");
-    let post = |name: &str, extra: &[&str]| -> String {
-        let out = dir.join(name);
+    // `post` or `verify` of the patch at one placement, with the options given.
+    let run = |cmd: &str, extra: &[&str], files: &[&str]| -> std::process::Output {
+        let input = fx("issue11-patch.nc");
         let mut args = vec![
-            "post",
+            cmd,
             "--machine",
             "fadal-lamp",
-            "--process",
-            "machine",
             "--index",
             "A=0,B=-20",
             "--origin",
             "0,0,1",
         ];
         args.extend_from_slice(extra);
-        let input = fx("issue11-patch.nc");
-        let o_path = out.to_string_lossy().into_owned();
-        args.extend_from_slice(&[input.as_str(), "-o", o_path.as_str()]);
-        let o = lampost(&args);
+        args.push(input.as_str());
+        args.extend_from_slice(files);
+        lampost(&args)
+    };
+    let dep = |name: &str, extra: &[&str]| -> String {
+        let out = dir.join(name).to_string_lossy().into_owned();
+        let o = run("post", extra, &["-o", &out]);
         assert!(o.status.success(), "{}", stderr(&o));
         std::fs::read_to_string(&out).expect("posted")
     };
-    let check = |text: &str, extra: &[&str]| -> std::process::Output {
+    let vdep = |text: &str, extra: &[&str]| -> std::process::Output {
         let p = write(&dir, "check.nc", text);
-        let input = fx("issue11-patch.nc");
-        let mut args = vec![
-            "verify",
-            "--machine",
-            "fadal-lamp",
-            "--process",
-            "machine",
-            "--index",
-            "A=0,B=-20",
-            "--origin",
-            "0,0,1",
-        ];
-        args.extend_from_slice(extra);
-        args.extend_from_slice(&[input.as_str(), p.as_str()]);
-        lampost(&args)
+        run("verify", extra, &[&p])
+    };
+    let post = |name: &str, extra: &[&str]| {
+        let mut a = vec!["--process", "machine"];
+        a.extend_from_slice(extra);
+        dep(name, &a)
+    };
+    let check = |text: &str, extra: &[&str]| {
+        let mut a = vec!["--process", "machine"];
+        a.extend_from_slice(extra);
+        vdep(text, &a)
     };
     let fails_at = |o: &std::process::Output, what: &str| {
         let e = stderr(o);
@@ -1512,41 +1510,6 @@ fn verify_holds_the_program_to_the_process_it_was_posted_with() {
         "a move with S5000 in force, and the program was posted with the spindle speed S3000",
     );
     // The laser's power: on at the power posted, and kept there.
-    let dep = |name: &str, extra: &[&str]| -> String {
-        let out = dir.join(name);
-        let mut args = vec![
-            "post",
-            "--machine",
-            "fadal-lamp",
-            "--index",
-            "A=0,B=-20",
-            "--origin",
-            "0,0,1",
-        ];
-        args.extend_from_slice(extra);
-        let input = fx("issue11-patch.nc");
-        let o_path = out.to_string_lossy().into_owned();
-        args.extend_from_slice(&[input.as_str(), "-o", o_path.as_str()]);
-        let o = lampost(&args);
-        assert!(o.status.success(), "{}", stderr(&o));
-        std::fs::read_to_string(&out).expect("posted")
-    };
-    let vdep = |text: &str, extra: &[&str]| -> std::process::Output {
-        let p = write(&dir, "dep.nc", text);
-        let input = fx("issue11-patch.nc");
-        let mut args = vec![
-            "verify",
-            "--machine",
-            "fadal-lamp",
-            "--index",
-            "A=0,B=-20",
-            "--origin",
-            "0,0,1",
-        ];
-        args.extend_from_slice(extra);
-        args.extend_from_slice(&[input.as_str(), p.as_str()]);
-        lampost(&args)
-    };
     let p500 = dep("p500.nc", &["--power", "500"]);
     let on = line(&p500, "M71 S500");
     let o = vdep(&p500, &["--power", "500"]);
