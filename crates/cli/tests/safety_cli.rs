@@ -1544,3 +1544,71 @@ fn verify_holds_the_program_to_the_process_it_was_posted_with() {
     ]);
     fails_at(&o, "--work-offset is for table machines' programs");
 }
+
+/// The post writes no dwells (a standing laser deposits on one spot): a `G4` and a
+/// drilling cycle's `P` at the bottom of each hole are left out, and the user is told at
+/// the line (they were dropped without a word: the helper's probe of pcb-gcode's drill
+/// files). `check` and `trace` say nothing of them.
+#[test]
+fn a_dwell_left_out_of_a_posted_program_is_named() {
+    let dir = tempdir("safety-dwell");
+    let input = write(
+        &dir,
+        "dwell.nc",
+        "G21 G90 G17\nG0 X0 Y0 Z5\nM3 S1000\nG82 X10 Y0 Z-2 R1 P0.5 F100\nG80\nG1 Z1 F100\nG4 P2\nG1 X5\nM5\nM2\n",
+    );
+    let out = dir.join("dwell.out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--process",
+        "machine",
+        "--index",
+        "B=0,C=0",
+        &input,
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("dwell.nc:4: G82's P0.5 (a dwell at the bottom of each hole): the dwell is left out of the posted program"),
+        "{e}"
+    );
+    assert!(e.contains("1 more warning(s) like that of line 4"), "{e}");
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let words = || text.lines().flat_map(str::split_whitespace);
+    assert!(
+        !words().any(|w| w == "G4" || w == "G04" || w.starts_with('P')),
+        "{text}"
+    );
+    let o = lampost(&["check", &input]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("left out"),
+        "{}",
+        stderr(&o)
+    );
+    // The G4 alone is named at its line.
+    let input = write(
+        &dir,
+        "g4.nc",
+        "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z1 F100\nG4 P2\nG1 X5\nM2\n",
+    );
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        &input,
+        "-o",
+        &dir.join("g4.out.nc").to_string_lossy(),
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("g4.nc:4: G4 P2: the dwell is left out of the posted program"),
+        "{e}"
+    );
+}

@@ -53,6 +53,9 @@ pub struct Options {
     pub block_delete: bool,
     /// The control the program was written for (resolved: see `flavor.rs`).
     pub flavor: crate::flavor::Flavor,
+    /// Warn of every dwell ([`ErrorKind::DwellLeftOut`]: `G4`, a canned cycle's `P` at
+    /// the bottom of a hole), for a reader that writes none (the post).
+    pub note_dwells: bool,
 }
 
 impl Default for Options {
@@ -62,6 +65,7 @@ impl Default for Options {
             e_word: EWord::FixtureOffset,
             block_delete: false,
             flavor: crate::flavor::Flavor::Fadal,
+            note_dwells: false,
         }
     }
 }
@@ -1786,7 +1790,17 @@ impl Interpreter {
                 continue;
             }
             match c {
-                40 => axes_used |= self.dwell_words(b, w, gw)?,
+                40 => {
+                    axes_used |= self.dwell_words(b, w, gw)?;
+                    if self.opts.note_dwells {
+                        let time = w.word(b'P').or(w.word(b'X')).or(w.word(b'U'));
+                        let what = match time {
+                            Some(t) => format!("{} {}", gw.display_code(), t.display()),
+                            None => gw.display_code(),
+                        };
+                        self.warn(b, out, ErrorKind::DwellLeftOut(what), Some(gw.span));
+                    }
+                }
                 100 => {
                     axes_used = true;
                     self.g10(b, w, gw)?;
@@ -3542,6 +3556,13 @@ impl Interpreter {
                 None,
             ));
         };
+        if self.opts.note_dwells && self.canned.p > 0.0 {
+            let what = format!(
+                "G{name}'s P{} (a dwell at the bottom of each hole)",
+                crate::decimal::Readable(self.canned.p)
+            );
+            self.warn(b, out, ErrorKind::DwellLeftOut(what), None);
+        }
         let passthrough = matches!(code, 740 | 760 | 870 | 880);
         let needs_q = matches!(code, 730 | 830);
         let q = self.canned.q.unwrap_or(0.0);

@@ -435,6 +435,8 @@ impl<'a> Intended<'a> {
                         EWord::FixtureOffset
                     },
                     flavor: self.opts.flavor,
+                    // The post writes no dwells: the user hears of each one left out.
+                    note_dwells: true,
                     ..Options::default()
                 };
                 // Slicer programs go by E alone (see `laser_off_feed`).
