@@ -186,6 +186,45 @@ fn a_colon_program_number_is_fanuc_s_o() {
     assert!(stderr(&o).contains(":2:1"), "{}", stderr(&o));
 }
 
+/// Fanuc's additional optional block skip `/1`–`/9` (a shop's Mazak EIA macros use
+/// `/1`; the h23 probe): read as block delete under `--flavor fanuc` and `haas` (one
+/// switch for every level; the lines run, as with `/`), refused where it stands under
+/// `linuxcnc`, as rs274 refuses it ("Bad character '1' used"). `/12` and `/1.5` are no
+/// levels.
+#[test]
+fn block_skip_levels_are_fanuc_s_block_delete() {
+    let dir = tempdir("findings-skip-levels");
+    let p = dir.join("skip.nc");
+    std::fs::write(
+        &p,
+        "O1000\nG21 G90 G17\nG0 X0. Y0. Z5.\n/2 G0 X10.\n/1G0 Y4.\n/9 G1 Z-1. F100.\nM30\n",
+    )
+    .expect("write");
+    let p = p.to_str().expect("utf8");
+    for flavor in ["fanuc", "haas"] {
+        let o = lampost(&["check", "--flavor", flavor, p]);
+        assert!(o.status.success(), "{flavor}: {}", stderr(&o));
+        let t = lampost(&["trace", "--flavor", flavor, p]);
+        assert!(t.status.success(), "{flavor}: {}", stderr(&t));
+        let text = String::from_utf8_lossy(&t.stdout);
+        assert!(
+            text.contains("G0 X10 Y4 Z5") && text.contains("G1 X10 Y4 Z-1"),
+            "{text}"
+        );
+    }
+    let o = lampost(&["check", "--flavor", "linuxcnc", p]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(":4:2"), "{}", stderr(&o));
+    let q = dir.join("not-levels.nc");
+    std::fs::write(&q, "G21 G90\n/12 G0 X1.\nM30\n").expect("write");
+    let o = lampost(&["check", "--flavor", "fanuc", q.to_str().expect("utf8")]);
+    assert!(
+        !o.status.success() && stderr(&o).contains(":2:2"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// A comment holding parentheses whose words look like another language's
 /// (`(ROUGH CYCLE (PASS 1))`) is a nested comment, said at the inner `(`, not
 /// "Sinumerik syntax".

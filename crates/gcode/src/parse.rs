@@ -28,8 +28,10 @@ pub struct Reading {
     /// LinuxCNC's polar coordinates: `@` (radius) and `^` (angle) are words, with the
     /// letters `@` and `^` (elsewhere each is an unexpected character).
     pub polar: bool,
-    /// Fanuc's and Haas's `:` program number (`:0097`, the O address in ISO code).
-    pub colon_program: bool,
+    /// Fanuc's and Haas's tape format: the `:` program number (`:0097`, the O address in
+    /// ISO code) and the block skip levels `/1`–`/9` (Fanuc's additional optional block
+    /// skip, which Mazak's EIA programs use too).
+    pub fanuc_tape: bool,
 }
 
 impl Reading {
@@ -40,7 +42,7 @@ impl Reading {
         Reading {
             slicer,
             polar: flavor == Flavor::LinuxCnc,
-            colon_program: matches!(flavor, Flavor::Fanuc | Flavor::Haas),
+            fanuc_tape: matches!(flavor, Flavor::Fanuc | Flavor::Haas),
         }
     }
 }
@@ -50,7 +52,7 @@ impl From<bool> for Reading {
         Reading {
             slicer,
             polar: false,
-            colon_program: false,
+            fanuc_tape: false,
         }
     }
 }
@@ -882,6 +884,16 @@ fn words_reference_items<'a>(
         b'/' => {
             block.block_delete = true;
             i += 1;
+            // `/2 G0 X10.`: a skip level (one digit, a number of its own) under Fanuc's
+            // tape format; the switch is one for every level. rs274 refuses it.
+            let digit = |k: usize| bytes.get(k).is_some_and(u8::is_ascii_digit);
+            if reading.fanuc_tape
+                && bytes.get(i).is_some_and(|c| (b'1'..=b'9').contains(c))
+                && !digit(i + 1)
+                && bytes.get(i + 1) != Some(&b'.')
+            {
+                i += 1;
+            }
         }
         b'$' if crate::foreign_language(text).is_some() => {
             // Not a grbl console line: another language's header (Okuma's `$O0137.MIN%`).
@@ -926,7 +938,7 @@ fn words_reference_items<'a>(
         // Fanuc's and Haas's ISO program number `:0097` is the O address (rs274 refuses
         // it, so only under those flavours), at the start of a block.
         let c = if c == b':'
-            && reading.colon_program
+            && reading.fanuc_tape
             && bytes.get(i + 1).is_some_and(u8::is_ascii_digit)
             && block
                 .items
@@ -1292,7 +1304,7 @@ mod tests {
             let reading = Reading {
                 slicer,
                 polar: false,
-                colon_program: false,
+                fanuc_tape: false,
             };
             for s in ["G0 X - [1 + 4]", "G0 Y - #1", "G0 Z -\t[2]"] {
                 let mut b = Block::empty(1, 0);
@@ -1604,7 +1616,7 @@ mod tests {
         let polar = Reading {
             slicer: false,
             polar: true,
-            colon_program: false,
+            fanuc_tape: false,
         };
         let mut b = Block::empty(1, 0);
         parse_line_with(b"G1 @ 1.5 ^-30 (c) F10", 1, 0, &mut b, polar).expect("parses");
