@@ -1548,7 +1548,8 @@ fn verify_holds_the_program_to_the_process_it_was_posted_with() {
 /// The post writes no dwells (a standing laser deposits on one spot): a `G4` and a
 /// drilling cycle's `P` at the bottom of each hole are left out, and the user is told at
 /// the line (they were dropped without a word: the helper's probe of pcb-gcode's drill
-/// files). `check` and `trace` say nothing of them.
+/// files). A block-delete line is run and written without its `/`, with a warning.
+/// `check` and `trace` say nothing of them.
 #[test]
 fn a_dwell_left_out_of_a_posted_program_is_named() {
     let dir = tempdir("safety-dwell");
@@ -1589,11 +1590,11 @@ fn a_dwell_left_out_of_a_posted_program_is_named() {
         "{}",
         stderr(&o)
     );
-    // The G4 alone is named at its line.
+    // The G4 alone is named at its line, and a block-delete line posted as run.
     let input = write(
         &dir,
         "g4.nc",
-        "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z1 F100\nG4 P2\nG1 X5\nM2\n",
+        "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z1 F100\nG4 P2\nG1 X5\n/ G1 Y5\nM2\n",
     );
     let o = lampost(&[
         "post",
@@ -1610,5 +1611,16 @@ fn a_dwell_left_out_of_a_posted_program_is_named() {
     assert!(
         e.contains("g4.nc:4: G4 P2: the dwell is left out of the posted program"),
         "{e}"
+    );
+    assert!(
+        e.contains("g4.nc:6: a block-delete line (`/`) is posted as run"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(dir.join("g4.out.nc")).expect("posted");
+    // nrc-lc's Y runs the other way at B0 C0: the part's Y5 is the table's Y-5.
+    assert!(
+        text.lines().any(|l| l.ends_with("Y-5.000"))
+            && !text.lines().any(|l| l.trim_start().starts_with('/')),
+        "{text}"
     );
 }

@@ -392,7 +392,7 @@ impl Ctx {
             },
             block_delete: r.coin(),
             flavor: *r.pick(&FLAVORS),
-            note_dwells: r.coin(),
+            post_notes: r.coin(),
         };
         let stop = r.coin();
         let mode = r.below(4);

@@ -140,10 +140,13 @@ pub enum ErrorKind {
     /// A feature that is read but not simulated.
     #[error("{0} is not simulated: the trace shows the programmed path without it")]
     NotSimulated(String),
-    /// A dwell, where the reader is asked to name them (`Options::note_dwells`: the
+    /// A dwell, where the reader is asked to name them (`Options::post_notes`: the
     /// post, which writes none).
     #[error("{0}: the dwell is left out of the posted program (the post writes no dwells: with the laser on, the head would stand over one spot)")]
     DwellLeftOut(String),
+    /// A block-delete line run and posted without its `/` (`Options::post_notes`).
+    #[error("a block-delete line (`/`) is posted as run, without its `/`: the posted program has no switch for it")]
+    BlockDeletePosted,
     /// A LinuxCNC G76 threading cycle that cannot run (rs274 refuses it too), or one
     /// with more passes than lampost expands (`lathe.rs`).
     #[error("G76 threading cycle: {0}")]
@@ -387,6 +390,7 @@ impl ErrorKind {
             ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its depth (Z in G17, Y in G18, X in G19) and R plane (and Q for peck cycles)",
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
+            ErrorKind::BlockDeletePosted => "if the control's block-delete switch was meant to be on, remove the line before posting",
             ErrorKind::DwellLeftOut(_) => "the program runs without the pause: where the process needs it (a spot face's finish), program it on the control (`verify` refuses a dwell in a posted program)",
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
             ErrorKind::CutterCompTraced(_) => "the trace shows where the tool's centre goes; the post writes no compensated path (program the centre path with G40)",

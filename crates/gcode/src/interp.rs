@@ -53,9 +53,11 @@ pub struct Options {
     pub block_delete: bool,
     /// The control the program was written for (resolved: see `flavor.rs`).
     pub flavor: crate::flavor::Flavor,
-    /// Warn of every dwell ([`ErrorKind::DwellLeftOut`]: `G4`, a canned cycle's `P` at
-    /// the bottom of a hole), for a reader that writes none (the post).
-    pub note_dwells: bool,
+    /// Warn of what a post of the program changes, for the post: every dwell it leaves
+    /// out ([`ErrorKind::DwellLeftOut`]: `G4`, a canned cycle's `P` at the bottom of a
+    /// hole), every block-delete line it runs and writes without its `/`
+    /// ([`ErrorKind::BlockDeletePosted`]).
+    pub post_notes: bool,
 }
 
 impl Default for Options {
@@ -65,7 +67,7 @@ impl Default for Options {
             e_word: EWord::FixtureOffset,
             block_delete: false,
             flavor: crate::flavor::Flavor::Fadal,
-            note_dwells: false,
+            post_notes: false,
         }
     }
 }
@@ -570,6 +572,9 @@ impl Interpreter {
     pub fn block(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
         if b.block_delete && self.opts.block_delete {
             return Ok(());
+        }
+        if b.block_delete && self.opts.post_notes && b.has_words() {
+            self.warn(b, out, ErrorKind::BlockDeletePosted, None);
         }
         if self.profile.is_some() {
             return self.record_profile(b);
@@ -1792,7 +1797,7 @@ impl Interpreter {
             match c {
                 40 => {
                     axes_used |= self.dwell_words(b, w, gw)?;
-                    if self.opts.note_dwells {
+                    if self.opts.post_notes {
                         let time = w.word(b'P').or(w.word(b'X')).or(w.word(b'U'));
                         let what = match time {
                             Some(t) => format!("{} {}", gw.display_code(), t.display()),
@@ -3556,7 +3561,7 @@ impl Interpreter {
                 None,
             ));
         };
-        if self.opts.note_dwells && self.canned.p > 0.0 {
+        if self.opts.post_notes && self.canned.p > 0.0 {
             let what = format!(
                 "G{name}'s P{} (a dwell at the bottom of each hole)",
                 crate::decimal::Readable(self.canned.p)

@@ -435,8 +435,9 @@ impl<'a> Intended<'a> {
                         EWord::FixtureOffset
                     },
                     flavor: self.opts.flavor,
-                    // The post writes no dwells: the user hears of each one left out.
-                    note_dwells: true,
+                    // The user hears of what the post changes: the dwells it leaves out
+                    // (it writes none), the block-delete lines it runs.
+                    post_notes: true,
                     ..Options::default()
                 };
                 // Slicer programs go by E alone (see `laser_off_feed`).
