@@ -1531,6 +1531,15 @@ fn verify_holds_the_program_to_the_process_it_was_posted_with() {
         &vdep(&(l.join("\n") + "\n"), &["--power", "500"]),
         "a move with S900 in force, and the program was posted with the laser power S500 (verify --power)",
     );
+    // A power or speed that is no usable number is refused, as `post` refuses it.
+    fails_at(
+        &vdep(&p500, &["--power", "NaN"]),
+        "--power NaN: the laser power must be a finite number, 0 or more",
+    );
+    fails_at(
+        &check(&t3, &["--tool", "3", "--spindle=-1"]),
+        "--spindle -1: the spindle speed must be a finite number, 0 or more",
+    );
     // An arm's program has no machining options to hold.
     let o = lampost(&[
         "verify",

@@ -2083,13 +2083,11 @@ impl Interpreter {
             }
         }
         let m = &mut self.modal;
-        if let Some((_, c)) = w.g_in(GGroup::CoordSystem) {
-            m.work_offset = WorkOffset::G5x(match c {
-                591 => 7,
-                592 => 8,
-                593 => 9,
-                c => ((c - 530) / 10) as u8,
-            });
+        if let Some(o) = w
+            .g_in(GGroup::CoordSystem)
+            .and_then(|(_, c)| WorkOffset::of_code(c))
+        {
+            m.work_offset = o;
         }
         if let Some((_, c)) = w.g_in(GGroup::Distance) {
             m.distance = if c == 910 {

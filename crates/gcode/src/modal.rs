@@ -151,6 +151,32 @@ pub enum WorkOffset {
     Extended(u16),
 }
 
+impl WorkOffset {
+    /// The work offset a code of the coordinate-system group selects (in tenths: `G54`
+    /// 540 … `G59.3` 593); `None` for any other code.
+    pub fn of_code(code: u16) -> Option<WorkOffset> {
+        Some(WorkOffset::G5x(match code {
+            591 => 7,
+            592 => 8,
+            593 => 9,
+            540 | 550 | 560 | 570 | 580 | 590 => ((code - 530) / 10) as u8,
+            _ => return None,
+        }))
+    }
+}
+
+impl std::fmt::Display for WorkOffset {
+    /// As a program selects it: `G55`, `G59.2`, `E3`, `G54.1 P3`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            WorkOffset::G5x(i @ 1..=6) => write!(f, "G{}", 53 + u32::from(i)),
+            WorkOffset::G5x(i) => write!(f, "G59.{}", i.saturating_sub(6)),
+            WorkOffset::Fixture(e) => write!(f, "E{e}"),
+            WorkOffset::Extended(p) => write!(f, "G54.1 P{p}"),
+        }
+    }
+}
+
 /// The modal state that goes with each move.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Modal {

@@ -49,6 +49,24 @@ pub enum Process {
     },
 }
 
+impl Process {
+    /// The process's numbers usable: the laser power or spindle speed a finite number, 0
+    /// or more (the post refuses to write, `verify` to compare with, anything else).
+    pub fn checked(&self) -> Result<&Process, PostError> {
+        let (value, flag, what) = match self {
+            Process::Deposit { power } => (*power, "--power", "the laser power"),
+            Process::Machine { spindle, .. } => (*spindle, "--spindle", "the spindle speed"),
+        };
+        if value.is_finite() && value >= 0.0 {
+            Ok(self)
+        } else {
+            Err(PostError::Options(format!(
+                "{flag} {value}: {what} must be a finite number, 0 or more"
+            )))
+        }
+    }
+}
+
 /// Post settings.
 #[derive(Debug, Clone)]
 pub struct PostConfig {

@@ -32,25 +32,11 @@ fn posted_work_offset(process: &Process) -> Result<(WorkOffset, Option<String>),
     let w = match crate::writer::work_offset_words(text)?.as_slice() {
         [(b'E', e)] => WorkOffset::Fixture(*e as u8),
         [(b'G', _), (b'P', p)] => WorkOffset::Extended(*p as u16),
-        [(b'G', g)] => WorkOffset::G5x(match (g * 10.0).round() as u16 {
-            591 => 7,
-            592 => 8,
-            593 => 9,
-            c => (c / 10 - 53) as u8,
-        }),
+        [(b'G', g)] => WorkOffset::of_code((g * 10.0).round() as u16)
+            .ok_or_else(|| PostError::Options(format!("--work-offset `{text}`")))?,
         _ => return Err(PostError::Options(format!("--work-offset `{text}`"))),
     };
     Ok((w, Some(text.clone())))
-}
-
-/// A work offset as a program selects it.
-fn offset_name(w: WorkOffset) -> String {
-    match w {
-        WorkOffset::G5x(i @ 1..=6) => format!("G{}", 53 + u32::from(i)),
-        WorkOffset::G5x(i) => format!("G59.{}", i.saturating_sub(6)),
-        WorkOffset::Fixture(e) => format!("E{e}"),
-        WorkOffset::Extended(p) => format!("G54.1 P{p}"),
-    }
 }
 
 /// What a verification found.
@@ -1000,7 +986,7 @@ impl PostedRules {
         process: &Process,
     ) -> Result<Self, PostError> {
         let (work_offset, work_text) = posted_work_offset(process)?;
-        let (tool_length, tool, speed) = match process {
+        let (tool_length, tool, speed) = match process.checked()? {
             Process::Deposit { power } => (None, None, *power),
             Process::Machine {
                 length_offset,
@@ -1074,7 +1060,7 @@ impl PostedRules {
             };
             return fail(&format!(
                 "a move in work offset {}, and the program was posted {posted}: it would run elsewhere on the table",
-                offset_name(md.work_offset),
+                md.work_offset,
             ));
         }
         if md.tool_length != self.tool_length {

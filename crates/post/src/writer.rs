@@ -200,7 +200,7 @@ impl<'m, W: Write> Writer<'m, W> {
         let units = program_units(self.m);
         write_header(&mut self.em, cfg, units)?;
         let p = &self.m.def.process;
-        match &cfg.process {
+        match cfg.process.checked()? {
             Process::Machine {
                 tool,
                 length_offset,
@@ -208,11 +208,6 @@ impl<'m, W: Write> Writer<'m, W> {
                 spindle,
                 coolant,
             } => {
-                if !(spindle.is_finite() && *spindle >= 0.0) {
-                    return Err(PostError::Options(format!(
-                        "--spindle {spindle}: the spindle speed must be a finite number, 0 or more"
-                    )));
-                }
                 if let Some(t) = tool {
                     let mut v = vec![(b'T', f64::from(*t))];
                     v.extend(code_words(&p.tool_change)?);
@@ -231,13 +226,7 @@ impl<'m, W: Write> Writer<'m, W> {
                     self.words(&code_words(&p.coolant_on)?, None)?;
                 }
             }
-            Process::Deposit { power } => {
-                if !(power.is_finite() && *power >= 0.0) {
-                    return Err(PostError::Options(format!(
-                        "--power {power}: the laser power must be a finite number, 0 or more"
-                    )));
-                }
-            }
+            Process::Deposit { .. } => {}
         }
         self.report.body.0 = self.offset();
         Ok(())
