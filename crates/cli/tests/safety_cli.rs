@@ -1633,3 +1633,142 @@ fn a_dwell_left_out_of_a_posted_program_is_named() {
         "{text}"
     );
 }
+
+/// `verify` follows the process switches the posted text makes (the machine's laser,
+/// powder, spindle and coolant codes) and holds every move to the process posted: an
+/// edit that stops the spindle in a cut, reverses or orients it, takes the coolant away
+/// or adds it, fires the laser in a machining program, turns the laser or its powder
+/// off in a deposit, or turns the spindle or coolant on in one, fails at the first move
+/// it changes.
+#[test]
+fn verify_holds_every_move_to_the_process_switches_posted() {
+    let dir = tempdir("safety-switches");
+    let input = fx("issue11-patch.nc");
+    let run = |cmd: &str, extra: &[&str], files: &[&str]| -> std::process::Output {
+        let mut args = vec![
+            cmd,
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=-20",
+            "--origin",
+            "0,0,1",
+        ];
+        args.extend_from_slice(extra);
+        args.push(input.as_str());
+        args.extend_from_slice(files);
+        lampost(&args)
+    };
+    let post = |name: &str, extra: &[&str]| -> String {
+        let out = dir.join(name).to_string_lossy().into_owned();
+        let o = run("post", extra, &["-o", &out]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(&out).expect("posted")
+    };
+    let verify = |text: &str, extra: &[&str]| -> std::process::Output {
+        let p = write(&dir, "check.nc", text);
+        run("verify", extra, &[&p])
+    };
+    let fails_at = |o: &std::process::Output, what: &str| {
+        let e = stderr(o);
+        assert!(!o.status.success(), "passed, expected `{what}`");
+        assert!(e.contains(what), "expected `{what}`:\n{e}");
+    };
+    let line = |text: &str, code: &str| {
+        1 + text
+            .lines()
+            .position(|l| l.starts_with(code))
+            .expect("the code")
+    };
+    // `text` with `code` as a line of its own before line `at` (1-based).
+    let with = |text: &str, at: usize, code: &str| {
+        let mut l: Vec<&str> = text.lines().collect();
+        l.insert(at - 1, code);
+        l.join("\n") + "\n"
+    };
+    // Machining with coolant: S3000 M3, M8, then the cut.
+    let mach = ["--process", "machine", "--coolant"];
+    let m = post("m.nc", &mach);
+    let o = verify(&m, &mach);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A line well inside the cut (three feeds after its first).
+    let cut = line(&m, "G1") + 3;
+    fails_at(
+        &verify(&with(&m, cut, "M5"), &mach),
+        &format!("posted line {}: a feed with the spindle stopped", cut + 1),
+    );
+    fails_at(
+        &verify(&m.replacen("S3000 M3", "S3000 M4", 1), &mach),
+        &format!(
+            "a feed with the spindle switched otherwise than posted (posted line {}",
+            line(&m, "S3000")
+        ),
+    );
+    fails_at(
+        &verify(&with(&m, cut, "M19"), &mach),
+        "a feed with the spindle switched otherwise than posted",
+    );
+    fails_at(
+        &verify(&with(&m, cut, "M9"), &mach),
+        &format!(
+            "posted line {}: a feed without coolant, and the program was posted with it",
+            cut + 1
+        ),
+    );
+    fails_at(
+        &verify(&m, &["--process", "machine"]),
+        &format!(
+            "coolant on (posted line {}), and the program was posted without it",
+            line(&m, "M8")
+        ),
+    );
+    fails_at(
+        &verify(&with(&m, cut, "M71"), &mach),
+        &format!(
+            "posted line {}: the laser on (posted line {cut}) in a program posted for machining",
+            cut + 1
+        ),
+    );
+    // Deposition: M71 S1000 and M73 after the approach, M72 and M74 before travel.
+    let d = post("d.nc", &[]);
+    let o = verify(&d, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let on = line(&d, "M71");
+    let run_at = on + 4;
+    let no_laser: String = d
+        .lines()
+        .filter(|l| !l.starts_with("M71"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    fails_at(
+        &verify(&no_laser, &[]),
+        "a feed with the laser off along the deposition move of input line 4",
+    );
+    fails_at(
+        &verify(&with(&d, run_at, "M72"), &[]),
+        &format!(
+            "posted line {}: a feed with the laser off along the deposition move",
+            run_at + 1
+        ),
+    );
+    fails_at(
+        &verify(&with(&d, run_at, "M74"), &[]),
+        &format!(
+            "posted line {}: a feed with the laser on (posted line {on}) and no powder",
+            run_at + 1
+        ),
+    );
+    fails_at(
+        &verify(&with(&d, run_at, "M3"), &[]),
+        &format!("the spindle turning (posted line {run_at}) in a program posted for deposition"),
+    );
+    fails_at(
+        &verify(&with(&d, run_at, "M8"), &[]),
+        &format!("coolant on (posted line {run_at}) in a program posted for deposition"),
+    );
+    // The laser on before the approach onto the run (which it would weld on the way).
+    fails_at(
+        &verify(&with(&d, line(&d, "G1"), "M71 S1000"), &[]),
+        "a feed with the laser on",
+    );
+}

@@ -137,7 +137,7 @@ impl PostError {
             PostError::File { .. } => "fix the file; see docs/post.md for its keys",
             PostError::Empty(_) => "give a program with moves",
             PostError::Io(_) => "check the paths and free space",
-            PostError::Verify(_) => "this is a lampost fault, or INPUT and POSTED do not belong together (verify takes the placement and --work-offset/--length-offset the program was posted with); nothing was written",
+            PostError::Verify(_) => "this is a lampost fault, or INPUT and POSTED do not belong together (verify takes the placement and the process options the program was posted with: --process, --power, --spindle, --coolant, --tool, --work-offset, --length-offset); nothing was written",
             PostError::Options(_) => "see `lampost post --help`",
         }
     }

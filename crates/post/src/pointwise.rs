@@ -840,7 +840,7 @@ pub fn verify_points_traced<R: BufRead>(
                 let lin = |p: &[f64; 9]| [p[ix[0]], p[ix[1]], p[ix[2]]];
                 let rot = |p: &[f64; 9]| [p[ix[3]], p[ix[4]]];
                 safety.travel(&lin(&m.end), &rot(&m.end), m.line)?;
-                crate::verify::laser_off_for_travel(&m, screen.laser())?;
+                crate::verify::process_state(&m, screen.switches(), process, None)?;
                 if matches!(m.kind, MoveKind::Rapid) {
                     safety.rapid(
                         &lin(&m.start),

@@ -399,7 +399,7 @@ pub fn verify_traced<R: BufRead>(
                      entering: bool,
                      current: &mut Option<Step>,
                      rep: &mut VerifyReport|
-     -> Result<(), PostError> {
+     -> Result<(u32, bool), PostError> {
         if entering {
             // The first feed after travel comes onto the start of the next move.
             if let Some(s) = current {
@@ -514,7 +514,8 @@ pub fn verify_traced<R: BufRead>(
                 step.line
             )));
         }
-        Ok(())
+        // The approach onto a move's start deposits nothing: the laser goes on after it.
+        Ok((step.line, step.deposit && !entering))
     };
     let screen = Screen::new(machine, process)?;
     let mut stream = screen.stream(posted, units);
@@ -542,7 +543,6 @@ pub fn verify_traced<R: BufRead>(
                 let (ls, rs) = j(&m.start);
                 let (le, re) = j(&m.end);
                 safety.travel(&le, &re, m.line)?;
-                laser_off_for_travel(&m, screen.laser())?;
                 match m.kind {
                     MoveKind::Rapid => safety.rapid(&ls, &rs, &le, &re, m.line)?,
                     MoveKind::Arc {
@@ -556,6 +556,9 @@ pub fn verify_traced<R: BufRead>(
                 }
                 let entering = after_travel;
                 after_travel = matches!(m.kind, MoveKind::Rapid);
+                // The intended move the move's end lies on (its input line, and whether
+                // it deposits).
+                let mut along = None;
                 match m.kind {
                     MoveKind::Rapid => {}
                     MoveKind::Linear | MoveKind::Probe => {
@@ -578,7 +581,7 @@ pub fn verify_traced<R: BufRead>(
                             )?;
                         }
                         let pose = fk(&m.end);
-                        check(
+                        along = Some(check(
                             pose.tip,
                             pose.axis,
                             m.feed,
@@ -587,7 +590,7 @@ pub fn verify_traced<R: BufRead>(
                             entering,
                             &mut current,
                             &mut rep,
-                        )?;
+                        )?);
                     }
                     MoveKind::Arc {
                         clockwise,
@@ -643,7 +646,7 @@ pub fn verify_traced<R: BufRead>(
                             m.line,
                         )?;
                         let pe = fk(&m.end);
-                        check(
+                        along = Some(check(
                             pe.tip,
                             pe.axis,
                             m.feed,
@@ -652,9 +655,10 @@ pub fn verify_traced<R: BufRead>(
                             false,
                             &mut current,
                             &mut rep,
-                        )?;
+                        )?);
                     }
                 }
+                process_state(&m, screen.switches(), process, along)?;
             }
         }
     }
@@ -706,25 +710,46 @@ pub(crate) fn posted_diagnostic(d: Diagnostic) -> Option<PostError> {
 /// machine stands the origin.) The first such line found is kept for [`Screen::check`].
 /// Also kept: the last program end or return (`M2`, `M30`, `M99`) read, in execution
 /// order, for [`Screen::finish`].
-/// And the machine's laser: on after a line holding every word of its `laser_on` code,
-/// off after one holding every word of `laser_off` (as `preview` reads them), for
-/// [`Screen::laser`].
+/// And the process switches the machine's codes set ([`Switches`]): the laser on after a
+/// line holding every word of its `laser_on` code, off after one holding every word of
+/// `laser_off` (as `preview` reads them); the powder, the spindle and the coolant alike,
+/// for [`process_state`].
 #[derive(Default, Clone)]
 pub(crate) struct Screen {
     found: Rc<Cell<Option<(u32, u16)>>>,
     last_end: Rc<Cell<Option<(u32, u16)>>>,
-    laser: Rc<Cell<Option<u32>>>,
-    codes: Rc<LaserCodes>,
+    switches: Rc<Cell<Switches>>,
+    codes: Rc<ProcessCodes>,
 }
 
-/// The words of the machine's laser codes; for deposition, the power word the laser-on
-/// line must hold (its letter and the power posted); and whether the program was posted
-/// without a work offset (then a line selecting one, `G54` included, is refused: the
-/// reader's moves would not show it).
+/// The process as the posted text has switched it so far: for each switch, the posted
+/// line that turned it on, while it is on.
+#[derive(Debug, Default, Clone, Copy, PartialEq)]
+pub(crate) struct Switches {
+    pub(crate) laser: Option<u32>,
+    pub(crate) powder: Option<u32>,
+    /// While the spindle turns (or is oriented, `M19`): the line, and whether it was
+    /// the machine's `spindle_on` code (else another `M3`, `M4` or `M19`).
+    pub(crate) spindle: Option<(u32, bool)>,
+    /// Any coolant (the machine's `coolant_on`, `M7` or `M8`; off by `coolant_off` or
+    /// `M9`).
+    pub(crate) coolant: Option<u32>,
+}
+
+/// The words of the machine's process codes; for deposition, the power word the
+/// laser-on line must hold (its letter and the power posted); and whether the program
+/// was posted without a work offset (then a line selecting one, `G54` included, is
+/// refused: the reader's moves would not show it).
 #[derive(Default)]
-pub(crate) struct LaserCodes {
+pub(crate) struct ProcessCodes {
     on: Vec<(u8, f64)>,
     off: Vec<(u8, f64)>,
+    powder_on: Vec<(u8, f64)>,
+    powder_off: Vec<(u8, f64)>,
+    spindle_on: Vec<(u8, f64)>,
+    spindle_off: Vec<(u8, f64)>,
+    coolant_on: Vec<(u8, f64)>,
+    coolant_off: Vec<(u8, f64)>,
     power: Option<(u8, f64)>,
     no_work_offset: bool,
 }
@@ -733,8 +758,8 @@ struct Screened<R> {
     lines: LineReader<R>,
     found: Rc<Cell<Option<(u32, u16)>>>,
     last_end: Rc<Cell<Option<(u32, u16)>>>,
-    laser: Rc<Cell<Option<u32>>>,
-    codes: Rc<LaserCodes>,
+    switches: Rc<Cell<Switches>>,
+    codes: Rc<ProcessCodes>,
 }
 
 impl Screen {
@@ -754,9 +779,15 @@ impl Screen {
             Process::Machine { .. } => None,
         };
         Ok(Screen {
-            codes: Rc::new(LaserCodes {
+            codes: Rc::new(ProcessCodes {
                 on: crate::post::code_words(&p.laser_on)?,
                 off: crate::post::code_words(&p.laser_off)?,
+                powder_on: crate::post::code_words(&p.powder_on)?,
+                powder_off: crate::post::code_words(&p.powder_off)?,
+                spindle_on: crate::post::code_words(&p.spindle_on)?,
+                spindle_off: crate::post::code_words(&p.spindle_off)?,
+                coolant_on: crate::post::code_words(&p.coolant_on)?,
+                coolant_off: crate::post::code_words(&p.coolant_off)?,
                 power,
                 no_work_offset: posted_work_offset(process)?.1.is_none(),
             }),
@@ -764,9 +795,9 @@ impl Screen {
         })
     }
 
-    /// The line that turned the laser on, while it is on.
-    pub(crate) fn laser(&self) -> Option<u32> {
-        self.laser.get()
+    /// The process switches as the lines read so far have set them.
+    pub(crate) fn switches(&self) -> Switches {
+        self.switches.get()
     }
 
     /// A stream of the posted text through this screen, in the machine's units.
@@ -775,7 +806,7 @@ impl Screen {
             lines: LineReader::new(posted),
             found: Rc::clone(&self.found),
             last_end: Rc::clone(&self.last_end),
-            laser: Rc::clone(&self.laser),
+            switches: Rc::clone(&self.switches),
             codes: Rc::clone(&self.codes),
         };
         Stream::new(
@@ -866,17 +897,71 @@ const LASER_STOP: u16 = u16::MAX - 1;
 /// The code [`Screen`] keeps for a laser-on line without the power posted.
 const LASER_POWER: u16 = u16::MAX - 2;
 
+impl ProcessCodes {
+    /// The process switches a parsed line sets, in `switches` (the line `number` kept
+    /// for each switched on); whether it turns the laser on at another power than the
+    /// one posted.
+    fn switch(&self, block: &lampost_gcode::Block, number: u32, switches: &mut Switches) -> bool {
+        let holds = |code: &[(u8, f64)]| {
+            !code.is_empty()
+                && code
+                    .iter()
+                    .all(|c| block.words().any(|w| (w.letter, w.value) == *c))
+        };
+        let m_code = |codes: &[u16]| {
+            block
+                .words()
+                .filter(|w| w.letter == b'M')
+                .filter_map(|w| w.code())
+                .any(|c| codes.contains(&c))
+        };
+        let mut wrong_power = false;
+        if holds(&self.off) {
+            switches.laser = None;
+        } else if holds(&self.on) {
+            switches.laser = switches.laser.or(Some(number));
+            // The power posted, as written (the emitter's rounding allowed).
+            if let Some((letter, want)) = self.power {
+                wrong_power = !block.words().any(|w| {
+                    w.letter == letter
+                        && (w.value - want).abs() <= SPEED_SLACK * want.abs().max(1.0)
+                });
+            }
+        }
+        if holds(&self.powder_off) {
+            switches.powder = None;
+        } else if holds(&self.powder_on) {
+            switches.powder = switches.powder.or(Some(number));
+        }
+        // M5 stops the spindle whatever the machine's code; M3, M4 (and M19, which
+        // orients it) other than the machine's `spindle_on` turn it otherwise.
+        if holds(&self.spindle_off) || m_code(&[50]) {
+            switches.spindle = None;
+        } else if holds(&self.spindle_on) {
+            switches.spindle = Some((number, true));
+        } else if m_code(&[30, 40, 190]) {
+            switches.spindle = Some((number, false));
+        }
+        if holds(&self.coolant_off) || m_code(&[90]) {
+            switches.coolant = None;
+        } else if holds(&self.coolant_on) || m_code(&[70, 80]) {
+            switches.coolant = switches.coolant.or(Some(number));
+        }
+        wrong_power
+    }
+}
+
 /// A line's first refused G-code (a frame code, or [`DWELL`]; or [`BLOCK_DELETE`]:
 /// whether a control runs the line depends on its block-delete switch), its program end
 /// or return (M2, M30, M99), if any, and whether it stops the program (M0, M1, M60);
 /// lines with neither a `G` nor an `M` are not parsed.
-/// A line's laser switch (`Some(true)` on, `Some(false)` off) is `laser`'s result.
+/// The line's process switches are set in `switches` ([`ProcessCodes::switch`]).
 fn screen_line(
     bytes: &[u8],
     number: u32,
     offset: usize,
-    codes: &LaserCodes,
-    laser: &mut Option<bool>,
+    codes: &ProcessCodes,
+    switches: &mut Switches,
 ) -> (Option<u16>, Option<u16>, bool) {
     if bytes.iter().find(|c| !c.is_ascii_whitespace()) == Some(&b'/') {
         return (Some(BLOCK_DELETE), None, false);
@@ -890,24 +975,7 @@ fn screen_line(
     let Ok(block) = lampost_gcode::parse_line(bytes, number, offset) else {
         return (None, None, false);
     };
-    let holds = |code: &[(u8, f64)]| {
-        !code.is_empty()
-            && code
-                .iter()
-                .all(|c| block.words().any(|w| (w.letter, w.value) == *c))
-    };
-    let mut wrong_power = false;
-    if holds(&codes.off) {
-        *laser = Some(false);
-    } else if holds(&codes.on) {
-        *laser = Some(true);
-        // The power posted, as written (the emitter's rounding allowed).
-        if let Some((letter, want)) = codes.power {
-            wrong_power = !block.words().any(|w| {
-                w.letter == letter && (w.value - want).abs() <= SPEED_SLACK * want.abs().max(1.0)
-            });
-        }
-    }
+    let wrong_power = codes.switch(&block, number, switches);
     let refused = block
         .words()
         .filter(|w| w.letter == b'G')
@@ -932,15 +1000,11 @@ impl<R: BufRead> LineSource for Screened<R> {
     fn next_line(&mut self) -> std::io::Result<Option<Line<'_>>> {
         let line = self.lines.next_line()?;
         if let Some(l) = &line {
-            let mut switch = None;
+            let mut switches = self.switches.get();
             let (refused, end, stop) =
-                screen_line(l.bytes, l.number, l.offset, &self.codes, &mut switch);
-            match switch {
-                Some(true) if self.laser.get().is_none() => self.laser.set(Some(l.number)),
-                Some(false) => self.laser.set(None),
-                _ => {}
-            }
-            let refused = refused.or((stop && self.laser.get().is_some()).then_some(LASER_STOP));
+                screen_line(l.bytes, l.number, l.offset, &self.codes, &mut switches);
+            self.switches.set(switches);
+            let refused = refused.or((stop && switches.laser.is_some()).then_some(LASER_STOP));
             if let (Some(code), None) = (refused, self.found.get()) {
                 self.found.set(Some((l.number, code)));
             }
@@ -1104,15 +1168,89 @@ impl PostedRules {
     }
 }
 
-/// No rapid while the laser is on (switched on at posted line `on`): the post turns it
-/// off before any travel, and a rapid with it on deposits along the way.
-pub(crate) fn laser_off_for_travel(m: &Move, on: Option<u32>) -> Result<(), PostError> {
-    match (m.kind, on) {
-        (MoveKind::Rapid, Some(l)) => Err(PostError::Verify(format!(
-            "posted line {}: a rapid with the laser on (turned on at posted line {l}): it would deposit along the travel",
-            m.line
-        ))),
-        _ => Ok(()),
+/// The process at every posted move, as the posted text has switched it ([`Switches`]),
+/// against the process the program was posted with:
+/// - no rapid with the laser on (the post turns it off before any travel; a rapid with it
+///   on deposits along the way);
+/// - deposition: along a deposition move (`along`: the intended move a feed's end lies
+///   on, its input line, and whether the feed deposits there: not on the approach onto
+///   its start) the laser on, and off along any other feed; the
+///   laser never on without the powder; the spindle never turning and the coolant never
+///   on (the post switches neither);
+/// - machining: the laser never on; every feed with the spindle turning as posted (the
+///   machine's `spindle_on` code); the coolant on along every feed when posted with it,
+///   and never on when posted without.
+pub(crate) fn process_state(
+    m: &Move,
+    s: Switches,
+    process: &Process,
+    along: Option<(u32, bool)>,
+) -> Result<(), PostError> {
+    let fail = |what: String| Err(PostError::Verify(format!("posted line {}: {what}", m.line)));
+    let feed = !matches!(m.kind, MoveKind::Rapid);
+    if let (false, Some(l)) = (feed, s.laser) {
+        return fail(format!(
+            "a rapid with the laser on (turned on at posted line {l}): it would deposit along the travel"
+        ));
+    }
+    match process {
+        Process::Deposit { .. } => {
+            if let Some((l, _)) = s.spindle {
+                return fail(format!(
+                    "the spindle turning (posted line {l}) in a program posted for deposition: the post never turns it"
+                ));
+            }
+            if let Some(l) = s.coolant {
+                return fail(format!(
+                    "coolant on (posted line {l}) in a program posted for deposition: the post never turns it on"
+                ));
+            }
+            if let (true, Some(l), None) = (feed, s.laser, s.powder) {
+                return fail(format!(
+                    "a feed with the laser on (posted line {l}) and no powder: it would melt the work without adding to it"
+                ));
+            }
+            match (along, s.laser) {
+                (Some((input, true)), None) => fail(format!(
+                    "a feed with the laser off along the deposition move of input line {input}: it would deposit nothing"
+                )),
+                (Some((input, false)), Some(l)) => fail(format!(
+                    "a feed with the laser on (posted line {l}) where the program deposits nothing (input line {input}'s move, or the approach onto it)"
+                )),
+                _ => Ok(()),
+            }
+        }
+        Process::Machine { coolant, .. } => {
+            if let Some(l) = s.laser {
+                return fail(format!(
+                    "the laser on (posted line {l}) in a program posted for machining"
+                ));
+            }
+            match (feed, s.spindle) {
+                (true, None) => {
+                    return fail(
+                        "a feed with the spindle stopped: the program was posted with it turning"
+                            .into(),
+                    )
+                }
+                (true, Some((l, false))) => {
+                    return fail(format!(
+                        "a feed with the spindle switched otherwise than posted (posted line {l}: not the machine's spindle_on code)"
+                    ))
+                }
+                _ => {}
+            }
+            match (*coolant, s.coolant) {
+                (true, None) if feed => fail(
+                    "a feed without coolant, and the program was posted with it (verify --coolant)"
+                        .into(),
+                ),
+                (false, Some(l)) => fail(format!(
+                    "coolant on (posted line {l}), and the program was posted without it (verify --coolant names it)"
+                )),
+                _ => Ok(()),
+            }
+        }
     }
 }
 

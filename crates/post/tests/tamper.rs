@@ -6,7 +6,10 @@
 //! goes below the work's top plus the margin. Then each posted program is tampered with
 //! (a feed or rotary value moved beyond tolerance, a rapid added to a point of the work,
 //! a feed's F word changed, the process changed before a feed (a work offset, a tool
-//! length offset, a tool change, another S), a motion block removed) and `verify` must
+//! length offset, a tool change, another S), a process switched within a run (the laser
+//! or powder off, the spindle or coolant on in a deposition; the spindle stopped,
+//! reversed or oriented, coolant or the laser on in a machining), a motion block
+//! removed) and `verify` must
 //! catch at least 99 % of the tampered
 //! programs. Seeded, so a failure reproduces.
 
@@ -166,7 +169,13 @@ fn rapids_clear_the_work(
 }
 
 /// A tampered copy of `text`, or `None` when the chosen change does not apply.
-fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'static str)> {
+fn tamper(
+    r: &mut Rng,
+    text: &str,
+    mv: &[Mv],
+    mm: bool,
+    deposit: bool,
+) -> Option<(String, &'static str)> {
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
     let fmt = |v: f64| {
         if mm {
@@ -180,7 +189,7 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
         .iter()
         .filter(|m| !matches!(m.1, MoveKind::Rapid))
         .collect();
-    match r.below(5) {
+    match r.below(6) {
         0 => {
             // One value moved beyond tolerance: an axis word of a feed, or a rotary.
             let m = feeds[r.below(feeds.len())];
@@ -265,6 +274,30 @@ fn tamper(r: &mut Rng, text: &str, mv: &[Mv], mm: bool) -> Option<(String, &'sta
             let code = ["G55", "E2", "G43 H7", "T4 M6", "S2500"][r.below(5)];
             lines.insert((m.0 - 1) as usize, code.to_string());
             Some((lines.join("\n") + "\n", "process changed"))
+        }
+        4 => {
+            // A process switch before a feed within a run (not the approach onto it,
+            // made with the laser still off): the laser or its powder off, the spindle
+            // or coolant on in a deposition; the spindle stopped, reversed or oriented,
+            // coolant (posted without) or the laser on in a machining.
+            let runs: Vec<&Mv> = mv
+                .windows(2)
+                .filter(|w| {
+                    !matches!(w[0].1, MoveKind::Rapid) && !matches!(w[1].1, MoveKind::Rapid)
+                })
+                .map(|w| &w[1])
+                .collect();
+            if runs.is_empty() {
+                return None;
+            }
+            let m = runs[r.below(runs.len())];
+            let codes: &[&str] = if deposit {
+                &["M72", "M74", "M3", "M8"]
+            } else {
+                &["M5", "M4", "M19", "M8", "M71"]
+            };
+            lines.insert((m.0 - 1) as usize, codes[r.below(codes.len())].to_string());
+            Some((lines.join("\n") + "\n", "process switched"))
         }
         _ => {
             // A motion block removed.
@@ -355,7 +388,8 @@ fn random_programs_post_verify_and_tampering_is_caught() {
                 layers: None,
             });
         }
-        let cfg = config(m, head, r.below(2) == 0);
+        let deposit = r.below(2) == 0;
+        let cfg = config(m, head, deposit);
         let mut out = Vec::new();
         match post(m, &secs, &cfg, &mut out, |_| {}) {
             Ok(_) => {}
@@ -402,7 +436,7 @@ fn random_programs_post_verify_and_tampering_is_caught() {
             panic!("case {case} ({name}): {e}\n{out}");
         }
         for _ in 0..6 {
-            let Some((bad, what)) = tamper(&mut r, &out, &mv, mm) else {
+            let Some((bad, what)) = tamper(&mut r, &out, &mv, mm, deposit) else {
                 continue;
             };
             if bad == out {
@@ -435,8 +469,9 @@ fn random_programs_post_verify_and_tampering_is_caught() {
         eprintln!("missed: {m}");
     }
     // A feed 10 % or more off is never within anything, nor is a program moved to
-    // another offset, tool or S: every one is caught.
-    for what in ["feed changed", "process changed"] {
+    // another offset, tool or S, or its laser, powder, spindle or coolant switched
+    // otherwise: every one is caught.
+    for what in ["feed changed", "process changed", "process switched"] {
         let (t, c) = kinds.get(what).copied().unwrap_or_default();
         assert!(t > 0 && c == t, "{what}: caught {c} of {t}");
     }
