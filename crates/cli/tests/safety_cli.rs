@@ -1771,4 +1771,20 @@ fn verify_holds_every_move_to_the_process_switches_posted() {
         &verify(&with(&d, line(&d, "G1"), "M71 S1000"), &[]),
         "a feed with the laser on",
     );
+    // Codes the post never writes whose effect verify cannot see: a user M code (a
+    // LinuxCNC M100 runs a program), a digital output (a laser may hang on one), a wait
+    // on an input, a pallet change; path blending.
+    for code in ["M100", "M62 P0", "M66 P0 L3 Q5", "M60"] {
+        let m_word = code.split(' ').next().expect("a word");
+        fails_at(
+            &verify(&with(&m, cut, code), &mach),
+            &format!(
+                "posted line {cut}: {m_word}, a code the post does not write for this machine"
+            ),
+        );
+    }
+    fails_at(
+        &verify(&with(&d, run_at, "G64 P0.1"), &[]),
+        &format!("posted line {run_at}: G64 (path blending)"),
+    );
 }

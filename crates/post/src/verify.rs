@@ -752,6 +752,8 @@ pub(crate) struct ProcessCodes {
     coolant_off: Vec<(u8, f64)>,
     power: Option<(u8, f64)>,
     no_work_offset: bool,
+    /// The M codes (in tenths) of the machine's process codes.
+    m_codes: Vec<u16>,
 }
 
 struct Screened<R> {
@@ -788,6 +790,7 @@ impl Screen {
                 spindle_off: crate::post::code_words(&p.spindle_off)?,
                 coolant_on: crate::post::code_words(&p.coolant_on)?,
                 coolant_off: crate::post::code_words(&p.coolant_off)?,
+                m_codes: process_m_codes(machine)?,
                 power,
                 no_work_offset: posted_work_offset(process)?.1.is_none(),
             }),
@@ -837,6 +840,17 @@ impl Screen {
                 char::from(self.codes.power.map_or(b'S', |p| p.0)),
                 lampost_gcode::Readable(self.codes.power.map_or(0.0, |p| p.1))
             ))),
+            Some((line, BLEND)) => Err(PostError::Verify(format!(
+                "posted line {line}: G64 (path blending): the control may leave the path by its P tolerance, or as far as it likes without one; the post writes none"
+            ))),
+            Some((line, code)) if code & FOREIGN_M != 0 && code < LASER_POWER => {
+                let c = code & !FOREIGN_M;
+                Err(PostError::Verify(format!(
+                    "posted line {line}: M{}{}, a code the post does not write for this machine (its process codes, M0, M1, M2, M30, M98 and M99): the control would act on it where verify cannot see",
+                    c / 10,
+                    if c % 10 == 0 { String::new() } else { format!(".{}", c % 10) },
+                )))
+            }
             Some((line, code)) if selects_work_offset(code) => Err(PostError::Verify(format!(
                 "posted line {line}: G{}{} selects a work offset, and the program was posted with none (the control's active one places it; give verify the post's --work-offset)",
                 code / 10,
@@ -890,6 +904,53 @@ const BLOCK_DELETE: u16 = u16::MAX;
 
 /// The code [`Screen`] keeps for a dwell (G4, in tenths).
 const DWELL: u16 = 40;
+
+/// The code [`Screen`] keeps for path blending (G64, in tenths).
+const BLEND: u16 = 640;
+
+/// The flag [`Screen`] sets on an M code (in tenths, at most 0x7000) the post does not
+/// write for the machine ([`foreign_m`]).
+const FOREIGN_M: u16 = 0x8000;
+
+/// The M codes (in tenths) of `machine`'s process codes (laser, powder, spindle,
+/// coolant, tool change, program end).
+fn process_m_codes(machine: &Machine) -> Result<Vec<u16>, PostError> {
+    let p = &machine.def.process;
+    let mut out = Vec::new();
+    for code in [
+        &p.laser_on,
+        &p.laser_off,
+        &p.powder_on,
+        &p.powder_off,
+        &p.spindle_on,
+        &p.spindle_off,
+        &p.coolant_on,
+        &p.coolant_off,
+        &p.tool_change,
+        &p.program_end,
+    ] {
+        for (letter, value) in crate::post::code_words(code)? {
+            if letter == b'M' && value >= 0.0 && value < 3000.0 {
+                out.push((value * 10.0).round() as u16);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Whether an M code (in tenths) is one the post does not write for a machine whose
+/// process codes hold `m_codes`: any but those, the program stops and ends (M0, M1, M2,
+/// M30), the subprogram call and return of a split program (M98, M99), and the spindle
+/// and coolant switches (M3, M4, M5, M7, M8, M9, M19), which [`process_state`] judges
+/// at every move. (A user M code runs a machine's own action: a LinuxCNC `M100`–`M199`
+/// runs a program, `M62`–`M65` set outputs a laser may hang on, `M66` waits, `M60`
+/// changes pallets.)
+fn foreign_m(code: u16, m_codes: &[u16]) -> bool {
+    !matches!(
+        code,
+        0 | 10 | 20 | 300 | 980 | 990 | 30 | 40 | 50 | 70 | 80 | 90 | 190
+    ) && !m_codes.contains(&code)
+}
 
 /// The code [`Screen`] keeps for a program stop (M0, M1, M60) with the laser on.
 const LASER_STOP: u16 = u16::MAX - 1;
@@ -983,6 +1044,7 @@ fn screen_line(
         .find(|&c| {
             frame_code(c).is_some()
                 || c == DWELL
+                || c == BLEND
                 || (codes.no_work_offset && selects_work_offset(c))
         });
     let ms = || {
@@ -993,7 +1055,14 @@ fn screen_line(
     };
     let end = ms().find(|c| matches!(c, 20 | 300 | 990));
     let stop = ms().any(|c| matches!(c, 0 | 10 | 600));
-    (refused.or(wrong_power.then_some(LASER_POWER)), end, stop)
+    let foreign = ms()
+        .find(|&c| foreign_m(c, &codes.m_codes))
+        .map(|c| FOREIGN_M | c.min(0x7000));
+    (
+        refused.or(wrong_power.then_some(LASER_POWER)).or(foreign),
+        end,
+        stop,
+    )
 }
 
 impl<R: BufRead> LineSource for Screened<R> {
