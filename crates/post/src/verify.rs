@@ -930,7 +930,7 @@ fn process_m_codes(machine: &Machine) -> Result<Vec<u16>, PostError> {
         &p.program_end,
     ] {
         for (letter, value) in crate::post::code_words(code)? {
-            if letter == b'M' && value >= 0.0 && value < 3000.0 {
+            if letter == b'M' && (0.0..3000.0).contains(&value) {
                 out.push((value * 10.0).round() as u16);
             }
         }
