@@ -1787,4 +1787,51 @@ fn verify_holds_every_move_to_the_process_switches_posted() {
         &verify(&with(&d, run_at, "G64 P0.1"), &[]),
         &format!("posted line {run_at}: G64 (path blending)"),
     );
+    // A per-point path with points that deposit nothing (travel between them, each
+    // approached with the laser off): the laser turned on for such an approach fails.
+    let csv_text: String = std::fs::read_to_string(fx("tilted-arc.csv"))
+        .expect("csv")
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if (9..14).contains(&i) {
+                let mut f: Vec<&str> = l.split(' ').collect();
+                f[7] = "0";
+                f.join(" ") + "\n"
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let csv = write(&dir, "gap.csv", &csv_text);
+    let out = dir.join("gap.nc").to_string_lossy().into_owned();
+    let o = lampost(&["post", "--machine", "nrc-lc", &csv, "-o", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let gap = std::fs::read_to_string(&out).expect("posted");
+    let vpp = |text: &str| {
+        let p = write(&dir, "gap-check.nc", text);
+        lampost(&["verify", "--machine", "nrc-lc", &csv, &p])
+    };
+    let o = vpp(&gap);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The second approach of the travel (a G1 straight down after an index).
+    let approach = 1 + gap
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.contains(" G1 ") && !l.contains(" X"))
+        .nth(1)
+        .expect("an approach")
+        .0;
+    let mut l: Vec<&str> = gap.lines().collect();
+    l.insert(approach, "M74");
+    l.insert(approach, "M72");
+    l.insert(approach - 1, "M73");
+    l.insert(approach - 1, "M71 S1000");
+    fails_at(
+        &vpp(&(l.join("\n") + "\n")),
+        &format!(
+            "posted line {}: a feed with the laser on (posted line {approach}) where the path deposits nothing",
+            approach + 2
+        ),
+    );
 }

@@ -887,6 +887,9 @@ pub fn verify_points_traced<R: BufRead>(
                 let mut next: Vec<(usize, f64)> = Vec::with_capacity(live.len() + 1);
                 let mut best: Option<(f64, f64)> = None;
                 let mut miss: Option<String> = None;
+                // Whether a reading that takes this move lies on a segment that deposits
+                // (segment k ends at point k, whose flag the post switches the laser by).
+                let mut deposits = false;
                 for &(k, at) in live.iter().rev() {
                     let Some(target) = placed.get(k) else {
                         miss.get_or_insert_with(|| {
@@ -902,6 +905,7 @@ pub fn verify_points_traced<R: BufRead>(
                     // about a standing tip).
                     let reached = d_tip <= tolerance && d_ax <= AXIS_TOLERANCE_DEG;
                     if reached {
+                        deposits |= k > 0 && target.deposit;
                         next.push((k + 1, 0.0));
                         keep_best(&mut best, (d_tip, d_ax));
                         if slow_enough(k) {
@@ -928,6 +932,7 @@ pub fn verify_points_traced<R: BufRead>(
                         }
                         Some((.., hi)) if hi < at => {}
                         Some((err, ang, lo, _)) => {
+                            deposits |= target.deposit;
                             next.push((k, at.max(lo)));
                             keep_best(&mut best, (err, ang));
                             if slow_enough(k) {
@@ -944,6 +949,14 @@ pub fn verify_points_traced<R: BufRead>(
                         }
                         None => {}
                     }
+                }
+                if let (Some(l), false, false) =
+                    (screen.switches().laser, deposits, next.is_empty())
+                {
+                    return Err(PostError::Verify(format!(
+                        "posted line {}: a feed with the laser on (posted line {l}) where the path deposits nothing",
+                        m.line
+                    )));
                 }
                 // One reading per point to reach: the one that has come least far.
                 next.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
