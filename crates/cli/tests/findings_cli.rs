@@ -1051,3 +1051,39 @@ fn axis_words_after_g80_move_in_the_motion_before_the_cycle() {
         stderr(&o)
     );
 }
+
+/// Blanks between a number's characters are nothing to rs274, which takes them out of a
+/// block before reading it (`X 1 0.5` is X10.5, `Y- 2` is Y−2), as Fanuc's controls
+/// ignore spaces: lampost refused the line, "number `0.5` has no address letter" (33).
+/// Now equal to rs274 under every CAM flavour; a printer's firmware joins nothing, and
+/// the slicer reading still refuses it.
+#[test]
+fn blanks_inside_a_number_are_nothing_as_in_rs274() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-blank-digits");
+    let path = finding("33-space-inside-number.nc");
+    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+    assert_eq!(canon.len(), 1);
+    for flavor in ["linuxcnc", "fanuc", "haas", "fadal", "mach3"] {
+        let doc = trace_json(flavor, &path);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+        assert_eq!(ends(&doc), [[10.5, -2.0, 0.0]], "{flavor}");
+    }
+    let o = lampost(&["check", "--flavor", "marlin", path.to_str().expect("utf8")]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    // More spellings, each against rs274: blanks around a point, in a G-code, in a feed.
+    let p = work.join("spellings.nc");
+    std::fs::write(
+        &p,
+        "G 2 1 G9 0\nG 0 X1 .5 Y 2 . 2 5 Z- 0 .1\nG 1 X 1 0 F1 0 0\nY1. 5\nM 2\n",
+    )
+    .expect("writes");
+    let canon = rs274_to_end(&p, &work).expect("rs274 runs it");
+    assert_eq!(canon.len(), 3);
+    for flavor in ["linuxcnc", "fanuc"] {
+        let doc = trace_json(flavor, &p);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+    }
+}
