@@ -286,6 +286,20 @@ fn text_token(text: &str, start: usize) -> Option<usize> {
     None
 }
 
+/// A value spelled `nan`, `inf` or `infinity` (any case, signed or not) at the start of
+/// `rest`, as a script whose arithmetic failed writes it (`G3 X3 Enan Fnan`): the text
+/// of it, for a message that says so (finding 46).
+fn not_a_number(rest: &str) -> Option<&str> {
+    let b = rest.as_bytes();
+    let sign = usize::from(matches!(b.first(), Some(b'+' | b'-')));
+    let word_end = b[sign..]
+        .iter()
+        .position(|c| !c.is_ascii_alphabetic())
+        .map_or(b.len(), |p| sign + p);
+    let word = rest[sign..word_end].to_ascii_lowercase();
+    matches!(word.as_str(), "nan" | "inf" | "infinity").then(|| &rest[..word_end])
+}
+
 /// The end of a number read from `start` to `end` when digits follow it after blanks:
 /// rs274 and Fanuc's controls take the blanks out of a block before reading it, so
 /// `X 1 0.5` is X10.5, `G 0 1` is G1 and `X1 .5` is X1.5. The digits after each run of
@@ -1160,11 +1174,18 @@ fn words_reference_items<'a>(
                                 err(ErrorKind::BadNumber(num.to_string()), start, end)
                             })
                         }
-                        Err(_) => Err(err(
-                            ErrorKind::LetterWithoutNumber(char::from(letter)),
-                            start,
-                            start + 1,
-                        )),
+                        Err(_) => Err(match not_a_number(&text[j..]) {
+                            Some(n) => err(
+                                ErrorKind::NotANumber(char::from(letter), n.to_string()),
+                                start,
+                                j + n.len(),
+                            ),
+                            None => err(
+                                ErrorKind::LetterWithoutNumber(char::from(letter)),
+                                start,
+                                start + 1,
+                            ),
+                        }),
                     },
                 };
                 let scanned = match scanned {
@@ -1358,6 +1379,34 @@ mod tests {
         for s in ["G0 X - -5", "G0 X - ", "G0 X -", "G0 X - -[1]"] {
             assert!(parse_line(s.as_bytes(), 1, 0).is_err(), "{s}");
         }
+    }
+
+    /// A value spelled `nan` or `inf` is named as such, at the word (finding 46).
+    #[test]
+    fn nan_and_inf_are_named_as_failed_calculations() {
+        for (s, col, word) in [
+            ("G3 X3 Y3 Z3 Enan Fnan;; Layer 1", 13, "Enan"),
+            ("G1 X-inf", 4, "X-inf"),
+            ("G1 F INF", 4, "FINF"),
+            ("G1 YNaN", 4, "YNaN"),
+        ] {
+            let e = parse_line(s.as_bytes(), 1, 0).expect_err("refused");
+            assert_eq!(e.column, col, "{s}");
+            assert!(
+                matches!(&e.kind, ErrorKind::NotANumber(..))
+                    && e.kind.to_string().starts_with(word)
+                    && e.kind.to_string().contains("not a number"),
+                "{s}: {}",
+                e.kind
+            );
+        }
+        // Other letters after a letter are still a letter without a number.
+        let e = parse_line(b"G1 Xnano", 1, 0).expect_err("refused");
+        assert!(
+            matches!(e.kind, ErrorKind::LetterWithoutNumber('X')),
+            "{}",
+            e.kind
+        );
     }
 
     /// Blanks between a number's characters are nothing, as rs274 and Fanuc's controls
