@@ -951,3 +951,139 @@ fn a_sign_with_blanks_after_it_signs_its_value() {
         ends(&trace_json("fanuc", &path))
     );
 }
+
+/// A slicer's preview images can fill the first 64 KiB that `auto` looks at (Creality
+/// Print 4.3.8: three PNGs, `;FLAVOR:Creality OS` at byte 104,467): every line there is a
+/// `;` comment, so the program was read as LinuxCNC's and refused at its first E word
+/// (42). The image block is a slicer's mark: the program now reads as a printer's, and
+/// traces as it does without its images.
+#[test]
+fn a_slicer_s_thumbnails_filling_the_head_read_as_a_printer_s() {
+    let work = tempdir("findings-thumbnail-head");
+    let body = ";FLAVOR:Creality OS\nG21\nG90\nM83\nG1 Z0.2 F600\nG1 X10 Y0 E0.5 F1200\n\
+                G2 X20 Y10 I0 J10 E0.6\nG1 X0 E0.8\nM84\n";
+    let mut big = String::from("; png begin 300*300 104000 0 95 192\n");
+    while big.len() < 100 * 1024 {
+        big.push_str("; iVBORw0KGgoAAAANSUhEUgAAASwAAAEsCAYAAAB5fY51AAAACXBIWXMAAA7EAAAR\n");
+    }
+    big.push_str("; png end\n");
+    let with = work.join("with-thumbnail.gcode");
+    let without = work.join("without.gcode");
+    std::fs::write(&with, format!("{big}{body}")).expect("writes");
+    std::fs::write(&without, body).expect("writes");
+    let doc = trace_json("auto", &with);
+    assert_eq!(doc["flavor"]["flavor"], "marlin", "{}", doc["flavor"]);
+    assert!(
+        doc["flavor"]["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("thumbnail") && r.contains("line 1")),
+        "{}",
+        doc["flavor"]
+    );
+    assert_eq!(ends(&doc), ends(&trace_json("auto", &without)));
+    assert_eq!(ends(&doc).len(), 4);
+    // Read as LinuxCNC's (what `auto` chose before), it is refused at the first E.
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        with.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    // The real program: found, and traced to the end of the part kept.
+    let real = root().join("fixtures/real-programs/creality-print/benchy-k1se-4.3.8.gcode");
+    let o = lampost(&["check", "--json", real.to_str().expect("utf8")]);
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["flavor"]["flavor"], "marlin", "{}", doc["flavor"]);
+}
+
+/// Mastercam's Haas post writes `A0.` alone after `G80` (and CAM posts for Fanuc-style
+/// controls may start the next positioning without G0): on Fanuc and Haas the canned
+/// cycles are group 09, apart from the group-01 motion, so G80 leaves the G0 (or G1) in
+/// force before the cycle, and the line is a move. lampost refused it "axis words but no
+/// motion mode" in every flavour (43). Under `fanuc`, `haas` and `fadal` it now moves in
+/// that mode: the same moves as rs274 gives for the program with the codes written out
+/// (`G0 A0.`, `G1 Y1.`). Under `linuxcnc` both still refuse the line, where rs274's G80
+/// leaves no motion.
+#[test]
+fn axis_words_after_g80_move_in_the_motion_before_the_cycle() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-after-g80");
+    let path = finding("43-axis-words-after-g80-fanuc.nc");
+    let text = std::fs::read_to_string(&path).expect("reads");
+    let explicit: String = text
+        .lines()
+        .map(|l| match l {
+            "A0." => "G0 A0.\n".to_string(),
+            "Y1." => "G1 Y1.\n".to_string(),
+            l => format!("{l}\n"),
+        })
+        .collect();
+    assert_ne!(explicit, text);
+    let p = work.join("explicit.nc");
+    std::fs::write(&p, &explicit).expect("writes");
+    let canon = rs274_to_end(&p, &work).expect("rs274 runs the explicit program");
+    for flavor in ["fanuc", "haas", "fadal"] {
+        let doc = trace_json(flavor, &path);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+        // The line after the second G80 is a feed (G1 was in force before that cycle).
+        let moves = doc["moves"].as_array().expect("moves");
+        let y1 = moves
+            .iter()
+            .find(|m| m["line"] == 16)
+            .unwrap_or_else(|| panic!("{flavor}: no move at line 16"));
+        assert_eq!(y1["kind"]["type"], "linear", "{flavor}: {y1}");
+    }
+    // LinuxCNC: refused at the same line as rs274 refuses it.
+    let err = rs274_to_end(&path, &work).expect_err("rs274 refuses `A0.` after G80");
+    assert!(err.contains("Cannot use axis values"), "{err}");
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        path.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains(":10:1"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Blanks between a number's characters are nothing to rs274, which takes them out of a
+/// block before reading it (`X 1 0.5` is X10.5, `Y- 2` is Y−2), as Fanuc's controls
+/// ignore spaces: lampost refused the line, "number `0.5` has no address letter" (33).
+/// Now equal to rs274 under every CAM flavour; a printer's firmware joins nothing, and
+/// the slicer reading still refuses it.
+#[test]
+fn blanks_inside_a_number_are_nothing_as_in_rs274() {
+    if require_rs274().is_none() {
+        return;
+    }
+    let work = tempdir("findings-blank-digits");
+    let path = finding("33-space-inside-number.nc");
+    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+    assert_eq!(canon.len(), 1);
+    for flavor in ["linuxcnc", "fanuc", "haas", "fadal", "mach3"] {
+        let doc = trace_json(flavor, &path);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+        assert_eq!(ends(&doc), [[10.5, -2.0, 0.0]], "{flavor}");
+    }
+    let o = lampost(&["check", "--flavor", "marlin", path.to_str().expect("utf8")]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    // More spellings, each against rs274: blanks around a point, in a G-code, in a feed.
+    let p = work.join("spellings.nc");
+    std::fs::write(
+        &p,
+        "G 2 1 G9 0\nG 0 X1 .5 Y 2 . 2 5 Z- 0 .1\nG 1 X 1 0 F1 0 0\nY1. 5\nM 2\n",
+    )
+    .expect("writes");
+    let canon = rs274_to_end(&p, &work).expect("rs274 runs it");
+    assert_eq!(canon.len(), 3);
+    for flavor in ["linuxcnc", "fanuc"] {
+        let doc = trace_json(flavor, &p);
+        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
+    }
+}

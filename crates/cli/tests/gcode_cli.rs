@@ -22,9 +22,10 @@ fn bad_input_gets_located_errors() {
             "the letter X has no number",
         ),
         (
+            // (`G1 X1 12.5` is X112.5, as rs274 reads it: finding 33.)
             "number",
-            b"G1 X1 12.5\n".to_vec(),
-            ":1:7",
+            b"G1 X1 (c) 12.5\n".to_vec(),
+            ":1:11",
             "has no address letter",
         ),
         (

@@ -11,8 +11,8 @@
 //!
 //! Slicer programs (prusaslicer, cura, bambustudio, slic3r, kisslicer, simplify3d,
 //! superslicer, icesl, mattercontrol, orcaslicer, snapmaker-luban, ideamaker, skeinforge,
-//! miracle-grue, arcwelder, marlin-kfactor, kcalibrator, weedo) are traced
-//! with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
+//! miracle-grue, arcwelder, marlin-kfactor, kcalibrator, weedo, creality-print, fullcontrol)
+//! are traced with `--e-word extrusion` and posted with `post --machine nrc-lc --e-extrusion`; the
 //! verdict then says `post R runs` when the post deposits the extruding length (relative
 //! difference ≤ 1e-9) with one laser-on per extruding run, or `post refused L: …`. Their
 //! start code's homing (`G28`) and bed levelling (`G29`) lines are left out of the posted
@@ -33,7 +33,7 @@ use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const SLICERS: [&str; 18] = [
+const SLICERS: [&str; 20] = [
     "prusaslicer",
     "cura",
     "bambustudio",
@@ -52,6 +52,8 @@ const SLICERS: [&str; 18] = [
     "marlin-kfactor",
     "kcalibrator",
     "weedo",
+    "creality-print",
+    "fullcontrol",
 ];
 
 /// `lampost check --json` of a program (with `e_word`'s options): the report and the run.

@@ -37,6 +37,12 @@ pub enum ErrorKind {
     /// A number that cannot be read (too long, or not finite).
     #[error("cannot read the number `{0}`")]
     BadNumber(String),
+    /// A word whose value is spelled `nan` or `inf` (`Enan`, `F-inf`): what a generating
+    /// script writes when its calculation failed.
+    #[error(
+        "{0}{1}: `{1}` is not a number (a calculation that failed in the program that wrote it)"
+    )]
+    NotANumber(char, String),
     /// The same word letter twice in one block.
     #[error("{0} appears twice in this block")]
     DuplicateWord(String),
@@ -368,6 +374,7 @@ impl ErrorKind {
             ErrorKind::UnexpectedCharacter(_) => "remove it, or put it inside a comment `( … )`",
             ErrorKind::NestedComment => "remove the inner parentheses or write `[ ]` instead (LinuxCNC refuses nested comments too)",
             ErrorKind::BadNumber(_) => "write a plain decimal number such as `-12.5`",
+            ErrorKind::NotANumber(..) => "generate the program again once the tool that wrote it computes this value; no machine reads it",
             ErrorKind::DuplicateWord(_) => "keep one value per letter in a block",
             ErrorKind::ModalGroupConflict { .. } => "keep one code of each modal group per block",
             ErrorKind::UnknownGCode(_) => "check the code against the controller's manual, or remove it",

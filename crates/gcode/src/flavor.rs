@@ -85,6 +85,14 @@ impl Flavor {
         self == Flavor::LinuxCnc || self.macro_b()
     }
 
+    /// Canned cycles are a modal group of their own (Fanuc's group 09), apart from the
+    /// group-01 motion G0–G3: G80 leaves the motion that was in force before the cycle
+    /// (Fanuc, Haas; FADAL read as the Fanuc family it follows). LinuxCNC (rs274) and grbl
+    /// put the cycles in the motion group, so G80 leaves none.
+    pub fn cycles_apart_from_motion(self) -> bool {
+        matches!(self, Flavor::Fanuc | Flavor::Haas | Flavor::Fadal)
+    }
+
     /// Fanuc Macro B is evaluated (see Macro B (`macrob.rs`)).
     pub fn macro_b(self) -> bool {
         matches!(self, Flavor::Fanuc | Flavor::Haas)
@@ -317,6 +325,14 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             }
             continue;
         }
+        // A slicer's preview image (`; thumbnail begin 300x300 …`, `; png begin …`):
+        // printers' programs only. Large ones fill the whole head (Creality Print's three
+        // PNGs, over 100 KiB before `;FLAVOR`), so the block decides as a slicer's name
+        // does (a later line naming RepRapFirmware still wins).
+        if thumbnail_begin(line) {
+            slicer = Some((Flavor::Marlin, at("a slicer's thumbnail image block")));
+            continue;
+        }
         // Comments that name their source.
         if let Some(p) = line.find([';', '(']) {
             let c = &line[p..];
@@ -481,6 +497,24 @@ fn polar_word(code: &str) -> bool {
     })
 }
 
+/// The first line of a slicer's embedded preview image: `; thumbnail begin 220x124 5788`
+/// (PrusaSlicer, Cura, Orca), `; thumbnail_QOI begin …`, `; thumbnail_JPG begin …`,
+/// `; png begin 96*96 …` and `; jpg begin …` (Creality Print).
+fn thumbnail_begin(line: &str) -> bool {
+    let Some(rest) = line.strip_prefix(';') else {
+        return false;
+    };
+    let mut words = rest.split_ascii_whitespace();
+    let (Some(kind), Some(begin)) = (words.next(), words.next()) else {
+        return false;
+    };
+    let kind = kind.to_ascii_lowercase();
+    begin.eq_ignore_ascii_case("begin")
+        && (kind == "thumbnail"
+            || kind.starts_with("thumbnail_")
+            || matches!(kind.as_str(), "png" | "jpg" | "jpeg" | "qoi"))
+}
+
 /// A `;` outside `(…)` comments: a `;` comment.
 fn semicolon_comment(line: &str) -> bool {
     let mut in_paren = false;
@@ -506,6 +540,35 @@ fn clip(line: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_slicer_s_thumbnail_block_decides_though_it_fills_the_head() {
+        // Creality Print: three PNGs (over 100 KiB) before `;FLAVOR:Creality OS`; every
+        // line of the head is a `;` comment, which alone would read as LinuxCNC.
+        let mut big = String::from("; png begin 96*96 7757 0 95 192\n");
+        while big.len() < 2 * DETECT_BYTES {
+            big.push_str("; iVBORw0KGgoAAAANSUhEUgAAAGAAAABgCAYAAADimHc4AAAACXBIWXMAABJ0AAA\n");
+        }
+        big.push_str("; png end\n;FLAVOR:Creality OS\nG1 X1 E.2\n");
+        let (f, why) = detect(big.as_bytes());
+        assert_eq!(f, Flavor::Marlin, "{why}");
+        assert!(why.contains("thumbnail"), "{why}");
+        for (text, want) in [
+            ("; thumbnail begin 16x16 100\n; abc\n", Flavor::Marlin),
+            ("; thumbnail_QOI begin 16x16 100\n", Flavor::Marlin),
+            (";thumbnail_JPG begin 16x16 100\n", Flavor::Marlin),
+            // The firmware named after the image still decides.
+            (
+                "; thumbnail begin 16x16 100\n; thumbnail end\n;FLAVOR:RepRap\n",
+                Flavor::RepRap,
+            ),
+            // Not an image block: a comment that merely says so, or a `(…)` comment.
+            ("; png of the part begins here\nG0 X1\n", Flavor::LinuxCnc),
+            ("(thumbnail begin)\nG0 X1\n", Flavor::Fadal),
+        ] {
+            assert_eq!(detect(text.as_bytes()).0, want, "{text:?}");
+        }
+    }
 
     #[test]
     fn auto_finds_each_flavour() {

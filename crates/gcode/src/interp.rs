@@ -232,6 +232,10 @@ pub struct Interpreter {
     warned_e_mode: bool,
     /// The thread motion in force is LinuxCNC's rigid tap `G33.1` (it returns to its start).
     rigid_tap: bool,
+    /// The group-01 motion (G0–G3) in force when a canned cycle began: under Fanuc, Haas
+    /// and FADAL (their cycles are group 09, apart from motion) G80 returns to it (see
+    /// [`crate::flavor::Flavor::cycles_apart_from_motion`]).
+    motion_before_cycle: Motion,
     /// Inside a LinuxCNC `G5.2` … `G5.3` NURBS block (control points, not moves).
     nurbs: bool,
     /// A skipped macro block set the feed rate from a value lampost does not know: later
@@ -494,6 +498,7 @@ impl Interpreter {
             warned_normal_centre: false,
             warned_e_mode: false,
             rigid_tap: false,
+            motion_before_cycle: Motion::None,
             nurbs: false,
             feed_from_macro: false,
             profile: None,
@@ -1731,17 +1736,7 @@ impl Interpreter {
         // `collect`), else its G80.
         if let Some((gw, c)) = w.g_in(GGroup::Motion) {
             self.rigid_tap = c == 331;
-            let m = &mut self.modal;
-            m.motion = match c {
-                0 => Motion::Rapid,
-                10 => Motion::Linear,
-                20 => Motion::ArcCw,
-                30 => Motion::ArcCcw,
-                330 | 331 => Motion::Thread,
-                382..=385 => Motion::Probe,
-                800 => Motion::None,
-                c => Motion::Canned(c),
-            };
+            self.modal.motion = self.motion_of_code(c);
             if matches!(c, 330 | 331) {
                 self.warn(
                     b,
@@ -1947,6 +1942,35 @@ impl Interpreter {
 
     /// The modal groups of a block's G-codes other than motion, feed mode and tool
     /// length (see [`Interpreter::execute`]).
+    /// The motion mode a block's group-1 code `c` (the code times ten) sets. G80 ends a
+    /// canned cycle: under LinuxCNC (rs274) and the printer firmwares no motion mode is left;
+    /// under Fanuc, Haas and FADAL, whose cycles are group 09 apart from the group-01 motion
+    /// (Fanuc 0i-MF's and the Haas mill manual's G-code tables), the G0–G3 in force before
+    /// the cycle is in force again (Mastercam's Haas post writes `A0.` after `G80`: a G0
+    /// move there).
+    fn motion_of_code(&mut self, c: u16) -> Motion {
+        let now = self.modal.motion;
+        match c {
+            0 => Motion::Rapid,
+            10 => Motion::Linear,
+            20 => Motion::ArcCw,
+            30 => Motion::ArcCcw,
+            330 | 331 => Motion::Thread,
+            382..=385 => Motion::Probe,
+            800 if self.opts.flavor.cycles_apart_from_motion() => match now {
+                Motion::Canned(_) => self.motion_before_cycle,
+                other => other,
+            },
+            800 => Motion::None,
+            c => {
+                if !matches!(now, Motion::Canned(_)) {
+                    self.motion_before_cycle = now;
+                }
+                Motion::Canned(c)
+            }
+        }
+    }
+
     fn modal_groups(
         &mut self,
         b: &Block<'_>,

@@ -286,6 +286,53 @@ fn text_token(text: &str, start: usize) -> Option<usize> {
     None
 }
 
+/// A value spelled `nan`, `inf` or `infinity` (any case, signed or not) at the start of
+/// `rest`, as a script whose arithmetic failed writes it (`G3 X3 Enan Fnan`): the text
+/// of it, for a message that says so (finding 46).
+fn not_a_number(rest: &str) -> Option<&str> {
+    let b = rest.as_bytes();
+    let sign = usize::from(matches!(b.first(), Some(b'+' | b'-')));
+    let word_end = b[sign..]
+        .iter()
+        .position(|c| !c.is_ascii_alphabetic())
+        .map_or(b.len(), |p| sign + p);
+    let word = rest[sign..word_end].to_ascii_lowercase();
+    matches!(word.as_str(), "nan" | "inf" | "infinity").then(|| &rest[..word_end])
+}
+
+/// The end of a number read from `start` to `end` when digits follow it after blanks:
+/// rs274 and Fanuc's controls take the blanks out of a block before reading it, so
+/// `X 1 0.5` is X10.5, `G 0 1` is G1 and `X1 .5` is X1.5. The digits after each run of
+/// blanks, and one decimal point if the number has none yet, continue it; anything else
+/// (a letter, a sign, a second point, a comment) ends it. `end` itself when no blank
+/// and digit follow.
+fn blank_continued(bytes: &[u8], start: usize, mut end: usize) -> usize {
+    let mut point = bytes[start..end].contains(&b'.');
+    loop {
+        let mut k = end;
+        while matches!(bytes.get(k), Some(b' ' | b'\t')) {
+            k += 1;
+        }
+        if k == end {
+            return end;
+        }
+        let mut took = false;
+        loop {
+            match bytes.get(k) {
+                Some(c) if c.is_ascii_digit() => {}
+                Some(b'.') if !point => point = true,
+                _ => break,
+            }
+            k += 1;
+            took = true;
+        }
+        if !took {
+            return end;
+        }
+        end = k;
+    }
+}
+
 /// An exponent right after a number's digits, when exponents are read: a lower-case
 /// `e`, an optional sign and at least one digit (`1e-05`, `2.5e3`). The end of the
 /// exponent, or `None`.
@@ -1127,14 +1174,30 @@ fn words_reference_items<'a>(
                                 err(ErrorKind::BadNumber(num.to_string()), start, end)
                             })
                         }
-                        Err(_) => Err(err(
-                            ErrorKind::LetterWithoutNumber(char::from(letter)),
-                            start,
-                            start + 1,
-                        )),
+                        Err(_) => Err(match not_a_number(&text[j..]) {
+                            Some(n) => err(
+                                ErrorKind::NotANumber(char::from(letter), n.to_string()),
+                                start,
+                                j + n.len(),
+                            ),
+                            None => err(
+                                ErrorKind::LetterWithoutNumber(char::from(letter)),
+                                start,
+                                start + 1,
+                            ),
+                        }),
                     },
                 };
                 let scanned = match scanned {
+                    // Digits after blanks go on with the number (`X 1 0.5` is X10.5), as
+                    // rs274 and Fanuc's controls read a block with its blanks taken out;
+                    // a printer's firmware does not (finding 33).
+                    Ok((end, value)) if !slicer => match blank_continued(bytes, j, end) {
+                        e if e == end => Ok((end, value)),
+                        e => parse_number(&text[j..e]).map(|v| (e, v)).ok_or_else(|| {
+                            err(ErrorKind::BadNumber(text[j..e].to_string()), start, e)
+                        }),
+                    },
                     Ok((end, value)) if slicer => match exponent_end(bytes, end) {
                         Some(e) => text[j..e]
                             .parse::<f64>()
@@ -1315,6 +1378,112 @@ mod tests {
         // A second sign, or nothing after the blanks, is no number.
         for s in ["G0 X - -5", "G0 X - ", "G0 X -", "G0 X - -[1]"] {
             assert!(parse_line(s.as_bytes(), 1, 0).is_err(), "{s}");
+        }
+    }
+
+    /// A value spelled `nan` or `inf` is named as such, at the word (finding 46).
+    #[test]
+    fn nan_and_inf_are_named_as_failed_calculations() {
+        for (s, col, word) in [
+            ("G3 X3 Y3 Z3 Enan Fnan;; Layer 1", 13, "Enan"),
+            ("G1 X-inf", 4, "X-inf"),
+            ("G1 F INF", 4, "FINF"),
+            ("G1 YNaN", 4, "YNaN"),
+        ] {
+            let e = parse_line(s.as_bytes(), 1, 0).expect_err("refused");
+            assert_eq!(e.column, col, "{s}");
+            assert!(
+                matches!(&e.kind, ErrorKind::NotANumber(..))
+                    && e.kind.to_string().starts_with(word)
+                    && e.kind.to_string().contains("not a number"),
+                "{s}: {}",
+                e.kind
+            );
+        }
+        // Other letters after a letter are still a letter without a number.
+        let e = parse_line(b"G1 Xnano", 1, 0).expect_err("refused");
+        assert!(
+            matches!(e.kind, ErrorKind::LetterWithoutNumber('X')),
+            "{}",
+            e.kind
+        );
+    }
+
+    /// Blanks between a number's characters are nothing, as rs274 and Fanuc's controls
+    /// read them (finding 33): `X 1 0.5` is X10.5; a printer's firmware reads no such
+    /// number, and neither reading joins a sign, a second point or a comment.
+    #[test]
+    fn blanks_inside_a_number_are_nothing() {
+        let w = words("G 0 1 X 1 0.5 Y- 2 Z1 .5 A1. 2 B 3 . 2 5 F1 0 0");
+        let v: Vec<_> = w.iter().map(|w| (w.0, w.2)).collect();
+        assert_eq!(
+            v,
+            [
+                ('G', 1.0),
+                ('X', 10.5),
+                ('Y', -2.0),
+                ('Z', 1.5),
+                ('A', 1.2),
+                ('B', 3.25),
+                ('F', 100.0)
+            ]
+        );
+        // A comment ends the number (rs274: "Bad character '2' used").
+        for s in [
+            "G0 X1 (a) 2 Y3",
+            "G0 X1 -2",
+            "G0 X1.5 .5",
+            "G0 X1 2 Y3 4 X5",
+        ] {
+            assert!(parse_line(s.as_bytes(), 1, 0).is_err(), "{s}");
+        }
+        let mut b = Block::empty(1, 0);
+        let slicer = Reading::from(true);
+        assert!(parse_line_with(b"G1 X1 0.5", 1, 0, &mut b, slicer).is_err());
+    }
+
+    proptest::proptest! {
+        /// A line of words with blanks put between any characters of its numbers reads
+        /// as the line without them, under the LinuxCNC and the Fanuc reading.
+        #[test]
+        fn blanks_between_a_number_s_characters_change_nothing(
+            ws in proptest::collection::vec(
+                ("[XYZABCIJKFSPQR]", "[+-]?[0-9]{1,5}(\\.[0-9]{0,4})?",
+                 proptest::collection::vec((0usize..12, "[ \t]{1,3}"), 0..4)),
+                1..6,
+            )
+        ) {
+            let mut letters = std::collections::HashSet::new();
+            let mut plain = String::from("G1");
+            let mut spaced = String::from("G 1");
+            for (l, n, blanks) in &ws {
+                if !letters.insert(l.clone()) {
+                    continue;
+                }
+                plain.push_str(&format!(" {l}{n}"));
+                let mut t = n.clone();
+                let mut at: Vec<(usize, &String)> = blanks
+                    .iter()
+                    .map(|(k, b)| (1 + k % n.len(), b))
+                    .filter(|(k, _)| *k < n.len())
+                    .collect();
+                at.sort_by_key(|b| std::cmp::Reverse(b.0));
+                for (k, b) in at {
+                    t.insert_str(k, b);
+                }
+                spaced.push_str(&format!(" {l}{t}"));
+            }
+            for flavor in [crate::flavor::Flavor::LinuxCnc, crate::flavor::Flavor::Fanuc] {
+                let reading = Reading::of(flavor, false);
+                let read = |line: &str| {
+                    let mut b = Block::empty(1, 0);
+                    parse_line_with(line.as_bytes(), 1, 0, &mut b, reading)
+                        .map(|()| b.words().map(|w| (w.letter, w.value.to_bits())).collect::<Vec<_>>())
+                        .map_err(|e| e.to_string())
+                };
+                proptest::prop_assert_eq!(read(&spaced), read(&plain), "{} / {}", spaced, plain);
+                proptest::prop_assert!(read(&plain).is_ok(), "{}", plain);
+            }
         }
     }
 
@@ -1593,7 +1762,7 @@ mod tests {
         let cases: [(&[u8], u32); 7] = [
             (b"G1 X1 (open", 7),
             (b"G1 X Y1", 4),
-            (b"G1 12.5", 4),
+            (b"G1 (a) 12.5", 8),
             (b"G1 X1 X2", 7),
             (b"G1 X1 @", 7),
             (b"G1 X\xff", 5),
