@@ -1940,8 +1940,6 @@ impl Interpreter {
         Ok(())
     }
 
-    /// The modal groups of a block's G-codes other than motion, feed mode and tool
-    /// length (see [`Interpreter::execute`]).
     /// The motion mode a block's group-1 code `c` (the code times ten) sets. G80 ends a
     /// canned cycle: under LinuxCNC (rs274) and the printer firmwares no motion mode is left;
     /// under Fanuc, Haas and FADAL, whose cycles are group 09 apart from the group-01 motion
@@ -1971,6 +1969,8 @@ impl Interpreter {
         }
     }
 
+    /// The modal groups of a block's G-codes other than motion, feed mode and tool
+    /// length (see [`Interpreter::execute`]).
     fn modal_groups(
         &mut self,
         b: &Block<'_>,

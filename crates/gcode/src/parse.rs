@@ -307,6 +307,17 @@ fn not_a_number(rest: &str) -> Option<&str> {
 /// (a letter, a sign, a second point, a comment) ends it. `end` itself when no blank
 /// and digit follow.
 fn blank_continued(bytes: &[u8], start: usize, mut end: usize) -> usize {
+    // Mostly a blank and then a letter: nothing continues the number.
+    let next = bytes[end..]
+        .iter()
+        .find(|c| !matches!(c, b' ' | b'\t'))
+        .copied();
+    if end == bytes.len()
+        || !matches!(bytes[end], b' ' | b'\t')
+        || !next.is_some_and(|c| c.is_ascii_digit() || c == b'.')
+    {
+        return end;
+    }
     let mut point = bytes[start..end].contains(&b'.');
     loop {
         let mut k = end;
