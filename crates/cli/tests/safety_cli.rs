@@ -1350,26 +1350,29 @@ fn a_per_point_move_back_along_the_path_fails_verify() {
 /// fails at that line; `G54.1 P3` (an extended offset) is read as one. The laser goes on
 /// at the power posted, and stays at it. The per-point post checks its own output the
 /// same way.
+/// `lampost CMD` (`post` or `verify`) of issue 11's patch indexed `A=0,B=-20` on
+/// `fadal-lamp` at origin 0,0,1, with the options `extra`, then `files`.
+fn patch_tilted(cmd: &str, extra: &[&str], files: &[&str]) -> std::process::Output {
+    let input = fx("issue11-patch.nc");
+    let mut args = vec![
+        cmd,
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=-20",
+        "--origin",
+        "0,0,1",
+    ];
+    args.extend_from_slice(extra);
+    args.push(input.as_str());
+    args.extend_from_slice(files);
+    lampost(&args)
+}
+
 #[test]
 fn verify_holds_the_program_to_the_process_it_was_posted_with() {
     let dir = tempdir("safety-offsets");
-    // `post` or `verify` of the patch at one placement, with the options given.
-    let run = |cmd: &str, extra: &[&str], files: &[&str]| -> std::process::Output {
-        let input = fx("issue11-patch.nc");
-        let mut args = vec![
-            cmd,
-            "--machine",
-            "fadal-lamp",
-            "--index",
-            "A=0,B=-20",
-            "--origin",
-            "0,0,1",
-        ];
-        args.extend_from_slice(extra);
-        args.push(input.as_str());
-        args.extend_from_slice(files);
-        lampost(&args)
-    };
+    let run = patch_tilted;
     let dep = |name: &str, extra: &[&str]| -> String {
         let out = dir.join(name).to_string_lossy().into_owned();
         let o = run("post", extra, &["-o", &out]);
@@ -1643,22 +1646,7 @@ fn a_dwell_left_out_of_a_posted_program_is_named() {
 #[test]
 fn verify_holds_every_move_to_the_process_switches_posted() {
     let dir = tempdir("safety-switches");
-    let input = fx("issue11-patch.nc");
-    let run = |cmd: &str, extra: &[&str], files: &[&str]| -> std::process::Output {
-        let mut args = vec![
-            cmd,
-            "--machine",
-            "fadal-lamp",
-            "--index",
-            "A=0,B=-20",
-            "--origin",
-            "0,0,1",
-        ];
-        args.extend_from_slice(extra);
-        args.push(input.as_str());
-        args.extend_from_slice(files);
-        lampost(&args)
-    };
+    let run = patch_tilted;
     let post = |name: &str, extra: &[&str]| -> String {
         let out = dir.join(name).to_string_lossy().into_owned();
         let o = run("post", extra, &["-o", &out]);
