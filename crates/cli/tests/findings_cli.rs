@@ -23,6 +23,18 @@ fn trace_json(flavor: &str, path: &Path) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).expect("json")
 }
 
+/// rs274's moves of `path` (run in `work` to the program's end), after checking that
+/// `lampost trace` under each of `flavors` gives the same moves.
+fn equal_to_rs274(path: &Path, work: &Path, flavors: &[&str]) -> Vec<Canon> {
+    let canon = rs274_to_end(path, work).expect("rs274 runs it");
+    for flavor in flavors {
+        let doc = trace_json(flavor, path);
+        compare_with_rs274(&doc, &canon)
+            .unwrap_or_else(|e| panic!("{} as {flavor}: {e}", path.display()));
+    }
+    canon
+}
+
 /// Ends of the traced moves, (x, y, z).
 fn ends(doc: &serde_json::Value) -> Vec<[f64; 3]> {
     doc["moves"]
@@ -51,11 +63,11 @@ fn drill_cycles_keep_their_initial_level_in_every_flavour() {
         "17-g91-cycle-r-from-initial-level.nc",
     ] {
         let path = finding(name);
-        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
-        for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
-            let doc = trace_json(flavor, &path);
-            compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{name} as {flavor}: {e}"));
-        }
+        equal_to_rs274(
+            &path,
+            &work,
+            &["fadal", "fanuc", "haas", "mach3", "linuxcnc"],
+        );
     }
 }
 
@@ -502,8 +514,7 @@ fn a_drill_cycle_outside_g17_drills_along_the_plane_s_normal() {
     }
     let work = tempdir("findings-g18-cycles");
     let path = finding("21-g18-cycle-z-read-as-depth.nc");
-    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
-    compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+    equal_to_rs274(&path, &work, &["linuxcnc"]);
     let both = work.join("g18-g19.nc");
     std::fs::write(
         &both,
@@ -630,8 +641,7 @@ fn a_closing_percent_ends_the_program() {
     }
     if let Some(_rs274) = require_rs274() {
         let work = tempdir("findings-percent");
-        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
-        compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+        equal_to_rs274(&path, &work, &["linuxcnc"]);
     }
     let work = tempdir("findings-percent-refused");
     for (name, text, at) in [
@@ -696,8 +706,7 @@ fn a_dynamic_tool_length_offset_is_not_a_move() {
     }
     if require_rs274().is_some() {
         let work = tempdir("findings-g43-1");
-        let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
-        compare_with_rs274(&trace_json("linuxcnc", &path), &canon).expect("equal to rs274");
+        equal_to_rs274(&path, &work, &["linuxcnc"]);
     }
 }
 
@@ -933,12 +942,8 @@ fn a_sign_with_blanks_after_it_signs_its_value() {
     }
     let work = tempdir("findings-sign-blanks");
     let path = finding("37-sign-then-blanks.nc");
-    let canon = rs274_to_end(&path, &work).expect("rs274 runs it");
+    let canon = equal_to_rs274(&path, &work, &["linuxcnc", "fanuc", "haas"]);
     assert_eq!(canon.len(), 5);
-    for flavor in ["linuxcnc", "fanuc", "haas"] {
-        let doc = trace_json(flavor, &path);
-        compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
-    }
     // The same lines with their expressions worked out by hand trace the same path.
     let p = work.join("by-hand.nc");
     std::fs::write(
