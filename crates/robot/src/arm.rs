@@ -353,8 +353,8 @@ struct WristParts {
     m02: f64,
     m10: f64,
     m12: f64,
-    m20: f64,
-    m21: f64,
+    m01: f64,
+    m11: f64,
     m22: f64,
     sb: f64,
 }
@@ -371,16 +371,34 @@ impl Directions {
         if w.sb < SINGULAR {
             return None;
         }
-        // θ3 = (θ2 + θ3) − θ2; θ4 = atan2(m12, m02), θ5 = −atan2(sb, m22), θ6 =
-        // atan2(m21, −m20), the flipped wrist half a turn on (θ5 negated).
+        // θ3 = (θ2 + θ3) − θ2; θ4 = atan2(m12, m02), θ5 = −atan2(sb, m22), θ6 from θ4
+        // by [`zyz_third`], the flipped wrist half a turn on (θ5 negated).
         let d3 = (w.c23 * w.c2 + w.s23 * w.s2, w.s23 * w.c2 - w.c23 * w.s2);
-        let (d4, d5, d6) = if c.flip {
-            ((-w.m02, -w.m12), (w.m22, w.sb), (w.m20, -w.m21))
+        let (d4, d5) = if c.flip {
+            ((-w.m02, -w.m12), (w.m22, w.sb))
         } else {
-            ((w.m02, w.m12), (w.m22, -w.sb), (-w.m20, w.m21))
+            ((w.m02, w.m12), (w.m22, -w.sb))
         };
+        let d6 = zyz_third([w.m00, w.m01, w.m10, w.m11, w.m22], d4);
         Some(Directions([(w.c1, w.s1), (w.c2, w.s2), d3, d4, d5, d6]))
     }
+}
+
+/// In a rotation `R = Rz(a) · Ry(b) · Rz(c)`, the direction `(x, y)` of c (its angle
+/// `atan2(y, x)`; not of unit length) from a's direction `a` (any length) and `m` = R's
+/// entries `[r00, r01, r10, r11, r22]`. R's upper-left block gives `(1 + cos b)` times
+/// the direction of a + c (`r00 + r11`, `r10 − r01`) and `(1 − cos b)` times that of
+/// a − c (`r11 − r00`, `−r10 − r01`): the first is read where cos b ≥ 0, the second
+/// where cos b < 0, each well conditioned there, and c is that turned back by a (or a
+/// turned back by it). Near the singularity (sin b → 0) a rounds by ε / sin b and c so
+/// taken rounds with it, so the three angles give R back to rounding; c read from R's
+/// third row (`atan2(r21, −r20)`) rounds apart from a, and R by up to ε / sin b (2e-8
+/// rad at sin b = 2e-10).
+pub(crate) fn zyz_third(m: [f64; 5], a: (f64, f64)) -> (f64, f64) {
+    let [r00, r01, r10, r11, r22] = m;
+    let s = if r22 >= 0.0 { 1.0 } else { -1.0 };
+    let (x, y) = (r11 + s * r00, s * r10 - r01);
+    (x * a.0 + y * a.1, s * (y * a.0 - x * a.1))
 }
 
 /// The largest change (tangent 0.05, 2.9°) [`Arm::change_turned`] takes by its series.
@@ -644,21 +662,19 @@ impl Arm {
         let m: Matrix3<f64> = r03.transpose() * tp.r; // Rz(θ4) · Ry(−θ5) · Rz(θ6)
         let sb = m[(0, 2)].hypot(m[(1, 2)]);
         let (t4, b, t6);
+        let block = [m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)], m[(2, 2)]];
         if sb < 1e-10 {
+            // θ4 kept; θ6 from it and the upper-left block ([`zyz_third`]).
             let w = wrist + l[3].offset;
-            if m[(2, 2)] > 0.0 {
-                b = 0.0;
-                t4 = w;
-                t6 = m[(1, 0)].atan2(m[(0, 0)]) - w;
-            } else {
-                b = PI;
-                t4 = w;
-                t6 = w - (-m[(1, 0)]).atan2(-m[(0, 0)]);
-            }
+            b = if m[(2, 2)] > 0.0 { 0.0 } else { PI };
+            t4 = w;
+            let (x, y) = zyz_third(block, (w.cos(), w.sin()));
+            t6 = y.atan2(x);
         } else {
             let bb = sb.atan2(m[(2, 2)]);
             let a4 = m[(1, 2)].atan2(m[(0, 2)]);
-            let a6 = m[(2, 1)].atan2(-m[(2, 0)]);
+            let (x, y) = zyz_third(block, (m[(0, 2)], m[(1, 2)]));
+            let a6 = y.atan2(x);
             if c.flip {
                 b = -bb;
                 t4 = a4 + PI;
@@ -795,21 +811,18 @@ impl Arm {
         let t2 = w.s2.atan2(w.c2);
         let t3 = w.s23.atan2(w.c23) - t2;
         let (t4, b, t6);
+        let block = [w.m00, w.m01, w.m10, w.m11, w.m22];
         if w.sb < SINGULAR {
             let wr = wrist + l[3].offset;
-            if w.m22 > 0.0 {
-                b = 0.0;
-                t4 = wr;
-                t6 = w.m10.atan2(w.m00) - wr;
-            } else {
-                b = PI;
-                t4 = wr;
-                t6 = wr - (-w.m10).atan2(-w.m00);
-            }
+            b = if w.m22 > 0.0 { 0.0 } else { PI };
+            t4 = wr;
+            let (x, y) = zyz_third(block, (wr.cos(), wr.sin()));
+            t6 = y.atan2(x);
         } else {
             let bb = w.sb.atan2(w.m22);
             let a4 = w.m12.atan2(w.m02);
-            let a6 = w.m21.atan2(-w.m20);
+            let (x, y) = zyz_third(block, (w.m02, w.m12));
+            let a6 = y.atan2(x);
             if c.flip {
                 b = -bb;
                 t4 = a4 + PI;

@@ -22,7 +22,7 @@ use std::ops::Range;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::arm::{Arm, Config, Frame, Q};
+use crate::arm::{zyz_third, Arm, Config, Frame, Q};
 use crate::error::RobotError;
 use crate::plan::{check_speed, Located, Sample};
 
@@ -80,21 +80,25 @@ pub fn chunk_ranges(
 }
 
 /// ZYZ Euler angles (radians) of a rotation: `R = Rz(a) · Ry(b) · Rz(c)`, b in [0, π].
+/// c is taken from a and R's upper-left block (a + c or a − c, whichever is well
+/// conditioned), so the three give R back
+/// to rounding however near b lies to 0 or π.
 pub fn zyz(r: &Matrix3<f64>) -> [f64; 3] {
     let sb = r[(0, 2)].hypot(r[(1, 2)]);
-    if sb < 1e-12 {
-        if r[(2, 2)] > 0.0 {
-            [0.0, 0.0, r[(1, 0)].atan2(r[(0, 0)])]
+    let block = [r[(0, 0)], r[(0, 1)], r[(1, 0)], r[(1, 1)], r[(2, 2)]];
+    let (a, b, da) = if sb < 1e-12 {
+        let b = if r[(2, 2)] > 0.0 {
+            0.0
         } else {
-            [0.0, std::f64::consts::PI, r[(1, 0)].atan2(r[(1, 1)])]
-        }
+            std::f64::consts::PI
+        };
+        (0.0, b, (1.0, 0.0))
     } else {
-        [
-            r[(1, 2)].atan2(r[(0, 2)]),
-            sb.atan2(r[(2, 2)]),
-            r[(2, 1)].atan2(-r[(2, 0)]),
-        ]
-    }
+        let da = (r[(0, 2)], r[(1, 2)]);
+        (da.1.atan2(da.0), sb.atan2(r[(2, 2)]), da)
+    };
+    let (x, y) = zyz_third(block, da);
+    [a, b, y.atan2(x)]
 }
 
 /// The rotation of ZYZ Euler angles (radians), `Rz(a) · Ry(b) · Rz(c)` multiplied out

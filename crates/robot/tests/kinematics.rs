@@ -95,10 +95,11 @@ proptest! {
                         // The two forms round differently where the elbow's triangle is
                         // ill-conditioned (the forearm nearly stretched or folded: ψ from
                         // acos against from its sine): 1e-12 rad scaled by 1/sin of the
-                        // elbow's distance from its stretch, at most 1e-9.
+                        // elbow's distance from its stretch, at most 1e-7 (at the stretch
+                        // itself ψ is known only to √ε, 1.5e-8).
                         let l = &arm.links;
                         let w = wrap(r[2] + l[2].offset + l[3].d.atan2(l[2].a)).abs();
-                        let tol = (1e-12 / w.sin().abs().max(1e-3)).max(1e-12);
+                        let tol = (1e-12 / w.sin().abs()).clamp(1e-12, 1e-7);
                         // Likewise θ1 where the wrist centre nears the cylinder of the
                         // shoulder offset d3 (the shoulder singularity): the arm's lever
                         // x = √(r² − d3²) goes to 0, and θ1 moves by ε·d3/x. Scaled by

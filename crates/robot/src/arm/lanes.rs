@@ -4,7 +4,9 @@
 //! scalar inverse is `N = 1`, and planning prices three turns about the beam at one
 //! location at once, which the compiler turns into vector instructions.
 
-use super::{Arm, Config, Directions, Frame, Turned, WristParts, LIMIT_SLACK, SINGULAR, SMALL};
+use super::{
+    zyz_third, Arm, Config, Directions, Frame, Turned, WristParts, LIMIT_SLACK, SINGULAR, SMALL,
+};
 use crate::arm::Q;
 
 /// `N` lanes of one value.
@@ -64,8 +66,8 @@ pub(super) struct Parts<const N: usize> {
     m02: L<N>,
     m10: L<N>,
     m12: L<N>,
-    m20: L<N>,
-    m21: L<N>,
+    m01: L<N>,
+    m11: L<N>,
     m22: L<N>,
     sb: L<N>,
     pub(super) reached: [bool; N],
@@ -85,8 +87,8 @@ impl Parts<1> {
             m02: self.m02[0],
             m10: self.m10[0],
             m12: self.m12[0],
-            m20: self.m20[0],
-            m21: self.m21[0],
+            m01: self.m01[0],
+            m11: self.m11[0],
             m22: self.m22[0],
             sb: self.sb[0],
         }
@@ -175,10 +177,10 @@ impl Arm {
         let (u0, u1) = (lanes(|k| c1[k] * c23[k]), lanes(|k| s1[k] * c23[k]));
         let (w0, w1) = (lanes(|k| -c1[k] * s23[k]), lanes(|k| -s1[k] * s23[k]));
         let (v0, zero) = (lanes(|k| -s1[k]), [0.0; N]);
-        let (m00, m02) = (row(&u0, &u1, &s23, 0), row(&u0, &u1, &s23, 2));
-        let (m10, m12) = (row(&v0, &c1, &zero, 0), row(&v0, &c1, &zero, 2));
-        let m20 = row(&w0, &w1, &c23, 0);
-        let m21 = row(&w0, &w1, &c23, 1);
+        let (m00, m01) = (row(&u0, &u1, &s23, 0), row(&u0, &u1, &s23, 1));
+        let m02 = row(&u0, &u1, &s23, 2);
+        let (m10, m11) = (row(&v0, &c1, &zero, 0), row(&v0, &c1, &zero, 1));
+        let m12 = row(&v0, &c1, &zero, 2);
         let m22 = row(&w0, &w1, &c23, 2);
         let sb = lanes(|k| (m02[k] * m02[k] + m12[k] * m12[k]).sqrt());
         Parts {
@@ -192,8 +194,8 @@ impl Arm {
             m02,
             m10,
             m12,
-            m20,
-            m21,
+            m01,
+            m11,
             m22,
             sb,
             reached,
@@ -218,15 +220,18 @@ impl Arm {
             lanes::<N>(|k| w.s23[k] * w.c2[k] - w.c23[k] * w.s2[k]),
         );
         let neg = |v: &L<N>| lanes::<N>(|k| -v[k]);
-        let (d4, d5, d6) = if c.flip {
-            (
-                (neg(&w.m02), neg(&w.m12)),
-                (w.m22, w.sb),
-                (w.m20, neg(&w.m21)),
-            )
+        let (d4, d5) = if c.flip {
+            ((neg(&w.m02), neg(&w.m12)), (w.m22, w.sb))
         } else {
-            ((w.m02, w.m12), (w.m22, neg(&w.sb)), (neg(&w.m20), w.m21))
+            ((w.m02, w.m12), (w.m22, neg(&w.sb)))
         };
+        let d6s: [(f64, f64); N] = std::array::from_fn(|k| {
+            zyz_third(
+                [w.m00[k], w.m01[k], w.m10[k], w.m11[k], w.m22[k]],
+                (d4.0[k], d4.1[k]),
+            )
+        });
+        let d6 = (lanes::<N>(|k| d6s[k].0), lanes::<N>(|k| d6s[k].1));
         let to = [(w.c1, w.s1), (w.c2, w.s2), d3, d4, d5, d6];
         // Each angle's change from `q`'s: atan of the two directions' cross over dot.
         let mut ok: [bool; N] = std::array::from_fn(|k| w.reached[k] && w.sb[k] >= SINGULAR);
