@@ -1092,3 +1092,76 @@ fn blanks_inside_a_number_are_nothing_as_in_rs274() {
         compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
     }
 }
+
+/// A printer moves a feed move given before any F at its firmware's initial feed rate
+/// (Marlin's and Klipper's 1500 mm/min, RepRapFirmware's 3000); FullControl's test
+/// output and hand-written scripts start so. It was refused "feed move with no feed rate"
+/// in every flavour. Now, under `marlin` and `reprap`, it is traced at that rate, in
+/// force until an F, with one warning at the move; every other flavour refuses it.
+#[test]
+fn a_printer_s_feed_before_any_f_moves_at_the_firmware_s_initial_rate() {
+    let work = tempdir("findings-initial-feed");
+    let body = "G28\nG90\nM83\nG1 X10 Y10 Z0.3\nG1 X20 E1\nG1 X30 E1 F1200\nG1 X40 E1\n";
+    let path = work.join("no-f.gcode");
+    std::fs::write(&path, body).expect("writes");
+    let feeds = |doc: &serde_json::Value| -> Vec<f64> {
+        doc["moves"]
+            .as_array()
+            .expect("moves")
+            .iter()
+            .map(|m| m["feed"].as_f64().expect("feed"))
+            .collect()
+    };
+    for (flavor, rate) in [("marlin", 1500.0), ("reprap", 3000.0)] {
+        let o = lampost(&["check", "--flavor", flavor, path.to_str().expect("utf8")]);
+        let e = stderr(&o);
+        assert!(o.status.success(), "{flavor}: {e}");
+        assert!(
+            e.contains(&format!("taken as {rate} mm/min")),
+            "{flavor}: {e}"
+        );
+        assert!(
+            e.contains("no-f.gcode:4:1") && e.contains("1 warning(s)"),
+            "{e}"
+        );
+        // G28's move, then the two at the initial rate, then F1200's two.
+        assert_eq!(
+            feeds(&trace_json(flavor, &path)),
+            [0.0, rate, rate, 1200.0, 1200.0],
+            "{flavor}"
+        );
+    }
+    // In inches, the same rate in inches a minute.
+    let inch = work.join("no-f-inch.gcode");
+    std::fs::write(&inch, format!("G20\n{body}")).expect("writes");
+    let f = feeds(&trace_json("marlin", &inch));
+    assert!((f[1] - 1500.0 / 25.4).abs() < 1e-12, "{f:?}");
+    // Posted and verified as the trace reads it (the homing left out, as the post asks).
+    let posted = work.join("no-f-posted.gcode");
+    std::fs::write(&posted, body.replace("G28\n", "")).expect("writes");
+    let out = work.join("no-f.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--e-extrusion",
+        "--flavor",
+        "marlin",
+        posted.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    assert!(text.contains("F1500"), "{text}");
+    // The machine controls (and MakerBot, whose initial rate is not known) refuse it.
+    for flavor in ["linuxcnc", "fanuc", "haas", "fadal", "mach3", "makerbot"] {
+        let o = lampost(&["check", "--flavor", flavor, path.to_str().expect("utf8")]);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{flavor}: {e}");
+        assert!(
+            e.contains("no feed rate (F) set") && e.contains(":4:1"),
+            "{flavor}: {e}"
+        );
+    }
+}

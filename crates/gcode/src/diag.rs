@@ -124,6 +124,16 @@ pub enum ErrorKind {
     /// A feed move with no feed rate.
     #[error("feed move with no feed rate (F) set")]
     NoFeedRate,
+    /// A feed move before any F in a printer's program: the firmware moves it at its
+    /// initial feed rate ([`crate::flavor::Flavor::initial_feed_mm_min`]), taken from
+    /// here on until an F.
+    #[error("feed move with no feed rate (F) set: {firmware} moves it at its initial feed rate, taken as {mm_min} mm/min until an F")]
+    FirmwareInitialFeed {
+        /// The firmware (its flavour's name).
+        firmware: &'static str,
+        /// Its initial feed rate, mm/min.
+        mm_min: f64,
+    },
     /// G93 inverse-time move without F in the block.
     #[error("inverse-time (G93) feed move without F in the block")]
     InverseTimeNeedsF,
@@ -393,6 +403,7 @@ impl ErrorKind {
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",
+            ErrorKind::FirmwareInitialFeed { .. } => "set a feed rate with F before the first feed move to be sure: a firmware's configuration may change its initial feed rate",
             ErrorKind::InverseTimeNeedsF => "in G93 every feed move needs its own F",
             ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its depth (Z in G17, Y in G18, X in G19) and R plane (and Q for peck cycles)",
             ErrorKind::BadValue { .. } => "correct the value",

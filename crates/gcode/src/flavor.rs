@@ -69,6 +69,21 @@ impl Flavor {
         }
     }
 
+    /// The feed rate (mm/min) a printer firmware moves a feed move at before any F has
+    /// been given: its initial requested feed rate after a reset. Marlin's
+    /// `feedrate_mm_s` starts at 1500 mm/min (and Klipper's `speed` at 25 mm/s, the
+    /// same); RepRapFirmware's `DefaultFeedRate` is 3000 mm/min. `None` where a feed
+    /// move without F is refused (the machine controls, and MakerBot, whose default is
+    /// not known here).
+    /// The firmware's name is given with it.
+    pub fn initial_feed_mm_min(self) -> Option<(&'static str, f64)> {
+        match self {
+            Flavor::Marlin => Some(("Marlin (and Klipper)", 1500.0)),
+            Flavor::RepRap => Some(("RepRapFirmware", 3000.0)),
+            _ => None,
+        }
+    }
+
     /// A printer firmware: E is the extruder.
     pub fn is_slicer(self) -> bool {
         matches!(self, Flavor::Marlin | Flavor::RepRap | Flavor::MakerBot)

@@ -2345,14 +2345,34 @@ impl Interpreter {
         t
     }
 
-    fn feed_for(&self, b: &Block<'_>, w: &Words<'_, '_>) -> Res<f64> {
+    /// The feed of a feed move. Before any F, a printer's firmware moves at its initial
+    /// feed rate: that becomes the feed in force, with a warning; any other control
+    /// refuses the move.
+    fn feed_for(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        out: &mut impl FnMut(Event),
+    ) -> Res<f64> {
         match self.modal.feed_mode {
             FeedMode::InverseTime => match w.get(b'F') {
                 Some(f) if f > 0.0 => Ok(f),
                 _ => Err(diag(b, Severity::Error, ErrorKind::InverseTimeNeedsF, None)),
             },
             _ if self.modal.feed <= 0.0 && !self.feed_from_macro => {
-                Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None))
+                match self.opts.flavor.initial_feed_mm_min() {
+                    // (Marlin ignores an F0, so it too leaves the initial feed rate.)
+                    Some((firmware, mm_min)) if self.modal.feed == 0.0 => {
+                        let kind = ErrorKind::FirmwareInitialFeed { firmware, mm_min };
+                        self.warn(b, out, kind, None);
+                        self.modal.feed = match self.modal.units {
+                            Units::Mm => mm_min,
+                            Units::Inch => mm_min / 25.4,
+                        };
+                        Ok(self.modal.feed)
+                    }
+                    _ => Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None)),
+                }
             }
             _ => Ok(self.modal.feed),
         }
@@ -2487,7 +2507,7 @@ impl Interpreter {
         if probe || self.modal.motion == Motion::Probe {
             // A probe move stops where the probe touches: traced to its programmed end,
             // with a warning (the post cannot place a contact it does not know).
-            let feed = self.feed_for(b, w)?;
+            let feed = self.feed_for(b, w, out)?;
             let code =
                 w.gs.iter()
                     .find(|g| matches!(g.1, 310 | 311 | 382..=385))
@@ -2539,7 +2559,7 @@ impl Interpreter {
                 // started (the spindle reverses out), as LinuxCNC runs it.
                 let feed = match w.get(b'K') {
                     Some(k) if k != 0.0 && self.modal.speed > 0.0 => k.abs() * self.modal.speed,
-                    _ => self.feed_for(b, w)?,
+                    _ => self.feed_for(b, w, out)?,
                 };
                 let start = self.pos;
                 self.emit(b.line, MoveKind::Linear, target, feed, origin, out);
@@ -2554,7 +2574,7 @@ impl Interpreter {
                     self.centre_words_unused(b, w, out)?;
                     self.endstop_move(b, w, out);
                 }
-                let feed = self.feed_for(b, w)?;
+                let feed = self.feed_for(b, w, out)?;
                 self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
             }
             Motion::ArcCw | Motion::ArcCcw => {
@@ -3351,7 +3371,7 @@ impl Interpreter {
                 (su + du / 2.0 + side * h * lu, sv + dv / 2.0 + side * h * lv)
             }
         };
-        let feed = self.feed_for(b, w)?;
+        let feed = self.feed_for(b, w, out)?;
         let mut center = [self.pos[0], self.pos[1], self.pos[2]];
         center[u] = cu;
         center[v] = cv;
@@ -3698,7 +3718,7 @@ impl Interpreter {
         let feed = if passthrough {
             0.0
         } else {
-            self.feed_for(b, w)?
+            self.feed_for(b, w, out)?
         };
         // The holes of polar words (program XY): every repeat's, found before any move
         // is made, so a step that fails refuses the block whole.
