@@ -1822,4 +1822,42 @@ fn verify_holds_every_move_to_the_process_switches_posted() {
             approach + 2
         ),
     );
+    // The laser left off along a depositing segment: its laser-on line deleted, or
+    // switched off within a run (the head would run the path and deposit nothing).
+    let whole = std::fs::read_to_string(fx("tilted-arc.csv")).expect("csv");
+    let csv = write(&dir, "whole.csv", &whole);
+    let out = dir.join("whole.nc").to_string_lossy().into_owned();
+    let o = lampost(&["post", "--machine", "nrc-lc", &csv, "-o", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let vw = |text: &str| {
+        let p = write(&dir, "whole-check.nc", text);
+        lampost(&["verify", "--machine", "nrc-lc", &csv, &p])
+    };
+    let o = vw(&posted);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let on = 1 + posted
+        .lines()
+        .position(|l| l.contains(" M71"))
+        .expect("the laser's line");
+    let no_laser: String = posted
+        .lines()
+        .filter(|l| !l.contains("M71"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    fails_at(
+        &vw(&no_laser),
+        &format!(
+            "posted line {}: a feed with the laser off along the path between points on lines 4 and 5, which deposits",
+            on + 1
+        ),
+    );
+    let mid = on + 10;
+    fails_at(
+        &vw(&with(&posted, mid, "M72")),
+        &format!(
+            "posted line {}: a feed with the laser off along the path",
+            mid + 1
+        ),
+    );
 }

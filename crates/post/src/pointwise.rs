@@ -13,7 +13,7 @@ use nalgebra::{Rotation3, Unit, Vector3};
 
 use crate::error::PostError;
 use crate::frame::Frame;
-use crate::post::{program_units, PostConfig, PostReport};
+use crate::post::{program_units, PostConfig, PostReport, Process};
 use crate::safety::{SafeHeights, WorkBounds};
 use crate::verify::VerifyReport;
 use crate::writer::Writer;
@@ -890,6 +890,28 @@ pub fn verify_points_traced<R: BufRead>(
                 // Whether a reading that takes this move lies on a segment that deposits
                 // (segment k ends at point k, whose flag the post switches the laser by).
                 let mut deposits = false;
+                // Whether every reading that takes this move runs it along a segment that
+                // deposits (from a start on that segment): the segment's input lines when
+                // so, for a feed with the laser off.
+                let mut dark: Option<(usize, usize)> = None;
+                let mut not_along = false;
+                let mut take = |k: usize| {
+                    let on = k > 0
+                        && placed[k].deposit
+                        && segment_span(
+                            &placed[k - 1],
+                            &placed[k],
+                            &from.tip,
+                            &from.axis,
+                            tolerance,
+                        )
+                        .is_some();
+                    if on {
+                        dark.get_or_insert((placed[k - 1].line, placed[k].line));
+                    } else {
+                        not_along = true;
+                    }
+                };
                 for &(k, at) in live.iter().rev() {
                     let Some(target) = placed.get(k) else {
                         miss.get_or_insert_with(|| {
@@ -906,6 +928,7 @@ pub fn verify_points_traced<R: BufRead>(
                     let reached = d_tip <= tolerance && d_ax <= AXIS_TOLERANCE_DEG;
                     if reached {
                         deposits |= k > 0 && target.deposit;
+                        take(k);
                         next.push((k + 1, 0.0));
                         keep_best(&mut best, (d_tip, d_ax));
                         if slow_enough(k) {
@@ -918,6 +941,7 @@ pub fn verify_points_traced<R: BufRead>(
                         // The approach onto the first point: straight down to it (it
                         // ends once the point is reached).
                         if !reached {
+                            take(0);
                             next.push((0, 0.0));
                         }
                         continue;
@@ -933,6 +957,7 @@ pub fn verify_points_traced<R: BufRead>(
                         Some((.., hi)) if hi < at => {}
                         Some((err, ang, lo, _)) => {
                             deposits |= target.deposit;
+                            take(k);
                             next.push((k, at.max(lo)));
                             keep_best(&mut best, (err, ang));
                             if slow_enough(k) {
@@ -957,6 +982,18 @@ pub fn verify_points_traced<R: BufRead>(
                         "posted line {}: a feed with the laser on (posted line {l}) where the path deposits nothing",
                         m.line
                     )));
+                }
+                // The laser off along a depositing segment, by every reading, where the
+                // tip moves (the post turns the laser off for a turn in place only).
+                if let (Process::Deposit { .. }, None, false, Some((a, b))) =
+                    (process, screen.switches().laser, not_along, dark)
+                {
+                    if chord > 2.0 * tolerance {
+                        return Err(PostError::Verify(format!(
+                            "posted line {}: a feed with the laser off along the path between points on lines {a} and {b}, which deposits: it would deposit nothing there",
+                            m.line
+                        )));
+                    }
                 }
                 // One reading per point to reach: the one that has come least far.
                 next.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
