@@ -1183,7 +1183,7 @@ fn eding_and_ddcs_macros_are_named() {
         ),
         (
             "49-ddcs-macro.nc",
-            "macro syntax with `//` comments",
+            "a `//` comment (DDCS, Syntec, LNC and MillMaster Pro",
             ":1:1",
             "Centroid",
         ),

@@ -36,9 +36,13 @@ const EDING: Foreign = Foreign {
     name: "Eding CNC macro syntax (`sub`/`endsub`, `gosub`, `msg \"…\"`, `IF [#5398 == 1]` … `ENDIF`)",
     hint: "this is a controller's macro file (macro.cnc), not a job: post the job for an ISO G-code control; lampost does not run Eding CNC's macro statements",
 };
+const SLASH_COMMENT: Foreign = Foreign {
+    name: "a `//` comment (DDCS, Syntec, LNC and MillMaster Pro controls read them; G-code comments are `( … )` and `;`)",
+    hint: "write the comment in `( … )` or after `;`, or post the job for an ISO G-code control; lampost does not run these controllers' macro statements",
+};
 const DDCS: Foreign = Foreign {
-    name: "a controller's macro syntax with `//` comments and C-style conditions (DDCS's `IF #1505==1 GOTO20`; Syntec and LNC macros also comment with `//`)",
-    hint: "post the job for an ISO G-code control; lampost does not run these controllers' macro statements (`//` starts no G-code comment: write comments in `( … )` or after `;`)",
+    name: "DDCS controller macro syntax (C-style conditions with a GOTO and no THEN: `IF #1505==1 GOTO20`)",
+    hint: "post the job for an ISO G-code control; lampost does not run the DDCS controller's macro statements",
 };
 const SHOPBOT: Foreign = Foreign {
     name: "ShopBot OpenSBP (two-letter commands and comma-separated values)",
@@ -193,13 +197,15 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     if eding_word || code.starts_with("IF [") && c_operator(code) && !then && !goto {
         return Some(EDING);
     }
-    // DDCS (Digital Dream) controllers' macros, and Syntec's and LNC's: `//` comments (`#20=1 //Beginning X`,
-    // a line of its own `//Macro author …`) and jumps on C-style conditions without THEN
-    // (`IF #1505==1 GOTO20`, `IF [#14==5]+[#14==4] GOTO10`). No G-code writes `//` outside
-    // a comment (one `/` is the block delete).
-    if code.contains("//")
-        || first == "IF" && c_operator(code) && goto && !then && code.contains('#')
-    {
+    // `//` comments: DDCS (Digital Dream), Syntec and LNC macros (`#20=1 //Beginning X`,
+    // `//Macro author …` on a line of its own) and MillMaster Pro programs. No G-code
+    // writes `//` outside a comment (one `/` is the block delete).
+    // DDCS's jumps on C-style conditions without THEN (`IF #1505==1 GOTO20`,
+    // `IF [#14==5]+[#14==4] GOTO10`).
+    if code.contains("//") {
+        return Some(SLASH_COMMENT);
+    }
+    if first == "IF" && c_operator(code) && goto && !then && code.contains('#') {
         return Some(DDCS);
     }
     // Centroid CNC12: a condition on a bare variable (`IF #50010`, which stops its
@@ -302,9 +308,13 @@ mod tests {
                 "\tIF [#3500 == 0]  ; IF [Initialize] is 0  proceed",
                 Some(EDING),
             ),
-            ("//Macros of cylindrical thread milling.", Some(DDCS)),
-            ("#20=1 //Beginning X coordinate", Some(DDCS)),
-            ("IF #1505==1 GOTO20 //If ENTER is pressed", Some(DDCS)),
+            (
+                "//Macros of cylindrical thread milling.",
+                Some(SLASH_COMMENT),
+            ),
+            ("#20=1 //Beginning X coordinate", Some(SLASH_COMMENT)),
+            ("//O0000Carriage-rail-hole", Some(SLASH_COMMENT)),
+            ("IF #1505==1 GOTO20", Some(DDCS)),
             (
                 "IF [#14==5]+[#14==4] GOTO10 ;;If the axis is incorrect",
                 Some(DDCS),
