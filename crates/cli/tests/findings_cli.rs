@@ -1165,3 +1165,67 @@ fn a_printer_s_feed_before_any_f_moves_at_the_firmware_s_initial_rate() {
         );
     }
 }
+
+/// Two controllers' macro languages were refused with a stray character or named as
+/// another control's (48, 49): Eding CNC's macro.cnc (`sub zero_z`, `msg "…"`,
+/// `IF [#5380 == 0]` … `ENDIF`) at its `sub` line as "the letter S has no number after
+/// it", and a DDCS controller's macro (`//` comments, `IF #50==1 GOTO20`) as "unexpected
+/// character `/`" or, at its condition, as Centroid CNC12's syntax. Each is now named at
+/// its first line that is not G-code.
+#[test]
+fn eding_and_ddcs_macros_are_named() {
+    for (name, language, at, not) in [
+        (
+            "48-eding-cnc-macro.cnc",
+            "Eding CNC macro syntax",
+            ":2:1",
+            "has no number",
+        ),
+        (
+            "49-ddcs-macro.nc",
+            "a `//` comment (DDCS, Syntec, LNC and MillMaster Pro",
+            ":1:1",
+            "Centroid",
+        ),
+    ] {
+        let path = finding(name);
+        let o = lampost(&["check", path.to_str().expect("utf8")]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{name}: {err}");
+        let first = err
+            .lines()
+            .find(|l| l.starts_with("error"))
+            .unwrap_or_default();
+        assert!(first.contains(language), "{name}: {err}");
+        assert!(err.contains(at), "{name}: {err}");
+        assert!(!first.contains(not), "{name}: {err}");
+    }
+}
+
+/// FreeCAD Path writes `F0.000000` on every move when the tool controller has no feed
+/// (50). rs274 stops at the first G1 ("Cannot do g1 with zero feed rate"); lampost
+/// stopped there too but said "feed move with no feed rate (F) set", which sends the user
+/// looking for a missing F. The F0 is now named.
+#[test]
+fn a_feed_move_at_f0_is_named_as_zero_feed() {
+    let path = finding("50-freecad-f0-feed.nc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("feed rate zero") && err.contains(":5:1"),
+        "{err}"
+    );
+    assert!(!err.contains("no feed rate (F) set"), "{err}");
+    // The oracle stops at the same line: the two traverses, then no feed move.
+    if require_rs274().is_some() {
+        let work = tempdir("f0-feed");
+        let calls = rs274_try(&path, &work).unwrap_or_default();
+        let kinds: Vec<&str> = calls.iter().map(|c| c.kind.as_str()).collect();
+        assert_eq!(
+            kinds,
+            ["STRAIGHT_TRAVERSE", "STRAIGHT_TRAVERSE"],
+            "{calls:?}"
+        );
+    }
+}

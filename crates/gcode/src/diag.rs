@@ -124,6 +124,9 @@ pub enum ErrorKind {
     /// A feed move with no feed rate.
     #[error("feed move with no feed rate (F) set")]
     NoFeedRate,
+    /// A feed move at the feed rate F0 (LinuxCNC: "Cannot do G1 with zero feed rate").
+    #[error("feed move at feed rate zero (the F in force is F0): the move would never end")]
+    ZeroFeedRate,
     /// A feed move before any F in a printer's program: the firmware moves it at its
     /// initial feed rate ([`crate::flavor::Flavor::initial_feed_mm_min`]), taken from
     /// here on until an F.
@@ -403,6 +406,7 @@ impl ErrorKind {
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",
+            ErrorKind::ZeroFeedRate => "give the move a feed rate above zero (a CAM job whose tool controller has no feed writes `F0`, as FreeCAD Path does)",
             ErrorKind::FirmwareInitialFeed { .. } => "set a feed rate with F before the first feed move to be sure: a firmware's configuration may change its initial feed rate",
             ErrorKind::InverseTimeNeedsF => "in G93 every feed move needs its own F",
             ErrorKind::CannedCycleIncomplete { .. } => "give the cycle its depth (Z in G17, Y in G18, X in G19) and R plane (and Q for peck cycles)",

@@ -32,6 +32,18 @@ const CENTROID: Foreign = Foreign {
     name: "Centroid CNC12 macro syntax (C-style conditions: `IF #4201 || #4202 THEN GOTO 1000`)",
     hint: "post the job for an ISO G-code control; lampost does not run Centroid's macro statements (the job's own moves read as G-code once they are left out)",
 };
+const EDING: Foreign = Foreign {
+    name: "Eding CNC macro syntax (`sub`/`endsub`, `gosub`, `msg \"…\"`, `IF [#5398 == 1]` … `ENDIF`)",
+    hint: "this is a controller's macro file (macro.cnc), not a job: post the job for an ISO G-code control; lampost does not run Eding CNC's macro statements",
+};
+const SLASH_COMMENT: Foreign = Foreign {
+    name: "a `//` comment (DDCS, Syntec, LNC and MillMaster Pro controls read them; G-code comments are `( … )` and `;`)",
+    hint: "write the comment in `( … )` or after `;`, or post the job for an ISO G-code control; lampost does not run these controllers' macro statements",
+};
+const DDCS: Foreign = Foreign {
+    name: "DDCS controller macro syntax (C-style conditions with a GOTO and no THEN: `IF #1505==1 GOTO20`)",
+    hint: "post the job for an ISO G-code control; lampost does not run the DDCS controller's macro statements",
+};
 const SHOPBOT: Foreign = Foreign {
     name: "ShopBot OpenSBP (two-letter commands and comma-separated values)",
     hint: "post the job from the CAM system for a G-code control (Vectric and Fusion have G-code posts for ShopBot's and other routers); lampost reads no OpenSBP",
@@ -158,6 +170,44 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     {
         return Some(SHOPBOT);
     }
+    // Eding CNC's macro files (macro.cnc): subroutines by name (`sub home_z`, `endsub`,
+    // `gosub home_x`), messages and dialogs in double quotes (`msg "…"`, `dlgmsg "…"`),
+    // and a block `IF [#5398 == 1]` with C's operators and no THEN (closed by `ENDIF`).
+    let code = u.split(['(', ';']).next().unwrap_or("").trim();
+    let first = code.split_whitespace().next().unwrap_or("");
+    let c_operator = |s: &str| {
+        ["||", "&&", "==", "!=", "<", ">"]
+            .iter()
+            .any(|k| s.contains(k))
+    };
+    let then = code.split_whitespace().any(|w| w == "THEN");
+    let goto = code.split_whitespace().any(|w| w.starts_with("GOTO"));
+    let eding_word = match first {
+        "SUB" | "GOSUB" => code.split_whitespace().nth(1).is_some_and(|n| {
+            n.bytes()
+                .next()
+                .is_some_and(|c| c.is_ascii_alphabetic() || c == b'_')
+        }),
+        "ENDSUB" => code == "ENDSUB",
+        "MSG" | "DLGMSG" | "WARNMSG" | "ERRMSG" => {
+            code[first.len()..].trim_start().starts_with('"')
+        }
+        _ => false,
+    };
+    if eding_word || code.starts_with("IF [") && c_operator(code) && !then && !goto {
+        return Some(EDING);
+    }
+    // `//` comments: DDCS (Digital Dream), Syntec and LNC macros (`#20=1 //Beginning X`,
+    // `//Macro author …` on a line of its own) and MillMaster Pro programs. No G-code
+    // writes `//` outside a comment (one `/` is the block delete).
+    // DDCS's jumps on C-style conditions without THEN (`IF #1505==1 GOTO20`,
+    // `IF [#14==5]+[#14==4] GOTO10`).
+    if code.contains("//") {
+        return Some(SLASH_COMMENT);
+    }
+    if first == "IF" && c_operator(code) && goto && !then && code.contains('#') {
+        return Some(DDCS);
+    }
     // Centroid CNC12: a condition on a bare variable (`IF #50010`, which stops its
     // look-ahead) or with C's operators (`IF #4201 || #4202 THEN GOTO 1000`); Fanuc's
     // and LinuxCNC's conditions are bracketed and spell EQ, AND, OR.
@@ -248,6 +298,31 @@ mod tests {
             ("IF #50010", Some(CENTROID)),
             ("IF #4201 || #4202 THEN GOTO 1000 ;Skip", Some(CENTROID)),
             ("IF [#1 EQ 2] GOTO 10", None),
+            ("Sub zero_z", Some(EDING)),
+            ("sub home_all ; HOMING", Some(EDING)),
+            ("ENDSUB", Some(EDING)),
+            ("    gosub home_z", Some(EDING)),
+            ("msg \"Homing Z Axis\"", Some(EDING)),
+            ("dlgmsg \"Reset G68 rotation offset?\"", Some(EDING)),
+            (
+                "\tIF [#3500 == 0]  ; IF [Initialize] is 0  proceed",
+                Some(EDING),
+            ),
+            (
+                "//Macros of cylindrical thread milling.",
+                Some(SLASH_COMMENT),
+            ),
+            ("#20=1 //Beginning X coordinate", Some(SLASH_COMMENT)),
+            ("//O0000Carriage-rail-hole", Some(SLASH_COMMENT)),
+            ("IF #1505==1 GOTO20", Some(DDCS)),
+            (
+                "IF [#14==5]+[#14==4] GOTO10 ;;If the axis is incorrect",
+                Some(DDCS),
+            ),
+            ("IF #1>0 GOTO1", Some(DDCS)),
+            ("G0 X1 (http://example.com)", None),
+            ("S1000 M3", None),
+            ("M98 P1000", None),
             ("N1 R20=200", Some(SINUMERIK)),
             ("N6 R101=R101+1", Some(SINUMERIK)),
             ("VC1=20", Some(OKUMA)),

@@ -241,6 +241,9 @@ pub struct Interpreter {
     /// A skipped macro block set the feed rate from a value lampost does not know: later
     /// feed moves are not blamed for a missing F.
     feed_from_macro: bool,
+    /// An F word has been read (`F0` included): a feed move at feed rate zero is then
+    /// refused as such, not as a missing F.
+    feed_given: bool,
     offset_cache: Position,
     /// Every offset is zero (the common case): positions need no shifting.
     offset_zero: bool,
@@ -501,6 +504,7 @@ impl Interpreter {
             motion_before_cycle: Motion::None,
             nurbs: false,
             feed_from_macro: false,
+            feed_given: false,
             profile: None,
             profile_call: None,
             comp_tool: None,
@@ -890,6 +894,7 @@ impl Interpreter {
         self.axes_named |= axes;
         self.pending_e = 0.0;
         self.modal.feed = modal_feed;
+        self.feed_given |= p.feed().is_some();
         if p.motion.is_some() {
             self.modal.motion = motion;
             self.canned = CannedParams::default();
@@ -1537,6 +1542,7 @@ impl Interpreter {
             };
         }
         if let Some(f) = w.word(b'F') {
+            self.feed_given = true;
             if f.value < 0.0 {
                 return Err(diag(
                     b,
@@ -2370,6 +2376,9 @@ impl Interpreter {
                             Units::Inch => mm_min / 25.4,
                         };
                         Ok(self.modal.feed)
+                    }
+                    _ if self.feed_given && self.modal.feed == 0.0 => {
+                        Err(diag(b, Severity::Error, ErrorKind::ZeroFeedRate, None))
                     }
                     _ => Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None)),
                 }
