@@ -1791,17 +1791,27 @@ fn verify_holds_every_move_to_the_process_switches_posted() {
             }
         })
         .collect();
-    let csv = write(&dir, "gap.csv", &csv_text);
-    let out = dir.join("gap.nc").to_string_lossy().into_owned();
-    let o = lampost(&["post", "--machine", "nrc-lc", &csv, "-o", &out]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let gap = std::fs::read_to_string(&out).expect("posted");
-    let vpp = |text: &str| {
-        let p = write(&dir, "gap-check.nc", text);
-        lampost(&["verify", "--machine", "nrc-lc", &csv, &p])
+    // A per-point path posted for the NRC cell (`name`.csv): the posted text, which
+    // verifies, and `verify` of any text against that path.
+    let post_points = |name: &str, csv_text: &str| {
+        let csv = write(&dir, &format!("{name}.csv"), csv_text);
+        let out = dir
+            .join(format!("{name}.nc"))
+            .to_string_lossy()
+            .into_owned();
+        let o = lampost(&["post", "--machine", "nrc-lc", &csv, "-o", &out]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let posted = std::fs::read_to_string(&out).expect("posted");
+        let check = write(&dir, &format!("{name}-check.nc"), "");
+        let verify = move |text: &str| {
+            std::fs::write(&check, text).expect("writes");
+            lampost(&["verify", "--machine", "nrc-lc", &csv, &check])
+        };
+        let o = verify(&posted);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (posted, verify)
     };
-    let o = vpp(&gap);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let (gap, vpp) = post_points("gap", &csv_text);
     // The second approach of the travel (a G1 straight down after an index).
     let approach = 1 + gap
         .lines()
@@ -1825,17 +1835,7 @@ fn verify_holds_every_move_to_the_process_switches_posted() {
     // The laser left off along a depositing segment: its laser-on line deleted, or
     // switched off within a run (the head would run the path and deposit nothing).
     let whole = std::fs::read_to_string(fx("tilted-arc.csv")).expect("csv");
-    let csv = write(&dir, "whole.csv", &whole);
-    let out = dir.join("whole.nc").to_string_lossy().into_owned();
-    let o = lampost(&["post", "--machine", "nrc-lc", &csv, "-o", &out]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let posted = std::fs::read_to_string(&out).expect("posted");
-    let vw = |text: &str| {
-        let p = write(&dir, "whole-check.nc", text);
-        lampost(&["verify", "--machine", "nrc-lc", &csv, &p])
-    };
-    let o = vw(&posted);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let (posted, vw) = post_points("whole", &whole);
     let on = 1 + posted
         .lines()
         .position(|l| l.contains(" M71"))
