@@ -7,8 +7,10 @@ chords to the same tolerance `lampost post` uses (0.01 mm). Travel is rebuilt as
 rebuilds it, so the output keeps the same safety rules: off the end of a run straight up to
 the safe height (the cell's 150 mm clearance, above this program's work), across there,
 straight down to 2.5 mm above the next start, and in at the feed; a lift and M2 at the end.
-(It keeps no limits, writes no process codes and does no verification, so it still does
-less than `lampost post`.)
+The cell's process codes frame each run as the post frames it: laser on at 1000 W and
+powder on (M71 S1000, M73) once the head is down, both off (M72, M74) before the lift, so
+`lampost verify` can hold the output to the same process rules. (It keeps no limits and
+does no verification, so it still does less than `lampost post`.)
 
 Usage: python3 post_baseline.py IN OUT B_DEG C_DEG H
 """
@@ -21,6 +23,8 @@ import numpy as np
 TOLERANCE = 0.01  # mm, chord tolerance
 SAFE = 150.0  # mm, the NRC cell's clearance_z (the bench's work is far below it)
 LIFT = 2.5  # mm, the approach lift
+ON = "M71 S1000\nM73\n"  # the NRC cell's laser on (at --power 1000) and powder on
+OFF = "M72\nM74\n"  # laser off, powder off
 
 
 def main():
@@ -47,7 +51,7 @@ def main():
                 if endword.search(line):
                     # The program end: lift first.
                     if in_run:
-                        out.write("G0 Z%.3f\n" % SAFE)
+                        out.write(OFF + "G0 Z%.3f\n" % SAFE)
                         in_run = False
                     ended = True
                 if line.strip() != "%":
@@ -71,7 +75,7 @@ def main():
             if motion == 0:
                 # Travel: only its ends matter. Lift off the end of a run.
                 if in_run:
-                    out.write("G0 Z%.3f\n" % SAFE)
+                    out.write(OFF + "G0 Z%.3f\n" % SAFE)
                     in_run = False
                 continue
             if not in_run:
@@ -80,6 +84,7 @@ def main():
                 out.write("G0 X%.3f Y%.3f\n" % (-s0[0], -s0[1]))
                 out.write("G0 Z%.3f\n" % min(s0[2] + LIFT, SAFE))
                 out.write("G1 Z%.3f F%s\n" % (s0[2], feed))
+                out.write(ON)
                 in_run = True
             if arc and tilted:
                 # Chords: the arc in its own plane, then turned like every point.
@@ -115,6 +120,8 @@ def main():
             else:
                 out.write("%s X%.3f Y%.3f Z%.3f\n" % (rest, -q[0], -q[1], q[2]))
         if not ended:
+            if in_run:
+                out.write(OFF)
             out.write("G0 Z%.3f\nM2\n" % SAFE)
 
 if __name__ == "__main__":
