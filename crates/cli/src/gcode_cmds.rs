@@ -415,6 +415,8 @@ pub fn trace(
                         not_shown += 1;
                     }
                 }
+                // Not asked for (`options`): a trace shows moves.
+                Event::Stop(_) => {}
             }
         }
         if json {

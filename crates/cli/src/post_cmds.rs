@@ -392,7 +392,7 @@ fn refuse_dry(secs: &[Section], opts: &IntendedOptions, given: bool) -> Result<(
             let m = match ev {
                 Ok(Event::Move(m)) => m,
                 Ok(Event::Diagnostic(d)) if d.severity == Severity::Error => return Ok(()),
-                Ok(Event::Diagnostic(_)) => continue,
+                Ok(Event::Diagnostic(_) | Event::Stop(_)) => continue,
                 Err(_) => return Ok(()),
             };
             // As the post deposits: a feed along which E grows (a rapid never deposits).

@@ -1229,3 +1229,149 @@ fn a_feed_move_at_f0_is_named_as_zero_feed() {
         );
     }
 }
+
+/// Finding 51: an input's program stops are posted where they stand (they were left
+/// out without a word). The oracle is rs274 on both programs: the input's stops
+/// (`PROGRAM_STOP`, `OPTIONAL_PROGRAM_STOP`, and for `M60` `PALLET_SHUTTLE` and
+/// `PROGRAM_STOP`; `M30` shuttles the pallets too) and
+/// the posted program's (`M60` posted as `M0`: no pallet is changed) come in the same
+/// order, each of the posted ones right after a rapid up to the clearance, with the
+/// spindle turned on again after it.
+#[test]
+fn program_stops_are_posted_where_they_stand() {
+    let path = finding("51-program-stops-posted.nc");
+    let work = tempdir("program-stops");
+    let out = work.join("posted.ngc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--dialect",
+        "iso",
+        "--convert-units",
+        path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("M60 (pallet change and stop) is posted as M0"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let stops: Vec<&str> = text.lines().filter(|l| matches!(*l, "M0" | "M1")).collect();
+    assert_eq!(stops, ["M0", "M1", "M0"], "{text}");
+    if require_rs274().is_none() {
+        return;
+    }
+    let input = rs274_stops(&path, &work);
+    let kinds: Vec<&str> = input.iter().map(|s| s.0.as_str()).collect();
+    assert_eq!(
+        kinds,
+        [
+            "PROGRAM_STOP",
+            "OPTIONAL_PROGRAM_STOP",
+            "PALLET_SHUTTLE",
+            "PROGRAM_STOP",
+            "PALLET_SHUTTLE"
+        ],
+        "{input:?}"
+    );
+    // The posted program's M30 shuttles the pallets, as the input's does.
+    let posted = rs274_stops(&out, &work);
+    let kinds: Vec<&str> = posted.iter().map(|s| s.0.as_str()).collect();
+    assert_eq!(
+        kinds,
+        [
+            "PROGRAM_STOP",
+            "OPTIONAL_PROGRAM_STOP",
+            "PROGRAM_STOP",
+            "PALLET_SHUTTLE"
+        ],
+        "{posted:?}"
+    );
+    let posted: Vec<_> = posted
+        .into_iter()
+        .filter(|s| s.0 != "PALLET_SHUTTLE")
+        .collect();
+    for (kind, before) in &posted {
+        let before = before.as_ref().expect("a move before the stop");
+        assert_eq!(before.kind, "STRAIGHT_TRAVERSE", "{kind}: {before:?}");
+        // FADAL's clearance, 10 in (rs274 reads the posted G20 program in inches).
+        assert!(
+            (before.args[2] - 10.0).abs() < RS274_TOL,
+            "{kind}: {before:?}"
+        );
+    }
+    // The spindle on again after each stop, before the next feed.
+    let lines: Vec<&str> = text.lines().collect();
+    for (k, l) in lines.iter().enumerate() {
+        if matches!(*l, "M0" | "M1") {
+            assert!(lines[k + 1].ends_with("M3"), "{text}");
+        }
+    }
+}
+
+/// Finding 52: a tool change between operations (`T2 M6`) was left out of the posted
+/// program without a word, and the machine went on with the first tool. A section is
+/// posted for one tool: the change is refused at the first move made with the new tool,
+/// nothing is written, and `verify` refuses the input as the post does. rs274 reads the
+/// change (`CHANGE_TOOL`) where lampost's trace does.
+#[test]
+fn a_tool_change_between_operations_is_refused_at_its_first_move() {
+    let path = finding("52-tool-change-between-operations.nc");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("tool-change");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--tool",
+        "1",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("52-tool-change-between-operations.nc:12")
+            && err.contains("a tool change from T1 to T2"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    // One tool throughout posts.
+    let one: String = std::fs::read_to_string(&path)
+        .expect("fixture")
+        .lines()
+        .filter(|l| *l != "T2 M6")
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let one_path = work.join("one-tool.nc");
+    std::fs::write(&one_path, one).expect("writes");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--tool",
+        "1",
+        one_path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    if require_rs274().is_none() {
+        return;
+    }
+    let (_, text) = rs274_exec(&path, &work);
+    let changes = text.lines().filter(|l| l.contains("CHANGE_TOOL(")).count();
+    assert_eq!(changes, 2, "{text}");
+}

@@ -1019,11 +1019,18 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
         &after(on + 2, "M01"),
         "a program stop",
     );
-    // A stop with the laser off (after M74) is the operator's: it passes.
+    // A stop with the laser off (after M74, the last), where the input makes none: the program
+    // stops where its author did not ask it to (the input's own stops are posted and
+    // held to theirs: `a_program_stop_in_the_input_is_posted_where_it_stands`).
     let mut stopped = lines.clone();
     stopped.insert(off + 1, "M1".into());
     let o = verify(&dir, "A=0,B=0", &(stopped.join("\n") + "\n"), &[]);
-    assert!(o.status.success(), "M1 with the laser off: {}", stderr(&o));
+    assert!(!o.status.success(), "M1 with the laser off passed");
+    assert!(
+        stderr(&o).contains("a program stop (M1) after the intended path has ended"),
+        "{}",
+        stderr(&o)
+    );
     // The program's end and block delete.
     check(
         "M99 for M30",
@@ -1859,5 +1866,147 @@ fn verify_holds_every_move_to_the_process_switches_posted() {
             "posted line {}: a feed with the laser off along the path",
             mid + 1
         ),
+    );
+}
+
+/// A program stop of the input (`M0`, `M1`, `M60`: an operator's stop to turn the part,
+/// change a tool or look) is posted where it stands: the head lifts off the run with the
+/// laser and powder off, the control stops (`M60` as `M0`, with a warning: no pallet is
+/// changed), and the next run is approached again. A machining program turns the
+/// spindle and coolant on again after it (a Haas stops them at M0). `verify` holds the
+/// posted stops to the input's: one left out, one of the other kind, one within a move
+/// or after the path fails; a path of points has none. (They were left out of the
+/// posted program without a word, and the machine ran on where the program stopped.)
+#[test]
+fn a_program_stop_in_the_input_is_posted_where_it_stands() {
+    let dir = tempdir("safety-stops");
+    let input = write(
+        &dir,
+        "stops.nc",
+        "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z0 F300\nG1 X10\nM0 (turn the part)\nG1 Y10\nM1\nG1 X0\nG0 Z5\nM60\nM30\n",
+    );
+    let post = |name: &str, extra: &[&str]| -> (String, String) {
+        let out = dir.join(name).to_string_lossy().into_owned();
+        let mut args = vec!["post", "--machine", "nrc-lc", "--index", "B=0,C=0"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[&input, "-o", &out]);
+        let o = lampost(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (std::fs::read_to_string(&out).expect("posted"), stderr(&o))
+    };
+    let verify = |text: &str, extra: &[&str]| -> std::process::Output {
+        let p = write(&dir, "check.nc", text);
+        let mut args = vec!["verify", "--machine", "nrc-lc", "--index", "B=0,C=0"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[&input, &p]);
+        lampost(&args)
+    };
+    let fails_at = |o: &std::process::Output, what: &str| {
+        let e = stderr(o);
+        assert!(!o.status.success(), "passed, expected `{what}`");
+        assert!(e.contains(what), "expected `{what}`:\n{e}");
+    };
+    // The blocks without their sequence numbers.
+    let blocks = |text: &str| -> Vec<String> {
+        text.lines()
+            .map(|l| match l.split_once(' ') {
+                Some((n, rest)) if n.starts_with('N') => rest.to_string(),
+                _ => l.to_string(),
+            })
+            .collect()
+    };
+    let (d, warned) = post("d.nc", &[]);
+    assert!(
+        warned.contains("stops.nc:10: M60 (pallet change and stop) is posted as M0"),
+        "{warned}"
+    );
+    let b = blocks(&d);
+    let stops: Vec<usize> = (0..b.len())
+        .filter(|&k| b[k] == "M0" || b[k] == "M1")
+        .collect();
+    let kinds: Vec<&str> = stops.iter().map(|&k| b[k].as_str()).collect();
+    assert_eq!(kinds, ["M0", "M1", "M0"], "{d}");
+    for &k in &stops {
+        // Laser and powder off, lifted to the clearance, then the stop.
+        assert_eq!(b[k - 3..k], ["M72", "M74", "G0 Z150.000"], "{d}");
+    }
+    // After the first two, the head comes down onto the next run and deposits again.
+    for &k in &stops[..2] {
+        assert!(b[k + 1..].iter().take(5).any(|l| l == "M71 S1000"), "{d}");
+    }
+    let o = verify(&d, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let edit = |from: usize, to: Option<&str>| -> String {
+        let mut l: Vec<&str> = d.lines().collect();
+        match to {
+            Some(t) => l[from] = t,
+            None => {
+                l.remove(from);
+            }
+        }
+        l.join("\n") + "\n"
+    };
+    fails_at(
+        &verify(&edit(stops[0], None), &[]),
+        "the input stops here (M0 at input line 5), and the posted program goes on without stopping",
+    );
+    fails_at(
+        &verify(&edit(stops[1], Some("M0")), &[]),
+        "a program stop (M0) where the input makes another (the next on the intended path is input line 7's M1)",
+    );
+    fails_at(
+        &verify(&edit(stops[2], None), &[]),
+        "the posted program ends before the stop of input line 10 (M60)",
+    );
+    // A stop (laser off about it) between two points of one move.
+    let feed = b
+        .iter()
+        .position(|l| l == "X-10.000")
+        .expect("the feed to X10");
+    assert_eq!(b[feed - 2], "M73", "{d}");
+    let mut l: Vec<&str> = d.lines().collect();
+    l.splice(
+        feed..=feed,
+        [
+            "X-5.000",
+            "M72",
+            "M74",
+            "M0",
+            "M71 S1000",
+            "M73",
+            "X-10.000",
+        ],
+    );
+    fails_at(
+        &verify(&(l.join("\n") + "\n"), &[]),
+        "a program stop (M0) within the move of input line 4",
+    );
+    // Machining: the spindle and coolant on again after each stop.
+    let mach = ["--process", "machine", "--coolant"];
+    let (m, _) = post("m.nc", &mach);
+    let b = blocks(&m);
+    let stops: Vec<usize> = (0..b.len())
+        .filter(|&k| b[k] == "M0" || b[k] == "M1")
+        .collect();
+    assert_eq!(stops.len(), 3, "{m}");
+    for &k in &stops {
+        assert_eq!(b[k + 1..k + 3], ["S3000 M3", "M8"], "{m}");
+    }
+    let o = verify(&m, &mach);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A path of points has no stops.
+    let csv = fx("tilted-arc.csv");
+    let out = dir.join("points.nc").to_string_lossy().into_owned();
+    let o = lampost(&["post", "--machine", "nrc-lc", &csv, "-o", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let b = blocks(&posted);
+    let off = b.iter().position(|l| l == "M74").expect("powder off");
+    let mut l: Vec<&str> = posted.lines().collect();
+    l.insert(off + 1, "M0");
+    let check = write(&dir, "points-check.nc", &(l.join("\n") + "\n"));
+    fails_at(
+        &lampost(&["verify", "--machine", "nrc-lc", &csv, &check]),
+        "a program stop (M0): a path of points has none",
     );
 }

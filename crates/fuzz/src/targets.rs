@@ -393,6 +393,7 @@ impl Ctx {
             block_delete: r.coin(),
             flavor: *r.pick(&FLAVORS),
             post_notes: r.coin(),
+            stops: r.coin(),
         };
         let stop = r.coin();
         let mode = r.below(4);
@@ -420,6 +421,10 @@ impl Ctx {
                         return Err("an empty diagnostic".into());
                     }
                 }
+                Event::Stop(s) if s.line == 0 => {
+                    return Err(format!("a stop on no line: {s:?}"));
+                }
+                Event::Stop(_) => {}
             }
             Ok(())
         };

@@ -58,6 +58,10 @@ pub struct Options {
     /// hole), every block-delete line it runs and writes without its `/`
     /// ([`ErrorKind::BlockDeletePosted`]).
     pub post_notes: bool,
+    /// Report the program's stops (`M0`, `M1`, `M60`) as [`Event::Stop`], after the
+    /// block's motion, for a reader that carries them on (the post, and `verify` reading
+    /// what it wrote). Off, they move nothing and say nothing.
+    pub stops: bool,
 }
 
 impl Default for Options {
@@ -68,6 +72,7 @@ impl Default for Options {
             block_delete: false,
             flavor: crate::flavor::Flavor::Fadal,
             post_notes: false,
+            stops: false,
         }
     }
 }
@@ -164,6 +169,39 @@ pub enum Event {
     Move(Move),
     /// A warning or error.
     Diagnostic(Diagnostic),
+    /// A program stop, where [`Options::stops`] asks for them.
+    Stop(Stop),
+}
+
+/// A program stop: the control halts until the operator starts it again.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Stop {
+    /// Which stop.
+    pub kind: StopKind,
+    /// Source line.
+    pub line: u32,
+}
+
+/// The stops a program can make.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum StopKind {
+    /// `M0`, and `M1` on a printer (Marlin and RepRapFirmware stop on both).
+    Program,
+    /// `M1` on a machine control: the operator's optional-stop switch decides.
+    Optional,
+    /// `M60`: a pallet change and a stop (LinuxCNC, Fanuc).
+    Pallet,
+}
+
+impl StopKind {
+    /// The code as a program writes it.
+    pub fn code(self) -> &'static str {
+        match self {
+            StopKind::Program => "M0",
+            StopKind::Optional => "M1",
+            StopKind::Pallet => "M60",
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -1926,6 +1964,9 @@ impl Interpreter {
             let probe = w.has_g(310) || w.has_g(311);
             self.motion(b, w, g53, probe, out)?;
         }
+        if self.opts.stops {
+            self.report_stop(b, w, out);
+        }
         if stop_after {
             if let Some(c) = self.comp.take() {
                 self.comp_release(*c, out)
@@ -2308,6 +2349,21 @@ impl Interpreter {
     fn extruded_now(&mut self) -> Option<f64> {
         let e = std::mem::take(&mut self.pending_e);
         (self.opts.e_word == EWord::Extrusion).then_some(e)
+    }
+
+    /// The block's stop, if it makes one (after its motion): [`Event::Stop`].
+    fn report_stop(&self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) {
+        let printer = self.opts.e_word == EWord::Extrusion;
+        let kind = w.ms.iter().find_map(|&(_, c)| match c {
+            0 => Some(StopKind::Program),
+            10 if printer => Some(StopKind::Program),
+            10 => Some(StopKind::Optional),
+            600 => Some(StopKind::Pallet),
+            _ => None,
+        });
+        if let Some(kind) = kind {
+            out(Event::Stop(Stop { kind, line: b.line }));
+        }
     }
 
     /// A block of setting M-codes (see [`m_known`]): the known codes among them act,
@@ -4039,6 +4095,36 @@ mod tests {
     use super::*;
     use crate::stream::Stream;
 
+    /// Stops are reported where asked (`Options::stops`), after the block's motion: `M0`
+    /// and `M60` stop, `M1` is the optional stop on a machine control and a stop on a
+    /// printer (Marlin and RepRapFirmware stop on both). Not asked, there are none.
+    #[test]
+    fn stops_are_reported_after_the_block_s_motion_when_asked() {
+        let text = "G21 G90\nG1 X1 F100 M0\nM1\nM60\nM3 S1\nM30\n";
+        let events = |opts: Options| -> Vec<String> {
+            Stream::from_bytes(text.as_bytes(), opts, false)
+                .map(|e| match e.expect("in memory") {
+                    Event::Move(m) => format!("move {}", m.line),
+                    Event::Stop(s) => format!("{} {}", s.kind.code(), s.line),
+                    Event::Diagnostic(d) => format!("{d}"),
+                })
+                .collect()
+        };
+        let asked = Options {
+            stops: true,
+            ..Options::default()
+        };
+        assert_eq!(events(asked), ["move 2", "M0 2", "M1 3", "M60 4"]);
+        assert_eq!(events(Options::default()), ["move 2"]);
+        let printer = Options {
+            stops: true,
+            e_word: EWord::Extrusion,
+            flavor: crate::flavor::Flavor::Marlin,
+            ..Options::default()
+        };
+        assert_eq!(events(printer), ["move 2", "M0 2", "M0 3", "M60 4"]);
+    }
+
     /// Moves and diagnostics of `text`, every line read.
     fn run(text: &str) -> (Vec<Move>, Vec<Diagnostic>) {
         let (mut moves, mut diags) = (Vec::new(), Vec::new());
@@ -4046,6 +4132,7 @@ mod tests {
             match e.expect("in memory") {
                 Event::Move(m) => moves.push(m),
                 Event::Diagnostic(d) => diags.push(d),
+                Event::Stop(_) => {}
             }
         }
         (moves, diags)
@@ -4083,7 +4170,7 @@ mod tests {
         let diags: Vec<Diagnostic> = Stream::from_bytes(text.as_bytes(), opts, false)
             .filter_map(|e| match e.expect("in memory") {
                 Event::Diagnostic(d) => Some(d),
-                Event::Move(_) => None,
+                Event::Move(_) | Event::Stop(_) => None,
             })
             .collect();
         assert_eq!(diags[0].severity, Severity::Error);
@@ -4109,7 +4196,7 @@ mod tests {
         let first = Stream::from_bytes(text.as_bytes(), opts, false)
             .find_map(|e| match e.expect("in memory") {
                 Event::Diagnostic(d) => Some(d),
-                Event::Move(_) => None,
+                Event::Move(_) | Event::Stop(_) => None,
             })
             .expect("refused");
         assert_eq!(first.severity, Severity::Error);

@@ -53,8 +53,8 @@ pub use expr::{sets_feed, Params};
 pub use flavor::{detect, Flavor, Resolved, DETECT_BYTES};
 pub use foreign::{foreign_language, Foreign};
 pub use interp::{
-    Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin, ARC_RADIUS_TOLERANCE,
-    ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE,
+    Calls, EWord, Event, Interpreter, Move, MoveKind, Options, Origin, Stop, StopKind,
+    ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE,
 };
 pub use lines::{Line, LineReader, Lines, CHECKED_CHUNK, MAX_NUL_RUN};
 pub use modal::{FeedMode, Modal, Plane, Position, Spindle, Units, WorkOffset, AXES};

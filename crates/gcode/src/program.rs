@@ -1160,6 +1160,7 @@ mod tests {
             match e.expect("reads") {
                 Event::Move(m) => moves.push(m),
                 Event::Diagnostic(d) => diags.push(d),
+                Event::Stop(_) => {}
             }
         }
         (moves, diags)

@@ -534,7 +534,7 @@ impl<S: LineSource> Stream<S> {
             if let Some(params) = self.params.as_deref_mut() {
                 params.after_moves(self.queue.range(start..).filter_map(|e| match e {
                     Event::Move(m) => Some(m),
-                    Event::Diagnostic(_) => None,
+                    Event::Diagnostic(_) | Event::Stop(_) => None,
                 }));
             }
             if let Err(d) = done {
@@ -629,7 +629,7 @@ fn ends_with_probe(events: &VecDeque<Event>) -> bool {
         .rev()
         .find_map(|e| match e {
             Event::Move(m) => Some(m.kind == MoveKind::Probe),
-            Event::Diagnostic(_) => None,
+            Event::Diagnostic(_) | Event::Stop(_) => None,
         })
         .unwrap_or(false)
 }
@@ -639,7 +639,7 @@ fn ends_with_probe(events: &VecDeque<Event>) -> bool {
 fn after_moves(params: &mut Params, events: &VecDeque<Event>) {
     params.after_moves(events.iter().filter_map(|e| match e {
         Event::Move(m) => Some(m),
-        Event::Diagnostic(_) => None,
+        Event::Diagnostic(_) | Event::Stop(_) => None,
     }));
 }
 

@@ -18,6 +18,7 @@ fn run_as(flavor: Flavor, text: &str, max_blocks: Option<u64>) -> (Vec<[f64; 3]>
         match e.expect("reads") {
             Event::Move(m) => moves.push([m.end[0], m.end[1], m.end[2]]),
             Event::Diagnostic(d) => diags.push(d),
+            Event::Stop(_) => {}
         }
     }
     (moves, diags)
@@ -557,7 +558,7 @@ fn a_failed_loop_condition_is_not_run_again() {
         assert_eq!(errors, want, "{flavor:?}: {events:?}");
         let last = events.iter().rev().find_map(|e| match e {
             Event::Move(m) => Some(m.end[0]),
-            Event::Diagnostic(_) => None,
+            Event::Diagnostic(_) | Event::Stop(_) => None,
         });
         assert_eq!(last, Some(5.0), "{flavor:?}");
     }

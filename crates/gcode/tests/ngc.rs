@@ -17,6 +17,7 @@ fn run_with(text: &str, max_blocks: Option<u64>) -> (Vec<[f64; 3]>, Vec<Diagnost
         match e.expect("reads") {
             Event::Move(m) => moves.push([m.end[0], m.end[1], m.end[2]]),
             Event::Diagnostic(d) => diags.push(d),
+            Event::Stop(_) => {}
         }
     }
     (moves, diags)
@@ -262,7 +263,7 @@ fn an_unevaluated_feed_blames_no_later_block() {
             .iter()
             .filter_map(|e| match e {
                 Event::Diagnostic(d) => Some(d),
-                Event::Move(_) => None,
+                Event::Move(_) | Event::Stop(_) => None,
             })
             .collect();
         assert_eq!(diags.len(), 1, "{text}: {diags:?}");
@@ -288,6 +289,7 @@ fn haas(text: &str, order: Order) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
         match e.expect("reads") {
             Event::Move(m) => moves.push([m.end[0], m.end[1], m.end[2]]),
             Event::Diagnostic(d) => diags.push(d),
+            Event::Stop(_) => {}
         }
     }
     (moves, diags)
@@ -407,6 +409,7 @@ fn a_setting_code_does_not_drop_the_other_codes_of_its_block() {
         match e.expect("in memory") {
             Event::Move(m) => ends.push([m.end[0], m.end[1], m.feed]),
             Event::Diagnostic(d) => panic!("{d:?}"),
+            Event::Stop(_) => {}
         }
     }
     assert_eq!(

@@ -17,6 +17,7 @@ fn run_as(flavor: Flavor, text: &str) -> (Vec<[f64; 3]>, Vec<Diagnostic>) {
         match e.expect("reads") {
             Event::Move(m) => moves.push([m.end[0], m.end[1], m.end[2]]),
             Event::Diagnostic(d) => diags.push(d),
+            Event::Stop(_) => {}
         }
     }
     (moves, diags)

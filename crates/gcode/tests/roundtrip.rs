@@ -58,6 +58,7 @@ fn moves(text: &[u8]) -> Vec<Move> {
                 assert!(!d.is_error(), "{d}");
                 None
             }
+            Event::Stop(_) => None,
         })
         .collect()
 }

@@ -20,7 +20,7 @@ fn run(src: &str) -> (Vec<Move>, Vec<String>) {
         match ev.expect("in memory") {
             Event::Move(m) => moves.push(m),
             Event::Diagnostic(d) if d.is_error() => errors.push(format!("{}: {}", d.line, d.kind)),
-            Event::Diagnostic(_) => {}
+            Event::Diagnostic(_) | Event::Stop(_) => {}
         }
     }
     (moves, errors)
@@ -219,6 +219,7 @@ fn klipper_commands_are_named_not_misread() {
             Event::Diagnostic(d) => {
                 kinds.push((d.line, d.is_error(), d.kind.clone(), d.snippet.text.clone()))
             }
+            Event::Stop(_) => {}
         }
     }
     assert_eq!(moves, 2);
@@ -262,6 +263,7 @@ fn e_mode_across_g90_and_g91_follows_the_flavour() {
             match ev.expect("in memory") {
                 Event::Move(m) => e.push(m.extruded),
                 Event::Diagnostic(x) => d.push((x.line, x.kind)),
+                Event::Stop(_) => {}
             }
         }
         (e, d)
@@ -329,6 +331,7 @@ fn makerbot_extrudes_with_a_or_b() {
             match ev.expect("in memory") {
                 Event::Move(mv) => m.push(mv),
                 Event::Diagnostic(x) => d.push(x.kind),
+                Event::Stop(_) => {}
             }
         }
         (m, d)
@@ -361,6 +364,7 @@ fn a_reprapfirmware_macro_file_call_is_named_not_refused() {
         match ev.expect("in memory") {
             Event::Move(_) => moves += 1,
             Event::Diagnostic(x) => d.push(x),
+            Event::Stop(_) => {}
         }
     }
     assert_eq!(moves, 1);

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use lampost_gcode::{
     EWord, ErrorKind, Event, Move, MoveKind, Options, Order, Origin, ProgramReader, Severity,
-    Stream, Units,
+    StopKind, Stream, Units,
 };
 use lampost_kinematics::{Machine, Units as MUnits};
 use nalgebra::Vector3;
@@ -90,6 +90,10 @@ pub enum StepKind {
     Retract,
     /// Straight feed.
     Feed,
+    /// A program stop (`M0`, `M1`, `M60`): the head lifts off the end of the run to the
+    /// safe height, with the process off, and the control halts there. Start and end are
+    /// where the last move ended.
+    Stop(StopKind),
     /// Arc about `center` (part frame) turning about `normal` (part frame, right-hand),
     /// `sweep` radians in all.
     Arc {
@@ -194,6 +198,8 @@ pub struct Intended<'a> {
     layer: usize,
     layer_z: Option<f64>,
     moves_in_section: usize,
+    /// The tool in the spindle at the section's first move (see [`Intended::one_tool`]).
+    tool: Option<u32>,
     done: bool,
     /// The last move's end, in the program and the part frame, with its (section,
     /// layer): the next move starts there, so its start needs no transform.
@@ -263,7 +269,7 @@ fn laser_ahead(source: &Source, opts: Options) -> Result<LaserAhead, PostError> 
                 }
             }
             Ok(Event::Diagnostic(d)) if d.severity == Severity::Error => break,
-            Ok(Event::Diagnostic(_)) => {}
+            Ok(Event::Diagnostic(_) | Event::Stop(_)) => {}
             Err(_) => break,
         }
     }
@@ -300,6 +306,7 @@ impl<'a> Intended<'a> {
             layer: 0,
             layer_z: None,
             moves_in_section: 0,
+            tool: None,
             done: false,
             last_end: None,
             frame_cache: None,
@@ -438,6 +445,8 @@ impl<'a> Intended<'a> {
                     // The user hears of what the post changes: the dwells it leaves out
                     // (it writes none), the block-delete lines it runs.
                     post_notes: true,
+                    // The program's stops are carried to the posted program.
+                    stops: true,
                     ..Options::default()
                 };
                 // Slicer programs go by E alone (see `laser_off_feed`).
@@ -456,6 +465,7 @@ impl<'a> Intended<'a> {
                 self.layer = 0;
                 self.layer_z = None;
                 self.moves_in_section = 0;
+                self.tool = None;
             }
             let ev = self.stream.as_mut().and_then(Iterator::next);
             let ev = match ev {
@@ -559,12 +569,33 @@ impl<'a> Intended<'a> {
                     }
                     continue;
                 }
+                Event::Stop(stop) => {
+                    let here = match self.last_end {
+                        Some((_, part, sec_i, layer))
+                            if sec_i == self.idx && layer == self.layer =>
+                        {
+                            part
+                        }
+                        _ => self.frame(sec, self.layer).apply(&Vector3::zeros()),
+                    };
+                    return Ok(Some(Step {
+                        section: self.idx,
+                        layer: self.layer,
+                        line: stop.line,
+                        kind: StepKind::Stop(stop.kind),
+                        start: here,
+                        end: here,
+                        feed: 0.0,
+                        deposit: false,
+                    }));
+                }
                 Event::Move(m) => m,
             };
             if m.axes_named & EXTRA_AXES != 0 {
                 self.extra_axes_at_zero(&sec.name, &m)?;
             }
             self.frame_kept(&sec.name, &m)?;
+            self.one_tool(&sec.name, &m)?;
             if let Some(step) = self.machine_coordinate_move(&m)? {
                 self.moves_in_section += 1;
                 return Ok(Some(step));
@@ -717,6 +748,29 @@ impl<'a> Intended<'a> {
 }
 
 impl Intended<'_> {
+    /// A section is posted for one tool: the one `--tool` names (or the one in the
+    /// spindle). A tool change (`M6`, `M61`) after the section's first move is refused at
+    /// the first move made with the new tool: posted without it, the machine would go on
+    /// with the first tool (a Mastercam or Fusion program changes tools between its
+    /// operations, with `M1` before each).
+    fn one_tool(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
+        match self.tool {
+            None => self.tool = Some(m.modal.tool),
+            Some(t) if t != m.modal.tool => {
+                return Err(PostError::Unsupported {
+                    file: file.to_string(),
+                    line: m.line,
+                    what: format!(
+                        "a tool change from T{t} to T{} (its M6 before this line, the first move with the new tool): the post writes a program for one tool (--tool), and would go on with the first; post each tool's operations as a program of their own",
+                        m.modal.tool
+                    ),
+                })
+            }
+            Some(_) => {}
+        }
+        Ok(())
+    }
+
     /// Whether `m` is a feed that burns nothing (see its call): made with the laser
     /// (spindle) off in a program that turns it on (before its first M3/M4, as
     /// [`laser_ahead`] found, or after an M5), or at zero power after the section ran it

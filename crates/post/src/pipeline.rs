@@ -72,8 +72,11 @@ impl Planner<'_> {
             }
         };
         let end_joints = joints(&jm, &step.end);
-        let check = (!matches!(step.kind, StepKind::Rapid | StepKind::Retract))
-            .then(|| (written_tip(&tm, self.scale, &end_joints) - step.end).norm());
+        let check = (!matches!(
+            step.kind,
+            StepKind::Rapid | StepKind::Retract | StepKind::Stop(_)
+        ))
+        .then(|| (written_tip(&tm, self.scale, &end_joints) - step.end).norm());
         let first = points.len();
         if let StepKind::Arc {
             center,

@@ -834,6 +834,14 @@ pub fn verify_points_traced<R: BufRead>(
                     return Err(e);
                 }
             }
+            Event::Stop(stop) => {
+                // A path of points has no stops, and the post writes none.
+                return Err(PostError::Verify(format!(
+                    "posted line {}: a program stop ({}): a path of points has none, and the post writes none",
+                    stop.line,
+                    stop.kind.code()
+                )));
+            }
             Event::Move(m) => {
                 rep.moves += 1;
                 rules.check(&m, &ix[3..])?;

@@ -507,7 +507,10 @@ pub(crate) fn post_steps<W: Write>(
             };
             w.feed_check.planned_check = planned.and_then(|p| p.check.map(|c| (p.joints, true, c)));
             prev_end = Some((step.end, end, rot));
-            let travel = matches!(step.kind, StepKind::Rapid | StepKind::Retract);
+            let travel = matches!(
+                step.kind,
+                StepKind::Rapid | StepKind::Retract | StepKind::Stop(_)
+            );
             // The move being written, for the in-process verification (approach included).
             w.feed_check.step = if travel { None } else { Some(step) };
             if travel {
@@ -520,7 +523,10 @@ pub(crate) fn post_steps<W: Write>(
                         step.line
                     ));
                 }
-                w.travel(file, step.line)?;
+                match step.kind {
+                    StepKind::Stop(kind) => w.stop(cfg, kind, file, step.line)?,
+                    _ => w.travel(file, step.line)?,
+                }
                 need_approach = true;
                 continue;
             }

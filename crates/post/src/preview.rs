@@ -130,7 +130,7 @@ pub fn replay<R: BufRead>(
                     diag: Box::new(d),
                 })
             }
-            Event::Diagnostic(_) => continue,
+            Event::Diagnostic(_) | Event::Stop(_) => continue,
             Event::Move(m) => m,
         };
         out.moves += 1;

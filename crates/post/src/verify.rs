@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use lampost_gcode::{
     Diagnostic, ErrorKind, Event, Line, LineReader, LineSource, Modal, Move, MoveKind, Options,
-    Origin, Plane, Severity, Stream, Units, WorkOffset, AXES,
+    Origin, Plane, Severity, StopKind, Stream, Units, WorkOffset, AXES,
 };
 use lampost_kinematics::{Joints, Machine, Units as MUnits};
 use nalgebra::Vector3;
@@ -296,6 +296,15 @@ fn same_feed(f: f64, want: f64) -> bool {
     (f - want).abs() <= 0.5e-5 + 1e-12 * want.abs()
 }
 
+/// The stop the post writes for an input's stop `k`: `M60` as `M0` (no pallet is
+/// changed), the others as they are.
+fn posted_as(k: StopKind) -> StopKind {
+    match k {
+        StopKind::Pallet => StopKind::Program,
+        k => k,
+    }
+}
+
 /// [`verify`], telling `on_point` the posted line and deviation of every feed point it
 /// compares (for a picture of the deviations: `verify --preview`).
 #[allow(clippy::too_many_arguments)]
@@ -332,7 +341,8 @@ pub fn verify_traced<R: BufRead>(
     let names = machine.axis_names();
     let lin_idx: Vec<usize> = names[..3].iter().map(|n| idx(n).unwrap_or(0)).collect();
     let rot_idx: Vec<usize> = names[3..].iter().map(|n| idx(n).unwrap_or(3)).collect();
-    let mut intended = Intended::new(machine, sections, opts).filter(|s| {
+    // Shared by `check` and the stops' arm below (a step taken is taken for both).
+    let intended = std::cell::RefCell::new(Intended::new(machine, sections, opts).filter(|s| {
         !matches!(
             s,
             Ok(Step {
@@ -340,13 +350,14 @@ pub fn verify_traced<R: BufRead>(
                 ..
             })
         )
-    });
+    }));
+    let next_intended = || intended.borrow_mut().next().transpose();
     let mut current: Option<Step> = None;
     // The move that ended at the last point (its end within the tolerance), while no
     // point has yet come onto the next one; and the next move, given back when a point
     // turned out to belong to the one that ended (see `check`).
     let mut ended: Option<Step> = None;
-    let mut held: Option<Step> = None;
+    let held: Cell<Option<Step>> = Cell::new(None);
     // The angle the current move (an arc) has swept so far, along its sweep.
     let mut swept = 0.0f64;
     // The least fraction of the current move the tool can have come to (see `progress`).
@@ -413,10 +424,21 @@ pub fn verify_traced<R: BufRead>(
         if fresh {
             *current = match held.take() {
                 Some(s) => Some(s),
-                None => intended.next().transpose()?,
+                None => next_intended()?,
             };
             swept = 0.0;
             reach = 0.0;
+            if let Some(Step {
+                kind: StepKind::Stop(k),
+                line: input,
+                ..
+            }) = *current
+            {
+                return Err(PostError::Verify(format!(
+                    "posted line {line}: the input stops here ({} at input line {input}), and the posted program goes on without stopping",
+                    k.code()
+                )));
+            }
         }
         let Some(step) = *current else {
             return Err(PostError::Verify(format!("posted line {line} feeds to ({:.5}, {:.5}, {:.5}) after the intended path has ended", p.x, p.y, p.z)));
@@ -467,7 +489,7 @@ pub fn verify_traced<R: BufRead>(
             let back = ended
                 .filter(|e| fresh && !entering && d > tolerance && (p - e.end).norm() <= tolerance);
             if let Some(e) = back {
-                held = current.take();
+                held.set(current.take());
                 ((p - e.end).norm(), e)
             } else if d > tolerance {
                 on_point(line, d);
@@ -529,6 +551,46 @@ pub fn verify_traced<R: BufRead>(
             Event::Diagnostic(d) => {
                 if let Some(e) = posted_diagnostic(d) {
                     return Err(e);
+                }
+            }
+            Event::Stop(stop) => {
+                // A stop of the input's, where the input makes it: between moves, the
+                // next thing along the intended path.
+                let fail = |what: String| {
+                    Err(PostError::Verify(format!(
+                        "posted line {}: a program stop ({}) {what}",
+                        stop.line,
+                        stop.kind.code()
+                    )))
+                };
+                if let Some(s) = current {
+                    return fail(format!("within the move of input line {}", s.line));
+                }
+                let next = match held.take() {
+                    Some(s) => Some(s),
+                    None => next_intended()?,
+                };
+                match next {
+                    Some(Step {
+                        kind: StepKind::Stop(k),
+                        ..
+                    }) if posted_as(k) == stop.kind => {}
+                    Some(s) => {
+                        return fail(format!(
+                            "where the input makes {} (the next on the intended path is input line {}'s {})",
+                            if matches!(s.kind, StepKind::Stop(_)) {
+                                "another"
+                            } else {
+                                "none"
+                            },
+                            s.line,
+                            match s.kind {
+                                StepKind::Stop(k) => k.code(),
+                                _ => "move",
+                            }
+                        ))
+                    }
+                    None => return fail("after the intended path has ended".into()),
                 }
             }
             Event::Move(m) => {
@@ -662,15 +724,22 @@ pub fn verify_traced<R: BufRead>(
             }
         }
     }
-    let rest = match current.or(held) {
+    let rest = match current.or(held.take()) {
         Some(s) => Some(s),
-        None => intended.next().transpose()?,
+        None => next_intended()?,
     };
     if let Some(s) = rest {
-        return Err(PostError::Verify(format!(
-            "the posted program ends before the move of input line {} (to ({:.5}, {:.5}, {:.5}))",
-            s.line, s.end.x, s.end.y, s.end.z
-        )));
+        return Err(PostError::Verify(match s.kind {
+            StepKind::Stop(k) => format!(
+                "the posted program ends before the stop of input line {} ({})",
+                s.line,
+                k.code()
+            ),
+            _ => format!(
+                "the posted program ends before the move of input line {} (to ({:.5}, {:.5}, {:.5}))",
+                s.line, s.end.x, s.end.y, s.end.z
+            ),
+        }));
     }
     screen.finish()?;
     safety.finish(stream.interpreter().ended())?;
@@ -816,6 +885,8 @@ impl Screen {
             src,
             Options {
                 units,
+                // Each stop is held to the input's (see `verify_traced`).
+                stops: true,
                 ..Options::default()
             },
             true,

@@ -8,6 +8,7 @@ use std::io::Write;
 
 use lampost_gcode::round_half_away;
 use lampost_gcode::Emitter;
+use lampost_gcode::StopKind;
 use lampost_gcode::{ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE};
 use lampost_kinematics::trig::sin_cos_deg;
 use lampost_kinematics::{Affine, Machine};
@@ -219,16 +220,56 @@ impl<'m, W: Write> Writer<'m, W> {
                 if let Some(h) = length_offset {
                     self.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
                 }
-                let mut v = vec![(b'S', *spindle)];
-                v.extend(code_words(&p.spindle_on)?);
-                self.words(&v, None)?;
-                if *coolant {
-                    self.words(&code_words(&p.coolant_on)?, None)?;
-                }
+                self.spindle_on(*spindle, *coolant)?;
             }
             Process::Deposit { .. } => {}
         }
         self.report.body.0 = self.offset();
+        Ok(())
+    }
+
+    /// The spindle on at `speed`, and the coolant when `coolant` (machining).
+    fn spindle_on(&mut self, speed: f64, coolant: bool) -> Result<(), PostError> {
+        let p = &self.m.def.process;
+        let mut v = vec![(b'S', speed)];
+        v.extend(code_words(&p.spindle_on)?);
+        self.words(&v, None)?;
+        if coolant {
+            self.words(&code_words(&p.coolant_on)?, None)?;
+        }
+        Ok(())
+    }
+
+    /// A program stop of the input: off the end of the run with the process off (as for
+    /// [`Writer::travel`]), then the stop, `M0` (`M60` too: the pallet is not changed,
+    /// said in a warning) or `M1`. A machining program turns the spindle (and coolant)
+    /// on again after it: a control may stop them with the program (Haas's M0 does),
+    /// and the next feed would cut with the spindle stopped.
+    pub(crate) fn stop(
+        &mut self,
+        cfg: &PostConfig,
+        kind: StopKind,
+        file: &str,
+        line: u32,
+    ) -> Result<(), PostError> {
+        self.travel(file, line)?;
+        let code = match kind {
+            StopKind::Program => 0.0,
+            StopKind::Optional => 1.0,
+            StopKind::Pallet => {
+                self.report.warnings.push(format!(
+                    "{file}:{line}: M60 (pallet change and stop) is posted as M0: the machine stops, and no pallet is changed"
+                ));
+                0.0
+            }
+        };
+        self.words(&[(b'M', code)], None)?;
+        if let Process::Machine {
+            spindle, coolant, ..
+        } = cfg.process.checked()?
+        {
+            self.spindle_on(*spindle, *coolant)?;
+        }
         Ok(())
     }
 

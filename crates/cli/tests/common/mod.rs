@@ -101,7 +101,7 @@ pub fn rs274_motions(program: &Path, work: &Path) -> Vec<Canon> {
 }
 
 /// Run rs274 on `program`: its output and the canonical calls it wrote.
-fn rs274_exec(program: &Path, work: &Path) -> (Output, String) {
+pub fn rs274_exec(program: &Path, work: &Path) -> (Output, String) {
     let _one_at_a_time = RS274
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -201,6 +201,26 @@ fn canon_calls(text: &str) -> Result<Vec<Canon>, String> {
         }
     }
     Ok(v)
+}
+
+/// The program stops rs274 reads in `program` (`PROGRAM_STOP`, `OPTIONAL_PROGRAM_STOP`,
+/// `PALLET_SHUTTLE`), in order, each with the last motion call before it.
+pub fn rs274_stops(program: &Path, work: &Path) -> Vec<(String, Option<Canon>)> {
+    let (_, text) = rs274_exec(program, work);
+    let calls = canon_calls(&text).unwrap_or_default();
+    let mut stops = Vec::new();
+    for (i, l) in text.lines().enumerate() {
+        for kind in ["OPTIONAL_PROGRAM_STOP(", "PALLET_SHUTTLE(", "PROGRAM_STOP("] {
+            let at = l.find(kind);
+            // `PROGRAM_STOP(` is also the tail of `OPTIONAL_PROGRAM_STOP(`.
+            if at.is_some_and(|a| !l[..a].ends_with("OPTIONAL_")) {
+                let before = calls.iter().rev().find(|c| c.line < i + 1).cloned();
+                stops.push((kind.trim_end_matches('(').to_string(), before));
+                break;
+            }
+        }
+    }
+    stops
 }
 
 /// rs274's printed resolution: half of 1e-4, plus rounding slack.
