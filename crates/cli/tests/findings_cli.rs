@@ -1375,3 +1375,52 @@ fn a_tool_change_between_operations_is_refused_at_its_first_move() {
     let changes = text.lines().filter(|l| l.contains("CHANGE_TOOL(")).count();
     assert_eq!(changes, 2, "{text}");
 }
+
+/// Finding 44, for the post: an M-code lampost does not act on (Rotrics Studio's DexArm
+/// header `M2000` and `M888 P0`, Marlin's filament change `M600`) was left out of the
+/// posted program without a word. The post now names the first at its line, with a
+/// count of the others; `check` and `trace`, which move nothing for them, stay silent.
+#[test]
+fn m_codes_the_post_leaves_out_are_named() {
+    let real =
+        std::fs::read_to_string(root().join("fixtures/real-programs/dexarm-rotrics/quote.gcode"))
+            .expect("the DexArm program");
+    // Its header as written, then a short path of its own.
+    let head: String = real.lines().take(5).map(|l| format!("{l}\n")).collect();
+    assert!(head.contains("M2000;custom:line mode"), "{head}");
+    let work = tempdir("m-codes-left-out");
+    let input = work.join("dexarm-head.gcode");
+    std::fs::write(
+        &input,
+        format!("{head}G21\nG0 X0 Y0 Z5\nG1 Z0 F300\nG1 X10\nM600\nG1 Y10\nM30\n"),
+    )
+    .expect("writes");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        input.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("dexarm-head.gcode:3: M2000: an M-code lampost does not act on")
+            && err.contains("left out of the posted program")
+            && err.contains("2 more warning(s) like that of line 3"),
+        "{err}"
+    );
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    assert!(
+        !posted.contains("M2000") && !posted.contains("M600"),
+        "{posted}"
+    );
+    let o = lampost(&["check", input.to_str().expect("utf8")]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("left out"),
+        "{}",
+        stderr(&o)
+    );
+}

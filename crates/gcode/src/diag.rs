@@ -166,6 +166,11 @@ pub enum ErrorKind {
     /// A block-delete line run and posted without its `/` (`Options::post_notes`).
     #[error("a block-delete line (`/`) is posted as run, without its `/`: the posted program has no switch for it")]
     BlockDeletePosted,
+    /// An M-code the interpreter does not act on (a setting of the firmware or control,
+    /// or a code of the machine's own), where the reader is asked to name what the post
+    /// leaves out (`Options::post_notes`).
+    #[error("{0}: an M-code lampost does not act on (a setting of the firmware or control, or a code of the machine's own) is left out of the posted program")]
+    MCodeLeftOut(String),
     /// A LinuxCNC G76 threading cycle that cannot run (rs274 refuses it too), or one
     /// with more passes than lampost expands (`lathe.rs`).
     #[error("G76 threading cycle: {0}")]
@@ -413,6 +418,7 @@ impl ErrorKind {
             ErrorKind::BadValue { .. } => "correct the value",
             ErrorKind::NotSimulated(_) => "check this part of the program on the machine's own graphics",
             ErrorKind::BlockDeletePosted => "if the control's block-delete switch was meant to be on, remove the line before posting",
+            ErrorKind::MCodeLeftOut(_) => "where the machine needs what the code does (a filament change, a park, an output, a macro), program it on the control or in the machine file's process codes (`verify` refuses an M-code the post does not write)",
             ErrorKind::DwellLeftOut(_) => "the program runs without the pause: where the process needs it (a spot face's finish), program it on the control (`verify` refuses a dwell in a posted program)",
             ErrorKind::ThreadingCycle(_) => "G76 needs P (pitch, > 0), an axis word (Z: the thread's end), I (the peaks' offset from the drive line, not 0), J (first cut depth, > 0) and K (full thread depth, > J); H and L are whole numbers; the spindle turning (M3/M4, again after M6), cutter compensation off (G40) and no rotary axis word",
             ErrorKind::CutterCompTraced(_) => "the trace shows where the tool's centre goes; the post writes no compensated path (program the centre path with G40)",

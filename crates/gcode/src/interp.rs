@@ -56,7 +56,9 @@ pub struct Options {
     /// Warn of what a post of the program changes, for the post: every dwell it leaves
     /// out ([`ErrorKind::DwellLeftOut`]: `G4`, a canned cycle's `P` at the bottom of a
     /// hole), every block-delete line it runs and writes without its `/`
-    /// ([`ErrorKind::BlockDeletePosted`]).
+    /// ([`ErrorKind::BlockDeletePosted`]), every M-code it does not act on
+    /// ([`ErrorKind::MCodeLeftOut`]: a firmware's or control's setting, a code of the
+    /// machine's own).
     pub post_notes: bool,
     /// Report the program's stops (`M0`, `M1`, `M60`) as [`Event::Stop`], after the
     /// block's motion, for a reader that carries them on (the post, and `verify` reading
@@ -700,6 +702,18 @@ impl Interpreter {
             angle: None,
         };
         self.collect(b, &mut w)?;
+        if self.opts.post_notes {
+            for &(mw, c) in &w.ms {
+                if !m_known(c) {
+                    self.warn(
+                        b,
+                        out,
+                        ErrorKind::MCodeLeftOut(mw.display_code()),
+                        Some(mw.span),
+                    );
+                }
+            }
+        }
         if !self.lathe.recognised() {
             self.lathe_signs(b, &w, out);
         }
