@@ -569,26 +569,7 @@ impl<'a> Intended<'a> {
                     }
                     continue;
                 }
-                Event::Stop(stop) => {
-                    let here = match self.last_end {
-                        Some((_, part, sec_i, layer))
-                            if sec_i == self.idx && layer == self.layer =>
-                        {
-                            part
-                        }
-                        _ => self.frame(sec, self.layer).apply(&Vector3::zeros()),
-                    };
-                    return Ok(Some(Step {
-                        section: self.idx,
-                        layer: self.layer,
-                        line: stop.line,
-                        kind: StepKind::Stop(stop.kind),
-                        start: here,
-                        end: here,
-                        feed: 0.0,
-                        deposit: false,
-                    }));
-                }
+                Event::Stop(stop) => return Ok(Some(self.stop_step(stop))),
                 Event::Move(m) => m,
             };
             if m.axes_named & EXTRA_AXES != 0 {
@@ -753,22 +734,36 @@ impl Intended<'_> {
     /// the first move made with the new tool: posted without it, the machine would go on
     /// with the first tool (a Mastercam or Fusion program changes tools between its
     /// operations, with `M1` before each).
+    #[inline]
     fn one_tool(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
         match self.tool {
             None => self.tool = Some(m.modal.tool),
-            Some(t) if t != m.modal.tool => {
-                return Err(PostError::Unsupported {
-                    file: file.to_string(),
-                    line: m.line,
-                    what: format!(
-                        "a tool change from T{t} to T{} (its M6 before this line, the first move with the new tool): the post writes a program for one tool (--tool), and would go on with the first; post each tool's operations as a program of their own",
-                        m.modal.tool
-                    ),
-                })
-            }
+            Some(t) if t != m.modal.tool => return Err(tool_changed(file, m, t)),
             Some(_) => {}
         }
         Ok(())
+    }
+
+    /// The step of a program stop: where the last move of the section (and layer) ended.
+    #[cold]
+    fn stop_step(&mut self, stop: lampost_gcode::Stop) -> Step {
+        let here = match self.last_end {
+            Some((_, part, sec_i, layer)) if sec_i == self.idx && layer == self.layer => part,
+            _ => {
+                let sec = &self.sections[self.idx];
+                self.frame(sec, self.layer).apply(&Vector3::zeros())
+            }
+        };
+        Step {
+            section: self.idx,
+            layer: self.layer,
+            line: stop.line,
+            kind: StepKind::Stop(stop.kind),
+            start: here,
+            end: here,
+            feed: 0.0,
+            deposit: false,
+        }
     }
 
     /// Whether `m` is a feed that burns nothing (see its call): made with the laser
@@ -865,6 +860,19 @@ impl Intended<'_> {
             feed: 0.0,
             deposit: false,
         }))
+    }
+}
+
+/// The refusal of a tool change (see [`Intended::one_tool`]): from `t` to `m`'s tool.
+#[cold]
+fn tool_changed(file: &str, m: &Move, t: u32) -> PostError {
+    PostError::Unsupported {
+        file: file.to_string(),
+        line: m.line,
+        what: format!(
+            "a tool change from T{t} to T{} (its M6 before this line, the first move with the new tool): the post writes a program for one tool (--tool), and would go on with the first; post each tool's operations as a program of their own",
+            m.modal.tool
+        ),
     }
 }
 
