@@ -1424,3 +1424,73 @@ fn m_codes_the_post_leaves_out_are_named() {
         stderr(&o)
     );
 }
+
+/// Finding 53: a machining program's spindle and coolant were replaced without a word:
+/// `S5000 M4` with `M8` was posted as `S3000 M3` with no coolant (the machine's
+/// `spindle_on`, `--spindle`'s default, no `--coolant`), so a tool cutting
+/// counter-clockwise would be driven backwards. A cut turning the other way than the
+/// machine's `spindle_on` is now refused at its line (by `post` and by `verify`); with
+/// the direction right, another speed and coolant left off are warned of.
+#[test]
+fn a_spindle_turning_the_other_way_is_refused_and_speed_and_coolant_named() {
+    let path = finding("53-spindle-reversed-and-coolant.nc");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("spindle-way");
+    let out = work.join("posted.nc");
+    let o_arg = out.to_str().expect("utf8");
+    let post = |input: &str, extra: &[&str]| {
+        let mut args = vec!["post", "--machine", "nrc-lc", "--process", "machine"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[input, "-o", o_arg]);
+        lampost(&args)
+    };
+    let o = post(p, &[]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("53-spindle-reversed-and-coolant.nc:6: a cut with the spindle turning counter-clockwise (M4)"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    // Clockwise: posted, with the speed and the coolant named.
+    let cw = work.join("cw.nc");
+    std::fs::write(
+        &cw,
+        std::fs::read_to_string(&path)
+            .expect("fixture")
+            .replace("S5000 M4", "S5000 M3"),
+    )
+    .expect("writes");
+    let cw = cw.to_str().expect("utf8");
+    let o = post(cw, &[]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("cw.nc:6: the input cuts at S5000; the posted program turns the spindle at S3000 (--spindle)")
+            && err.contains("cw.nc:6: the input cuts with coolant on (M8); the posted program has none (post with --coolant)"),
+        "{err}"
+    );
+    let o = post(cw, &["--spindle", "5000", "--coolant"]);
+    let err = stderr(&o);
+    assert!(
+        o.status.success() && !err.contains("the input cuts"),
+        "{err}"
+    );
+    // verify holds the input to the same rule: the posted program against the
+    // counter-clockwise input is refused.
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        "--process",
+        "machine",
+        "--spindle",
+        "5000",
+        "--coolant",
+        p,
+        o_arg,
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("counter-clockwise (M4)"), "{err}");
+}

@@ -543,9 +543,11 @@ fn real_programs_post_and_verify_or_are_refused_where_expected() {
     let dir = tempdir("safety-corpus");
     let cases: [(&str, Option<&str>); 3] = [
         ("cam/fusion360-generic-mm-bore-tests.nc", None),
+        // Its ball nose cuts turning counter-clockwise (`S6000 M4`), and the FADAL's
+        // spindle_on is M3 (its F9991300 is out of FADAL's range too, further on).
         (
             "linuxcnc/LHchips4.ngc",
-            Some("LHchips4.ngc:28: refused to write F393358.2677165354: out of range for FADAL"),
+            Some("LHchips4.ngc:28: a cut with the spindle turning counter-clockwise (M4)"),
         ),
         ("linuxcnc/Cereal.ngc", Some("Cereal.ngc:2270: G53")),
     ];
@@ -591,6 +593,32 @@ fn real_programs_post_and_verify_or_are_refused_where_expected() {
             }
         }
     }
+    // LHchips4 turning clockwise: refused further on, at its feed out of FADAL's range.
+    let chips = std::fs::read_to_string(shared.join("corpus/linuxcnc/LHchips4.ngc"))
+        .expect("LHchips4")
+        .replace("S6000 M4", "S6000 M3");
+    let input = write(&dir, "LHchips4-m3.ngc", &chips);
+    let out = dir.join("out.nc").to_string_lossy().into_owned();
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--convert-units",
+        "--process",
+        "machine",
+        "--head",
+        "spindle",
+        &input,
+        "-o",
+        &out,
+    ]);
+    assert!(
+        stderr(&o).contains(
+            "LHchips4-m3.ngc:28: refused to write F393358.2677165354: out of range for FADAL"
+        ),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// `--stock` (a box in the part frame) raises the retracts over it, and verify, given the

@@ -13,6 +13,7 @@ use nalgebra::Vector3;
 
 use crate::error::PostError;
 use crate::frame::Frame;
+use crate::post::Process;
 
 /// How a section's rotaries are chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,6 +201,10 @@ pub struct Intended<'a> {
     moves_in_section: usize,
     /// The tool in the spindle at the section's first move (see [`Intended::one_tool`]).
     tool: Option<u32>,
+    /// The spindle a machining program is posted with (see [`Intended::holding_spindle`]),
+    /// and the section in which the input's speed and coolant were last warned of.
+    posted_spindle: Option<PostedSpindle>,
+    warned_spindle: [Option<usize>; 2],
     done: bool,
     /// The last move's end, in the program and the part frame, with its (section,
     /// layer): the next move starts there, so its start needs no transform.
@@ -307,6 +312,8 @@ impl<'a> Intended<'a> {
             layer_z: None,
             moves_in_section: 0,
             tool: None,
+            posted_spindle: None,
+            warned_spindle: [None; 2],
             done: false,
             last_end: None,
             frame_cache: None,
@@ -577,6 +584,9 @@ impl<'a> Intended<'a> {
             }
             self.frame_kept(&sec.name, &m)?;
             self.one_tool(&sec.name, &m)?;
+            if let Some(posted) = self.posted_spindle {
+                self.spindle_kept(&sec.name, &m, posted)?;
+            }
             if let Some(step) = self.machine_coordinate_move(&m)? {
                 self.moves_in_section += 1;
                 return Ok(Some(step));
@@ -744,6 +754,91 @@ impl Intended<'_> {
         Ok(())
     }
 
+    /// Hold the input's spindle to the one `process` posts, when it machines: a cut made
+    /// with the spindle turning the other way than the machine's `spindle_on` code turns
+    /// it (`M4` where that is `M3`) is refused at its line (the post would drive the tool
+    /// backwards); a cut at another speed than `--spindle`, or with coolant when the
+    /// program is posted without it, is warned of once a section. They used to be
+    /// replaced without a word.
+    pub fn holding_spindle(mut self, process: &Process) -> Self {
+        if let Process::Machine {
+            spindle, coolant, ..
+        } = process
+        {
+            // The way the machine's spindle_on code turns it (M3 or M4 among its words).
+            let on =
+                crate::post::code_words(&self.machine.def.process.spindle_on).unwrap_or_default();
+            let turns = |code: f64| on.iter().any(|&(l, v)| l == b'M' && v == code);
+            let way = if turns(3.0) {
+                Some(lampost_gcode::Spindle::Cw)
+            } else if turns(4.0) {
+                Some(lampost_gcode::Spindle::Ccw)
+            } else {
+                None
+            };
+            self.posted_spindle = Some(PostedSpindle {
+                speed: *spindle,
+                coolant: *coolant,
+                way,
+            });
+        }
+        self
+    }
+
+    /// See [`Intended::holding_spindle`].
+    #[inline]
+    fn spindle_kept(
+        &mut self,
+        file: &str,
+        m: &Move,
+        posted: PostedSpindle,
+    ) -> Result<(), PostError> {
+        if matches!(m.kind, MoveKind::Rapid) {
+            return Ok(());
+        }
+        let md = &m.modal;
+        if let Some(way) = posted
+            .way
+            .filter(|&w| md.spindle != lampost_gcode::Spindle::Off && md.spindle != w)
+        {
+            let (theirs, ours) = match way {
+                lampost_gcode::Spindle::Ccw => (("clockwise", "M3"), ("counter-clockwise", "M4")),
+                _ => (("counter-clockwise", "M4"), ("clockwise", "M3")),
+            };
+            return Err(PostError::Unsupported {
+                file: file.to_string(),
+                line: m.line,
+                what: format!(
+                    "a cut with the spindle turning {} ({}): the posted program turns it by the machine's spindle_on code ({}, {}), which would drive the tool backwards; post a program that cuts with {}",
+                    theirs.0, theirs.1, ours.0, ours.1, ours.1
+                ),
+            });
+        }
+        let on = md.spindle != lampost_gcode::Spindle::Off;
+        if on
+            && md.speed > 0.0
+            && (md.speed - posted.speed).abs() > 1e-9 * posted.speed.abs().max(1.0)
+            && self.warned_spindle[0] != Some(self.idx)
+        {
+            self.warned_spindle[0] = Some(self.idx);
+            self.notes.push(format!(
+                "{file}:{}: the input cuts at S{}; the posted program turns the spindle at S{} (--spindle)",
+                m.line,
+                lampost_gcode::Readable(md.speed),
+                lampost_gcode::Readable(posted.speed)
+            ));
+        }
+        if (md.flood || md.mist) && !posted.coolant && self.warned_spindle[1] != Some(self.idx) {
+            self.warned_spindle[1] = Some(self.idx);
+            self.notes.push(format!(
+                "{file}:{}: the input cuts with coolant on ({}); the posted program has none (post with --coolant)",
+                m.line,
+                if md.flood { "M8" } else { "M7" }
+            ));
+        }
+        Ok(())
+    }
+
     /// The step of a program stop: where the last move of the section (and layer) ended.
     #[cold]
     fn stop_step(&mut self, stop: lampost_gcode::Stop) -> Step {
@@ -861,6 +956,15 @@ impl Intended<'_> {
             deposit: false,
         }))
     }
+}
+
+/// The spindle a machining program is posted with: its speed and whether coolant is on.
+#[derive(Debug, Clone, Copy)]
+struct PostedSpindle {
+    speed: f64,
+    coolant: bool,
+    /// The way the machine's `spindle_on` code turns it, where it says (M3 or M4).
+    way: Option<lampost_gcode::Spindle>,
 }
 
 /// The refusal of a tool change (see [`Intended::one_tool`]): from `t` to `m`'s tool.

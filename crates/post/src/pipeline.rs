@@ -220,7 +220,8 @@ fn post_pass<W: Write>(
                     })
                 };
                 let mut batch = fresh();
-                let mut intended = Intended::new(machine, sections, opts);
+                let mut intended =
+                    Intended::new(machine, sections, opts).holding_spindle(&cfg.process);
                 for step in intended.by_ref() {
                     let failed = step.is_err();
                     let planned = step.map(|s| {

@@ -342,7 +342,8 @@ pub fn verify_traced<R: BufRead>(
     let lin_idx: Vec<usize> = names[..3].iter().map(|n| idx(n).unwrap_or(0)).collect();
     let rot_idx: Vec<usize> = names[3..].iter().map(|n| idx(n).unwrap_or(3)).collect();
     // Shared by `check` and the stops' arm below (a step taken is taken for both).
-    let intended = std::cell::RefCell::new(Intended::new(machine, sections, opts).filter(|s| {
+    let steps = Intended::new(machine, sections, opts).holding_spindle(process);
+    let intended = std::cell::RefCell::new(steps.filter(|s| {
         !matches!(
             s,
             Ok(Step {
