@@ -1430,7 +1430,8 @@ fn m_codes_the_post_leaves_out_are_named() {
 /// `spindle_on`, `--spindle`'s default, no `--coolant`), so a tool cutting
 /// counter-clockwise would be driven backwards. A cut turning the other way than the
 /// machine's `spindle_on` is now refused at its line (by `post` and by `verify`); with
-/// the direction right, another speed and coolant left off are warned of.
+/// the direction right, another speed, coolant left off, and another tool or tool length
+/// offset than `--tool` and `--length-offset` are warned of.
 #[test]
 fn a_spindle_turning_the_other_way_is_refused_and_speed_and_coolant_named() {
     let path = finding("53-spindle-reversed-and-coolant.nc");
@@ -1493,4 +1494,26 @@ fn a_spindle_turning_the_other_way_is_refused_and_speed_and_coolant_named() {
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("counter-clockwise (M4)"), "{err}");
+    // The tool and its length offset, likewise.
+    let tl = work.join("tool.nc");
+    std::fs::write(
+        &tl,
+        "G21 G90 G17\nT1 M6\nS3000 M3\nG0 G43 H1 X0 Y0 Z5\nG1 Z0 F300\nG1 X10\nG0 Z5\nM30\n",
+    )
+    .expect("writes");
+    let tl = tl.to_str().expect("utf8");
+    let o = post(tl, &[]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("tool.nc:5: the input cuts with tool T1; the posted program makes no tool change (--tool)")
+            && err.contains("tool.nc:5: the input cuts with tool length offset H1 (G43); the posted program applies none (--length-offset)"),
+        "{err}"
+    );
+    let o = post(tl, &["--tool", "1", "--length-offset", "1"]);
+    let err = stderr(&o);
+    assert!(
+        o.status.success() && !err.contains("the input cuts"),
+        "{err}"
+    );
 }

@@ -204,7 +204,7 @@ pub struct Intended<'a> {
     /// The spindle a machining program is posted with (see [`Intended::holding_spindle`]),
     /// and the section in which the input's speed and coolant were last warned of.
     posted_spindle: Option<PostedSpindle>,
-    warned_spindle: [Option<usize>; 2],
+    warned_spindle: [Option<usize>; 4],
     done: bool,
     /// The last move's end, in the program and the part frame, with its (section,
     /// layer): the next move starts there, so its start needs no transform.
@@ -313,7 +313,7 @@ impl<'a> Intended<'a> {
             moves_in_section: 0,
             tool: None,
             posted_spindle: None,
-            warned_spindle: [None; 2],
+            warned_spindle: [None; 4],
             done: false,
             last_end: None,
             frame_cache: None,
@@ -757,12 +757,17 @@ impl Intended<'_> {
     /// Hold the input's spindle to the one `process` posts, when it machines: a cut made
     /// with the spindle turning the other way than the machine's `spindle_on` code turns
     /// it (`M4` where that is `M3`) is refused at its line (the post would drive the tool
-    /// backwards); a cut at another speed than `--spindle`, or with coolant when the
-    /// program is posted without it, is warned of once a section. They used to be
+    /// backwards); a cut at another speed than `--spindle`, with coolant when the
+    /// program is posted without it, or with another tool or tool length offset than
+    /// `--tool` and `--length-offset` give, is warned of once a section. They used to be
     /// replaced without a word.
     pub fn holding_spindle(mut self, process: &Process) -> Self {
         if let Process::Machine {
-            spindle, coolant, ..
+            spindle,
+            coolant,
+            tool,
+            length_offset,
+            ..
         } = process
         {
             // The way the machine's spindle_on code turns it (M3 or M4 among its words).
@@ -780,6 +785,8 @@ impl Intended<'_> {
                 speed: *spindle,
                 coolant: *coolant,
                 way,
+                tool: *tool,
+                length_offset: *length_offset,
             });
         }
         self
@@ -827,6 +834,32 @@ impl Intended<'_> {
                 lampost_gcode::Readable(md.speed),
                 lampost_gcode::Readable(posted.speed)
             ));
+        }
+        let named =
+            |v: Option<u32>, letter: char| v.map_or("none".to_string(), |n| format!("{letter}{n}"));
+        if md.tool != 0 && posted.tool != Some(md.tool) && self.warned_spindle[2] != Some(self.idx)
+        {
+            self.warned_spindle[2] = Some(self.idx);
+            self.notes.push(format!(
+                "{file}:{}: the input cuts with tool T{}; the posted program {} (--tool)",
+                m.line,
+                md.tool,
+                posted
+                    .tool
+                    .map_or("makes no tool change".to_string(), |t| format!(
+                        "changes to T{t}"
+                    ))
+            ));
+        }
+        if let Some(h) = md.tool_length.filter(|&h| posted.length_offset != Some(h)) {
+            if self.warned_spindle[3] != Some(self.idx) {
+                self.warned_spindle[3] = Some(self.idx);
+                self.notes.push(format!(
+                    "{file}:{}: the input cuts with tool length offset H{h} (G43); the posted program applies {} (--length-offset): check the tool's Z before running it",
+                    m.line,
+                    named(posted.length_offset, 'H')
+                ));
+            }
         }
         if (md.flood || md.mist) && !posted.coolant && self.warned_spindle[1] != Some(self.idx) {
             self.warned_spindle[1] = Some(self.idx);
@@ -965,6 +998,9 @@ struct PostedSpindle {
     coolant: bool,
     /// The way the machine's `spindle_on` code turns it, where it says (M3 or M4).
     way: Option<lampost_gcode::Spindle>,
+    /// `--tool` and `--length-offset`.
+    tool: Option<u32>,
+    length_offset: Option<u32>,
 }
 
 /// The refusal of a tool change (see [`Intended::one_tool`]): from `t` to `m`'s tool.
