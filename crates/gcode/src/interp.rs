@@ -2637,7 +2637,21 @@ impl Interpreter {
                 // times the spindle speed, no F needed; a rigid tap returns to where it
                 // started (the spindle reverses out), as LinuxCNC runs it.
                 let feed = match w.get(b'K') {
-                    Some(k) if k != 0.0 && self.modal.speed > 0.0 => k.abs() * self.modal.speed,
+                    Some(k) if k != 0.0 && self.modal.speed > 0.0 => {
+                        let feed = k.abs() * self.modal.speed;
+                        if !feed.is_finite() {
+                            return Err(diag(
+                                b,
+                                Severity::Error,
+                                ErrorKind::BadValue {
+                                    word: w.word(b'K').map_or_else(String::new, |k| k.display()),
+                                    why: "the pitch times the spindle speed is beyond any number",
+                                },
+                                w.word(b'K').map(|k| k.span),
+                            ));
+                        }
+                        feed
+                    }
                     _ => self.feed_for(b, w, out)?,
                 };
                 let start = self.pos;
@@ -4108,6 +4122,23 @@ mod tests {
 
     use super::*;
     use crate::stream::Stream;
+
+    /// A spindle-synchronised move whose pitch times the spindle speed overflows is
+    /// refused at its K, never moved at an infinite feed (fuzz, seed 20261128, input
+    /// 905313: `G33.1 Z-0.95 K1.7976931348623157e308` at S200).
+    #[test]
+    fn a_thread_whose_feed_overflows_is_refused_at_its_pitch() {
+        // K1 followed by 308 zeros: 1e308 (the default reading, FADAL's, has no
+        // exponents), times S200.
+        let k = format!("1{}.", "0".repeat(308));
+        let (moves, diags) = run(&format!(
+            "G21 G90\nS200 M3\nG0 X0 Y0 Z1\nG33.1 Z-0.95 K{k}\n"
+        ));
+        assert!(moves.iter().all(|m| m.feed.is_finite()), "{moves:?}");
+        let e = diags.iter().find(|d| d.is_error()).expect("refused");
+        assert_eq!((e.line, e.column), (4, 14), "{e}");
+        assert!(e.to_string().contains("beyond any number"), "{e}");
+    }
 
     /// Stops are reported where asked (`Options::stops`), after the block's motion: `M0`
     /// and `M60` stop, `M1` is the optional stop on a machine control and a stop on a
