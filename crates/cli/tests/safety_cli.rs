@@ -2037,4 +2037,34 @@ fn a_program_stop_in_the_input_is_posted_where_it_stands() {
         &lampost(&["verify", "--machine", "nrc-lc", &csv, &check]),
         "a program stop (M0): a path of points has none",
     );
+    // A stop after an arc shorter than the tolerance, written as chords at a tilted
+    // index: the chords after the one that ends the arc are the arc's, then the stop.
+    let tiny = write(
+        &dir,
+        "tiny.nc",
+        "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z0 F300\nG1 X10\nG2 X10.004 Y-0.004 I0.004 J0\nM0\nG1 Y10\nG0 Z5\nM30\n",
+    );
+    let out = dir.join("tiny.out.nc").to_string_lossy().into_owned();
+    let tilted = ["--machine", "nrc-lc", "--index", "B=30,C=45"];
+    let mut args = vec!["post"];
+    args.extend_from_slice(&tilted);
+    args.extend_from_slice(&[&tiny, "-o", &out]);
+    let o = lampost(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let mut args = vec!["verify"];
+    args.extend_from_slice(&tilted);
+    args.extend_from_slice(&[&tiny, &out]);
+    let o = lampost(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let no_stop: String = posted
+        .lines()
+        .filter(|l| !l.ends_with(" M0"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let check = write(&dir, "tiny-check.nc", &no_stop);
+    let mut args = vec!["verify"];
+    args.extend_from_slice(&tilted);
+    args.extend_from_slice(&[&tiny, &check]);
+    fails_at(&lampost(&args), "the input stops here (M0 at input line 6)");
 }

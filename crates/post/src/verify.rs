@@ -435,10 +435,16 @@ pub fn verify_traced<R: BufRead>(
                 ..
             }) = *current
             {
-                return Err(PostError::Verify(format!(
-                    "posted line {line}: the input stops here ({} at input line {input}), and the posted program goes on without stopping",
-                    k.code()
-                )));
+                // A point of the move that ended, after its end (a move shorter than the
+                // tolerance, written as chords): checked against it below, and the stop
+                // given back for the posted one. Any other point goes on past the stop.
+                let of_ended = ended.is_some_and(|e| !entering && (p - e.end).norm() <= tolerance);
+                if !of_ended {
+                    return Err(PostError::Verify(format!(
+                        "posted line {line}: the input stops here ({} at input line {input}), and the posted program goes on without stopping",
+                        k.code()
+                    )));
+                }
             }
         }
         let Some(step) = *current else {
@@ -477,7 +483,8 @@ pub fn verify_traced<R: BufRead>(
                 p.x, p.y, p.z, step.line
             )));
         }
-        let (err, step) = if is_end && !entering && d_end <= tolerance && last_turn {
+        let stop = matches!(step.kind, StepKind::Stop(_));
+        let (err, step) = if is_end && !entering && d_end <= tolerance && last_turn && !stop {
             *current = None;
             ended = Some(step);
             (d_end, step)
@@ -487,8 +494,9 @@ pub fn verify_traced<R: BufRead>(
             // written as chords, every one within the tolerance of its end), after the
             // point that ended it: it stays within the tolerance of that end, where the
             // tool already is. Checked against that move; the next is given back.
-            let back = ended
-                .filter(|e| fresh && !entering && d > tolerance && (p - e.end).norm() <= tolerance);
+            let back = ended.filter(|e| {
+                fresh && !entering && (d > tolerance || stop) && (p - e.end).norm() <= tolerance
+            });
             if let Some(e) = back {
                 held.set(current.take());
                 ((p - e.end).norm(), e)
