@@ -985,6 +985,8 @@ impl<W: Write> Emitter<W> {
                 return Err(self.block_error(b, kind, b.word(b'N').map(|w| w.span)));
             }
         }
+        // Whether the line ends with a word written from the block (see `Item::Text`).
+        let mut after_word = false;
         for item in &b.items {
             match item {
                 Item::Word(w) => {
@@ -995,6 +997,7 @@ impl<W: Write> Emitter<W> {
                     if self.suppressed(w.letter, w.value) {
                         continue;
                     }
+                    after_word = true;
                     if let Err(range) = self.push_word(w.letter, w.register, w.value, Some(w.text))
                     {
                         let kind = ErrorKind::OutOfRange {
@@ -1008,10 +1011,35 @@ impl<W: Write> Emitter<W> {
                     self.after(w.letter, w.value);
                 }
                 Item::Text(t) => {
+                    // Text that starts with a digit, or a point after a number without
+                    // one, would be read as more of the number the line ends with,
+                    // across the blank (`M308 .7575` is M308.7575, as rs274 reads a
+                    // block without its blanks): it cannot be written apart from the
+                    // word (`M308.000.7575`, whose M the dialect writes `M308`).
+                    let digits = self
+                        .line
+                        .iter()
+                        .rev()
+                        .take_while(|c| c.is_ascii_digit() || **c == b'.')
+                        .count();
+                    let number = &self.line[self.line.len() - digits..];
+                    let merges = after_word
+                        && digits > 0
+                        && match t.text.as_bytes().first() {
+                            Some(c) if c.is_ascii_digit() => true,
+                            Some(b'.') => !number.contains(&b'.'),
+                            _ => false,
+                        };
+                    if merges {
+                        let kind = ErrorKind::NumberWithoutLetter(t.text.to_string());
+                        return Err(self.block_error(b, kind, Some(t.span)));
+                    }
                     self.separate();
                     self.line.extend_from_slice(t.text.as_bytes());
+                    after_word = false;
                 }
                 Item::Comment(c) => {
+                    after_word = false;
                     self.separate();
                     match c.style {
                         CommentStyle::Paren => {
@@ -1391,6 +1419,37 @@ mod tests {
             assert_eq!(round_half_away(x).to_bits(), x.round().to_bits(), "{x}");
         }
         assert!(round_half_away(f64::NAN).is_nan());
+    }
+
+    /// A firmware code's text that starts with a point or a digit cannot follow a
+    /// word's number across a blank, or it reads as more of that number: `M308.000.7575`
+    /// in the FADAL dialect (which writes `M308`) is refused, not written as
+    /// `M308 .7575` (M308.7575, and then its Z twice: fuzz, fmt, seed 1, input 142313).
+    /// Verbatim, `M308.000 .7575` reads back as it was.
+    #[test]
+    fn text_that_would_join_a_number_is_refused() {
+        let line = "G1 Z1.016 F50M308.000.7575 Y5.977 Z3.556";
+        let b = crate::parse::parse_line(line.as_bytes(), 1, 0).expect("parses");
+        let mut em = super::Emitter::new(
+            Vec::new(),
+            super::EmitOptions {
+                dialect: Some(super::Dialect::Fadal),
+                units: crate::Units::Inch,
+                ..Default::default()
+            },
+        );
+        let e = em.block(&b).expect_err("refused");
+        assert!(
+            e.to_string().contains("`.7575` has no address letter"),
+            "{e}"
+        );
+        let mut em = super::Emitter::new(Vec::new(), super::EmitOptions::default());
+        em.block(&b).expect("verbatim");
+        let out = String::from_utf8(em.finish().expect("ends")).expect("utf8");
+        assert!(out.contains("M308.000 .7575 Y5.977 Z3.556"), "{out}");
+        for l in out.lines() {
+            crate::parse::parse_line(l.as_bytes(), 1, 0).expect("reads back");
+        }
     }
 
     #[test]
