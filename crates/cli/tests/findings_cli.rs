@@ -1517,3 +1517,47 @@ fn a_spindle_turning_the_other_way_is_refused_and_speed_and_coolant_named() {
         "{err}"
     );
 }
+
+/// Findings 51 and 52 on a real program: pcb2gcode's drill file moves with no tool (T0)
+/// to its tool-change height, then `M6` and `M0 (Temporary machine stop.)`. Loading the
+/// first tool is no tool change: it posts, its stop posted after a lift, and verifies.
+/// (The tool rule first refused it as a change from T0 to T1.)
+#[test]
+fn pcb2gcode_s_first_tool_and_stop_post_and_verify() {
+    let path = root().join("fixtures/real-programs/pcb2gcode/multivibrator-milldrill.ngc");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("pcb2gcode-stop");
+    let out = work.join("posted.nc");
+    let o_arg = out.to_str().expect("utf8");
+    let args = [
+        "--machine",
+        "nrc-lc",
+        "--process",
+        "machine",
+        "--convert-units",
+    ];
+    let mut post = vec!["post"];
+    post.extend_from_slice(&args);
+    post.extend_from_slice(&[p, "-o", o_arg]);
+    let o = lampost(&post);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = text.lines().collect();
+    let stops: Vec<usize> = (0..lines.len())
+        .filter(|&k| lines[k].ends_with(" M0"))
+        .collect();
+    assert_eq!(stops.len(), 1, "{text}");
+    // Before any cut (the stop is the program's first: its drill is changed there), at
+    // the clearance after the index, and the spindle on again after it.
+    let first_cut = lines
+        .iter()
+        .position(|l| l.contains(" G1 "))
+        .expect("a cut");
+    assert!(stops[0] < first_cut, "{text}");
+    assert!(lines[stops[0] + 1].ends_with("S3000 M3"), "{text}");
+    let mut verify = vec!["verify"];
+    verify.extend_from_slice(&args);
+    verify.extend_from_slice(&[p, o_arg]);
+    let o = lampost(&verify);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

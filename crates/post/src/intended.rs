@@ -199,7 +199,7 @@ pub struct Intended<'a> {
     layer: usize,
     layer_z: Option<f64>,
     moves_in_section: usize,
-    /// The tool in the spindle at the section's first move (see [`Intended::one_tool`]).
+    /// The first tool (not T0) the section's moves are made with (see [`Intended::one_tool`]).
     tool: Option<u32>,
     /// The spindle a machining program is posted with (see [`Intended::holding_spindle`]),
     /// and the section in which the input's speed and coolant were last warned of.
@@ -740,15 +740,19 @@ impl<'a> Intended<'a> {
 
 impl Intended<'_> {
     /// A section is posted for one tool: the one `--tool` names (or the one in the
-    /// spindle). A tool change (`M6`, `M61`) after the section's first move is refused at
-    /// the first move made with the new tool: posted without it, the machine would go on
-    /// with the first tool (a Mastercam or Fusion program changes tools between its
-    /// operations, with `M1` before each).
+    /// spindle). A change from one tool to another (`M6`, `M61`) is refused at the first
+    /// move made with the new tool: posted without it, the machine would go on with the
+    /// first tool (a Mastercam or Fusion program changes tools between its operations,
+    /// with `M1` before each). The first tool loaded after moves made with none (T0:
+    /// pcb2gcode moves to its tool-change height, then `M6`), and T0 put back at the end,
+    /// are no change of the tool that cuts.
     #[inline]
     fn one_tool(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
+        let now = m.modal.tool;
         match self.tool {
-            None => self.tool = Some(m.modal.tool),
-            Some(t) if t != m.modal.tool => return Err(tool_changed(file, m, t)),
+            _ if now == 0 => {}
+            None => self.tool = Some(now),
+            Some(t) if t != now => return Err(tool_changed(file, m, t)),
             Some(_) => {}
         }
         Ok(())
