@@ -1306,46 +1306,56 @@ fn program_stops_are_posted_where_they_stand() {
             "{kind}: {before:?}"
         );
     }
-    // The spindle on again after each stop, before the next feed.
+    // The spindle on again after each stop, before the next feed; after the last (the
+    // program's M60, with no feed after it) the program ends.
     let lines: Vec<&str> = text.lines().collect();
-    for (k, l) in lines.iter().enumerate() {
-        if matches!(*l, "M0" | "M1") {
-            assert!(lines[k + 1].ends_with("M3"), "{text}");
-        }
+    let stops: Vec<usize> = (0..lines.len())
+        .filter(|&k| matches!(lines[k], "M0" | "M1"))
+        .collect();
+    assert_eq!(stops.len(), 3, "{text}");
+    for &k in &stops[..2] {
+        assert!(lines[k + 1].ends_with("M3"), "{text}");
     }
+    assert_eq!(lines[stops[2] + 1], "M5", "{text}");
 }
 
 /// Finding 52: a tool change between operations (`T2 M6`) was left out of the posted
-/// program without a word, and the machine went on with the first tool. A section is
-/// posted for one tool: the change is refused at the first move made with the new tool,
-/// nothing is written, and `verify` refuses the input as the post does. rs274 reads the
-/// change (`CHANGE_TOOL`) where lampost's trace does.
+/// program without a word, and the machine went on with the first tool. Since 54 a
+/// machining program's tool changes are posted, each with its tool's length offset: this
+/// program gives T2 none (no `G43 H`), so it is refused at T2's first cut, posted with
+/// or without `--length-offset`, and nothing is written. rs274 reads the change
+/// (`CHANGE_TOOL`) where lampost's trace does.
 #[test]
-fn a_tool_change_between_operations_is_refused_at_its_first_move() {
+fn a_tool_change_without_its_length_offset_is_refused_at_its_first_cut() {
     let path = finding("52-tool-change-between-operations.nc");
     let p = path.to_str().expect("utf8");
     let work = tempdir("tool-change");
     let out = work.join("posted.nc");
-    let o = lampost(&[
-        "post",
-        "--machine",
-        "fadal-lamp",
-        "--process",
-        "machine",
-        "--tool",
-        "1",
-        p,
-        "-o",
-        out.to_str().expect("utf8"),
-    ]);
-    let err = stderr(&o);
-    assert!(!o.status.success(), "{err}");
-    assert!(
-        err.contains("52-tool-change-between-operations.nc:12")
-            && err.contains("a tool change from T1 to T2"),
-        "{err}"
-    );
-    assert!(!out.exists(), "nothing is written");
+    let post = |extra: &[&str]| {
+        let mut a = vec!["post", "--machine", "fadal-lamp", "--process", "machine"];
+        a.extend_from_slice(extra);
+        a.extend([p, "-o", out.to_str().expect("utf8")]);
+        lampost(&a)
+    };
+    for (extra, what) in [
+        (
+            &["--tool", "1"][..],
+            "a tool change from T1 to T2 (its M6 before this line, the first cut with the new tool), and the program is posted without tool length offsets",
+        ),
+        (
+            &["--tool", "1", "--length-offset", "1"][..],
+            "T2's first cut (after its tool change from T1) is made without a tool length offset",
+        ),
+    ] {
+        let o = post(extra);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{err}");
+        assert!(
+            err.contains("52-tool-change-between-operations.nc:14") && err.contains(what),
+            "{extra:?}: {err}"
+        );
+        assert!(!out.exists(), "nothing is written");
+    }
     // One tool throughout posts.
     let one: String = std::fs::read_to_string(&path)
         .expect("fixture")
@@ -1374,6 +1384,231 @@ fn a_tool_change_between_operations_is_refused_at_its_first_move() {
     let (_, text) = rs274_exec(&path, &work);
     let changes = text.lines().filter(|l| l.contains("CHANGE_TOOL(")).count();
     assert_eq!(changes, 2, "{text}");
+}
+
+/// What the tool and spindle are at each cut of rs274's reading of a program, in order,
+/// runs of equal ones as one: (tool, spindle speed, spindle turning clockwise, flood
+/// coolant on).
+fn rs274_cutting_states(
+    program: &std::path::Path,
+    work: &std::path::Path,
+) -> Vec<(u32, f64, bool, bool)> {
+    let (_, text) = rs274_exec(program, work);
+    let arg = |l: &str, call: &str| -> Option<String> {
+        let at = l.find(call)? + call.len();
+        Some(l[at..].trim_end().trim_end_matches(')').to_string())
+    };
+    let (mut tool, mut speed, mut cw, mut flood) = (0u32, 0.0f64, false, false);
+    let mut out: Vec<(u32, f64, bool, bool)> = Vec::new();
+    for l in text.lines() {
+        if let Some(a) = arg(l, "CHANGE_TOOL(") {
+            tool = a.trim().parse().expect("tool number");
+        } else if let Some(a) = arg(l, "SET_SPINDLE_SPEED(") {
+            speed = a
+                .rsplit(',')
+                .next()
+                .and_then(|v| v.trim().parse().ok())
+                .expect("speed");
+        } else if l.contains("START_SPINDLE_CLOCKWISE(") {
+            cw = true;
+        } else if l.contains("STOP_SPINDLE_TURNING(")
+            || l.contains("START_SPINDLE_COUNTERCLOCKWISE(")
+        {
+            cw = false;
+        } else if l.contains("FLOOD_ON(") {
+            flood = true;
+        } else if l.contains("FLOOD_OFF(") {
+            flood = false;
+        } else if l.contains("STRAIGHT_FEED(") || l.contains("ARC_FEED(") {
+            let s = (tool, speed, cw, flood);
+            if out.last() != Some(&s) {
+                out.push(s);
+            }
+        }
+    }
+    out
+}
+
+/// Finding 54: a machining program's tool changes are posted where they stand (they were
+/// left out without a word, then refused: 52). Fusion 360's Fanuc output with two
+/// tools, each with its `G43 H`, S and coolant, an `M1` before the change: posted for
+/// the FADAL with the first tool's options, the change comes after a lift to the
+/// clearance, the spindle and coolant off; then `T2 M6`, `G43 H2`, T2's S3000 and the
+/// coolant, and the next run is approached from above. `verify` holds the change to the
+/// input's; rs274, reading both programs, cuts with the same tool, speed, spindle and
+/// coolant, in the same order, and changes tools the same number of times.
+#[test]
+fn tool_changes_are_posted_where_they_stand() {
+    let path = finding("54-tool-changes-posted.nc");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("tool-changes-posted");
+    let out = work.join("posted.ngc");
+    let opts = [
+        "--process",
+        "machine",
+        "--tool",
+        "1",
+        "--length-offset",
+        "1",
+        "--spindle",
+        "5000",
+        "--coolant",
+    ];
+    let mut a = vec!["post", "--machine", "fadal-lamp", "--dialect", "iso"];
+    a.extend_from_slice(&opts);
+    a.extend([p, "-o", out.to_str().expect("utf8")]);
+    let o = lampost(&a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = text.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| *l == "T2 M6")
+        .expect("the change posted");
+    assert_eq!(
+        lines[at - 4..at + 5],
+        [
+            "G0 Z10.0000",
+            "M1",
+            "M9",
+            "M5",
+            "T2 M6",
+            "G43 H2",
+            "S3000 M3",
+            "M8",
+            "X0.5000 Y0.2500 Z10.0000"
+        ],
+        "{text}"
+    );
+    let verify = |posted: &std::path::Path| {
+        let mut v = vec!["verify", "--machine", "fadal-lamp"];
+        v.extend_from_slice(&opts);
+        v.extend([p, posted.to_str().expect("utf8")]);
+        lampost(&v)
+    };
+    let o = verify(&out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Each tampering with the change fails.
+    let tampered = work.join("tampered.ngc");
+    let feed_before = lines[..at]
+        .iter()
+        .rposition(|l| l.starts_with("G1 X0.0000"))
+        .expect("the last cut of T1");
+    for (what, edit) in [
+        ("the change left out", vec![(at, None)]),
+        ("another tool", vec![(at, Some("T3 M6"))]),
+        ("another length offset", vec![(at + 1, Some("G43 H1"))]),
+        ("the first tool's speed", vec![(at + 2, Some("S5000 M3"))]),
+        ("the spindle left off", vec![(at + 2, None)]),
+        (
+            "the change within T1's run",
+            vec![(at, None), (feed_before, Some("T2 M6"))],
+        ),
+    ] {
+        let mut l: Vec<Option<String>> = lines.iter().map(|l| Some((*l).to_string())).collect();
+        for (k, new) in &edit {
+            l[*k] = match (k, new) {
+                (k, Some(n)) if *k == feed_before => Some(format!("{n}\n{}", lines[*k])),
+                (_, n) => n.map(str::to_string),
+            };
+        }
+        let t: String = l.into_iter().flatten().map(|l| format!("{l}\n")).collect();
+        std::fs::write(&tampered, t).expect("writes");
+        let o = verify(&tampered);
+        assert!(!o.status.success(), "{what}: passed");
+    }
+    if require_rs274().is_none() {
+        return;
+    }
+    let input = rs274_cutting_states(&path, &work);
+    assert_eq!(
+        input,
+        [
+            (1, 5000.0, true, true),
+            (2, 3000.0, true, true),
+            (3, 4000.0, true, true)
+        ],
+        "the input's cuts"
+    );
+    assert_eq!(rs274_cutting_states(&out, &work), input);
+    let (_, posted) = rs274_exec(&out, &work);
+    let changes: Vec<&str> = posted
+        .lines()
+        .filter_map(|l| l.split("CHANGE_TOOL(").nth(1))
+        .collect();
+    assert_eq!(changes, ["1)", "2)", "3)"], "{posted}");
+}
+
+/// Finding 54 on a real program: Fusion's Haas-style output of six tool changes
+/// (`hand-haas/slot_assembly_12.nc`, enier290188/cnc: T10, T1, T5 drilling by `G81`
+/// alone, T22 by `G73` alone, T16, T10 again). Three things in it are refused for their
+/// own reasons, and are edited out here as a user would post it: its positioning
+/// feeds (`G1 X… Y… F650.` after a `G53 Z0.` retract: a feed from a height not known on
+/// the part) made rapids, its `G41` wear compensation dropped (the path is the tool's
+/// centre), its closing park `G53 G0 X0. Y0.` dropped. The posted program changes tools
+/// as the input does, in the same order (the two drills' changes were missed by the
+/// first version of 54: their cuts are a canned cycle's alone), each change with the
+/// input's `G43 H` and S, and verifies.
+#[test]
+fn a_real_program_s_six_tool_changes_are_posted() {
+    let path = root().join("fixtures/real-programs/hand-haas/slot_assembly_12.nc");
+    let text = std::fs::read_to_string(&path).expect("fixture");
+    let edited: String = text
+        .lines()
+        .filter(|l| !l.contains("G53 G0 X0. Y0."))
+        .map(|l| {
+            let l = l.replace("G41 ", "").replace("G42 ", "");
+            match l.strip_suffix(" F650.") {
+                Some(head) if head.contains(" G1 X") => {
+                    format!("{}\n", head.replace(" G1 X", " G0 X"))
+                }
+                _ => format!("{l}\n"),
+            }
+        })
+        .collect();
+    let work = tempdir("real-tool-changes");
+    let input = work.join("slot_assembly_12-edited.nc");
+    std::fs::write(&input, &edited).expect("writes");
+    let out = work.join("posted.nc");
+    let opts = [
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--tool",
+        "10",
+        "--length-offset",
+        "10",
+        "--spindle",
+        "7000",
+        "--coolant",
+    ];
+    let i = input.to_str().expect("utf8");
+    let mut a = vec!["post"];
+    a.extend_from_slice(&opts);
+    a.extend([i, "-o", out.to_str().expect("utf8")]);
+    let o = lampost(&a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let changes: Vec<&str> = posted.lines().filter(|l| l.ends_with(" M6")).collect();
+    assert_eq!(
+        changes,
+        ["T10 M6", "T1 M6", "T5 M6", "T22 M6", "T16 M6", "T10 M6"],
+        "{posted}"
+    );
+    for (t, s) in [(1, 10000), (5, 7563), (22, 3450), (16, 2292)] {
+        let at = posted
+            .lines()
+            .position(|l| l == format!("T{t} M6"))
+            .expect("its change");
+        let next: Vec<&str> = posted.lines().skip(at + 1).take(2).collect();
+        assert_eq!(next, [format!("G43 H{t}"), format!("S{s} M3")], "T{t}");
+    }
+    let mut v = vec!["verify"];
+    v.extend_from_slice(&opts);
+    v.extend([i, out.to_str().expect("utf8")]);
+    let o = lampost(&v);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
 
 /// Finding 44, for the post: an M-code lampost does not act on (Rotrics Studio's DexArm

@@ -2009,7 +2009,8 @@ fn a_program_stop_in_the_input_is_posted_where_it_stands() {
         &verify(&(l.join("\n") + "\n"), &[]),
         "a program stop (M0) within the move of input line 4",
     );
-    // Machining: the spindle and coolant on again after each stop.
+    // Machining: the spindle and coolant on again after each stop, before the next
+    // approach; after the last (no cut after it) the program ends.
     let mach = ["--process", "machine", "--coolant"];
     let (m, _) = post("m.nc", &mach);
     let b = blocks(&m);
@@ -2017,9 +2018,10 @@ fn a_program_stop_in_the_input_is_posted_where_it_stands() {
         .filter(|&k| b[k] == "M0" || b[k] == "M1")
         .collect();
     assert_eq!(stops.len(), 3, "{m}");
-    for &k in &stops {
+    for &k in &stops[..2] {
         assert_eq!(b[k + 1..k + 3], ["S3000 M3", "M8"], "{m}");
     }
+    assert_eq!(b[stops[2] + 1..stops[2] + 3], ["M9", "M5"], "{m}");
     let o = verify(&m, &mach);
     assert!(o.status.success(), "{}", stderr(&o));
     // A path of points has no stops.

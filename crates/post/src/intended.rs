@@ -95,6 +95,10 @@ pub enum StepKind {
     /// safe height, with the process off, and the control halts there. Start and end are
     /// where the last move ended.
     Stop(StopKind),
+    /// A tool change of the input's (machining): the head lifts off the end of the run to
+    /// the safe height, the spindle stops, the new tool is loaded and its length offset
+    /// and spindle speed applied. Start and end are where the last move ended.
+    ToolChange(ToolChange),
     /// Arc about `center` (part frame) turning about `normal` (part frame, right-hand),
     /// `sweep` radians in all.
     Arc {
@@ -105,6 +109,26 @@ pub enum StepKind {
         /// Signed angle from start to end.
         sweep: f64,
     },
+}
+
+/// A tool change of the input's (see [`StepKind::ToolChange`], [`Intended::one_tool`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ToolChange {
+    /// The tool loaded (T).
+    pub tool: u32,
+    /// Its tool length offset (the input's `G43 H` at its first cut), where the program
+    /// is posted with length offsets.
+    pub length_offset: Option<u32>,
+    /// The spindle speed its cuts are made at (the input's S at its first cut), as bits
+    /// of the `f64` (so the change compares whole).
+    pub speed_bits: u64,
+}
+
+impl ToolChange {
+    /// The spindle speed its cuts are made at.
+    pub fn speed(&self) -> f64 {
+        f64::from_bits(self.speed_bits)
+    }
 }
 
 /// One intended move, part frame.
@@ -126,6 +150,8 @@ pub struct Step {
     pub feed: f64,
     /// A deposition move (feed, and extrusion increasing where E means extrusion).
     pub deposit: bool,
+    /// The input's tool (T) the move is made with (0: none), as its own modal state says.
+    pub tool: u32,
 }
 
 /// The program frame of a section's layer: the section's frame, turned by its layer
@@ -199,8 +225,13 @@ pub struct Intended<'a> {
     layer: usize,
     layer_z: Option<f64>,
     moves_in_section: usize,
-    /// The first tool (not T0) the section's moves are made with (see [`Intended::one_tool`]).
+    /// The tool (not T0) the input's moves are made with so far (see [`Intended::one_tool`]).
     tool: Option<u32>,
+    /// Whether a tool change is posted (machining) or refused (deposition); see
+    /// [`Intended::one_tool`].
+    tools: Tools,
+    /// The move a tool change was found at, read again after the change's step.
+    pending: Option<Move>,
     /// The spindle a machining program is posted with (see [`Intended::holding_spindle`]),
     /// and the section in which the input's speed and coolant were last warned of.
     posted_spindle: Option<PostedSpindle>,
@@ -312,6 +343,8 @@ impl<'a> Intended<'a> {
             layer_z: None,
             moves_in_section: 0,
             tool: None,
+            tools: Tools::Follow,
+            pending: None,
             posted_spindle: None,
             warned_spindle: [None; 4],
             done: false,
@@ -472,9 +505,18 @@ impl<'a> Intended<'a> {
                 self.layer = 0;
                 self.layer_z = None;
                 self.moves_in_section = 0;
-                self.tool = None;
+                // A deposition program's tool is one a section; a machining program's
+                // tool changes are posted, across sections too.
+                if self.tools == Tools::Refuse {
+                    self.tool = None;
+                }
             }
-            let ev = self.stream.as_mut().and_then(Iterator::next);
+            // The move a tool change was found at comes again after the change's step.
+            let pending = self.pending.take();
+            let ev = match pending {
+                Some(m) => Some(Ok(Event::Move(m))),
+                None => self.stream.as_mut().and_then(Iterator::next),
+            };
             let ev = match ev {
                 None => {
                     if self.moves_in_section == 0 {
@@ -582,8 +624,12 @@ impl<'a> Intended<'a> {
             if m.axes_named & EXTRA_AXES != 0 {
                 self.extra_axes_at_zero(&sec.name, &m)?;
             }
+            if let Some(change) = self.one_tool(&sec.name, &m)? {
+                let line = m.line;
+                self.pending = Some(m);
+                return Ok(Some(self.here_step(StepKind::ToolChange(change), line)));
+            }
             self.frame_kept(&sec.name, &m)?;
-            self.one_tool(&sec.name, &m)?;
             if let Some(posted) = self.posted_spindle {
                 self.spindle_kept(&sec.name, &m, posted)?;
             }
@@ -733,29 +779,94 @@ impl<'a> Intended<'a> {
                 end: end_part,
                 feed,
                 deposit,
+                tool: m.modal.tool,
             }));
         }
     }
 }
 
 impl Intended<'_> {
-    /// A section is posted for one tool: the one `--tool` names (or the one in the
-    /// spindle). A change from one tool to another (`M6`, `M61`) is refused at the first
-    /// move made with the new tool: posted without it, the machine would go on with the
-    /// first tool (a Mastercam or Fusion program changes tools between its operations,
-    /// with `M1` before each). The first tool loaded after moves made with none (T0:
-    /// pcb2gcode moves to its tool-change height, then `M6`), and T0 put back at the end,
-    /// are no change of the tool that cuts.
+    /// The input's tool changes (`M6`, `M61`). A machining program's change from one tool
+    /// to another is a [`StepKind::ToolChange`] before the first cut made with the new
+    /// tool (its rapids before that cut are travel, rebuilt at the safe height after the
+    /// change): the tool, its `G43 H` and its S as the input has them at that cut. It is
+    /// refused there when the program is posted without tool length offsets (the new
+    /// tool would cut at the first one's length: post with `--length-offset`), when the
+    /// input gives the new tool no `G43 H` by its first cut, or no spindle speed. A
+    /// deposition program is posted for one tool a section: a change is refused at the
+    /// first move made with the new tool. The first tool loaded after moves made with
+    /// none (T0: pcb2gcode moves to its tool-change height, then `M6`), and T0 put back
+    /// at the end, are no change of the tool that cuts.
     #[inline]
-    fn one_tool(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
+    fn one_tool(&mut self, file: &str, m: &Move) -> Result<Option<ToolChange>, PostError> {
         let now = m.modal.tool;
         match self.tool {
-            _ if now == 0 => {}
-            None => self.tool = Some(now),
-            Some(t) if t != now => return Err(tool_changed(file, m, t)),
+            _ if now == 0 => return Ok(None),
+            None => {
+                self.tool = Some(now);
+                return Ok(None);
+            }
+            Some(t) if t == now => return Ok(None),
             Some(_) => {}
         }
-        Ok(())
+        self.tool_change(file, m)
+    }
+
+    /// See [`Intended::one_tool`]: a move made with another tool than the last.
+    #[cold]
+    fn tool_change(&mut self, file: &str, m: &Move) -> Result<Option<ToolChange>, PostError> {
+        let (t, now) = (self.tool.unwrap_or(0), m.modal.tool);
+        if self.tools == Tools::Refuse {
+            return Err(tool_changed(file, m, t));
+        }
+        // Taken at the first cut made with the new tool (a canned cycle's feeds are cuts);
+        // its rapids and machine-coordinate retracts before it are travel.
+        if matches!(m.kind, MoveKind::Rapid)
+            || matches!(m.origin, Origin::Home | Origin::MachineCoords)
+        {
+            return Ok(None);
+        }
+        let md = &m.modal;
+        let refuse = |what: String| {
+            Err(PostError::Unsupported {
+                file: file.to_string(),
+                line: m.line,
+                what,
+            })
+        };
+        let mut change = ToolChange {
+            tool: now,
+            length_offset: md.tool_length,
+            speed_bits: md.speed.to_bits(),
+        };
+        if let (Tools::Machine, Some(posted)) = (self.tools, self.posted_spindle.as_mut()) {
+            if let Some(x) = posted.tool.filter(|&x| x != t) {
+                return refuse(format!(
+                    "a tool change from T{t} to T{now} (its M6 before this line, the first cut with the new tool), and the program is posted with T{x} for T{t} (--tool): the post takes each later tool's number from the input, so the numbering would mix; post with --tool {t}"
+                ));
+            }
+            if posted.length_offset.is_none() {
+                return refuse(format!(
+                    "a tool change from T{t} to T{now} (its M6 before this line, the first cut with the new tool), and the program is posted without tool length offsets: T{now} would cut at T{t}'s length; post with --length-offset (the first tool's H; each later tool takes the input's G43 H)"
+                ));
+            }
+            let Some(h) = md.tool_length else {
+                return refuse(format!(
+                    "T{now}'s first cut (after its tool change from T{t}) is made without a tool length offset: give it its G43 H before this line, or post each tool's operations as a program of their own"
+                ));
+            };
+            if md.spindle == lampost_gcode::Spindle::Off || md.speed <= 0.0 {
+                return refuse(format!(
+                    "T{now}'s first cut (after its tool change from T{t}) is made with the spindle stopped or at S0: give its S and M3 before this line"
+                ));
+            }
+            change.length_offset = Some(h);
+            posted.tool = Some(now);
+            posted.length_offset = Some(h);
+            posted.speed = md.speed;
+        }
+        self.tool = Some(now);
+        Ok(Some(change))
     }
 
     /// Hold the input's spindle to the one `process` posts, when it machines: a cut made
@@ -792,6 +903,9 @@ impl Intended<'_> {
                 tool: *tool,
                 length_offset: *length_offset,
             });
+            self.tools = Tools::Machine;
+        } else {
+            self.tools = Tools::Refuse;
         }
         self
     }
@@ -879,6 +993,13 @@ impl Intended<'_> {
     /// The step of a program stop: where the last move of the section (and layer) ended.
     #[cold]
     fn stop_step(&mut self, stop: lampost_gcode::Stop) -> Step {
+        self.here_step(StepKind::Stop(stop.kind), stop.line)
+    }
+
+    /// A step of `kind` between moves (a stop, a tool change), at input line `line`:
+    /// where the last move of the section (and layer) ended.
+    #[cold]
+    fn here_step(&mut self, kind: StepKind, line: u32) -> Step {
         let here = match self.last_end {
             Some((_, part, sec_i, layer)) if sec_i == self.idx && layer == self.layer => part,
             _ => {
@@ -889,12 +1010,13 @@ impl Intended<'_> {
         Step {
             section: self.idx,
             layer: self.layer,
-            line: stop.line,
-            kind: StepKind::Stop(stop.kind),
+            line,
+            kind,
             start: here,
             end: here,
             feed: 0.0,
             deposit: false,
+            tool: self.tool.unwrap_or(0),
         }
     }
 
@@ -991,6 +1113,7 @@ impl Intended<'_> {
             end: here,
             feed: 0.0,
             deposit: false,
+            tool: m.modal.tool,
         }))
     }
 }
@@ -1007,6 +1130,17 @@ struct PostedSpindle {
     length_offset: Option<u32>,
 }
 
+/// What [`Intended::one_tool`] does with a tool change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Tools {
+    /// Machining ([`Intended::holding_spindle`]): posted, held to the process.
+    Machine,
+    /// Deposition: refused (one tool a section).
+    Refuse,
+    /// No process given (the work's bounds): followed as the input makes it.
+    Follow,
+}
+
 /// The refusal of a tool change (see [`Intended::one_tool`]): from `t` to `m`'s tool.
 #[cold]
 fn tool_changed(file: &str, m: &Move, t: u32) -> PostError {
@@ -1014,7 +1148,7 @@ fn tool_changed(file: &str, m: &Move, t: u32) -> PostError {
         file: file.to_string(),
         line: m.line,
         what: format!(
-            "a tool change from T{t} to T{} (its M6 before this line, the first move with the new tool): the post writes a program for one tool (--tool), and would go on with the first; post each tool's operations as a program of their own",
+            "a tool change from T{t} to T{} (its M6 before this line, the first move with the new tool): a deposition program is posted for one tool, and would go on with the first; post each tool's moves as a program of their own",
             m.modal.tool
         ),
     }

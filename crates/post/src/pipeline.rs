@@ -74,7 +74,7 @@ impl Planner<'_> {
         let end_joints = joints(&jm, &step.end);
         let check = (!matches!(
             step.kind,
-            StepKind::Rapid | StepKind::Retract | StepKind::Stop(_)
+            StepKind::Rapid | StepKind::Retract | StepKind::Stop(_) | StepKind::ToolChange(_)
         ))
         .then(|| (written_tip(&tm, self.scale, &end_joints) - step.end).norm());
         let first = points.len();

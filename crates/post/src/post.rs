@@ -509,7 +509,7 @@ pub(crate) fn post_steps<W: Write>(
             prev_end = Some((step.end, end, rot));
             let travel = matches!(
                 step.kind,
-                StepKind::Rapid | StepKind::Retract | StepKind::Stop(_)
+                StepKind::Rapid | StepKind::Retract | StepKind::Stop(_) | StepKind::ToolChange(_)
             );
             // The move being written, for the in-process verification (approach included).
             w.feed_check.step = if travel { None } else { Some(step) };
@@ -524,12 +524,14 @@ pub(crate) fn post_steps<W: Write>(
                     ));
                 }
                 match step.kind {
-                    StepKind::Stop(kind) => w.stop(cfg, kind, file, step.line)?,
+                    StepKind::Stop(kind) => w.stop(kind, file, step.line)?,
+                    StepKind::ToolChange(change) => w.tool_change(change, file, step.line)?,
                     _ => w.travel(file, step.line)?,
                 }
                 need_approach = true;
                 continue;
             }
+            w.holds_tool(&step, file)?;
             let on_grid = w.on_grid(&start);
             let at_start = w
                 .pos

@@ -70,7 +70,7 @@ impl WorkBounds {
     /// Grow to hold the path of a feed step (an arc by its whole circle).
     pub fn add_step(&mut self, s: &Step) {
         match s.kind {
-            StepKind::Rapid | StepKind::Retract | StepKind::Stop(_) => {}
+            StepKind::Rapid | StepKind::Retract | StepKind::Stop(_) | StepKind::ToolChange(_) => {}
             StepKind::Feed => {
                 self.add(&s.start);
                 self.add(&s.end);

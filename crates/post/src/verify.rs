@@ -296,6 +296,52 @@ fn same_feed(f: f64, want: f64) -> bool {
     (f - want).abs() <= 0.5e-5 + 1e-12 * want.abs()
 }
 
+/// Every cut of a machining program made with the input's tool, as the input's own
+/// modal state has it at that move (not as the tool changes were found): a program's
+/// first tool may be posted under another number (`--tool`) until a tool change is
+/// posted; every other is posted as itself. Used by `verify` and by the post on what it
+/// writes.
+#[derive(Debug)]
+pub(crate) struct CutTools {
+    machining: bool,
+    /// The input's first tool (0: none seen yet).
+    first: u32,
+    /// A tool change has been posted.
+    pub(crate) changed: bool,
+}
+
+impl CutTools {
+    pub(crate) fn new(process: &Process) -> CutTools {
+        CutTools {
+            machining: matches!(process, Process::Machine { .. }),
+            first: 0,
+            changed: false,
+        }
+    }
+
+    /// Whether the cut `step`, written with tool `posted` in the spindle, is made with
+    /// the input's tool.
+    #[inline]
+    pub(crate) fn hold(&mut self, step: &Step, posted: u32) -> bool {
+        if !self.machining || step.tool == 0 {
+            return true;
+        }
+        if self.first == 0 {
+            self.first = step.tool;
+        }
+        step.tool == posted || (step.tool == self.first && !self.changed)
+    }
+
+    /// What [`CutTools::hold`] found wrong, for a message.
+    #[cold]
+    pub(crate) fn missing(step: &Step, posted: u32) -> String {
+        format!(
+            "the cut of input line {} is made with T{} in the input and with T{posted} in the posted program: its tool change is missing",
+            step.line, step.tool
+        )
+    }
+}
+
 /// The stop the post writes for an input's stop `k`: `M60` as `M0` (no pallet is
 /// changed), the others as they are.
 fn posted_as(k: StopKind) -> StopKind {
@@ -353,6 +399,10 @@ pub fn verify_traced<R: BufRead>(
         )
     }));
     let next_intended = || intended.borrow_mut().next().transpose();
+    // The tool the posted moves are made with, and each cut's held to the input's (see
+    // `check`).
+    let rules_tool = Cell::new(0u32);
+    let cut_tools = std::cell::RefCell::new(CutTools::new(process));
     let mut current: Option<Step> = None;
     // The move that ended at the last point (its end within the tolerance), while no
     // point has yet come onto the next one; and the next move, given back when a point
@@ -430,20 +480,31 @@ pub fn verify_traced<R: BufRead>(
             swept = 0.0;
             reach = 0.0;
             if let Some(Step {
-                kind: StepKind::Stop(k),
+                kind: kind @ (StepKind::Stop(_) | StepKind::ToolChange(_)),
                 line: input,
                 ..
             }) = *current
             {
                 // A point of the move that ended, after its end (a move shorter than the
                 // tolerance, written as chords): checked against it below, and the stop
-                // given back for the posted one. Any other point goes on past the stop.
+                // (tool change) given back for the posted one. Any other point goes on
+                // past it.
                 let of_ended = ended.is_some_and(|e| !entering && (p - e.end).norm() <= tolerance);
                 if !of_ended {
-                    return Err(PostError::Verify(format!(
-                        "posted line {line}: the input stops here ({} at input line {input}), and the posted program goes on without stopping",
-                        k.code()
-                    )));
+                    return Err(PostError::Verify(match kind {
+                        StepKind::ToolChange(c) => format!(
+                            "posted line {line}: the input changes to T{} here (before input line {input}), and the posted program goes on with T{}",
+                            c.tool,
+                            rules_tool.get()
+                        ),
+                        StepKind::Stop(k) => format!(
+                            "posted line {line}: the input stops here ({} at input line {input}), and the posted program goes on without stopping",
+                            k.code()
+                        ),
+                        other => format!(
+                            "posted line {line}: the posted program goes on past input line {input}'s {other:?}"
+                        ),
+                    }));
                 }
             }
         }
@@ -483,7 +544,7 @@ pub fn verify_traced<R: BufRead>(
                 p.x, p.y, p.z, step.line
             )));
         }
-        let stop = matches!(step.kind, StepKind::Stop(_));
+        let stop = matches!(step.kind, StepKind::Stop(_) | StepKind::ToolChange(_));
         let (err, step) = if is_end && !entering && d_end <= tolerance && last_turn && !stop {
             *current = None;
             ended = Some(step);
@@ -523,6 +584,12 @@ pub fn verify_traced<R: BufRead>(
             }
         };
         on_point(line, err);
+        if !cut_tools.borrow_mut().hold(&step, rules_tool.get()) {
+            return Err(PostError::Verify(format!(
+                "posted line {line}: {}",
+                CutTools::missing(&step, rules_tool.get())
+            )));
+        }
         if !same_feed(feed, step.feed) {
             return Err(PostError::Verify(format!(
                 "posted line {line}: feed F{} along the move of input line {}, which asks F{} (the post writes the input's feed, in the machine's units)",
@@ -551,6 +618,7 @@ pub fn verify_traced<R: BufRead>(
     let screen = Screen::new(machine, process)?;
     let mut stream = screen.stream(posted, units);
     let mut rules = PostedRules::new(machine.units, false, process)?;
+    rules_tool.set(rules.tool);
     // The last move was travel (the next feed must come onto a start).
     let mut after_travel = true;
     for ev in stream.by_ref() {
@@ -604,6 +672,53 @@ pub fn verify_traced<R: BufRead>(
             }
             Event::Move(m) => {
                 rep.moves += 1;
+                if let (true, Some(s)) = (m.modal.tool != rules.tool, current) {
+                    return Err(PostError::Verify(format!(
+                        "posted line {}: a tool change (to T{}) within the move of input line {}",
+                        m.line, m.modal.tool, s.line
+                    )));
+                }
+                if m.modal.tool != rules.tool {
+                    // A tool change posted: the input's, where the input makes it (between
+                    // moves, the next thing along the intended path); the moves after it
+                    // are held to the new tool's length offset and speed.
+                    let next = match held.take() {
+                        Some(s) => Some(s),
+                        None => next_intended()?,
+                    };
+                    match next {
+                        Some(Step {
+                            kind: StepKind::ToolChange(c),
+                            ..
+                        }) if c.tool == m.modal.tool => {
+                            rules.tool_changed(&c);
+                            rules_tool.set(c.tool);
+                            cut_tools.borrow_mut().changed = true;
+                        }
+                        // The first move's tool is the one posted with (`--tool`): a
+                        // wrong one fails on its tool below.
+                        other if rep.moves == 1 => held.set(other),
+                        Some(s) => {
+                            return Err(PostError::Verify(format!(
+                                "posted line {}: a tool change (to T{}) where the input makes none (the next on the intended path is input line {}'s {})",
+                                m.line,
+                                m.modal.tool,
+                                s.line,
+                                match s.kind {
+                                    StepKind::ToolChange(c) => format!("change to T{}", c.tool),
+                                    StepKind::Stop(k) => k.code().to_string(),
+                                    _ => "move".to_string(),
+                                }
+                            )))
+                        }
+                        None => {
+                            return Err(PostError::Verify(format!(
+                                "posted line {}: a tool change (to T{}) after the intended path has ended",
+                                m.line, m.modal.tool
+                            )))
+                        }
+                    }
+                }
                 rules.check(&m, &rot_idx)?;
                 let j = |p: &[f64; 9]| {
                     (
@@ -743,6 +858,10 @@ pub fn verify_traced<R: BufRead>(
                 "the posted program ends before the stop of input line {} ({})",
                 s.line,
                 k.code()
+            ),
+            StepKind::ToolChange(c) => format!(
+                "the posted program ends before the change to T{} (before input line {})",
+                c.tool, s.line
             ),
             _ => format!(
                 "the posted program ends before the move of input line {} (to ({:.5}, {:.5}, {:.5}))",
@@ -1186,6 +1305,9 @@ pub(crate) struct PostedRules {
     speed: f64,
     deposit: bool,
     speed_set: bool,
+    /// A tool change has been posted: the tool, its length offset and speed are the
+    /// input's (for the messages).
+    changed: bool,
 }
 
 /// How far a posted S (or laser power word) may lie from the value posted: the emitter's
@@ -1221,7 +1343,30 @@ impl PostedRules {
             speed,
             deposit: matches!(process, Process::Deposit { .. }),
             speed_set: false,
+            changed: false,
         })
+    }
+
+    /// The moves after a posted tool change (held to the input's, see `verify_traced`)
+    /// are made with its tool, length offset and spindle speed.
+    fn tool_changed(&mut self, c: &crate::intended::ToolChange) {
+        self.changed = true;
+        self.tool = c.tool;
+        self.tool_length = c.length_offset;
+        self.speed = c.speed();
+    }
+
+    /// Where a posted value comes from: the option `flag` of verify, or after a tool
+    /// change the input's own (its G43 H and S at the tool's first cut).
+    fn given_by(&self, flag: &str) -> String {
+        if self.changed {
+            format!(
+                "the input's, for T{}'s cuts after its tool change",
+                self.tool
+            )
+        } else {
+            format!("verify {flag}")
+        }
     }
 
     pub(crate) fn check(&mut self, m: &Move, rot_idx: &[usize]) -> Result<(), PostError> {
@@ -1276,14 +1421,6 @@ impl PostedRules {
                 md.work_offset,
             ));
         }
-        if md.tool_length != self.tool_length {
-            let h = |h: Option<u32>| h.map_or("none".to_string(), |h| format!("H{h}"));
-            return fail(&format!(
-                "a move with tool length offset {}, and the program was posted with {} (verify --length-offset): the tool would stand off by the difference",
-                h(md.tool_length),
-                h(self.tool_length)
-            ));
-        }
         if md.tool != self.tool {
             let t = |t: u32| {
                 if t == 0 {
@@ -1293,9 +1430,19 @@ impl PostedRules {
                 }
             };
             return fail(&format!(
-                "a move with tool {} in the spindle, and the program was posted with {} (verify --tool)",
+                "a move with tool {} in the spindle, and the program was posted with {} ({})",
                 t(md.tool),
-                t(self.tool)
+                t(self.tool),
+                self.given_by("--tool")
+            ));
+        }
+        if md.tool_length != self.tool_length {
+            let h = |h: Option<u32>| h.map_or("none".to_string(), |h| format!("H{h}"));
+            return fail(&format!(
+                "a move with tool length offset {}, and the program was posted with {} ({}): the tool would stand off by the difference",
+                h(md.tool_length),
+                h(self.tool_length),
+                self.given_by("--length-offset")
             ));
         }
         let same = (md.speed - self.speed).abs() <= SPEED_SLACK * self.speed.abs().max(1.0);
@@ -1308,9 +1455,10 @@ impl PostedRules {
                 ("the spindle speed", "--spindle")
             };
             return fail(&format!(
-                "a move with S{} in force, and the program was posted with {what} S{} (verify {flag})",
+                "a move with S{} in force, and the program was posted with {what} S{} ({})",
                 lampost_gcode::Readable(md.speed),
-                lampost_gcode::Readable(self.speed)
+                lampost_gcode::Readable(self.speed),
+                self.given_by(flag)
             ));
         }
         Ok(())
@@ -1798,6 +1946,7 @@ pub(crate) mod tests {
             end,
             feed: 100.0,
             deposit: false,
+            tool: 0,
         }
     }
 
@@ -1898,5 +2047,43 @@ pub(crate) mod tests {
             let p = near + Vector3::from(off) * (r * 10f64.powi(scale_exp));
             prop_assert_eq!(ap.dist_near(&step, &p, &near, t).to_bits(), dist_to(&step, &p).to_bits());
         }
+    }
+
+    /// Each cut is held to the input's tool: the first tool may be posted under another
+    /// number until a change is posted; a cut with another tool than the one posted fails
+    /// (a change left out), as does the first tool's after a change; deposition and T0
+    /// are not held.
+    #[test]
+    fn cuts_are_held_to_the_input_s_tool() {
+        use super::CutTools;
+        use crate::post::Process;
+        let machine = Process::Machine {
+            tool: Some(5),
+            length_offset: Some(5),
+            work_offset: None,
+            spindle: 3000.0,
+            coolant: false,
+        };
+        let cut = |tool: u32| Step {
+            tool,
+            ..arc(Vector3::zeros(), Vector3::z(), 1.0, 0.0, 1.0, 0.0)
+        };
+        // T1 posted as T5 (--tool 5), then T2 with its change posted.
+        let mut c = CutTools::new(&machine);
+        assert!(c.hold(&cut(1), 5));
+        assert!(c.hold(&cut(0), 5));
+        assert!(!c.hold(&cut(2), 5), "T2's change left out");
+        c.changed = true;
+        assert!(c.hold(&cut(2), 2));
+        assert!(!c.hold(&cut(1), 2), "back to T1 without its change");
+        assert!(!c.hold(&cut(1), 5), "T1 is posted as itself after a change");
+        assert!(c.hold(&cut(1), 1));
+        // The first cut made with the tool posted, then another tool's without a change.
+        let mut c = CutTools::new(&machine);
+        assert!(c.hold(&cut(5), 5));
+        assert!(!c.hold(&cut(7), 5));
+        // Deposition is not held.
+        let mut c = CutTools::new(&Process::Deposit { power: 1000.0 });
+        assert!(c.hold(&cut(1), 0) && c.hold(&cut(2), 0));
     }
 }

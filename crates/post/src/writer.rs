@@ -15,7 +15,7 @@ use lampost_kinematics::{Affine, Machine};
 
 use crate::check::FeedCheck;
 use crate::error::PostError;
-use crate::intended::Step;
+use crate::intended::{Step, ToolChange};
 use crate::pipeline::HeightUsed;
 use crate::post::{
     axis_letters, check_height, code_words, emitter, index_maps, linear_scale, program_units,
@@ -93,6 +93,16 @@ pub(crate) struct Writer<'m, W: Write> {
     pub(crate) rot_snap: [Option<f64>; 2],
     /// The bound on the program's size (bytes).
     pub(crate) max_bytes: u64,
+    /// A machining program's spindle speed and coolant in force (the first tool's from
+    /// the process, each later tool's from its [`ToolChange`]).
+    spindle: Option<(f64, bool)>,
+    /// The spindle (and coolant) are to be turned on again before the next approach
+    /// (after a program stop).
+    respin: bool,
+    /// The tool in the spindle as posted (0: none named), and every cut held to the
+    /// input's tool ([`Writer::holds_tool`]).
+    tool: u32,
+    cut_tools: crate::verify::CutTools,
     /// The linear axes' travel as [`Writer::check`] compares with it (1e-9 of slack
     /// included), read once from the machine.
     lin_within: [(f64, f64); 3],
@@ -144,6 +154,13 @@ impl<'m, W: Write> Writer<'m, W> {
                 (r * linear_scale(units) > 1.0 + 1e-9).then_some(r)
             }),
             max_bytes: cfg.max_output_bytes.unwrap_or(u64::MAX),
+            spindle: None,
+            respin: false,
+            tool: match &cfg.process {
+                Process::Machine { tool, .. } => tool.unwrap_or(0),
+                Process::Deposit { .. } => 0,
+            },
+            cut_tools: crate::verify::CutTools::new(&cfg.process),
             rot_snap: [0, 1].map(|k| {
                 let r = machine.rotary[k].resolution;
                 (r * 1e3 > 1.0 + 1e-9).then_some(r)
@@ -221,6 +238,7 @@ impl<'m, W: Write> Writer<'m, W> {
                     self.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
                 }
                 self.spindle_on(*spindle, *coolant)?;
+                self.spindle = Some((*spindle, *coolant));
             }
             Process::Deposit { .. } => {}
         }
@@ -243,15 +261,10 @@ impl<'m, W: Write> Writer<'m, W> {
     /// A program stop of the input: off the end of the run with the process off (as for
     /// [`Writer::travel`]), then the stop, `M0` (`M60` too: the pallet is not changed,
     /// said in a warning) or `M1`. A machining program turns the spindle (and coolant)
-    /// on again after it: a control may stop them with the program (Haas's M0 does),
-    /// and the next feed would cut with the spindle stopped.
-    pub(crate) fn stop(
-        &mut self,
-        cfg: &PostConfig,
-        kind: StopKind,
-        file: &str,
-        line: u32,
-    ) -> Result<(), PostError> {
+    /// on again before its next approach ([`Writer::approach`]; a tool change right after
+    /// the stop turns them on for the new tool): a control may stop them with the
+    /// program (Haas's M0 does), and the next feed would cut with the spindle stopped.
+    pub(crate) fn stop(&mut self, kind: StopKind, file: &str, line: u32) -> Result<(), PostError> {
         self.travel(file, line)?;
         let code = match kind {
             StopKind::Program => 0.0,
@@ -264,12 +277,63 @@ impl<'m, W: Write> Writer<'m, W> {
             }
         };
         self.words(&[(b'M', code)], None)?;
-        if let Process::Machine {
-            spindle, coolant, ..
-        } = cfg.process.checked()?
-        {
-            self.spindle_on(*spindle, *coolant)?;
+        self.respin = self.spindle.is_some();
+        Ok(())
+    }
+
+    /// The cut `step` is made with the input's tool (see [`crate::verify::CutTools`]), as
+    /// `verify` holds it.
+    #[inline]
+    pub(crate) fn holds_tool(&mut self, step: &Step, file: &str) -> Result<(), PostError> {
+        if self.cut_tools.hold(step, self.tool) {
+            return Ok(());
         }
+        Err(PostError::Verify(format!(
+            "{file}:{}: {}",
+            step.line,
+            crate::verify::CutTools::missing(step, self.tool)
+        )))
+    }
+
+    /// A tool change of the input's (machining): off the end of the run to the safe
+    /// height (as for [`Writer::travel`]), coolant and spindle off, the new tool loaded
+    /// (`T`, the machine's `tool_change` code), its length offset (`G43 H`) and spindle
+    /// speed applied, the coolant on again where the program is posted with it. The
+    /// control moves Z for the change: every axis is written again on the next move.
+    pub(crate) fn tool_change(
+        &mut self,
+        change: ToolChange,
+        file: &str,
+        line: u32,
+    ) -> Result<(), PostError> {
+        let Some((_, coolant)) = self.spindle else {
+            return Err(PostError::Unsupported {
+                file: file.to_string(),
+                line,
+                what: format!(
+                    "a tool change to T{}: a deposition program is posted for one tool",
+                    change.tool
+                ),
+            });
+        };
+        self.travel(file, line)?;
+        let p = &self.m.def.process;
+        if coolant {
+            self.words(&code_words(&p.coolant_off)?, None)?;
+        }
+        self.words(&code_words(&p.spindle_off)?, None)?;
+        let mut v = vec![(b'T', f64::from(change.tool))];
+        v.extend(code_words(&p.tool_change)?);
+        self.words(&v, None)?;
+        if let Some(h) = change.length_offset {
+            self.words(&[(b'G', 43.0), (b'H', f64::from(h))], None)?;
+        }
+        self.spindle_on(change.speed(), coolant)?;
+        self.spindle = Some((change.speed(), coolant));
+        self.respin = false;
+        self.written = [None; 3];
+        self.tool = change.tool;
+        self.cut_tools.changed = true;
         Ok(())
     }
 
@@ -374,6 +438,11 @@ impl<'m, W: Write> Writer<'m, W> {
         line: u32,
     ) -> Result<(), PostError> {
         self.travel(file, line)?;
+        if std::mem::take(&mut self.respin) {
+            if let Some((speed, coolant)) = self.spindle {
+                self.spindle_on(speed, coolant)?;
+            }
+        }
         let lift = crate::safety::approach_lift(self.m);
         let mut above = *start;
         above[2] = self.up_on_grid(self.pos.map_or(self.safe, |p| p[2].max(self.safe)));
