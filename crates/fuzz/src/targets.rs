@@ -87,6 +87,7 @@ const GCODE_TOKENS: &[&str] = &[
     "M2",
     "M3",
     "M6",
+    "T2 M6",
     "M60",
     "M600",
     "M30",

@@ -1,6 +1,7 @@
 //! Issue 11's differential test: random planar programs (rapids, G53/G28 retracts,
-//! lines, arcs, helices) at random placements, indexes, layer schedules and second
-//! sections on three machines and both FADAL heads. Every posted program must pass
+//! lines, arcs, helices; in machining, sometimes a tool of its own for each run, its
+//! change posted) at random placements, indexes, layer schedules and second sections on
+//! three machines and both FADAL heads. Every posted program must pass
 //! `verify`; on the FADAL and the NRC cell, a checker written here from papers 000's and
 //! 003's formulas (not the crate's kinematics) confirms that no rapid but a vertical one
 //! goes below the work's top plus the margin. Then each posted program is tampered with
@@ -9,7 +10,7 @@
 //! length offset, a tool change, another S), a process switched within a run (the laser
 //! or powder off, the spindle or coolant on in a deposition; the spindle stopped,
 //! reversed or oriented, coolant or the laser on in a machining), a motion block
-//! removed) and `verify` must
+//! removed, a posted tool change left out or changed) and `verify` must
 //! catch at least 99 % of the tampered
 //! programs. Seeded, so a failure reproduces.
 
@@ -78,6 +79,23 @@ fn program(r: &mut Rng, k: f64) -> String {
     s + "M30\n"
 }
 
+/// `text` cut by a tool of its own for each run: `T<n> M6`, `G43 H<n>` and
+/// `S<1000 + 100(n - 1)> M3` before run n's first move (T1 at S1000, as [`config`] posts
+/// the first tool with `tools`).
+fn with_tools(text: &str) -> String {
+    let mut n = 0;
+    let mut out = String::new();
+    for l in text.lines() {
+        if l.starts_with("G0 X") {
+            n += 1;
+            out += &format!("T{n} M6\nG43 H{n}\nS{} M3\n", 1000 + 100 * (n - 1));
+        }
+        out += l;
+        out.push('\n');
+    }
+    out
+}
+
 fn trt() -> Machine {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -91,13 +109,13 @@ fn trt() -> Machine {
     .expect("valid")
 }
 
-fn config(m: &Machine, head: usize, deposit: bool) -> PostConfig {
+fn config(m: &Machine, head: usize, deposit: bool, tools: bool) -> PostConfig {
     let process = if deposit {
         Process::Deposit { power: 500.0 }
     } else {
         Process::Machine {
-            tool: None,
-            length_offset: None,
+            tool: tools.then_some(1),
+            length_offset: tools.then_some(1),
             work_offset: None,
             spindle: 1000.0,
             coolant: false,
@@ -175,6 +193,7 @@ fn tamper(
     mv: &[Mv],
     mm: bool,
     deposit: bool,
+    tools: bool,
 ) -> Option<(String, &'static str)> {
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
     let fmt = |v: f64| {
@@ -189,7 +208,28 @@ fn tamper(
         .iter()
         .filter(|m| !matches!(m.1, MoveKind::Rapid))
         .collect();
-    match r.below(6) {
+    match r.below(if tools { 7 } else { 6 }) {
+        6 => {
+            // A posted tool change (after the first tool's) left out, to another tool,
+            // with another length offset, or with the last tool's speed.
+            let at: Vec<usize> = (0..lines.len())
+                .filter(|&k| lines[k].starts_with('T') && lines[k].ends_with(" M6"))
+                .skip(1)
+                .collect();
+            if at.is_empty() {
+                return None;
+            }
+            let k = at[r.below(at.len())];
+            match r.below(4) {
+                0 => {
+                    lines.remove(k);
+                }
+                1 => lines[k] = "T9 M6".into(),
+                2 => lines[k + 1] = "G43 H9".into(),
+                _ => lines[k + 2] = "S9000 M3".into(),
+            }
+            Some((lines.join("\n") + "\n", "tool change tampered"))
+        }
         0 => {
             // One value moved beyond tolerance: an axis word of a feed, or a rotary.
             let m = feeds[r.below(feeds.len())];
@@ -389,7 +429,17 @@ fn random_programs_post_verify_and_tampering_is_caught() {
             });
         }
         let deposit = r.below(2) == 0;
-        let cfg = config(m, head, deposit);
+        // Sometimes a machining program with a tool of its own for each run.
+        let tools = !deposit && r.below(2) == 0;
+        if tools {
+            for sec in &mut secs {
+                if let Source::Bytes(b) = &sec.source {
+                    let t = with_tools(&String::from_utf8_lossy(b));
+                    sec.source = Source::Bytes(t.into_bytes());
+                }
+            }
+        }
+        let cfg = config(m, head, deposit, tools);
         let mut out = Vec::new();
         match post(m, &secs, &cfg, &mut out, |_| {}) {
             Ok(_) => {}
@@ -436,7 +486,7 @@ fn random_programs_post_verify_and_tampering_is_caught() {
             panic!("case {case} ({name}): {e}\n{out}");
         }
         for _ in 0..6 {
-            let Some((bad, what)) = tamper(&mut r, &out, &mv, mm, deposit) else {
+            let Some((bad, what)) = tamper(&mut r, &out, &mv, mm, deposit, tools) else {
                 continue;
             };
             if bad == out {
