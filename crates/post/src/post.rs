@@ -463,8 +463,8 @@ pub(crate) fn post_steps<W: Write>(
                 progress(count);
             }
             count += 1;
-            let file = &sections[step.section].name;
-            let key = (step.section, step.layer);
+            let file = &sections[step.section as usize].name;
+            let key = (step.section as usize, step.layer);
             if cur_key != Some(key) {
                 cur_key = Some(key);
                 w.feed_check
@@ -575,15 +575,15 @@ pub(crate) fn post_steps<W: Write>(
                             None
                         }
                         ArcWay::Kept { .. } => {
-                            if round_warned != Some(step.section) {
-                                round_warned = Some(step.section);
+                            if round_warned != Some(step.section as usize) {
+                                round_warned = Some(step.section as usize);
                                 w.report.warnings.push(format!("{file}:{}: an arc that would not read back as itself at the output resolution (its end rounding onto or past its start reads as a full circle, or nearly one; or its radii as written beyond the control's arc tolerance) is written as chords", step.line));
                             }
                             Some(chord_count(&step, &center, sweep, cfg.tolerance))
                         }
                         ArcWay::Chords(n) => {
-                            if arc_warned != Some(step.section) {
-                                arc_warned = Some(step.section);
+                            if arc_warned != Some(step.section as usize) {
+                                arc_warned = Some(step.section as usize);
                                 w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
                             }
                             Some(n)
