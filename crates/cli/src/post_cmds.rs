@@ -588,16 +588,16 @@ pub struct ProcessArgs {
     /// Laser power for deposition.
     #[arg(long, default_value_t = 1000.0)]
     pub power: f64,
-    /// Machining: tool number (T… M6).
+    /// Machining: tool number (T… M6) of the first tool; the input's tool changes post each later tool with its own T, G43 H and S.
     #[arg(long)]
     pub tool: Option<u32>,
-    /// Machining: tool length offset register (G43 H…).
+    /// Machining: tool length offset register (G43 H…) of the first tool; needed when the input changes tools.
     #[arg(long)]
     pub length_offset: Option<u32>,
     /// Machining: work offset, e.g. E1 (FADAL) or G54.
     #[arg(long)]
     pub work_offset: Option<String>,
-    /// Machining: spindle speed.
+    /// Machining: spindle speed of the first tool.
     #[arg(long, default_value_t = 3000.0)]
     pub spindle: f64,
     /// Machining: coolant on.
