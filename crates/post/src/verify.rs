@@ -342,6 +342,16 @@ impl CutTools {
     }
 }
 
+/// What an intended step is, for a message: its stop code, its change of tool, or a move.
+#[cold]
+fn step_name(kind: &StepKind) -> String {
+    match kind {
+        StepKind::Stop(k) => k.code().to_string(),
+        StepKind::ToolChange(c) => format!("change to T{}", c.tool),
+        _ => "move".to_string(),
+    }
+}
+
 /// The stop the post writes for an input's stop `k`: `M60` as `M0` (no pallet is
 /// changed), the others as they are.
 fn posted_as(k: StopKind) -> StopKind {
@@ -661,10 +671,7 @@ pub fn verify_traced<R: BufRead>(
                                 "none"
                             },
                             s.line,
-                            match s.kind {
-                                StepKind::Stop(k) => k.code(),
-                                _ => "move",
-                            }
+                            step_name(&s.kind)
                         ))
                     }
                     None => return fail("after the intended path has ended".into()),
@@ -704,11 +711,7 @@ pub fn verify_traced<R: BufRead>(
                                 m.line,
                                 m.modal.tool,
                                 s.line,
-                                match s.kind {
-                                    StepKind::ToolChange(c) => format!("change to T{}", c.tool),
-                                    StepKind::Stop(k) => k.code().to_string(),
-                                    _ => "move".to_string(),
-                                }
+                                step_name(&s.kind)
                             )))
                         }
                         None => {
