@@ -1541,11 +1541,11 @@ fn tool_changes_are_posted_where_they_stand() {
 
 /// Finding 54 on a real program: Fusion's Haas-style output of six tool changes
 /// (`hand-haas/slot_assembly_12.nc`, enier290188/cnc: T10, T1, T5 drilling by `G81`
-/// alone, T22 by `G73` alone, T16, T10 again). Three things in it are refused for their
-/// own reasons, and are edited out here as a user would post it: its positioning
-/// feeds (`G1 X… Y… F650.` after a `G53 Z0.` retract: a feed from a height not known on
-/// the part) made rapids, its `G41` wear compensation dropped (the path is the tool's
-/// centre), its closing park `G53 G0 X0. Y0.` dropped. The posted program changes tools
+/// alone, T22 by `G73` alone, T16, T10 again). Two things in it are refused for their
+/// own reasons, and are edited out here as a user would post it: its `G41` wear
+/// compensation dropped (the path is the tool's centre), its closing park
+/// `G53 G0 X0. Y0.` dropped. Its positioning feeds (`G1 X… Y… F650.` after a
+/// `G53 G0 Z0.` retract) are travel (finding 55). The posted program changes tools
 /// as the input does, in the same order (the two drills' changes were missed by the
 /// first version of 54: their cuts are a canned cycle's alone), each change with the
 /// input's `G43 H` and S, and verifies.
@@ -1556,15 +1556,7 @@ fn a_real_program_s_six_tool_changes_are_posted() {
     let edited: String = text
         .lines()
         .filter(|l| !l.contains("G53 G0 X0. Y0."))
-        .map(|l| {
-            let l = l.replace("G41 ", "").replace("G42 ", "");
-            match l.strip_suffix(" F650.") {
-                Some(head) if head.contains(" G1 X") => {
-                    format!("{}\n", head.replace(" G1 X", " G0 X"))
-                }
-                _ => format!("{l}\n"),
-            }
-        })
+        .map(|l| format!("{}\n", l.replace("G41 ", "").replace("G42 ", "")))
         .collect();
     let work = tempdir("real-tool-changes");
     let input = work.join("slot_assembly_12-edited.nc");
@@ -1589,6 +1581,11 @@ fn a_real_program_s_six_tool_changes_are_posted() {
     a.extend([i, "-o", out.to_str().expect("utf8")]);
     let o = lampost(&a);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":22: a feed across at the height a machine-coordinate retract"),
+        "{}",
+        stderr(&o)
+    );
     let posted = std::fs::read_to_string(&out).expect("posted");
     let changes: Vec<&str> = posted.lines().filter(|l| l.ends_with(" M6")).collect();
     assert_eq!(
@@ -1609,6 +1606,148 @@ fn a_real_program_s_six_tool_changes_are_posted() {
     v.extend([i, out.to_str().expect("utf8")]);
     let o = lampost(&v);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Finding 55: Fusion's Haas-style output positions each new tool with a feed at the
+/// height its `G53 G0 Z0.` retract left (`G1 X1. Y1. F650.` after `T1 M6`, before
+/// `G0 G43 Z0.6 H1`); it was refused as a feed from a height not known on the part. Such
+/// a feed, moving only across, is a rapid written as a feed: posted as travel at the
+/// safe height, noted at its line; the tool's change comes before its first real cut. A
+/// feed that leaves the retract height stays refused. rs274 is the oracle for which
+/// feeds run at the retract's height, and reads the posted program with no feed above
+/// the input's own program Z and every other feed's end kept.
+#[test]
+fn positioning_feeds_at_a_retract_s_height_are_travel() {
+    let path = finding("55-positioning-feed-at-retract.nc");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("positioning-feeds");
+    let out = work.join("posted.ngc");
+    let opts = [
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--tool",
+        "1",
+        "--length-offset",
+        "1",
+        "--spindle",
+        "5000",
+        "--coolant",
+    ];
+    let post = |input: &str| {
+        let mut a = vec!["post", "--dialect", "iso"];
+        a.extend_from_slice(&opts);
+        a.extend([input, "-o", out.to_str().expect("utf8")]);
+        lampost(&a)
+    };
+    let o = post(p);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":11: a feed across at the height a machine-coordinate retract (G53/G28/G30) left the head at is positioning"),
+        "{}",
+        stderr(&o)
+    );
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let lines: Vec<&str> = text.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| *l == "T2 M6")
+        .expect("T2's change");
+    assert_eq!(
+        lines[at..at + 5],
+        [
+            "T2 M6",
+            "G43 H2",
+            "S8000 M3",
+            "M8",
+            "X1.0000 Y2.0000 Z10.0000"
+        ],
+        "{text}"
+    );
+    let mut v = vec!["verify"];
+    v.extend_from_slice(&opts);
+    v.extend([p, out.to_str().expect("utf8")]);
+    let o = lampost(&v);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A feed that leaves the retract's height (down toward the part) stays refused.
+    let text_in = std::fs::read_to_string(&path).expect("fixture");
+    let down = work.join("down.nc");
+    std::fs::write(
+        &down,
+        text_in.replace("N45 G1 X1. Y1. F650.", "N45 G1 X1. Y1. Z0.5 F650."),
+    )
+    .expect("writes");
+    std::fs::remove_file(&out).ok();
+    let o = post(down.to_str().expect("utf8"));
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains(":11: a feed starts at the height a machine-coordinate retract"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists(), "nothing written");
+    if require_rs274().is_none() {
+        return;
+    }
+    let o = post(p);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The oracle's reading of the input: the feeds of N45 and N125 run at the Z the
+    // G53 retracts before them (N20, N100) leave, the input's other feeds below Z0.6.
+    let (_, input) = rs274_exec(&path, &work);
+    let call = |l: &str, kind: &str| -> Option<Vec<f64>> {
+        let inner = l.split(&format!("{kind}(")).nth(1)?;
+        Some(
+            inner
+                .trim_end()
+                .trim_end_matches(')')
+                .split(',')
+                .map(|x| x.trim().parse().expect("a number"))
+                .collect(),
+        )
+    };
+    let z_of = |n: &str, kind: &str| -> f64 {
+        input
+            .lines()
+            .find(|l| l.contains(&format!(" {n} ")) && l.contains(kind))
+            .and_then(|l| call(l, kind))
+            .map(|a| a[2])
+            .unwrap_or_else(|| panic!("rs274's {kind} of {n}: {input}"))
+    };
+    for (retract, feed) in [("N20", "N45"), ("N100", "N125")] {
+        assert_eq!(
+            z_of(retract, "STRAIGHT_TRAVERSE"),
+            z_of(feed, "STRAIGHT_FEED")
+        );
+    }
+    let feeds = |text: &str| -> Vec<(String, Vec<f64>)> {
+        text.lines()
+            .filter_map(|l| {
+                let n = l.split_whitespace().nth(1)?.to_string();
+                call(l, "STRAIGHT_FEED").map(|a| (n, a))
+            })
+            .collect()
+    };
+    let cuts: Vec<Vec<f64>> = feeds(&input)
+        .into_iter()
+        .filter(|(n, _)| n != "N45" && n != "N125")
+        .map(|(_, a)| a)
+        .collect();
+    assert!(cuts.iter().all(|a| a[2] <= 0.6), "{cuts:?}");
+    let (_, posted) = rs274_exec(&out, &work);
+    let posted_feeds: Vec<Vec<f64>> = feeds(&posted).into_iter().map(|(_, a)| a).collect();
+    assert!(
+        posted_feeds.iter().all(|a| a[2] <= 0.6 + 1e-9),
+        "a feed above the input's program Z: {posted}"
+    );
+    for c in &cuts {
+        assert!(
+            posted_feeds
+                .iter()
+                .any(|a| (0..3).all(|k| (a[k] - c[k]).abs() < 1e-4)),
+            "the input's feed to {c:?} is not in the posted program: {posted}"
+        );
+    }
 }
 
 /// Finding 44, for the post: an M-code lampost does not act on (Rotrics Studio's DexArm

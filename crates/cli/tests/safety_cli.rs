@@ -137,7 +137,9 @@ fn safe_height_beyond_travel_is_refused() {
 }
 
 /// Issue 11, case 2: G53 and G28/G30 Z-only moves become retracts to the safe height
-/// (with a note); any other machine-coordinate move is refused with its line.
+/// (with a note); any other machine-coordinate move is refused with its line, and so is
+/// a feed that leaves the height such a retract left (one across at it is travel:
+/// `findings_cli::positioning_feeds_at_a_retract_s_height_are_travel`).
 #[test]
 fn machine_coordinate_moves() {
     let dir = tempdir("safety-g53");
@@ -176,7 +178,7 @@ fn machine_coordinate_moves() {
         ),
         (
             "g53feed.nc",
-            "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG53 G0 Z0\nG1 X1. F10\nM30\n",
+            "G20 G90\nG0 X0 Y0 Z0.2\nG1 Z0 F20.\nG53 G0 Z0\nG1 X1. Z-0.1 F10\nM30\n",
             5,
         ),
     ] {

@@ -251,6 +251,9 @@ pub struct Intended<'a> {
     notes: Vec<String>,
     /// The section a G0 that extrudes in X or Y was warned of in.
     warned_wet_rapid: Option<usize>,
+    /// The section a feed at a machine-coordinate retract's height was noted in (see
+    /// [`Intended::positioning_at_retract`]).
+    noted_positioning: Option<usize>,
     /// The section's warnings so far, one note per kind: (kind, first line, how many).
     warned: Vec<(std::mem::Discriminant<ErrorKind>, u32, usize)>,
     /// A rotary or extra axis word at zero has been noted (see `extra_axes_at_zero`).
@@ -354,6 +357,7 @@ impl<'a> Intended<'a> {
             retract_z: None,
             notes: Vec::new(),
             warned_wet_rapid: None,
+            noted_positioning: None,
             warned: Vec::new(),
             noted_zero_axes: false,
             laser_seen: (usize::MAX, false, false, false),
@@ -632,6 +636,17 @@ impl<'a> Intended<'a> {
     fn move_step(&mut self, m: &Move) -> Result<Step, PostError> {
         let sections = self.sections;
         let sec = &sections[self.idx];
+        let positioning;
+        let m = match self.retract_z {
+            Some(z) => match self.positioning_at_retract(&sec.name, m, z) {
+                Some(p) => {
+                    positioning = p;
+                    &positioning
+                }
+                None => m,
+            },
+            None => m,
+        };
         if m.axes_named & EXTRA_AXES != 0 {
             self.extra_axes_at_zero(&sec.name, m)?;
         }
@@ -819,6 +834,35 @@ impl Intended<'_> {
             Some(_) => {}
         }
         self.tool_change(file, m)
+    }
+
+    /// A straight feed that stays at the height a machine-coordinate retract left the
+    /// head at (`z`), moving only across: Fusion's positioning after `G53 G0 Z0.` and a
+    /// tool change (`G1 X5.1 Y-1.975 F650.`, then `G0 G43 Z0.6 H10`) is such a move, a
+    /// rapid written as a feed. Nothing is cut up there, and its height on the part is not
+    /// known: it is travel, as a rapid there is (rebuilt at the safe height), noted once a
+    /// section. `None` for any other move (a feed that leaves that height is refused in
+    /// [`Intended::move_step`]).
+    #[cold]
+    fn positioning_at_retract(&mut self, file: &str, m: &Move, z: f64) -> Option<Move> {
+        let across = matches!(m.kind, MoveKind::Linear)
+            && m.origin == Origin::Block
+            && m.start[2] == z
+            && m.end[2] == z;
+        if !across {
+            return None;
+        }
+        if self.noted_positioning != Some(self.idx) {
+            self.noted_positioning = Some(self.idx);
+            self.notes.push(format!(
+                "{file}:{}: a feed across at the height a machine-coordinate retract (G53/G28/G30) left the head at is positioning (a rapid written as a feed): posted as travel at the safe height",
+                m.line
+            ));
+        }
+        Some(Move {
+            kind: MoveKind::Rapid,
+            ..*m
+        })
     }
 
     /// See [`Intended::one_tool`]: a move made with another tool than the last.
