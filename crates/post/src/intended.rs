@@ -1139,12 +1139,22 @@ impl Intended<'_> {
         let z_only =
             named_only_z && (0..9).all(|a| a == 2 || (m.end[a] - m.start[a]).abs() <= 1e-9);
         if !z_only || !matches!(m.kind, MoveKind::Rapid) {
+            // A block naming axes but not Z: a mill program's park (`G53 G0 X0. Y0.`,
+            // `G28 G91 Y0.`: the table brought to the operator at the end or at a stop).
+            let park = m.block_axes != 0 && m.block_axes & (1 << 2) == 0;
+            let what = if park {
+                format!(
+                    "{what} that parks the table (a CAM program's `G53 G0 X0. Y0.` or `G28 G91 X0. Y0.` at its end or before a stop) cannot be placed on the part, and the post writes no moves in machine coordinates: remove the line (the posted program lifts to the safe height before each stop and at its end, and stays over the part)"
+                )
+            } else {
+                format!(
+                    "{what} that moves more than Z cannot be placed on the part: keep only Z retracts in machine coordinates (a slicer's start code homes the printer this way: remove its homing and bed-levelling lines)"
+                )
+            };
             return Err(PostError::Unsupported {
                 file: sec.name.clone(),
                 line: m.line,
-                what: format!(
-                    "{what} that moves more than Z cannot be placed on the part: keep only Z retracts in machine coordinates (a slicer's start code homes the printer this way: remove its homing and bed-levelling lines)"
-                ),
+                what,
             });
         }
         let scale = if m.modal.units == self.machine_units() {
