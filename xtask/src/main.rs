@@ -396,7 +396,7 @@ impl RobotSplit {
 fn bench_robot() -> Result<(), String> {
     println!("== paper 001's twisted plate at full size (600 x 200 mm), planned and posted for puma-lens in this process (slicing, plan, resampling, poses, chunks of {ROBOT_CHUNK}, location text, in-process verification; no files)");
     let mesh = lampost_plan::demo::twisted_plate(1.0, 3.0, 120, 20).ok_or("plate")?;
-    for (layer, runs) in [(20.0, 5), (2.0, 1)] {
+    for (layer, runs) in [(20.0, 5), (2.0, 3)] {
         let mut wall = Duration::MAX;
         let c0 = crate::plan::cpu_seconds();
         let mut last = None;

@@ -216,7 +216,7 @@ fn output_to_a_device_is_written_through_not_replaced() {
     }
     let dir = tempdir("devnull");
     let prog = dir.join("p.nc");
-    std::fs::write(&prog, "G21 G90\nG0 X1 Y2\nM30\n").expect("write");
+    std::fs::write(&prog, "G21 G90\nG0 X1 Y2\nG1 X2 F100\nM30\n").expect("write");
     let p = prog.to_str().expect("utf-8");
     for args in [
         vec!["fmt", p, "-o", "/dev/null"],

@@ -1340,7 +1340,7 @@ fn a_tool_change_without_its_length_offset_is_refused_at_its_first_cut() {
     for (extra, what) in [
         (
             &["--tool", "1"][..],
-            "a tool change from T1 to T2 (its M6 before this line, the first cut with the new tool), and the program is posted without tool length offsets",
+            "a tool change from T1 to T2 (its M6 before this line, the first cut with the new tool), and neither the options nor the input give tool length offsets (no --length-offset, no G43 H for T2 by this cut)",
         ),
         (
             &["--tool", "1", "--length-offset", "1"][..],
@@ -1934,4 +1934,112 @@ fn pcb2gcode_s_first_tool_and_stop_post_and_verify() {
     verify.extend_from_slice(&[p, o_arg]);
     let o = lampost(&verify);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// The sixth probe (every mill, router and laser program of `fixtures/real-programs`
+/// posted as a user would, 172 of them): refusals that sent the user the wrong way.
+/// Each is refused, located, with nothing written, and the message says what to do:
+/// - a tool change whose new tool has a `G43 H` in the input, posted without
+///   `--length-offset`: named as posted without offsets (the input's H is not enough);
+/// - neither the options nor the input giving offsets (pcb-gcode's drills): one message
+///   saying both, not two sending the user from one to the other;
+/// - a tool's H beyond FADAL's H0–H99 (Mastercam's `T110`, `G43 H110`): at the new
+///   tool's first cut for a later tool, as the option's error for `--length-offset`
+///   (it was an I/O error without a line, "check the paths and free space");
+/// - a program of rapids alone (a script that never left G0, plunging at `Z-2 F2`): it
+///   posted as a lift and nothing else, and verified;
+/// - a bare `G28` (every axis home) at a mill program's end: named as such, not only as
+///   a slicer's homing.
+#[test]
+fn refusals_of_the_sixth_probe_say_what_to_do() {
+    let work = tempdir("sixth-probe");
+    let out = work.join("posted.nc");
+    let post = |name: &str, body: &str, extra: &[&str]| {
+        let input = work.join(name);
+        std::fs::write(&input, body).expect("writes");
+        let mut a = vec!["post", "--machine", "fadal-lamp", "--process", "machine"];
+        a.extend_from_slice(extra);
+        let i = input.to_str().expect("utf8").to_string();
+        let o = work.join("posted.nc");
+        let mut owned: Vec<String> = a.iter().map(|s| s.to_string()).collect();
+        owned.extend([i, "-o".into(), o.to_str().expect("utf8").into()]);
+        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
+        lampost(&refs)
+    };
+    let two_tools = |h2: &str| {
+        format!(
+            "G20 G90 G17\nT1 M6\nS3000 M3\nG0 G43 H1 Z1.\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F10.\nX1.\nG0 Z1.\nT2 M6\nS4000 M3\n{h2}G0 X2. Y0 Z0.1\nG1 Z-0.1 F10.\nX3.\nG0 Z1.\nM30\n"
+        )
+    };
+    for (name, body, extra, at, what) in [
+        (
+            "t2-h2.nc",
+            two_tools("G0 G43 H2 Z1.\n"),
+            &["--tool", "1", "--spindle", "3000"][..],
+            ":13:",
+            "the program is posted without tool length offsets",
+        ),
+        (
+            "t2-none.nc",
+            two_tools("").replace("G0 G43 H1 Z1.\n", ""),
+            &["--tool", "1", "--spindle", "3000"][..],
+            ":11:",
+            "neither the options nor the input give tool length offsets",
+        ),
+        (
+            "t2-h110.nc",
+            two_tools("G0 G43 H110 Z1.\n"),
+            &["--tool", "1", "--length-offset", "1", "--spindle", "3000"][..],
+            ":13:",
+            "refused to write H110: out of range for FADAL: 0 to 99",
+        ),
+        (
+            "t1-h110.nc",
+            two_tools("G0 G43 H2 Z1.\n"),
+            &["--tool", "1", "--length-offset", "110", "--spindle", "3000"][..],
+            "--length-offset: ",
+            "refused to write H110: out of range for FADAL: 0 to 99",
+        ),
+        (
+            "rapids.nc",
+            "G21 G90\nT1 M6\nG0 X0 Y0 Z10 S3000 M3\nX61.045 Y67.745\nZ1\nZ-2 F2\nZ10\nM5\nM30\n"
+                .to_string(),
+            &["--tool", "1", "--spindle", "3000", "--convert-units"][..],
+            ":3:",
+            "the program has no feed moves",
+        ),
+        (
+            "g28-end.nc",
+            "G20 G90\nT1 M6\nS3000 M3\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F10.\nX1.\nG0 Z1.\nG28\nM30\n"
+                .to_string(),
+            &["--tool", "1", "--spindle", "3000"][..],
+            ":8:",
+            "with no axes named (every axis sent home) cannot be placed on the part: keep only Z retracts in machine coordinates; remove the line (a mill program homes this way",
+        ),
+    ] {
+        std::fs::remove_file(&out).ok();
+        let o = post(name, &body, extra);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{name}: {err}");
+        assert!(err.contains(at) && err.contains(what), "{name}: {err}");
+        assert!(!err.contains("check the paths and free space"), "{name}: {err}");
+        assert!(!out.exists(), "{name}: nothing is written");
+    }
+    // Each posts once the named thing is mended.
+    for (name, body, extra) in [
+        (
+            "t2-h2-ok.nc",
+            two_tools("G0 G43 H2 Z1.\n"),
+            &["--tool", "1", "--length-offset", "1", "--spindle", "3000"][..],
+        ),
+        (
+            "g28-removed.nc",
+            "G20 G90\nT1 M6\nS3000 M3\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F10.\nX1.\nG0 Z1.\nM30\n"
+                .to_string(),
+            &["--tool", "1", "--spindle", "3000"][..],
+        ),
+    ] {
+        let o = post(name, &body, extra);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+    }
 }

@@ -130,7 +130,7 @@ impl PostError {
             PostError::Unsupported { .. } => "change the input as the message says (in the CAM system, or in the slicer's start and end code), then post again",
             PostError::OutOfRange { .. } => "the input's value does not fit the controller's word: check the program's feeds and units (a feed written for another machine, or millimetres read as inches)",
             PostError::Units { .. } => "post with --convert-units to scale the program, or output the program in the machine's units",
-            PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits",
+            PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits; a program that gives no G20/G21 is read in the machine's units (a program in mm on an inch machine: --units mm --convert-units)",
             PostError::SafeHeight { .. } => "place the part lower (--origin or the setup), choose an index that keeps it lower, or check clearance_z, safe_margin and the Z limits in the machine file",
             PostError::TooLarge { .. } => "an arc of many turns or a fine chord tolerance at a tilted index makes many lines: raise --max-growth, or keep arcs in the index's plane",
             PostError::Kin { .. } => "choose an orientation within the rotary limits, or re-fixture the part",

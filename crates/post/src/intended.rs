@@ -898,6 +898,13 @@ impl Intended<'_> {
                     "a tool change from T{t} to T{now} (its M6 before this line, the first cut with the new tool), and the program is posted with T{x} for T{t} (--tool): the post takes each later tool's number from the input, so the numbering would mix; post with --tool {t}"
                 ));
             }
+            if posted.length_offset.is_none() && md.tool_length.is_none() {
+                // Neither the options nor the input give lengths: saying only one of
+                // them would send the user from one refusal to the other.
+                return refuse(format!(
+                    "a tool change from T{t} to T{now} (its M6 before this line, the first cut with the new tool), and neither the options nor the input give tool length offsets (no --length-offset, no G43 H for T{now} by this cut): T{now} would cut at T{t}'s length; give each tool its G43 H in the input (the offset the control holds the tool's length under) and post with --length-offset for the first, or post each tool's operations as a program of their own"
+                ));
+            }
             if posted.length_offset.is_none() {
                 return refuse(format!(
                     "a tool change from T{t} to T{now} (its M6 before this line, the first cut with the new tool), and the program is posted without tool length offsets: T{now} would cut at T{t}'s length; post with --length-offset (the first tool's H; each later tool takes the input's G43 H)"
@@ -1147,8 +1154,13 @@ impl Intended<'_> {
                     "{what} that parks the table (a CAM program's `G53 G0 X0. Y0.` or `G28 G91 X0. Y0.` at its end or before a stop) cannot be placed on the part, and the post writes no moves in machine coordinates: remove the line (the posted program lifts to the safe height before each stop and at its end, and stays over the part)"
                 )
             } else {
+                let moves = if m.block_axes == 0 {
+                    "with no axes named (every axis sent home)"
+                } else {
+                    "that moves more than Z"
+                };
                 format!(
-                    "{what} that moves more than Z cannot be placed on the part: keep only Z retracts in machine coordinates (a slicer's start code homes the printer this way: remove its homing and bed-levelling lines)"
+                    "{what} {moves} cannot be placed on the part: keep only Z retracts in machine coordinates; remove the line (a mill program homes this way at its start or end: the posted program lifts to the safe height at its end; a slicer's start code homes the printer this way: remove its homing and bed-levelling lines)"
                 )
             };
             return Err(PostError::Unsupported {

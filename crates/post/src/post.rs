@@ -454,6 +454,9 @@ pub(crate) fn post_steps<W: Write>(
     let mut round_warned: Option<usize> = None;
     let mut prev_end: Option<(Vector3<f64>, [f64; 3], [f64; 2])> = None;
     let mut count = 0usize;
+    // The first move's (section, line), and whether any step cuts (a feed or an arc).
+    let mut first: Option<(usize, u32)> = None;
+    let mut cut = false;
     for batch in batches {
         let mut batch = batch;
         let Batch { steps, points } = &mut batch;
@@ -463,6 +466,9 @@ pub(crate) fn post_steps<W: Write>(
                 progress(count);
             }
             count += 1;
+            if step.start != step.end {
+                first.get_or_insert((step.section as usize, step.line));
+            }
             let file = &sections[step.section as usize].name;
             let key = (step.section as usize, step.layer);
             if cur_key != Some(key) {
@@ -531,6 +537,7 @@ pub(crate) fn post_steps<W: Write>(
                 need_approach = true;
                 continue;
             }
+            cut = true;
             w.holds_tool(&step, file)?;
             let on_grid = w.on_grid(&start);
             let at_start = w
@@ -644,6 +651,15 @@ pub(crate) fn post_steps<W: Write>(
                 .first()
                 .map_or_else(String::new, |s| s.name.clone()),
         ));
+    }
+    if let (false, Some((sec, line))) = (cut, first) {
+        // Travel alone: the posted program would be a lift and nothing else, while the
+        // input (a script that never left G0, say) may have meant its rapids to cut.
+        return Err(PostError::Unsupported {
+            file: sections[sec].name.clone(),
+            line,
+            what: "the program has no feed moves: every move is a rapid, which the post rebuilds as travel at the safe height, so the posted program would cut or deposit nothing; if rapids were meant to cut (G0 where G1 was meant), fix the input".into(),
+        });
     }
     w.finish(cfg)
 }

@@ -229,13 +229,17 @@ impl<'m, W: Write> Writer<'m, W> {
                 if let Some(t) = tool {
                     let mut v = vec![(b'T', f64::from(*t))];
                     v.extend(code_words(&p.tool_change)?);
-                    self.words(&v, None)?;
+                    self.em
+                        .words(&v, None)
+                        .map_err(|e| option_out_of_range(e, "--tool"))?;
                 }
                 if let Some(o) = work_offset {
                     self.words(&work_offset_words(o)?, Some("WORK OFFSET"))?;
                 }
                 if let Some(h) = length_offset {
-                    self.words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)?;
+                    self.em
+                        .words(&[(b'G', 43.0), (b'H', f64::from(*h))], None)
+                        .map_err(|e| option_out_of_range(e, "--length-offset"))?;
                 }
                 self.spindle_on(*spindle, *coolant)?;
                 self.spindle = Some((*spindle, *coolant));
@@ -324,9 +328,11 @@ impl<'m, W: Write> Writer<'m, W> {
         self.words(&code_words(&p.spindle_off)?, None)?;
         let mut v = vec![(b'T', f64::from(change.tool))];
         v.extend(code_words(&p.tool_change)?);
-        self.words(&v, None)?;
+        // A T or H the dialect cannot hold (FADAL's H1–H99) is the new tool's: refused at
+        // its first cut's line.
+        self.move_words(&v, file, line)?;
         if let Some(h) = change.length_offset {
-            self.words(&[(b'G', 43.0), (b'H', f64::from(h))], None)?;
+            self.move_words(&[(b'G', 43.0), (b'H', f64::from(h))], file, line)?;
         }
         self.spindle_on(change.speed(), coolant)?;
         self.spindle = Some((change.speed(), coolant));
@@ -923,6 +929,19 @@ fn emit_words<W: Write>(
         }
     }
     em.words(w, comment).map_err(PostError::from)
+}
+
+/// An emitter error of the words an option gives (`--tool`, `--length-offset`): a value
+/// out of the dialect's range is the option's error (FADAL's length offsets are H1–H99);
+/// anything else is I/O.
+fn option_out_of_range(e: std::io::Error, option: &str) -> PostError {
+    if e.kind() == std::io::ErrorKind::InvalidData {
+        PostError::Options(format!(
+            "{option}: {e}; give the number the control's table holds this tool's offset under"
+        ))
+    } else {
+        PostError::from(e)
+    }
 }
 
 /// An emitter error of a move from input line `line`: a value out of the dialect's
