@@ -2043,3 +2043,76 @@ fn refusals_of_the_sixth_probe_say_what_to_do() {
         assert!(o.status.success(), "{name}: {}", stderr(&o));
     }
 }
+
+/// Finding 56: a printer's program that gives no G20/G21 (Cura never writes G21) was
+/// posted for an inch machine as inches, 25.4 times its size, with one warning at the
+/// end; a firmware reads it in millimetres (Marlin's `INCH_MODE_SUPPORT` is off by
+/// default; RepRapFirmware, Klipper and Sailfish work in mm). Under a printer's flavour
+/// such a program is now read in mm: refused on the inch machine without
+/// `--convert-units` (located, nothing written), and with it the 10 mm square is posted
+/// 10/25.4 in on a side, and verifies.
+#[test]
+fn a_printer_s_program_without_units_is_read_in_millimetres() {
+    let path = finding("56-printer-program-without-units.gcode");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("printer-units");
+    let out = work.join("posted.nc");
+    let o_ = out.to_str().expect("utf8");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--e-extrusion",
+        p,
+        "-o",
+        o_,
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("56-printer-program-without-units.gcode:11: the program is in millimetres but the machine is in inches"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let opts = [
+        "--machine",
+        "fadal-lamp",
+        "--e-extrusion",
+        "--convert-units",
+    ];
+    let mut a = vec!["post"];
+    a.extend_from_slice(&opts);
+    a.extend([p, "-o", o_]);
+    let o = lampost(&a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("read as millimetres (a printer's firmware works in mm"),
+        "{}",
+        stderr(&o)
+    );
+    // The deposit's X and Y words (between laser on and off) span 10 mm in inches.
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    let mut on = false;
+    for l in text.lines() {
+        on = (on || l.starts_with("M71")) && !l.starts_with("M72");
+        for w in l.split_whitespace() {
+            let v = |s: &str| s.parse::<f64>().ok();
+            match (on, w.split_at(1)) {
+                (true, ("X", n)) => xs.extend(v(n)),
+                (true, ("Y", n)) => ys.extend(v(n)),
+                _ => {}
+            }
+        }
+    }
+    let span = |v: &[f64]| {
+        v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+    };
+    assert!((span(&xs) - 10.0 / 25.4).abs() < 2e-4, "{xs:?}\n{text}");
+    assert!((span(&ys) - 10.0 / 25.4).abs() < 2e-4, "{ys:?}\n{text}");
+    let mut v = vec!["verify"];
+    v.extend_from_slice(&opts);
+    v.extend([p, o_]);
+    let o = lampost(&v);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

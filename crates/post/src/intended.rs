@@ -445,8 +445,26 @@ impl<'a> Intended<'a> {
     }
 
     /// The units a program is read in until it says (`--units`, else the machine's).
+    /// Units of a program that gives no G20/G21: `--units`; else millimetres for a
+    /// printer's program (Marlin, RepRapFirmware, Klipper and Sailfish work in mm, and
+    /// slicers such as Cura never write G21); else the machine's.
     fn assumed_units(&self) -> Units {
-        self.opts.units.unwrap_or_else(|| self.machine_units())
+        self.opts.units.unwrap_or_else(|| {
+            if self.printer_program() {
+                Units::Mm
+            } else {
+                self.machine_units()
+            }
+        })
+    }
+
+    /// Whether the programs are a printer's (the flavour is a printer firmware's).
+    fn printer_program(&self) -> bool {
+        use lampost_gcode::Flavor;
+        matches!(
+            self.opts.flavor,
+            Flavor::Marlin | Flavor::RepRap | Flavor::MakerBot
+        )
     }
 
     fn machine_units(&self) -> Units {
@@ -545,6 +563,8 @@ impl<'a> Intended<'a> {
                             units_name(u),
                             if self.opts.units.is_some() {
                                 "--units"
+                            } else if self.printer_program() {
+                                "a printer's firmware works in mm; say otherwise with --units"
                             } else {
                                 "the machine's units; say otherwise with --units"
                             }
