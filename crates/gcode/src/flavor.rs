@@ -215,6 +215,9 @@ struct Codes {
     heater: bool,
     /// An S word with a number.
     s: bool,
+    /// `G4`, and a P word with a number.
+    g4: bool,
+    p: bool,
 }
 
 impl Codes {
@@ -226,6 +229,12 @@ impl Codes {
     /// A printer's temperature code with its S (`M104 S210`, `M190 S60`).
     fn heater_temperature(&self) -> bool {
         self.heater && self.s
+    }
+
+    /// A dwell in seconds by S and no P (`G4 S1`): Marlin's, RepRapFirmware's and
+    /// Klipper's; LinuxCNC, Fanuc, Haas, FADAL, Mach3 and grbl dwell by P (or X).
+    fn printer_dwell(&self) -> bool {
+        self.g4 && self.s && !self.p
     }
 }
 
@@ -246,6 +255,7 @@ impl Codes {
             c.j |= letter == b'J' && numeric;
             c.k |= letter == b'K' && numeric;
             c.s |= letter == b'S' && numeric;
+            c.p |= letter == b'P' && numeric;
             if letter == b'E' {
                 let num = b[i + 1..].strip_prefix(b"-").unwrap_or(&b[i + 1..]);
                 let int = num.iter().take_while(|d| d.is_ascii_digit()).count();
@@ -269,6 +279,7 @@ impl Codes {
                     (b'G', 0 | 1) => c.g0_1 = true,
                     (b'G', 76) => c.g76 = true,
                     (b'M', 104 | 109 | 140 | 190) => c.heater = true,
+                    (b'G', 4) => c.g4 = true,
                     _ => {}
                 }
             }
@@ -299,7 +310,8 @@ impl Codes {
 ///
 /// Without any of those, weaker evidence decides, the strongest kind found first: a G0
 /// or G1 with a fractional E word (a slicer's extrusion), or a printer's temperature code
-/// with its S (`M104`, `M109`, `M140`, `M190`): Marlin; numbered parameters
+/// with its S (`M104`, `M109`, `M140`, `M190`), or a dwell in seconds by S (`G4 S1`, no
+/// P): Marlin; numbered parameters
 /// (`#1 = …`), `[…]` expressions or polar coordinates (`@`, `^`): LinuxCNC; a `;` comment, which FADAL programs do not
 /// hold (grbl, Mach3 and hobby CAM write them): LinuxCNC, whose reading is ISO's.
 pub fn detect(head: &[u8]) -> (Flavor, String) {
@@ -455,6 +467,12 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
                 3,
                 Flavor::Marlin,
                 "a printer's temperature code (M104/M109/M140/M190 with S)",
+            ))
+        } else if c.printer_dwell() {
+            Some((
+                3,
+                Flavor::Marlin,
+                "a dwell in seconds by S (`G4 S…`: a printer firmware's)",
             ))
         } else if code.contains('#') || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
@@ -641,6 +659,14 @@ mod tests {
             ("M140 S60\nM190 S60\nG1 X1\n", Flavor::Marlin),
             // Haas's M109 (interactive user input) has a P, no S.
             ("G0 X1 ; note\nM109 P501\n", Flavor::LinuxCnc),
+            // A dwell in seconds by S: a printer firmware's (FABtotum's laser jobs, which
+            // name no slicer and open with a `;` comment); by P, anyone's.
+            (
+                ";FABtotum laser engraving\nG4 S1 ;pause\nG90\nG1 X1 F800\n",
+                Flavor::Marlin,
+            ),
+            ("G0 X1 ; note\nG4 P1\n", Flavor::LinuxCnc),
+            ("G0 X1\nG4 P1 S1\n", Flavor::Fadal),
             ("O1000\nM104\nG0 X1\nM30\n", Flavor::Fadal),
             ("O1000\nG0 X1\nM30\n", Flavor::Fadal),
             ("", Flavor::Fadal),
