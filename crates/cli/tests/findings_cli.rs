@@ -2116,3 +2116,55 @@ fn a_printer_s_program_without_units_is_read_in_millimetres() {
     let o = lampost(&v);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Finding 58: Fanuc's and Haas's G87 bores back, upward, from R below the part to Z
+/// above it (Fusion's Fanuc post writes `G87 … Z-15.8 R-16. Q0.01`); lampost refused it
+/// in every flavour, "the hole bottom Z is above the R plane", and the trace stopped.
+/// Under `fanuc` and `haas` it is now passed through with the cycle's warning (as every
+/// G87 is: not simulated), and the post refuses it as a cycle it cannot write;
+/// LinuxCNC's G87 gives the bottom in Z, so `linuxcnc` still refuses Z above R.
+#[test]
+fn fanuc_s_back_boring_cycle_bores_upward_from_r() {
+    let path = finding("58-fanuc-g87-back-boring.nc");
+    let p = path.to_str().expect("utf8");
+    for flavor in ["fanuc", "haas"] {
+        let o = lampost(&["check", "--flavor", flavor, p]);
+        assert!(o.status.success(), "{flavor}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("0 error(s)"),
+            "{flavor}: {}",
+            stderr(&o)
+        );
+    }
+    let o = lampost(&["check", "--flavor", "linuxcnc", p]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("above the R plane"), "{}", stderr(&o));
+    let work = tempdir("g87");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--flavor",
+        "fanuc",
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--tool",
+        "4",
+        "--length-offset",
+        "4",
+        "--spindle",
+        "5000",
+        "--convert-units",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains(":13: canned cycle G87 cannot be posted"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}

@@ -3757,7 +3757,16 @@ impl Interpreter {
         } else {
             (rv + off[n], zv + off[n])
         };
-        if bottom > r_abs {
+        // Fanuc's and Haas's G87 bores back, upward: from R below the part to Z above it
+        // (the Fanuc 0i-MF and Haas mill manuals; Fusion's Fanuc post writes it so), so
+        // there Z above R is the cycle's shape. LinuxCNC's G87 (and Mach3's) gives the
+        // bottom in Z and the top of the bore in K.
+        let back_bore = code == 870
+            && matches!(
+                self.opts.flavor,
+                crate::flavor::Flavor::Fanuc | crate::flavor::Flavor::Haas
+            );
+        if bottom > r_abs && !back_bore {
             return Err(diag(
                 b,
                 Severity::Error,
