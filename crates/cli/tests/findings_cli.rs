@@ -2168,3 +2168,24 @@ fn fanuc_s_back_boring_cycle_bores_upward_from_r() {
     );
     assert!(!out.exists());
 }
+
+/// Finding 59: LinuxCNC's analog output sets a laser's power along the moves
+/// (`G1 X5 M67 E2 Q25`, LinuxCNC's laser examples); E there is the output's number.
+/// Under `linuxcnc` it was refused, "LinuxCNC reads E only with G76", and `auto` (which
+/// took the program for FADAL's) read it as a fixture offset. The E of `M66`, `M67` and
+/// `M68` is now theirs under `linuxcnc`, and such a code with its E is evidence of
+/// LinuxCNC for `auto`; the moves equal rs274's.
+#[test]
+fn linuxcnc_s_analog_output_e_is_its_number() {
+    let path = finding("59-linuxcnc-analog-output-e.ngc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("flavour linuxcnc (auto: an input or analog output code"),
+        "{}",
+        stderr(&o)
+    );
+    let work = tempdir("m67");
+    let moves = equal_to_rs274(&path, &work, &["linuxcnc", "auto"]);
+    assert_eq!(moves.len(), 6, "{moves:?}");
+}

@@ -218,6 +218,10 @@ struct Codes {
     /// `G4`, and a P word with a number.
     g4: bool,
     p: bool,
+    /// `M66`, `M67` or `M68`, and an E word with a number: LinuxCNC's inputs and analog
+    /// outputs (`M67 E2 Q25`).
+    m66_68: bool,
+    e: bool,
 }
 
 impl Codes {
@@ -256,6 +260,7 @@ impl Codes {
             c.k |= letter == b'K' && numeric;
             c.s |= letter == b'S' && numeric;
             c.p |= letter == b'P' && numeric;
+            c.e |= letter == b'E' && numeric;
             if letter == b'E' {
                 let num = b[i + 1..].strip_prefix(b"-").unwrap_or(&b[i + 1..]);
                 let int = num.iter().take_while(|d| d.is_ascii_digit()).count();
@@ -280,6 +285,7 @@ impl Codes {
                     (b'G', 76) => c.g76 = true,
                     (b'M', 104 | 109 | 140 | 190) => c.heater = true,
                     (b'G', 4) => c.g4 = true,
+                    (b'M', 66..=68) => c.m66_68 = true,
                     _ => {}
                 }
             }
@@ -312,7 +318,8 @@ impl Codes {
 /// or G1 with a fractional E word (a slicer's extrusion), or a printer's temperature code
 /// with its S (`M104`, `M109`, `M140`, `M190`), or a dwell in seconds by S (`G4 S1`, no
 /// P): Marlin; numbered parameters
-/// (`#1 = …`), `[…]` expressions or polar coordinates (`@`, `^`): LinuxCNC; a `;` comment, which FADAL programs do not
+/// (`#1 = …`), `[…]` expressions, polar coordinates (`@`, `^`) or an input or analog
+/// output code with its E (`M67 E2 Q25`): LinuxCNC; a `;` comment, which FADAL programs do not
 /// hold (grbl, Mach3 and hobby CAM write them): LinuxCNC, whose reading is ISO's.
 pub fn detect(head: &[u8]) -> (Flavor, String) {
     if head.starts_with(b"GCDE") {
@@ -485,6 +492,12 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
                 2,
                 Flavor::Fanuc,
                 "a `:` program number (Fanuc's O address in ISO code)",
+            ))
+        } else if c.m66_68 && c.e {
+            Some((
+                2,
+                Flavor::LinuxCnc,
+                "an input or analog output code with its E (`M66`/`M67`/`M68 E…`: LinuxCNC's)",
             ))
         } else if polar_word(code) {
             Some((2, Flavor::LinuxCnc, "a polar coordinate (`@`, `^`)"))
@@ -667,6 +680,8 @@ mod tests {
             ),
             ("G0 X1 ; note\nG4 P1\n", Flavor::LinuxCnc),
             ("G0 X1\nG4 P1 S1\n", Flavor::Fadal),
+            // LinuxCNC's analog output sets a laser's power (`M68 E0 Q0`).
+            ("G21 G90\nM68 E0 Q0\nG1 X1 F100\n", Flavor::LinuxCnc),
             ("O1000\nM104\nG0 X1\nM30\n", Flavor::Fadal),
             ("O1000\nG0 X1\nM30\n", Flavor::Fadal),
             ("", Flavor::Fadal),

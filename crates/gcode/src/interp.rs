@@ -1694,9 +1694,13 @@ impl Interpreter {
                 _ => {}
             }
         }
+        // LinuxCNC's I/O codes take E as the input's or output's number (`M67 E2 Q25`:
+        // analog output 2, synchronised with the move; `M68`, `M66`).
+        let io_number = self.opts.flavor == crate::flavor::Flavor::LinuxCnc
+            && w.ms.iter().any(|&(_, c)| matches!(c, 660 | 670 | 680));
         let m = &mut self.modal;
         // E word.
-        if let Some(e) = w.word(b'E') {
+        if let Some(e) = w.word(b'E').filter(|_| !io_number) {
             match self.opts.e_word {
                 // LinuxCNC: E is G76's taper, nothing else (no fixture offsets).
                 EWord::FixtureOffset if self.opts.flavor == crate::flavor::Flavor::LinuxCnc => {
