@@ -2189,3 +2189,42 @@ fn linuxcnc_s_analog_output_e_is_its_number() {
     let moves = equal_to_rs274(&path, &work, &["linuxcnc", "auto"]);
     assert_eq!(moves.len(), 6, "{moves:?}");
 }
+
+/// Finding 60: PrusaSlicer's MK3 start code (Prusa firmware) was refused at its
+/// `G80 X109.746 Y89.7458 W30.5083 H30.5083` ("axis words but no motion mode is active",
+/// "add G0 or G1"): on a printer G80 is Prusa's mesh bed levelling, its words the area
+/// probed; and `G28 W` (home every axis without levelling) was traced as homing a W axis,
+/// X, Y and Z left where they were. Now, in a printer's program, G80 is named as the
+/// levelling (not simulated; the post refuses it, as G29), and `G28 W` homes every axis.
+#[test]
+fn prusa_s_mesh_levelling_and_homing_are_read_as_prusa_s() {
+    let path = finding("60-prusa-g80-and-g28-w.gcode");
+    let p = path.to_str().expect("utf8");
+    let o = lampost(&["check", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("G80 (Prusa firmware's mesh bed levelling"),
+        "{}",
+        stderr(&o)
+    );
+    let doc = trace_json("auto", &path);
+    let e = ends(&doc);
+    assert_eq!(
+        e[..3],
+        [[10.0, 10.0, 5.0], [0.0, 0.0, 0.0], [0.0, -3.0, 0.0]],
+        "{e:?}"
+    );
+    let work = tempdir("prusa-g80");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(":12:"), "{}", stderr(&o));
+    assert!(!out.exists());
+}

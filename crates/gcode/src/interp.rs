@@ -1039,21 +1039,26 @@ impl Interpreter {
     }
 
     /// In a firmware (slicer) program `G29` is the printer's bed levelling probe
-    /// (`G29`, `G29 A X92 Y92 I15 J15`): a warning names it, and its words are its own.
+    /// (`G29`, `G29 A X92 Y92 I15 J15`), and `G80` Prusa firmware's mesh bed levelling
+    /// (PrusaSlicer's MK2/MK3 start code: `G80`, `G80 X109.7 Y89.7 W30.5 H30.5`, the area
+    /// probed; slicers write no canned cycles to cancel): a warning names it, and its
+    /// words are its own.
     fn bed_levelling(&self, b: &Block<'_>, w: &Words<'_, '_>, out: &mut impl FnMut(Event)) -> bool {
-        let Some(&(gw, _, _)) = w.gs.iter().find(|g| g.1 == 290) else {
-            return false;
-        };
         if self.opts.e_word != EWord::Extrusion {
             return false;
         }
+        let Some(&(gw, c, _)) = w.gs.iter().find(|g| matches!(g.1, 290 | 800)) else {
+            return false;
+        };
+        let what = if c == 800 {
+            "Prusa firmware's mesh bed levelling: the head probes the bed"
+        } else {
+            "the printer's bed levelling probe"
+        };
         self.warn(
             b,
             out,
-            ErrorKind::NotSimulated(format!(
-                "{} (the printer's bed levelling probe)",
-                gw.display_code()
-            )),
+            ErrorKind::NotSimulated(format!("{} ({what})", gw.display_code())),
             Some(gw.span),
         );
         true
@@ -2317,11 +2322,18 @@ impl Interpreter {
         let mut inter = self.pos;
         let mut target = self.pos;
         let numbered = w.has_axes();
-        let any = numbered || w.bare != 0;
+        // In a printer's program a bare W is Prusa firmware's flag (`G28 W`: home every
+        // axis without mesh bed levelling), not an axis: printers have none.
+        let bare = if self.opts.e_word == EWord::Extrusion {
+            w.bare & !(1 << 8)
+        } else {
+            w.bare
+        };
+        let any = numbered || bare != 0;
         let off = self.offset();
         for (a, &l) in AXES.iter().enumerate() {
             match w.get(l) {
-                _ if w.bare & (1 << a) != 0 => target[a] = home[a],
+                _ if bare & (1 << a) != 0 => target[a] = home[a],
                 Some(_) if !via => target[a] = home[a],
                 Some(v) => {
                     inter[a] = match self.modal.distance {

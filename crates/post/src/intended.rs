@@ -1168,7 +1168,9 @@ impl Intended<'_> {
         if !z_only || !matches!(m.kind, MoveKind::Rapid) {
             // A block naming axes but not Z: a mill program's park (`G53 G0 X0. Y0.`,
             // `G28 G91 Y0.`: the table brought to the operator at the end or at a stop).
-            let park = m.block_axes != 0 && m.block_axes & (1 << 2) == 0;
+            // (A printer's `G28 X0` or Prusa's `G28 W` is its homing, said below.)
+            let park =
+                !self.opts.e_extrusion && m.block_axes != 0 && m.block_axes & (1 << 2) == 0;
             let what = if park {
                 format!(
                     "{what} that parks the table (a CAM program's `G53 G0 X0. Y0.` or `G28 G91 X0. Y0.` at its end or before a stop) cannot be placed on the part, and the post writes no moves in machine coordinates: remove the line (the posted program lifts to the safe height before each stop and at its end, and stays over the part)"
