@@ -670,6 +670,38 @@ fn a_closing_percent_ends_the_program() {
                     && err.contains(":3:1"),
                 "{name}: {err}"
             );
+            // The post cannot tell where the program ends: refused, saying so (it said
+            // the line "changes the path").
+            let cut = work.join("cut.nc");
+            std::fs::write(
+                &cut,
+                "%
+G1 X1 F10
+% vfd enable
+G1 X2
+M2
+",
+            )
+            .expect("writes");
+            let out = work.join("posted.nc");
+            let c = cut.to_str().expect("utf8");
+            let o = lampost(&[
+                "post",
+                "--machine",
+                "nrc-lc",
+                c,
+                "-o",
+                out.to_str().expect("utf8"),
+            ]);
+            let err = stderr(&o);
+            assert!(
+                !o.status.success()
+                    && err.contains("cut.nc:3: a `%` line with text after it")
+                    && err.contains("where the program ends cannot be told")
+                    && !err.contains("changes the path"),
+                "{err}"
+            );
+            assert!(!out.exists());
         } else {
             assert_eq!(e, vec![[1.0, 0.0, 0.0]], "{name} as fadal");
         }
@@ -2042,6 +2074,19 @@ fn refusals_of_the_sixth_probe_say_what_to_do() {
         let o = post(name, &body, extra);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
     }
+    // A machining program's feed before its M3 (GrblGru's `G1 F200 Z25` start) is
+    // travel, said in a spindle's words (it was "made with the laser off").
+    let o = post(
+        "feed-before-m3.nc",
+        "G20 G90\nG1 Z1. F20.\nT1 M6\nS3000 M3\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F10.\nX1.\nG0 Z1.\nM30\n",
+        &["--tool", "1", "--spindle", "3000"],
+    );
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(":2: a feed made with the spindle stopped") && !err.contains("laser"),
+        "{err}"
+    );
 }
 
 /// Finding 56: a printer's program that gives no G20/G21 (Cura never writes G21) was

@@ -594,6 +594,9 @@ impl<'a> Intended<'a> {
                             "{what}: macros would need evaluating to know the path"
                         )),
                         ErrorKind::NotSimulated(what) if what.contains("after M2") => None,
+                        ErrorKind::NotSimulated(what) if what.starts_with("a `%` line with text after it") => Some(
+                            "a `%` line with text after it (a user's note, `% vfd enable`): a Fanuc, Haas or FADAL control stops reading the program there, other controls read past it, so where the program ends cannot be told; remove the line (or write the note as a comment in parentheses) if the moves after it are meant, or end the program there".to_string(),
+                        ),
                         ErrorKind::MainProgramLoops(control) => Some(format!(
                             "M99 in the main program: a {control} control runs it again without end, and the post writes one pass; end the program with M30"
                         )),
@@ -1140,10 +1143,13 @@ impl Intended<'_> {
         }
         if off && !self.laser_seen.3 {
             self.laser_seen.3 = true;
-            self.notes.push(format!(
-                "{}:{}: a feed made with the laser off (before the program's first M3/M4, or after M5) or at zero power (S0) is posted as travel (laser off), not deposited; so is every such feed",
-                sec.name, m.line
-            ));
+            // Said in the process's own words: a machining program's M3 runs a spindle.
+            let note = if self.posted_spindle.is_some() {
+                "a feed made with the spindle stopped (before the program's first M3/M4, or after M5) or at S0 is posted as travel, not as a cut; so is every such feed"
+            } else {
+                "a feed made with the laser off (before the program's first M3/M4, or after M5) or at zero power (S0) is posted as travel (laser off), not deposited; so is every such feed"
+            };
+            self.notes.push(format!("{}:{}: {note}", sec.name, m.line));
         }
         Ok(off)
     }
@@ -1169,8 +1175,7 @@ impl Intended<'_> {
             // A block naming axes but not Z: a mill program's park (`G53 G0 X0. Y0.`,
             // `G28 G91 Y0.`: the table brought to the operator at the end or at a stop).
             // (A printer's `G28 X0` or Prusa's `G28 W` is its homing, said below.)
-            let park =
-                !self.opts.e_extrusion && m.block_axes != 0 && m.block_axes & (1 << 2) == 0;
+            let park = !self.opts.e_extrusion && m.block_axes != 0 && m.block_axes & (1 << 2) == 0;
             let what = if park {
                 format!(
                     "{what} that parks the table (a CAM program's `G53 G0 X0. Y0.` or `G28 G91 X0. Y0.` at its end or before a stop) cannot be placed on the part, and the post writes no moves in machine coordinates: remove the line (the posted program lifts to the safe height before each stop and at its end, and stays over the part)"
