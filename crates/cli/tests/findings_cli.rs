@@ -2181,7 +2181,17 @@ fn fanuc_s_back_boring_cycle_bores_upward_from_r() {
             stderr(&o)
         );
     }
+    // (Its Q, which no LinuxCNC code of the block reads, is refused first.)
     let o = lampost(&["check", "--flavor", "linuxcnc", p]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(":13:"), "{}", stderr(&o));
+    let no_q = std::fs::read_to_string(&path)
+        .expect("fixture")
+        .replace(" Q0.01", "");
+    let work = tempdir("g87-no-q");
+    let f = work.join("no-q.nc");
+    std::fs::write(&f, no_q).expect("writes");
+    let o = lampost(&["check", "--flavor", "linuxcnc", f.to_str().expect("utf8")]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("above the R plane"), "{}", stderr(&o));
     let work = tempdir("g87");
@@ -2272,4 +2282,53 @@ fn prusa_s_mesh_levelling_and_homing_are_read_as_prusa_s() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains(":12:"), "{}", stderr(&o));
     assert!(!out.exists());
+}
+
+/// Finding 61: under `linuxcnc`, blocks rs274 refuses were read without a word (a Fanuc
+/// post's output read as LinuxCNC's): a Q no code of the block reads (`G84 … Q3.`),
+/// G86 begun without its dwell P, and a motion code beside G28 (`G0 G28 G91 Z0.`,
+/// which Fanuc reads). Each is now refused where rs274 refuses it, at the same line;
+/// the other flavours read them as before.
+#[test]
+fn linuxcnc_refuses_what_rs274_refuses_of_a_block_s_codes() {
+    let work = tempdir("linuxcnc-parity");
+    for (name, line, what) in [
+        (
+            "G98 G84 X25. Y10. Z-16. R4. P0 Q3. F800.",
+            4,
+            "no code of the block reads Q",
+        ),
+        ("G86 X-25. Y10. Z-16. R4. F400.", 4, "dwell time P missing"),
+        (
+            "G0 G28 G91 Z0.",
+            4,
+            "two G-codes in one block that both use the axis words",
+        ),
+    ] {
+        let f = work.join("p.ngc");
+        let text = format!("G21 G90 G17 G94\nS1000 M3\nG0 X0 Y0 Z10\n{name}\nG80\nG90\nM2\n");
+        std::fs::write(&f, &text).expect("writes");
+        let p = f.to_str().expect("utf8");
+        let o = lampost(&["check", "--flavor", "linuxcnc", p]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{name}: {err}");
+        assert!(
+            err.contains(&format!("p.ngc:{line}:")) && err.contains(what),
+            "{name}: {err}"
+        );
+        for flavor in ["fanuc", "haas"] {
+            let o = lampost(&["check", "--flavor", flavor, p]);
+            assert!(o.status.success(), "{name} as {flavor}: {}", stderr(&o));
+        }
+        if require_rs274().is_some() {
+            let (out, _) = rs274_exec(&f, &work);
+            let said = format!(
+                "{}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let after = said.rsplit("executing").next().unwrap_or("");
+            assert!(after.contains(name), "rs274 on {name}: {said}");
+        }
+    }
 }

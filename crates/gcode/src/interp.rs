@@ -1038,6 +1038,68 @@ impl Interpreter {
         );
     }
 
+    /// Under `linuxcnc`, what rs274 refuses of a block's motion code (`c`, ten times the
+    /// number) with the words and codes beside it: a G10, G28, G30, G52 or G92 in the
+    /// block (both would use the axis words: `G0 G28 G91 Z0.`, which Fanuc reads); a Q
+    /// that no code of the block reads (`G84 … Q3.`, a Fanuc post's); G82, G86, G88 or
+    /// G89 begun without its dwell P.
+    fn linuxcnc_motion_words(
+        &self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        gw: &Word<'_>,
+        c: u16,
+    ) -> Res<()> {
+        let refuse = |word: String, why: &'static str, span| {
+            Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::BadValue { word, why },
+                Some(span),
+            ))
+        };
+        if c == 800 {
+            return Ok(());
+        }
+        if let Some(&(g0, _, _)) =
+            w.gs.iter()
+                .find(|g| matches!(g.1, 100 | 280 | 300 | 520 | 920))
+        {
+            return refuse(
+                format!("{} {}", gw.display_code(), g0.display_code()),
+                "two G-codes in one block that both use the axis words (rs274 refuses it); write the motion and the other code on blocks of their own",
+                g0.span,
+            );
+        }
+        // The canned cycles: every motion code but these (see `motion_of_code`).
+        let cycle = !matches!(c, 0 | 10 | 20 | 30 | 330 | 331 | 382..=385 | 800);
+        if let Some(q) = w.word(b'Q') {
+            let q_read = matches!(c, 730 | 830 | 760)
+                || w.gs.iter().any(|g| matches!(g.1, 50 | 100 | 640))
+                || w.ms
+                    .iter()
+                    .any(|&(_, m)| matches!(m, 190 | 660 | 670 | 680));
+            if cycle && !q_read {
+                return refuse(
+                    q.display(),
+                    "no code of the block reads Q (rs274 refuses it: LinuxCNC's cycles take a peck depth Q only in G73 and G83)",
+                    q.span,
+                );
+            }
+        }
+        if matches!(c, 820 | 860 | 880 | 890)
+            && self.modal.motion != Motion::Canned(c)
+            && w.word(b'P').is_none()
+        {
+            return refuse(
+                gw.display_code(),
+                "dwell time P missing (LinuxCNC's G82, G86, G88 and G89 take their dwell in P when they begin; rs274 refuses it)",
+                gw.span,
+            );
+        }
+        Ok(())
+    }
+
     /// In a firmware (slicer) program `G29` is the printer's bed levelling probe
     /// (`G29`, `G29 A X92 Y92 I15 J15`), and `G80` Prusa firmware's mesh bed levelling
     /// (PrusaSlicer's MK2/MK3 start code: `G80`, `G80 X109.7 Y89.7 W30.5 H30.5`, the area
@@ -1802,6 +1864,9 @@ impl Interpreter {
         // Motion mode change: the block's motion code other than G80 (at most one: see
         // `collect`), else its G80.
         if let Some((gw, c)) = w.g_in(GGroup::Motion) {
+            if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+                self.linuxcnc_motion_words(b, w, gw, c)?;
+            }
             self.rigid_tap = c == 331;
             self.modal.motion = self.motion_of_code(c);
             if matches!(c, 330 | 331) {
