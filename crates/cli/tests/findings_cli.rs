@@ -2332,3 +2332,208 @@ fn linuxcnc_refuses_what_rs274_refuses_of_a_block_s_codes() {
         }
     }
 }
+
+/// The length a GRBL laser burns along `text` (laser mode, `$32=1`): feeds (G1, modal)
+/// made with M3 or M4 in force at a power S above 0 (S modal), in G90 or G91; written
+/// here from GRBL's documented rules, apart from lampost's reading.
+fn grbl_burn_length(text: &str) -> f64 {
+    let (mut pos, mut abs, mut feed, mut on, mut s) = ([0.0f64; 3], true, false, false, 0.0);
+    let mut burnt = 0.0;
+    for raw in text.lines() {
+        let line = raw.split(';').next().unwrap_or("").to_ascii_uppercase();
+        let mut words = Vec::new();
+        let b = line.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i].is_ascii_alphabetic() {
+                let mut j = i + 1;
+                while j < b.len() && (b[j].is_ascii_digit() || matches!(b[j], b'.' | b'-' | b'+')) {
+                    j += 1;
+                }
+                if let Ok(v) = line[i + 1..j].parse::<f64>() {
+                    words.push((b[i], v));
+                }
+                i = j;
+            } else {
+                i += 1;
+            }
+        }
+        let mut to = pos;
+        let mut moved = false;
+        for &(l, v) in &words {
+            match (l, v) {
+                (b'G', 0.0) => feed = false,
+                (b'G', 1.0) => feed = true,
+                (b'G', 90.0) => abs = true,
+                (b'G', 91.0) => abs = false,
+                (b'M', 3.0 | 4.0) => on = true,
+                (b'M', 5.0) => on = false,
+                (b'S', v) => s = v,
+                _ => {}
+            }
+        }
+        for &(l, v) in &words {
+            if let Some(k) = b"XYZ".iter().position(|&a| a == l) {
+                to[k] = if abs { v } else { pos[k] + v };
+                moved = true;
+            }
+        }
+        if moved {
+            let d =
+                ((to[0] - pos[0]).powi(2) + (to[1] - pos[1]).powi(2) + (to[2] - pos[2]).powi(2))
+                    .sqrt();
+            if feed && on && s > 0.0 {
+                burnt += d;
+            }
+            pos = to;
+        }
+    }
+    burnt
+}
+
+/// The length a posted program (nrc-lc: ISO words, `M71` laser on, `M72` off, absolute
+/// X, Y, Z) deposits along.
+fn posted_deposit_length(text: &str) -> f64 {
+    let (mut pos, mut on, mut total) = ([0.0f64; 3], false, 0.0);
+    for line in text.lines() {
+        if line.contains('(') {
+            continue;
+        }
+        let mut to = pos;
+        for w in line.split_whitespace() {
+            let (l, v) = w.split_at(1);
+            match (l, v.parse::<f64>()) {
+                ("M", Ok(71.0)) => on = true,
+                ("M", Ok(72.0)) => on = false,
+                ("X", Ok(v)) => to[0] = v,
+                ("Y", Ok(v)) => to[1] = v,
+                ("Z", Ok(v)) => to[2] = v,
+                _ => {}
+            }
+        }
+        let d =
+            ((to[0] - pos[0]).powi(2) + (to[1] - pos[1]).powi(2) + (to[2] - pos[2]).powi(2)).sqrt();
+        if on {
+            total += d;
+        }
+        pos = to;
+    }
+    total
+}
+
+/// Finding 62: a laser program's feeds at `S0` before its first power above S0 were
+/// deposited (LightBurn's image rows and overscans at `S0`, which GRBL burns nothing
+/// along; every recent LightBurn raster starts so): the S0 rule held only after the
+/// program had run at a power. The post now reads ahead for the first power, as it does
+/// for the first M3/M4: a program that runs its laser at a power deposits nothing at S0;
+/// one that never gives S deposits along every feed made with it on, as before. The
+/// oracle is GRBL's laser mode written out in the test: the posted program deposits
+/// exactly the length GRBL burns, on the fixture (5 mm, not 25.2) and on LightBurn
+/// 0.9.09's real image (`lightburn/laser_love-0.9.09.nc`), and verifies.
+#[test]
+fn a_laser_s_feeds_at_s0_before_its_first_power_burn_nothing() {
+    let work = tempdir("s0-before-power");
+    for path in [
+        finding("62-laser-s0-before-first-power.nc"),
+        root().join("fixtures/real-programs/lightburn/laser_love-0.9.09.nc"),
+    ] {
+        let p = path.to_str().expect("utf8");
+        let out = work.join("posted.nc");
+        let o_ = out.to_str().expect("utf8");
+        let o = lampost(&["post", "--machine", "nrc-lc", p, "-o", o_]);
+        assert!(o.status.success(), "{p}: {}", stderr(&o));
+        let input = std::fs::read_to_string(&path).expect("input");
+        let posted = std::fs::read_to_string(&out).expect("posted");
+        let (want, got) = (grbl_burn_length(&input), posted_deposit_length(&posted));
+        assert!(want > 0.0, "{p}");
+        assert!(
+            (want - got).abs() < 1e-6 * want.max(1.0) + 1e-3,
+            "{p}: GRBL burns {want} mm, posted {got} mm"
+        );
+        let o = lampost(&["verify", "--machine", "nrc-lc", p, o_]);
+        assert!(o.status.success(), "{p}: {}", stderr(&o));
+    }
+    // M3 with no S at all: a bare path, deposited along every feed, as before.
+    let bare = work.join("bare.nc");
+    std::fs::write(
+        &bare,
+        "G21 G90\nM3\nG0 X0 Y0\nG1 X10 F3000\nG1 Y10\nM5\nM2\n",
+    )
+    .expect("writes");
+    let out = work.join("bare-posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        bare.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = posted_deposit_length(&std::fs::read_to_string(&out).expect("posted"));
+    assert!((got - 20.0).abs() < 1e-6, "{got}");
+}
+
+/// Finding 63: a slicer's extruder change (`T0` … `T1`: PrusaSlicer's MMU, Cura's dual
+/// extrusion, Orca's and Bambu's filament changes; Marlin, RepRapFirmware and Klipper
+/// change tools on a bare T) was posted as one material, with no word: the interpreter
+/// changed tools only on M6, and T0 counted as no tool. In a printer's program a bare T
+/// now changes the tool, T0 is the first extruder, and a deposit made with another
+/// extruder than the section's first is refused at its line, nothing written. A program
+/// printing with one extruder (T1 alone, travel with any) still posts.
+#[test]
+fn a_slicer_s_extruder_change_is_refused_not_merged() {
+    let path = finding("63-slicer-extruder-change.gcode");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("extruder-change");
+    let out = work.join("posted.nc");
+    let o_ = out.to_str().expect("utf8");
+    let o = lampost(&["post", "--machine", "nrc-lc", p, "-o", o_]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("63-slicer-extruder-change.gcode:16: a deposit made with extruder T1, after deposits made with T0"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    let one = work.join("one.gcode");
+    let text = std::fs::read_to_string(&path)
+        .expect("fixture")
+        .replace("\nT0\n", "\n");
+    let text = text.replace("G1 X10 E1 F1200", "G1 X10 F1200");
+    std::fs::write(&one, text).expect("writes");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        one.to_str().expect("utf8"),
+        "-o",
+        o_,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Finding 64: a greyscale image's powers (LightBurn's `S4` to `S949`) were posted at one
+/// power without a word. The post deposits at the machine's power (`--power`); it now
+/// says so once a section, naming the input's range and the first line that differs.
+#[test]
+fn a_laser_s_varying_power_is_named() {
+    let path = finding("64-laser-greyscale-power.nc");
+    let p = path.to_str().expect("utf8");
+    let work = tempdir("greyscale");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":7: the input's laser power varies (S4 to S949"),
+        "{}",
+        stderr(&o)
+    );
+}

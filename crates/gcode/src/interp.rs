@@ -1694,6 +1694,11 @@ impl Interpreter {
                 ));
             }
             m.selected_tool = t.value as u32;
+            // A printer changes tools (extruders) on a bare T (Marlin's "T0–T7: select
+            // or switch hotend", RepRapFirmware, Klipper): no M6 follows.
+            if self.opts.e_word == EWord::Extrusion {
+                m.tool = m.selected_tool;
+            }
         }
         // M-codes that change state before motion.
         let mut stop_after = false;

@@ -261,8 +261,22 @@ pub struct Intended<'a> {
     /// The laser (spindle) state the section's moves have shown: (section, turned on
     /// by M3/M4, run at a power S above 0, a feed with it off noted).
     laser_seen: (usize, bool, bool, bool),
-    /// What the look at the section's first moves found of its laser ([`laser_ahead`]).
+    /// What the look at the section's first moves found of its laser ([`laser_ahead`]):
+    /// the first move made with it on, and the first made with it on at a power above
+    /// S0.
     laser_ahead: LaserAhead,
+    power_ahead: LaserAhead,
+    /// The input line of the section's first feed made at S0 with the laser on and
+    /// taken for a deposit, no power above S0 having been seen within [`LASER_LOOK`]
+    /// moves (see [`Intended::laser_off_feed`]).
+    dim_deposit: Option<u32>,
+    /// The powers (S above 0) the section's deposits were made at in the input: the
+    /// least, the greatest, and the line of the first whose power differs from the
+    /// first's (a greyscale image's). The post deposits at one power.
+    powers: Option<(f64, f64, Option<u32>)>,
+    /// A printer's program: the extruder (T, T0 among them) its first deposit of the
+    /// section was made with (see [`Intended::one_extruder`]).
+    extruder: Option<u32>,
     /// The input line of the section's first feed deposited with the laser off (in a
     /// program not seen to turn it on within [`LASER_LOOK`] moves).
     dark_deposit: Option<u32>,
@@ -290,22 +304,32 @@ enum LaserAhead {
 }
 
 /// The section's program read ahead, on a reader of its own, until a move is made with
-/// the laser (spindle) on: what the post decides its feeds with the laser off by (a
-/// program that turns it on burns nothing along them; one that never does is a bare
-/// path and deposits along every feed). Reads at most [`LASER_LOOK`] moves; the
-/// program's own errors are left to the post's reading, which meets them first.
-fn laser_ahead(source: &Source, opts: Options) -> Result<LaserAhead, PostError> {
+/// the laser (spindle) on, and until one is made with it on at a power above S0: what
+/// the post decides its feeds with the laser off, and at S0, by. A program that turns it
+/// on burns nothing along its feeds with it off; one that never does is a bare path and
+/// deposits along every feed. A program that runs it at a power burns nothing along its
+/// feeds at S0 (LightBurn's image rows and overscans at `S0` before the first power:
+/// GRBL's laser mode, Marlin's and RepRapFirmware's lasers burn nothing at S0); one that
+/// never gives a power (M3 and no S) deposits along every feed made with it on. Reads at
+/// most [`LASER_LOOK`] moves; the program's own errors are left to the post's reading,
+/// which meets them first.
+fn laser_ahead(source: &Source, opts: Options) -> Result<(LaserAhead, LaserAhead), PostError> {
     let src = ProgramReader::new(source.open()?, Order::Execution);
     let mut moves = 0usize;
+    let mut on = None;
     for ev in Stream::new(src, opts, true) {
         match ev {
             Ok(Event::Move(m)) => {
                 if m.modal.spindle != lampost_gcode::Spindle::Off {
-                    return Ok(LaserAhead::On(m.line));
+                    let first = *on.get_or_insert(m.line);
+                    if m.modal.speed > 0.0 {
+                        return Ok((LaserAhead::On(first), LaserAhead::On(m.line)));
+                    }
                 }
                 moves += 1;
                 if moves >= LASER_LOOK {
-                    return Ok(LaserAhead::NotWithin);
+                    let on = on.map_or(LaserAhead::NotWithin, LaserAhead::On);
+                    return Ok((on, LaserAhead::NotWithin));
                 }
             }
             Ok(Event::Diagnostic(d)) if d.severity == Severity::Error => break,
@@ -313,7 +337,10 @@ fn laser_ahead(source: &Source, opts: Options) -> Result<LaserAhead, PostError> 
             Err(_) => break,
         }
     }
-    Ok(LaserAhead::Never)
+    Ok((
+        on.map_or(LaserAhead::Never, LaserAhead::On),
+        LaserAhead::Never,
+    ))
 }
 
 /// The axes past X, Y, Z (A, B, C, U, V, W), as bits of [`lampost_gcode::AXES`].
@@ -363,6 +390,10 @@ impl<'a> Intended<'a> {
             laser_seen: (usize::MAX, false, false, false),
             laser_ahead: LaserAhead::Never,
             dark_deposit: None,
+            power_ahead: LaserAhead::Never,
+            dim_deposit: None,
+            powers: None,
+            extruder: None,
             frame_at_first: None,
         }
     }
@@ -513,12 +544,14 @@ impl<'a> Intended<'a> {
                     ..Options::default()
                 };
                 // Slicer programs go by E alone (see `laser_off_feed`).
-                self.laser_ahead = if self.opts.e_extrusion {
-                    LaserAhead::Never
+                (self.laser_ahead, self.power_ahead) = if self.opts.e_extrusion {
+                    (LaserAhead::Never, LaserAhead::Never)
                 } else {
                     laser_ahead(&sec.source, opts)?
                 };
                 self.dark_deposit = None;
+                self.dim_deposit = None;
+                self.powers = None;
                 // In execution order, as `trace` reads it: subprogram calls (M98, M97,
                 // LinuxCNC O-word calls) and loops are followed by the one reader, and
                 // the flavour's parameters evaluated by the stream.
@@ -533,6 +566,7 @@ impl<'a> Intended<'a> {
                 if self.tools == Tools::Refuse {
                     self.tool = None;
                 }
+                self.extruder = None;
             }
             // The move a tool change was found at comes again after the change's step.
             if let Some(m) = self.pending.take() {
@@ -549,6 +583,14 @@ impl<'a> Intended<'a> {
                             "{}: {} more warning(s) like that of line {first}",
                             sec.name,
                             n - 1
+                        ));
+                    }
+                    if let Some((lo, hi, Some(line))) = self.powers {
+                        self.notes.push(format!(
+                            "{}:{line}: the input's laser power varies (S{} to S{}: a greyscale image's, or power by speed), and the posted program deposits at one power throughout (the machine's laser_on with --power)",
+                            sec.name,
+                            lampost_gcode::Readable(lo),
+                            lampost_gcode::Readable(hi)
                         ));
                     }
                     if self
@@ -747,6 +789,9 @@ impl<'a> Intended<'a> {
         // A feed deposits exactly when E grows along it (absolute or relative E, the
         // interpreter gives the growth); E-only and F-only blocks are no moves.
         let deposit = is_feed && (!self.opts.e_extrusion || m.extruded.is_some_and(|g| g > 0.0));
+        if deposit && self.opts.e_extrusion {
+            self.one_extruder(&sec.name, m)?;
+        }
         let kind = match m.kind {
             _ if dry => StepKind::Rapid,
             MoveKind::Rapid => StepKind::Rapid,
@@ -846,6 +891,10 @@ impl Intended<'_> {
     /// at the end, are no change of the tool that cuts.
     #[inline]
     fn one_tool(&mut self, file: &str, m: &Move) -> Result<Option<ToolChange>, PostError> {
+        if self.opts.e_extrusion {
+            // A printer's tools are its extruders: held by `one_extruder`.
+            return Ok(None);
+        }
         let now = m.modal.tool;
         match self.tool {
             _ if now == 0 => return Ok(None),
@@ -886,6 +935,32 @@ impl Intended<'_> {
             kind: MoveKind::Rapid,
             ..*m
         })
+    }
+
+    /// A printer's program (E as extrusion) deposits with one extruder a section: its
+    /// tools are its extruders, `T0` the first, changed by a bare `T1` (Marlin,
+    /// RepRapFirmware, Klipper; PrusaSlicer's MMU, Cura's dual extrusion, Orca's and
+    /// Bambu's filament changes write them so). A deposit made with another extruder than
+    /// the section's first deposit is refused at its line: the post deposits one powder
+    /// a program, and two materials would be posted as one. Travel with any extruder is
+    /// no deposit and says nothing; without a process (the work's bounds) changes are
+    /// followed.
+    #[cold]
+    fn one_extruder(&mut self, file: &str, m: &Move) -> Result<(), PostError> {
+        let now = m.modal.tool;
+        match self.extruder {
+            Some(t) if t != now && self.tools != Tools::Follow => Err(PostError::Unsupported {
+                file: file.to_string(),
+                line: m.line,
+                what: format!(
+                    "a deposit made with extruder T{now}, after deposits made with T{t}: the slicer's program prints two materials (or two nozzles), and the post deposits one powder a program; post each extruder's part as a program of its own (slice it with one extruder)"
+                ),
+            }),
+            _ => {
+                self.extruder = Some(now);
+                Ok(())
+            }
+        }
     }
 
     /// See [`Intended::one_tool`]: a move made with another tool than the last.
@@ -1131,15 +1206,39 @@ impl Intended<'_> {
                 ),
             });
         }
+        let powered = on && m.modal.speed > 0.0;
+        if let (true, Some(dim)) = (powered, self.dim_deposit) {
+            return Err(PostError::Unsupported {
+                file: sec.name.clone(),
+                line: m.line,
+                what: format!(
+                    "the laser first runs at a power above S0 here, after more than {LASER_LOOK} moves; the feeds before it made at S0 (from line {dim}) were taken for deposits, as in a program that never gives a power; give the power (S) before the first feed, or leave the S0 feeds out"
+                ),
+            });
+        }
         self.laser_seen.1 |= on;
-        self.laser_seen.2 |= on && m.modal.speed > 0.0;
+        self.laser_seen.2 |= powered;
         let off = if on {
-            self.laser_seen.2 && m.modal.speed == 0.0
+            // At S0 it burns nothing, once the program is seen to run it at a power
+            // (before this move, or ahead of it).
+            (self.laser_seen.2 || matches!(self.power_ahead, LaserAhead::On(_)))
+                && m.modal.speed == 0.0
         } else {
             self.laser_seen.1 || matches!(self.laser_ahead, LaserAhead::On(_))
         };
         if !on && !off && self.laser_ahead == LaserAhead::NotWithin {
             self.dark_deposit.get_or_insert(m.line);
+        }
+        if on && !off && !powered && self.power_ahead == LaserAhead::NotWithin {
+            self.dim_deposit.get_or_insert(m.line);
+        }
+        if powered && self.posted_spindle.is_none() {
+            let s = m.modal.speed;
+            let p = self.powers.get_or_insert((s, s, None));
+            if s != p.0 || s != p.1 {
+                p.2.get_or_insert(m.line);
+            }
+            (p.0, p.1) = (p.0.min(s), p.1.max(s));
         }
         if off && !self.laser_seen.3 {
             self.laser_seen.3 = true;
