@@ -1702,6 +1702,17 @@ fn positioning_feeds_at_a_retract_s_height_are_travel() {
     v.extend([p, out.to_str().expect("utf8")]);
     let o = lampost(&v);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The travel made of the positioning feed, written back as a feed at the safe
+    // height, is caught.
+    let tampered = work.join("tampered.ngc");
+    let back = text.replacen("\nX1.0000 Y1.0000\n", "\nG1 X1.0000 Y1.0000 F650.\n", 1);
+    assert_ne!(back, text, "the positioning travel is where it is expected");
+    std::fs::write(&tampered, back).expect("writes");
+    let mut v = vec!["verify"];
+    v.extend_from_slice(&opts);
+    v.extend([p, tampered.to_str().expect("utf8")]);
+    let o = lampost(&v);
+    assert!(!o.status.success(), "a feed at the safe height passed");
     // A feed that leaves the retract's height (down toward the part) stays refused.
     let text_in = std::fs::read_to_string(&path).expect("fixture");
     let down = work.join("down.nc");
@@ -2453,6 +2464,32 @@ fn a_laser_s_feeds_at_s0_before_its_first_power_burn_nothing() {
         let o = lampost(&["verify", "--machine", "nrc-lc", p, o_]);
         assert!(o.status.success(), "{p}: {}", stderr(&o));
     }
+    // A deposit run stretched over the fixture's S0 row (X5 to X10 at Y0.2) is caught.
+    let path = finding("62-laser-s0-before-first-power.nc");
+    let p = path.to_str().expect("utf8");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    let stretched = text.replacen(" X-5.000\n", " X-10.000\n", 1);
+    assert_ne!(stretched, text, "the deposit run is where it is expected");
+    let tampered = work.join("tampered.nc");
+    std::fs::write(&tampered, stretched).expect("writes");
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        p,
+        tampered.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success(), "a deposit along the S0 row passed");
     // M3 with no S at all: a bare path, deposited along every feed, as before.
     let bare = work.join("bare.nc");
     std::fs::write(
