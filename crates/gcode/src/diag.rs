@@ -431,7 +431,7 @@ impl ErrorKind {
             ErrorKind::PrinterRotaryAxis(_) => "if A and B are the printer's extruders (QIDI, MakerBot), --flavor makerbot reads them as E (one head: a block naming both is refused); otherwise check that the printer was built with that axis",
             ErrorKind::FirmwareSetting(_) => "nothing to do: the printer's setting does not apply to the machine",
             ErrorKind::VendorCommand(_) => "nothing to do: a vendor's line (WEEDO's W221 and W220 carry the preview image) moves nothing",
-            ErrorKind::FirmwareMacro(_) => "remove the printer's start and end code (its homing, purge line and macros) before posting; the slicer's custom G-code settings hold it",
+            ErrorKind::FirmwareMacro(_) => "remove the printer's macros before posting: the slicer's custom G-code settings hold them (the start and end code, with its homing and purge line, and the per-layer code: before and after the layer change, a timelapse frame)",
             ErrorKind::MacroNotEvaluated(_) => "post the program after the macros have been resolved, or check this part by hand",
             ErrorKind::SubprogramNotFollowed(_) => "trace the subprogram on its own",
             ErrorKind::StrayWord { .. } => "remove the word (a typo, most likely), or read the program with --flavor fadal if it was written for a FADAL (L: a subroutine call, E: a fixture offset)",

@@ -175,6 +175,19 @@ fn contains_ci(hay: &str, needle: &str) -> bool {
         .any(|w| w.eq_ignore_ascii_case(needle.as_bytes()))
 }
 
+/// Whether `code` (a line's code, before any comment) reads or sets a parameter as
+/// LinuxCNC writes one: `#` then a digit, `<` or `[` (`#1=5`, `X#<x>`, `#[1+2]`). A
+/// `#` and a blank is a FADAL statement's (`# V1 = 2.`) or a script's note (`# 4mm
+/// square`), no sign of LinuxCNC.
+fn parameter_read(code: &str) -> bool {
+    let b = code.as_bytes();
+    b.iter().enumerate().any(|(i, &c)| {
+        c == b'#'
+            && b.get(i + 1)
+                .is_some_and(|n| n.is_ascii_digit() || matches!(n, b'<' | b'['))
+    })
+}
+
 /// The first word of a line (after an optional block delete and `N` number): its
 /// upper-cased letter and the rest of the line from there.
 fn first_word(line: &str) -> &str {
@@ -481,7 +494,7 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
                 Flavor::Marlin,
                 "a dwell in seconds by S (`G4 S…`: a printer firmware's)",
             ))
-        } else if code.contains('#') || code.contains('[') {
+        } else if parameter_read(code) || code.contains('[') {
             Some((2, Flavor::LinuxCnc, "a parameter or expression"))
         } else if code
             .trim_start()

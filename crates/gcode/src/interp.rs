@@ -270,6 +270,9 @@ pub struct Interpreter {
     warned_normal_centre: bool,
     /// G90 under M83 has been warned about (see [`ErrorKind::EModeAfterG90`]).
     warned_e_mode: bool,
+    /// The warning of a G90 under M83, held until an E word is read by it: an M82 or
+    /// M83 before then says what E is, and drops it.
+    e_mode_doubt: Option<Diagnostic>,
     /// The thread motion in force is LinuxCNC's rigid tap `G33.1` (it returns to its start).
     rigid_tap: bool,
     /// The group-01 motion (G0–G3) in force when a canned cycle began: under Fanuc, Haas
@@ -540,6 +543,7 @@ impl Interpreter {
             warned_integer: false,
             warned_normal_centre: false,
             warned_e_mode: false,
+            e_mode_doubt: None,
             rigid_tap: false,
             motion_before_cycle: Motion::None,
             nurbs: false,
@@ -1730,8 +1734,10 @@ impl Interpreter {
                     m.flood = false;
                 }
                 20 | 300 => stop_after = true,
-                820 => self.e_relative = false,
-                830 => self.e_relative = true,
+                820 | 830 => {
+                    self.e_relative = code == 830;
+                    self.e_mode_doubt = None;
+                }
                 // Haas M97: the reader runs the labelled block to its M99, which then
                 // returns like a subprogram's, once for each of the L runs.
                 970 if self.calls == Calls::Followed => {
@@ -1894,15 +1900,22 @@ impl Interpreter {
                 if w.has_g(920) {
                     // G92 E: the extruder's position is set; nothing moves.
                     self.extrusion = e.value;
-                } else if self.e_relative
-                    || (self.modal.distance == Distance::Incremental
-                        && self.opts.flavor != crate::flavor::Flavor::RepRap)
-                {
-                    self.extrusion += e.value;
-                    self.pending_e = e.value;
                 } else {
-                    self.pending_e = e.value - self.extrusion;
-                    self.extrusion = e.value;
+                    // The first E read after a G90 under M83: the doubt is said now.
+                    if let Some(d) = self.e_mode_doubt.take() {
+                        self.warned_e_mode = true;
+                        out(Event::Diagnostic(d));
+                    }
+                    if self.e_relative
+                        || (self.modal.distance == Distance::Incremental
+                            && self.opts.flavor != crate::flavor::Flavor::RepRap)
+                    {
+                        self.extrusion += e.value;
+                        self.pending_e = e.value;
+                    } else {
+                        self.pending_e = e.value - self.extrusion;
+                        self.extrusion = e.value;
+                    }
                 }
             }
         }
@@ -2122,15 +2135,20 @@ impl Interpreter {
         }
         // G90 while M83 holds: firmwares differ on what E is next. lampost keeps it
         // relative, as Marlin 1, Prusa's firmware and RepRapFirmware do; Marlin 2 makes
-        // it absolute again. Said once, where it happens.
+        // it absolute again. Said once, at the G90, when an E word is read by it (an M82
+        // or M83 first settles it: see `extrude`).
         if let Some((gw, 900)) = w.g_in(GGroup::Distance) {
             if self.e_relative
                 && self.opts.e_word == EWord::Extrusion
                 && self.opts.flavor != crate::flavor::Flavor::RepRap
                 && !self.warned_e_mode
             {
-                self.warned_e_mode = true;
-                self.warn(b, out, ErrorKind::EModeAfterG90, Some(gw.span));
+                self.e_mode_doubt = Some(diag(
+                    b,
+                    Severity::Warning,
+                    ErrorKind::EModeAfterG90,
+                    Some(gw.span),
+                ));
             }
         }
         let m = &mut self.modal;
@@ -2471,8 +2489,10 @@ impl Interpreter {
     fn settings(&mut self, w: &Words<'_, '_>) -> Res<()> {
         for &(_, code) in &w.ms {
             match code {
-                820 => self.e_relative = false,
-                830 => self.e_relative = true,
+                820 | 830 => {
+                    self.e_relative = code == 830;
+                    self.e_mode_doubt = None;
+                }
                 20 | 300 => {
                     self.ended = true;
                     self.open_programs = 0;

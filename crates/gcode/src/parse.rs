@@ -931,8 +931,12 @@ fn words_reference_items<'a>(
         b'#' => {
             let next = bytes.get(i + 1).copied().unwrap_or(b' ');
             // `#1 =`, `#<name> =` and the indirect `#[expr] =` (pcb2gcode's autolevel
-            // stores each probe so); FADAL statements follow `#` with a letter or `:`.
-            block.kind = if next == b'<' || next == b'[' || next.is_ascii_digit() {
+            // stores each probe so); FADAL statements follow `#` with a letter or `:`,
+            // or a blank (`N1 # V1 = V1 + 2.` in the FADAL manual). LinuxCNC reads every
+            // `#` line as a parameter setting, blanks skipped (`# 1 = 5` sets #1), and
+            // refuses one that is none (rs274's "Equal sign missing in parameter
+            // setting").
+            block.kind = if reading.polar || next == b'<' || next == b'[' || next.is_ascii_digit() {
                 BlockKind::Macro(MacroKind::LinuxCncExpression)
             } else {
                 BlockKind::Macro(MacroKind::FadalStatement)

@@ -685,10 +685,15 @@ const FIRMWARE_SETTINGS: &[&str] = &[
 /// hex). A line that starts with a letter other than G, M, T and N, and other than the
 /// words X, Y, Z, E, F, S and P (lampost reads a bare axis line as the motion in force,
 /// and a bare S or P as the value it sets, as laser programs write them), followed by a
-/// number: the end of its text (before any `;` comment).
+/// number, or a line that starts with `#` (a script's `# 4mm square outline`: no
+/// firmware reads parameters): the end of its text (before any `;` comment).
 fn vendor_command(line: &[u8]) -> Option<usize> {
     let start = line.len() - line.trim_ascii_start().len();
     let letter = line.get(start)?.to_ascii_uppercase();
+    let end = line.iter().position(|&c| c == b';').unwrap_or(line.len());
+    if letter == b'#' {
+        return Some(start + line[start..end].trim_ascii_end().len());
+    }
     let number = line
         .get(start + 1)
         .is_some_and(|c| c.is_ascii_digit() || matches!(c, b'-' | b'+' | b'.'));
@@ -701,9 +706,11 @@ fn vendor_command(line: &[u8]) -> Option<usize> {
     {
         return None;
     }
-    let end = line.iter().position(|&c| c == b';').unwrap_or(line.len());
     Some(start + line[start..end].trim_ascii_end().len())
 }
+
+/// The most characters of a firmware's command a message names (60).
+const SHOWN_CHARS: usize = 60;
 
 /// A firmware's extended command (Klipper: `START_PRINT BED=60`, `SET_PRESSURE_ADVANCE
 /// ADVANCE=0.05`, `_ON_LAYER_CHANGE`): a first token of letters, digits and
@@ -733,7 +740,13 @@ fn firmware_command(line: &[u8]) -> Option<(ErrorKind, usize)> {
         .position(|&c| c == b';')
         .map_or(line.len(), |i| start + i);
     let text_end = start + line[start..end].trim_ascii_end().len();
-    let shown = String::from_utf8_lossy(&line[start..text_end]).into_owned();
+    // Named as written, up to 60 characters (an `EXCLUDE_OBJECT_DEFINE` line with its
+    // polygon runs to kilobytes).
+    let text = String::from_utf8_lossy(&line[start..text_end]);
+    let shown = match text.char_indices().nth(SHOWN_CHARS) {
+        Some((cut, _)) => format!("{} …", text[..cut].trim_ascii_end()),
+        None => text.into_owned(),
+    };
     let kind = if FIRMWARE_SETTINGS.contains(&name.as_str()) {
         ErrorKind::FirmwareSetting(shown)
     } else {
@@ -747,6 +760,33 @@ mod tests {
     use super::*;
     use crate::flavor::Flavor;
     use proptest::prelude::*;
+
+    #[test]
+    fn a_firmware_command_is_named_by_its_first_sixty_characters() {
+        let poly = (0..400)
+            .map(|k| format!("[{k}.5,{k}.25]"))
+            .collect::<Vec<_>>();
+        let long = format!(
+            "EXCLUDE_OBJECT_DEFINE NAME=part POLYGON=[{}]",
+            poly.join(",")
+        );
+        let Some((ErrorKind::FirmwareSetting(shown), end)) = firmware_command(long.as_bytes())
+        else {
+            panic!("a setting");
+        };
+        assert_eq!(end, long.len());
+        assert!(
+            shown.ends_with(" …") && shown.chars().count() <= SHOWN_CHARS + 2,
+            "{shown}"
+        );
+        assert!(long.starts_with(shown.trim_end_matches(" …")));
+        let Some((ErrorKind::FirmwareMacro(shown), _)) =
+            firmware_command(b"PRINT_START BED=60 ; x")
+        else {
+            panic!("a macro");
+        };
+        assert_eq!(shown, "PRINT_START BED=60");
+    }
 
     /// Every event of `text` read with the fast lane on or off.
     fn events(text: &str, flavor: Flavor, order: Option<Order>, fast_lane: bool) -> Vec<Event> {

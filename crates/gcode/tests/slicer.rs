@@ -272,6 +272,17 @@ fn e_mode_across_g90_and_g91_follows_the_flavour() {
     assert_eq!(e, [Some(1.0), Some(1.0)], "E stays relative");
     assert_eq!(d.len(), 1, "{d:?}");
     assert_eq!(d[0], (2, ErrorKind::EModeAfterG90));
+    // An M82 or M83 before any E settles what E is: nothing to doubt (PrusaSlicer's
+    // start code writes `G90` then `M83` on the next line).
+    let (e, d) = extruded("M83\nG90\nM83\nG1 X1 E1 F600\nG1 X2 E1\n", slicer());
+    assert_eq!(e, [Some(1.0), Some(1.0)]);
+    assert!(d.is_empty(), "{d:?}");
+    let (e, d) = extruded("M83\nG90\nG1 X1 F600\nM82\nG1 X2 E1\nG1 X3 E3\n", slicer());
+    assert_eq!(e, [Some(0.0), Some(1.0), Some(2.0)]);
+    assert!(d.is_empty(), "{d:?}");
+    // A G92 E does not settle it; the warning still names the G90's line.
+    let (_, d) = extruded("M83\nG90\nG92 E0\nG1 X1 E1 F600\n", slicer());
+    assert_eq!(d, [(2, ErrorKind::EModeAfterG90)]);
     let reprap = Options {
         flavor: lampost_gcode::Flavor::RepRap,
         ..slicer()

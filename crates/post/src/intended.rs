@@ -280,6 +280,9 @@ pub struct Intended<'a> {
     /// The input line of the section's first feed deposited with the laser off (in a
     /// program not seen to turn it on within [`LASER_LOOK`] moves).
     dark_deposit: Option<u32>,
+    /// Where the section's last step ended, when it was a deposit: a feed of no length
+    /// from there continues the run (see [`Intended::move_step`]).
+    deposit_end: Option<[f64; 9]>,
     /// The section's frame on the machine at its first move: the X, Y, Z offsets in
     /// force (G92, G52, a work offset set by G10) and the work offset selected (see
     /// `frame_kept`).
@@ -390,6 +393,7 @@ impl<'a> Intended<'a> {
             laser_seen: (usize::MAX, false, false, false),
             laser_ahead: LaserAhead::Never,
             dark_deposit: None,
+            deposit_end: None,
             power_ahead: LaserAhead::Never,
             dim_deposit: None,
             powers: None,
@@ -550,6 +554,7 @@ impl<'a> Intended<'a> {
                     laser_ahead(&sec.source, opts)?
                 };
                 self.dark_deposit = None;
+                self.deposit_end = None;
                 self.dim_deposit = None;
                 self.powers = None;
                 // In execution order, as `trace` reads it: subprogram calls (M98, M97,
@@ -632,6 +637,23 @@ impl<'a> Intended<'a> {
                         });
                     }
                     let refuse = match &d.kind {
+                        // A deposition program that never turns a laser on with M3/M4
+                        // is a bare path, deposited along every feed; an M-code of the
+                        // machine's own between its feeds may be what switches its
+                        // laser (a DED cell's `M201 (SDC 36.7)`, a printer's laser on
+                        // `M106`), and then its lifts and moves between tracks would be
+                        // deposited too. (Codes before the first feed set the machine
+                        // up: Rotrics' `M2000` header.)
+                        ErrorKind::MCodeLeftOut(code)
+                            if self.posted_spindle.is_none()
+                                && !self.opts.e_extrusion
+                                && self.laser_seen.0 == self.idx
+                                && !matches!(self.laser_ahead, LaserAhead::On(_)) =>
+                        {
+                            Some(format!(
+                                "{code} between the feeds of a program that never turns a laser on with M3/M4: such a program is a bare path, deposited along every feed, and {code} may be the machine's own laser switch (then its lifts and moves between tracks would be deposited too); if it is, write M3 (with S for the power) where it turns the laser on and M5 where it turns it off, then post again; if it is not, remove it (the post leaves it out in any case)"
+                            ))
+                        }
                         ErrorKind::MacroNotEvaluated(what) => Some(format!(
                             "{what}: macros would need evaluating to know the path"
                         )),
@@ -652,7 +674,12 @@ impl<'a> Intended<'a> {
                             "`{word}` has no decimal point, and {control} reads such a number in least increments by default: whether whole units or increments are meant cannot be told, and the post does not guess; write the decimal point (`{word}.`) in every such word"
                         )),
                         ErrorKind::FirmwareMacro(what) => Some(format!(
-                            "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; remove the printer's start and end code from the slicer's custom G-code"
+                            "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; {}",
+                            if self.extruder.is_some() {
+                                "it comes after the first deposit: remove it from the slicer's per-layer custom G-code (before or after the layer change, a timelapse frame), or from the end code if the print is over"
+                            } else {
+                                "remove the printer's start and end code from the slicer's custom G-code"
+                            }
                         )),
                         ErrorKind::LatheProgram(evidence) => Some(format!(
                             "{evidence} makes this a lathe (turning) program; lampost posts mill programs only (a lathe's X is a diameter, its cycles and corner words a lathe's)"
@@ -773,6 +800,14 @@ impl<'a> Intended<'a> {
         // G1 that does not extrude. A program that never turns it on deposits along
         // every feed, as before.
         let dry = dry || self.laser_off_feed(sec, m)?;
+        // A straight feed of no length that continues no deposit (a CAM system's point
+        // repeated after a rapid, a DED program's `G1 Z20` to where the head is) moves
+        // nothing and burns nothing: travel. Posted as a deposit it turned the laser on
+        // and off over one spot.
+        let dry = dry
+            || matches!(m.kind, MoveKind::Linear)
+                && m.start == m.end
+                && self.deposit_end != Some(m.start);
         let is_feed = !matches!(m.kind, MoveKind::Rapid) && !dry;
         // Layers: a feed move ending at a new Z level starts a new layer.
         if is_feed && sec.layers.is_some() {
@@ -863,6 +898,7 @@ impl<'a> Intended<'a> {
         };
         let end_part = frame.apply(&end);
         self.last_end = Some((end, end_part, self.idx, self.layer));
+        self.deposit_end = deposit.then_some(m.end);
         Ok(Step {
             section: self.idx as u32,
             layer: self.layer,
