@@ -2799,3 +2799,92 @@ fn a_feed_of_no_length_after_travel_burns_nothing() {
     let posted = std::fs::read_to_string(&out).expect("posted");
     assert_eq!(posted.matches("M73").count(), 1, "{posted}");
 }
+
+/// Findings 67–70 (the eighth probe's slicer, laser and LinuxCNC programs). 67: Prusa's
+/// XL start code picks its tool with `T0 S1 L0 D0` and parks it with `P0 S1 L2 D0`; the
+/// L was read as a subprogram call in every flavour and the post refused ("inline
+/// them"). A printer's L is now its command's option, and `P0` is named as Prusa's tool
+/// park, whose moves only the firmware knows (refused by the post at its line). 68:
+/// Marlin's inline laser mode `M3 I` / `M5 I` was refused ("the letter I has no number");
+/// it is now read as M3/M5, as Marlin reads it, outside `linuxcnc` (rs274 refuses it).
+/// 69: Bambu's `T1000` (its nozzle coordinate space) was taken for an extruder, and a
+/// one-filament print refused at its first wall as two materials; it is now named at its
+/// line as a coordinate space only the firmware knows. 70: a QtPlasmaC feed read from a
+/// HAL pin (`F#<_hal[plasmac.cut-feed-rate]>`) read 0 and was blamed on FreeCAD's F0; it
+/// is refused at the read, as rs274 refuses it.
+#[test]
+fn codes_of_the_eighth_probe_are_read_as_their_controls_read_them() {
+    let work = tempdir("eighth-probe");
+    let out = work.join("posted.nc");
+    let o_ = out.to_str().expect("utf8");
+    let post = |p: &Path| {
+        lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            p.to_str().expect("utf8"),
+            "-o",
+            o_,
+        ])
+    };
+    // 67: refused at the park alone; without it the tool picks post.
+    let xl = finding("67-prusa-xl-tool-pick.gcode");
+    let o = lampost(&["check", xl.to_str().expect("utf8")]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("subprogram"),
+        "{}",
+        stderr(&o)
+    );
+    let o = post(&xl);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains(":9: `P0 S1 L2 D0`") && err.contains("own macro or command"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    let picks = work.join("xl-picks.gcode");
+    let text = std::fs::read_to_string(&xl).expect("fixture");
+    std::fs::write(&picks, text.replace("P0 S1 L2 D0 ; park the tool\n", "")).expect("writes");
+    let o = post(&picks);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // 68: two burns, at S100 and at S200, as Marlin's laser mode makes them.
+    let inline = finding("68-marlin-inline-laser.gcode");
+    let o = post(&inline);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    assert_eq!(posted.matches("M73").count(), 2, "{posted}");
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "linuxcnc",
+        inline.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success(), "rs274 refuses `M3 I`: {}", stderr(&o));
+    // 69: named at the T1000.
+    std::fs::remove_file(&out).ok();
+    let bambu = finding("69-bambu-t1000-nozzle-space.gcode");
+    let o = post(&bambu);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains(":8: T1000") && err.contains("coordinate space"),
+        "{err}"
+    );
+    assert!(!err.contains("two materials"), "{err}");
+    assert!(!out.exists(), "nothing is written");
+    // 70: refused at the read, as rs274 refuses it.
+    let hal = finding("70-hal-pin-feed.ngc");
+    let o = lampost(&["check", hal.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("70-hal-pin-feed.ngc:2:2") && err.contains("HAL pin"),
+        "{err}"
+    );
+    assert!(!err.contains("FreeCAD"), "{err}");
+    if require_rs274().is_some() {
+        let e = rs274_to_end(&hal, &work).expect_err("rs274 refuses it");
+        assert!(e.contains("not defined"), "{e}");
+    }
+}

@@ -225,7 +225,7 @@ pub enum ErrorKind {
     VendorCommand(String),
     /// In a printer (slicer) program, a firmware's macro or extended command that may
     /// move (Klipper's `START_PRINT`, `PRINT_END`, `SET_GCODE_OFFSET`): not simulated.
-    #[error("{0} is a firmware macro or command (Klipper): its moves, if any, are not known and not simulated")]
+    #[error("{0} is a printer firmware's own macro or command: its moves, if any, are not known and not simulated")]
     FirmwareMacro(String),
     /// A macro line whose value a later stage would need.
     #[error("{0} is not evaluated: macros are kept verbatim, not run (statement lines are reported once)")]

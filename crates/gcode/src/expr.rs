@@ -6,7 +6,7 @@
 //! - Parameters: numbered `#1` … `#5601` (0 until set; `#1`–`#30` are a subroutine's
 //!   arguments, local to each call), named `#<name>` (local to the subroutine or main
 //!   program that sets them; reading one never set is an error), global `#<_name>`;
-//!   `#[expr]` and `##1` name a parameter by number. HAL pins `#<_hal[…]>` read 0; after each
+//!   `#[expr]` and `##1` name a parameter by number. HAL pins `#<_hal[…]>` are refused (only the machine knows them); after each
 //!   block `#5420`–`#5428` hold the position, and after a probing move `#5061`–`#5069` its
 //!   end and `#5070` 0, as LinuxCNC's standalone `rs274` sets them.
 //! - Expressions `[…]`: numbers, parameters, `**`, `*` `/` `MOD`, `+` `-`, `EQ NE GT GE LT
@@ -306,11 +306,12 @@ impl Params {
     }
 
     /// A named parameter (name without `#<>`, any case). A HAL pin (`#<_hal[…]>`) is
-    /// unknown to lampost and reads 0, as in LinuxCNC's standalone interpreter.
+    /// known only on the machine: never set here, as in LinuxCNC's standalone rs274
+    /// ("Named parameter #<_hal[…]> not defined").
     pub fn named(&self, name: &str) -> Option<f64> {
         let name = name.to_ascii_lowercase();
         if name.starts_with("_hal[") {
-            return Some(0.0);
+            return None;
         }
         if name.starts_with('_') {
             // `#<_x>` … `#<_w>`: the position, LinuxCNC's aliases of `#5420`–`#5428`.
@@ -590,10 +591,14 @@ impl<'t, 'p> Eval<'t, 'p> {
         }
         match p {
             Param::Numbered(n) => Ok(self.params.get(*n).unwrap_or(0.0)),
-            Param::Named(name) => self
-                .params
-                .named(name)
-                .ok_or_else(|| (format!("parameter #<{name}> is not set"), s, e)),
+            Param::Named(name) => self.params.named(name).ok_or_else(|| {
+                let what = if name.to_ascii_lowercase().starts_with("_hal[") {
+                    format!("#<{name}> is a HAL pin, whose value only the machine knows (QtPlasmaC reads its cut feed rate from one); LinuxCNC's standalone rs274 refuses it too: write the value in its place")
+                } else {
+                    format!("parameter #<{name}> is not set")
+                };
+                (what, s, e)
+            }),
         }
     }
 

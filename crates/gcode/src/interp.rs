@@ -1697,11 +1697,26 @@ impl Interpreter {
                     Some(t.span),
                 ));
             }
-            m.selected_tool = t.value as u32;
-            // A printer changes tools (extruders) on a bare T (Marlin's "T0–T7: select
-            // or switch hotend", RepRapFirmware, Klipper): no M6 follows.
-            if self.opts.e_word == EWord::Extrusion {
-                m.tool = m.selected_tool;
+            // Bambu's T1000 and T1100 (its start code's "change to nozzle space", and the
+            // lidar's) are coordinate spaces of the firmware, not extruders: the moves
+            // after them are offset as only the firmware knows.
+            if self.opts.e_word == EWord::Extrusion && t.value >= 1000.0 {
+                out(Event::Diagnostic(diag(
+                    b,
+                    Severity::Warning,
+                    ErrorKind::NotSimulated(format!(
+                        "{} (Bambu's nozzle or lidar coordinate space, not an extruder: the moves after it are offset as only the firmware knows)",
+                        t.display()
+                    )),
+                    Some(t.span),
+                )));
+            } else {
+                m.selected_tool = t.value as u32;
+                // A printer changes tools (extruders) on a bare T (Marlin's "T0–T7:
+                // select or switch hotend", RepRapFirmware, Klipper): no M6 follows.
+                if self.opts.e_word == EWord::Extrusion {
+                    m.tool = m.selected_tool;
+                }
             }
         }
         // M-codes that change state before motion.
@@ -1814,11 +1829,11 @@ impl Interpreter {
             }
         }
         // FADAL L words outside canned cycles call subroutines (with M98, L is the
-        // call's repeat count).
-        if let Some(l) = w
-            .word(b'L')
-            .filter(|_| !w.ms.iter().any(|&(_, c)| c == 980 || c == 970))
-        {
+        // call's repeat count). A printer's L is an option of its command (Prusa's
+        // tool pick `T0 S1 L0 D0`: the Z lift).
+        if let Some(l) = w.word(b'L').filter(|_| {
+            !w.ms.iter().any(|&(_, c)| c == 980 || c == 970) && self.opts.e_word != EWord::Extrusion
+        }) {
             let canned_block = w
                 .g_in(GGroup::Motion)
                 .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {

@@ -995,6 +995,8 @@ fn words_reference_items<'a>(
     // The words after a firmware M-code are its own, repeats included (Bambu
     // `M970.3 Q0 A7 B30 C90 Q0 H15 K0`).
     let mut firmware = false;
+    // An M3, M4 or M5 outside LinuxCNC: a bare `I` is Marlin's inline-mode flag.
+    let mut inline_flag = false;
     while i < bytes.len() {
         let c = bytes[i];
         // Fanuc's and Haas's ISO program number `:0097` is the O address (rs274 refuses
@@ -1120,7 +1122,7 @@ fn words_reference_items<'a>(
             b'a'..=b'z' | b'A'..=b'Z' => {
                 let letter = c.to_ascii_uppercase();
                 let start = i;
-                if lenient {
+                if lenient || inline_flag && letter == b'I' {
                     // A G or M letter among a firmware code's words is one of them
                     // (Bambu `M900 K0.02 M0.118825`), not a code of its own.
                     let own = firmware && matches!(letter, b'G' | b'M');
@@ -1270,6 +1272,10 @@ fn words_reference_items<'a>(
                         };
                         firmware |=
                             letter == b'M' && code.is_some_and(|c| !crate::modal::m_known(c));
+                        // Marlin's inline laser mode: `M3 I`, `M4 I`, `M5 I` (a flag
+                        // with no value; rs274 refuses it).
+                        inline_flag |=
+                            letter == b'M' && matches!(code, Some(30 | 40 | 50)) && !reading.polar;
                         if !lenient && matches!(letter, b'T' | b'G' | b'M') {
                             lenient = match (letter, code) {
                                 (b'T', _) => true,

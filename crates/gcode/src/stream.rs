@@ -241,7 +241,13 @@ impl<S: LineSource> Iterator for Stream<S> {
             } else {
                 None
             };
-            if self.fast_lane && line.len <= MAX_LINE_BYTES && vendor.is_none() {
+            // Nor is Prusa's tool park (`P0 S1 L2 D0`), which moves as its firmware knows.
+            let park = if self.reading.slicer {
+                prusa_tool_park(line.bytes)
+            } else {
+                None
+            };
+            if self.fast_lane && line.len <= MAX_LINE_BYTES && vendor.is_none() && park.is_none() {
                 if let Some(p) = plain_motion(line.bytes) {
                     // A whole-number length word under Fanuc or Haas goes the reference
                     // way, which warns of it (`Interpreter::integer_word`).
@@ -327,6 +333,22 @@ impl<S: LineSource> Iterator for Stream<S> {
                             start + code_len,
                         )));
                     }
+                    block = Block::empty(line.number, line.offset);
+                    parsed = Ok(());
+                }
+                if let Some(len) = park {
+                    let start = line.bytes.len() - line.bytes.trim_ascii_start().len();
+                    queue.push_back(Event::Diagnostic(Diagnostic::at(
+                        Severity::Warning,
+                        ErrorKind::FirmwareMacro(
+                            String::from_utf8_lossy(&line.bytes[start..len]).into_owned(),
+                        ),
+                        line.number,
+                        line.offset,
+                        line.bytes,
+                        start,
+                        len,
+                    )));
                     block = Block::empty(line.number, line.offset);
                     parsed = Ok(());
                 }
@@ -707,6 +729,20 @@ fn vendor_command(line: &[u8]) -> Option<usize> {
         return None;
     }
     Some(start + line[start..end].trim_ascii_end().len())
+}
+
+/// Prusa's tool park in a printer program (`P0 S1 L2 D0`, PrusaSlicer's start code for
+/// the XL: Prusa's firmware parks the tool in its dock, lifting by L): `P` and a digit
+/// first on the line. No other firmware reads a P command. The end of its text (before
+/// any `;` comment), at most 60 characters.
+fn prusa_tool_park(line: &[u8]) -> Option<usize> {
+    let start = line.len() - line.trim_ascii_start().len();
+    let rest = &line[start..];
+    if !(matches!(rest.first(), Some(b'P' | b'p')) && rest.get(1).is_some_and(u8::is_ascii_digit)) {
+        return None;
+    }
+    let end = rest.iter().position(|&c| c == b';').unwrap_or(rest.len());
+    Some(start + rest[..end].trim_ascii_end().len().min(SHOWN_CHARS))
 }
 
 /// The most characters of a firmware's command a message names (60).

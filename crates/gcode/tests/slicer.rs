@@ -136,8 +136,13 @@ fn strings_and_bare_tokens_are_kept_verbatim() {
         );
     }
     // Outside those codes a letter without a number is still refused.
-    for line in ["G1 X F100", "M3 X", "G1 \"a\""] {
+    for line in ["G1 X F100", "M3 X", "G1 \"a\"", "G1 I"] {
         assert!(parse_line(line.as_bytes(), 1, 0).is_err(), "{line}");
+    }
+    // Marlin's inline laser mode flag: `M3 I` (finding 68).
+    for line in ["M3 I", "M4 S100 I", "M5 I"] {
+        let b = parse_line(line.as_bytes(), 1, 0).unwrap_or_else(|e| panic!("{line}: {e}"));
+        assert_eq!(texts(&b), ["I"], "{line}");
     }
 }
 

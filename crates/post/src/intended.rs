@@ -674,7 +674,7 @@ impl<'a> Intended<'a> {
                             "`{word}` has no decimal point, and {control} reads such a number in least increments by default: whether whole units or increments are meant cannot be told, and the post does not guess; write the decimal point (`{word}.`) in every such word"
                         )),
                         ErrorKind::FirmwareMacro(what) => Some(format!(
-                            "`{what}` is a printer's macro or command (Klipper): its moves, if any, are not known, so the post cannot place them; {}",
+                            "`{what}` is a printer firmware's own macro or command: its moves, if any, are not known, so the post cannot place them; {}",
                             if self.extruder.is_some() {
                                 "it comes after the first deposit: remove it from the slicer's per-layer custom G-code (before or after the layer change, a timelapse frame), or from the end code if the print is over"
                             } else {
