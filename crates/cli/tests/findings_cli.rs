@@ -2888,3 +2888,61 @@ fn codes_of_the_eighth_probe_are_read_as_their_controls_read_them() {
         assert!(e.contains("not defined"), "{e}");
     }
 }
+
+/// Findings of h47 under `linuxcnc` (what `auto` picks on a `;` comment): a laser-DED
+/// program's `G90 G54 G64 G50 G17 …` was read with no word, and so were G9, G15, G50.1,
+/// G67, G69, G187, G255 and the codes warned as not simulated (G12, G16, G51, G68, G65),
+/// which rs274 refuses ("Unknown g code used", from G100 "G-code out of range"); and
+/// G10 with no L, G52/G92 and G5/G5.1 with no axis word, G96 with no S and `G28 X` (a
+/// letter with no number). Each is now refused at its word. The codes lampost takes are
+/// those rs274 takes, on every G0–G199.9 (G17.1, G18.1 and G19.1, the U/V/W planes,
+/// aside: lampost refuses them), rs274 run on every seventh code and each named here.
+#[test]
+fn linuxcnc_refuses_the_g_codes_it_does_not_have() {
+    let work = tempdir("linuxcnc-g-codes");
+    let prog = work.join("g.ngc");
+    let mut codes: Vec<String> = Vec::new();
+    for n in 0..200 {
+        codes.push(format!("{n}"));
+        if n < 100 {
+            codes.extend((1..10).map(|d| format!("{n}.{d}")));
+        }
+    }
+    let named = [
+        "9", "15", "50", "50.1", "67", "69", "187", "255", "12", "16", "51", "68", "65",
+    ];
+    let rs274 = require_rs274().is_some();
+    for (k, code) in codes.iter().map(String::as_str).chain(named).enumerate() {
+        std::fs::write(&prog, format!("G21 G90 G17\nF100\nG{code}\nM2\n")).expect("writes");
+        let o = lampost(&[
+            "check",
+            "--flavor",
+            "linuxcnc",
+            prog.to_str().expect("utf8"),
+        ]);
+        let unknown = stderr(&o).contains(&format!("unknown G-code G{code}"));
+        assert!(!unknown || !o.status.success(), "G{code}: {}", stderr(&o));
+        let uvw = matches!(code, "17.1" | "18.1" | "19.1");
+        if rs274 && !uvw && (k % 7 == 0 || k >= codes.len()) {
+            let refused = match rs274_to_end(&prog, &work) {
+                Err(e) => e.contains("Unknown g code") || e.contains("out of range"),
+                Ok(_) => false,
+            };
+            assert_eq!(unknown, refused, "G{code}: lampost and rs274 differ");
+        }
+    }
+    for block in ["G10 P1 X0", "G52", "G92", "G5", "G5.1", "G96", "G28 X"] {
+        std::fs::write(&prog, format!("G21 G90 G17\nF100\n{block}\nM2\n")).expect("writes");
+        let o = lampost(&[
+            "check",
+            "--flavor",
+            "linuxcnc",
+            prog.to_str().expect("utf8"),
+        ]);
+        assert!(!o.status.success(), "{block}: {}", stderr(&o));
+        assert!(stderr(&o).contains("g.ngc:3:"), "{block}: {}", stderr(&o));
+        if rs274 {
+            assert!(rs274_to_end(&prog, &work).is_err(), "rs274 refuses {block}");
+        }
+    }
+}

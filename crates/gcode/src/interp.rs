@@ -488,6 +488,53 @@ pub(crate) fn has_integer_word(bytes: &[u8], with_feed: bool) -> bool {
     false
 }
 
+/// Under `linuxcnc`, the words a block's codes need and rs274 refuses the block
+/// without: an axis letter with no number (`G28 X`: "No characters found in reading
+/// real value"), G10 with no L, G52 with no axis word (G92's is said where it is
+/// read), G5 or G5.1 with none
+/// ("All axes missing"), G96 with no S. (`settings`: the block's words are a setting
+/// code's own, bare letters among them.)
+fn linuxcnc_code_words(b: &Block<'_>, w: &Words<'_, '_>, settings: bool) -> Res<()> {
+    if w.bare != 0 && !settings {
+        if let Some(t) = w.first_text {
+            let letter = t.text.chars().next().unwrap_or('?').to_ascii_uppercase();
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::LetterWithoutNumber(letter),
+                Some(t.span),
+            ));
+        }
+    }
+    for &(gw, code, _) in &w.gs {
+        let why = match code {
+            100 if w.word(b'L').is_none() => {
+                "G10 with no L (LinuxCNC's G10 is L1, L10, L11, L2 or L20; rs274 refuses it)"
+            }
+            520 if !w.has_axes() => {
+                "G52 needs at least one axis word (rs274 refuses it: \"All axes missing with g52 or g92\")"
+            }
+            50 | 51 if !w.has_axes() => {
+                "no axis word (rs274 refuses a spline with none: \"All axes missing with motion code\")"
+            }
+            960 if w.word(b'S').is_none() => {
+                "G96 with no S (the surface speed; rs274 refuses it)"
+            }
+            _ => continue,
+        };
+        return Err(diag(
+            b,
+            Severity::Error,
+            ErrorKind::BadValue {
+                word: gw.display_code(),
+                why,
+            },
+            Some(gw.span),
+        ));
+    }
+    Ok(())
+}
+
 fn diag(
     b: &Block<'_>,
     sev: Severity,
@@ -768,6 +815,9 @@ impl Interpreter {
                     Some(t.span),
                 ));
             }
+        }
+        if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+            linuxcnc_code_words(b, &w, settings)?;
         }
         self.block_axes = 0;
         if !settings {
@@ -1340,6 +1390,16 @@ impl Interpreter {
                             Some(word.span),
                         )
                     })?;
+                    if self.opts.flavor == crate::flavor::Flavor::LinuxCnc
+                        && !crate::modal::linuxcnc_knows(code)
+                    {
+                        return Err(diag(
+                            b,
+                            Severity::Error,
+                            ErrorKind::UnknownGCode(code_text(code)),
+                            Some(word.span),
+                        ));
+                    }
                     let group = match g_group(code) {
                         // LinuxCNC's lathe roughing and finishing cycles (elsewhere
                         // G70/G71 are units).

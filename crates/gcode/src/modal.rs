@@ -494,6 +494,21 @@ pub fn m_known(code: u16) -> bool {
     )
 }
 
+/// Whether LinuxCNC (2.9's rs274) has G-code `code` (ten times its number): every other
+/// is "Unknown g code used" there, or "G-code out of range" from G100 on, as a sweep of
+/// G0–G199.9 through rs274 found (`findings_cli::linuxcnc_refuses_the_g_codes_it_does_not_have`).
+pub fn linuxcnc_knows(code: u16) -> bool {
+    matches!(
+        code,
+        0 | 10 | 20 | 30 | 40 | 50 | 51 | 52 | 53 | 70 | 80 | 100 | 170 | 171 | 180 | 181
+            | 190 | 191 | 200 | 210 | 280 | 281 | 300 | 301 | 330 | 331 | 382..=385 | 400
+            | 410 | 411 | 420 | 421 | 430 | 431 | 432 | 490 | 520 | 530 | 540 | 550 | 560
+            | 570 | 580 | 590..=593 | 610 | 611 | 640 | 700 | 710..=712 | 720..=722 | 730
+            | 740 | 760 | 800 | 810 | 820 | 830 | 840 | 850 | 860 | 870 | 880 | 890 | 900
+            | 901 | 910 | 911 | 920..=923 | 930 | 940 | 950 | 960 | 970 | 980 | 990
+    )
+}
+
 /// Format a code given as ten times its number: 311 → "31.1", 10 → "1".
 pub fn code_text(code: u16) -> String {
     if code % 10 == 0 {
