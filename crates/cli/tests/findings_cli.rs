@@ -2946,3 +2946,42 @@ fn linuxcnc_refuses_the_g_codes_it_does_not_have() {
         }
     }
 }
+
+/// h47: a machining program's dwell after M3 (EagleCAD's `stepcraft.ulp` writes `G04
+/// P4000` after `S19500 M03`, the spindle's spin-up) was left out with a laser's reason
+/// ("with the laser on, the head would stand over one spot"). It is now said in a
+/// spindle's words.
+#[test]
+fn a_machining_dwell_is_explained_in_a_spindle_s_words() {
+    let work = tempdir("machining-dwell");
+    let input = work.join("spin-up.nc");
+    std::fs::write(
+        &input,
+        "G21 G90\nG0 X0 Y0 Z5\nS19500 M03\nG04 P4000\nG1 Z-0.5 F100\nG1 X10\nG0 Z5\nM05\nM30\n",
+    )
+    .expect("writes");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--convert-units",
+        "--process",
+        "machine",
+        "--head",
+        "spindle",
+        "--spindle",
+        "19500",
+        input.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(":4: G4 P4000: the dwell is left out")
+            && err.contains("spindle reach its speed"),
+        "{err}"
+    );
+    assert!(!err.contains("laser"), "{err}");
+}

@@ -709,7 +709,15 @@ impl<'a> Intended<'a> {
                         Some(w) => w.2 += 1,
                         None => {
                             self.warned.push((key, d.line, 1));
-                            self.notes.push(format!("{file}:{}: {}", d.line, d.kind));
+                            let said = match &d.kind {
+                                // A machining program's dwell is no laser's: mostly the
+                                // spindle's spin-up after M3 (`G04 P4000`).
+                                ErrorKind::DwellLeftOut(what) if self.posted_spindle.is_some() => format!(
+                                    "{what}: the dwell is left out of the posted program (the post writes no dwells); where it lets the spindle reach its speed after M3 before the first cut, make sure the control waits for the speed"
+                                ),
+                                kind => kind.to_string(),
+                            };
+                            self.notes.push(format!("{file}:{}: {said}", d.line));
                         }
                     }
                     continue;
