@@ -2985,3 +2985,58 @@ fn a_machining_dwell_is_explained_in_a_spindle_s_words() {
     );
     assert!(!err.contains("laser"), "{err}");
 }
+
+/// Finding 71 (h49): a tall part with sloped walls (a 150 mm frustum at 0.5 mm layers)
+/// turns the tool axis a full turn about C each layer; the per-point post kept C
+/// continuous across every laser-off move, so C wound past the ISO word (C-100001.25 at
+/// layer 278) and the post was refused, its help blaming feeds and units. An unlimited
+/// rotary wound past ten turns is now unwound on the next laser-off move, at the safe
+/// height: C stays within ±(3600 + 360)°, and the program verifies (planned here at 4 mm
+/// layers, 37 of them: 13,000° of C unwound).
+#[test]
+fn a_rotary_wound_by_a_tall_part_is_unwound_between_runs() {
+    let work = tempdir("frustum-unwind");
+    let path = work.join("frustum.csv");
+    let stl = finding("71-frustum-150.stl");
+    let o = lampost(&[
+        "plan",
+        "path",
+        stl.to_str().expect("utf8"),
+        "--layer",
+        "4",
+        "--bead",
+        "1",
+        "-o",
+        path.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    let cs: Vec<f64> = posted
+        .lines()
+        .filter_map(|l| l.split_whitespace().find_map(|w| w.strip_prefix('C')))
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    let wound = cs.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    assert!(cs.len() > 1000 && wound <= 3960.0, "C reaches {wound}°");
+    // Unwound at an index (the safe height), never along a run.
+    let unwinds = posted.lines().filter(|l| l.contains("(INDEX)")).count();
+    assert!(unwinds >= 2, "{unwinds} indexes");
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -37,6 +37,25 @@ pub const IN_PLACE_TURN_DEG: f64 = 1.0;
 /// retract, index, approach (see [`post_points`]).
 pub const RELINK_TURN_DEG: f64 = 1.0;
 
+/// An unlimited rotary wound past this many degrees (ten turns) is unwound on the next
+/// laser-off move: chosen again within half a turn of 0, reached by a linking move at the
+/// safe height. A tall part whose walls turn the tool axis a full turn a layer wound C
+/// past the ISO word's ±99,999.999° after some 278 layers (h49's frustum).
+pub const UNWIND_DEG: f64 = 3600.0;
+
+/// `near` with each unlimited rotary wound past [`UNWIND_DEG`] brought within half a
+/// turn of 0 (the same table pose).
+fn unwound(machine: &Machine, near: [f64; 2]) -> [f64; 2] {
+    std::array::from_fn(|i| {
+        let v = near[i];
+        if machine.rotary[i].limits.is_none() && v.abs() > UNWIND_DEG {
+            v - 360.0 * (v / 360.0).round()
+        } else {
+            v
+        }
+    })
+}
+
 /// One point of a path with its own tool axis (part frame once placed).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PathPoint {
@@ -509,6 +528,12 @@ pub fn post_points<W: Write>(
     for q in &placed {
         let line = u32::try_from(q.line).unwrap_or(u32::MAX);
         let near = cur.map_or(cfg.near, |(j, _)| [j[3], j[4]]);
+        // Off the run, a rotary wound far is unwound (a linking move below).
+        let near = if q.deposit {
+            near
+        } else {
+            unwound(machine, near)
+        };
         let (j, branch, flip) = ctx.solve(&q.tip, &q.axis, &near, cur.map(|c| c.1), q.line)?;
         w.check(name, line, &[j[0], j[1], j[2]], &[j[3], j[4]])?;
         if cur.is_none() || flip {
