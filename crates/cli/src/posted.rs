@@ -129,6 +129,12 @@ pub fn locate(posted: &[String], e: PostError) -> PostError {
         let (file, line) = place(posted, as_run(posted, n)?)?;
         (several || line != n).then_some((file, line))
     };
+    // "posted line N" of the joined program, as the piece's own line.
+    let located = |msg: &str| {
+        number_after(msg, "posted line ")
+            .and_then(|(a, b, n)| Some((a, b, from_run(n)?)))
+            .map(|(a, b, (f, line))| format!("{}{line} of {f}{}", &msg[..a], &msg[b..]))
+    };
     match e {
         PostError::Input { file, mut diag } => match from_run(diag.line) {
             Some((f, line)) => {
@@ -137,16 +143,14 @@ pub fn locate(posted: &[String], e: PostError) -> PostError {
             }
             None => PostError::Input { file, diag },
         },
-        PostError::Verify(msg) => {
-            match number_after(&msg, "posted line ")
-                .and_then(|(a, b, n)| Some((a, b, from_run(n)?)))
-            {
-                Some((a, b, (f, line))) => {
-                    PostError::Verify(format!("{}{line} of {f}{}", &msg[..a], &msg[b..]))
-                }
-                None => PostError::Verify(msg),
-            }
-        }
+        PostError::Verify(msg) => match located(&msg) {
+            Some(msg) => PostError::Verify(msg),
+            None => PostError::Verify(msg),
+        },
+        PostError::Collision(msg) => match located(&msg) {
+            Some(msg) => PostError::Collision(msg),
+            None => PostError::Collision(msg),
+        },
         // A call the reader could not follow: read again to the problem, and show it
         // as any error of the posted program is shown.
         PostError::Io(msg) => match call_problem(posted) {

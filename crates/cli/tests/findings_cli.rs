@@ -3040,3 +3040,34 @@ fn a_rotary_wound_by_a_tall_part_is_unwound_between_runs() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Finding 72 (h49): `post --part` found a real collision (the approach onto a run under
+/// a ring comes down through it) and reported it as a failed self-verification, whose
+/// help says "this is a lampost fault, or INPUT and POSTED do not belong together". A
+/// collision with the part is now an error of its own, with what to do.
+#[test]
+fn a_collision_with_the_part_is_no_lampost_fault() {
+    let work = tempdir("part-collision");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        finding("72-under-ring.ngc").to_str().expect("utf8"),
+        "--part",
+        finding("72-ring.stl").to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("the posted path meets the part: ") && err.contains("72-under-ring.ngc:5:"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("lampost fault") && err.contains("stands in the way"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+}

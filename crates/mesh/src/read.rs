@@ -37,7 +37,7 @@ impl Format {
         if bytes.starts_with(b"PK\x03\x04") {
             return Format::ThreeMf;
         }
-        let head = &bytes[..bytes.len().min(4096)];
+        let head = text_start(&bytes[..bytes.len().min(4096)]);
         let first = head
             .split(|&b| b == b'\n')
             .map(trim_ascii)
@@ -105,6 +105,35 @@ fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
         .map(|(i, l)| (i + 1, l))
 }
 
+/// An OBJ file's lines, a line ending in `\\` joined to the next (the format's line
+/// continuation: Rhino writes long faces so), each with the number of its first line.
+fn obj_lines(bytes: &[u8]) -> impl Iterator<Item = (usize, std::borrow::Cow<'_, [u8]>)> {
+    let mut phys = lines(bytes).peekable();
+    std::iter::from_fn(move || {
+        let (ln, first) = phys.next()?;
+        let continued = |l: &[u8]| l.trim_ascii_end().ends_with(b"\\");
+        if !continued(first) {
+            return Some((ln, std::borrow::Cow::Borrowed(first)));
+        }
+        let mut joined = Vec::new();
+        let mut line = first;
+        loop {
+            let body = line.trim_ascii_end();
+            if !continued(line) {
+                joined.extend_from_slice(line);
+                break;
+            }
+            joined.extend_from_slice(&body[..body.len() - 1]);
+            joined.push(b' ');
+            match phys.next() {
+                Some((_, next)) => line = next,
+                None => break,
+            }
+        }
+        Some((ln, std::borrow::Cow::Owned(joined)))
+    })
+}
+
 /// Whitespace-separated tokens of a line with their 1-based byte columns.
 fn tokens(line: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
     let mut i = 0;
@@ -170,12 +199,22 @@ pub fn read_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
         let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
         count > 0 && (bytes.len() - 84) % 50 == 0 && (bytes.len() - 84) / 50 == count
     };
-    let starts_solid = bytes.len() >= 5 && bytes[..5].eq_ignore_ascii_case(b"solid");
+    // A text editor's byte-order mark, blank lines or spaces may come first.
+    let text = text_start(bytes);
+    let starts_solid = text.len() >= 5 && text[..5].eq_ignore_ascii_case(b"solid");
     if starts_solid && !binary_size_fits {
         read_ascii_stl(bytes)
     } else {
         read_binary_stl(bytes)
     }
+}
+
+/// `bytes` after a UTF-8 byte-order mark and leading white space.
+fn text_start(bytes: &[u8]) -> &[u8] {
+    bytes
+        .strip_prefix(b"\xEF\xBB\xBF")
+        .unwrap_or(bytes)
+        .trim_ascii_start()
 }
 
 fn read_binary_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
@@ -190,7 +229,9 @@ fn read_binary_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]);
     let body = bytes.len() - 84;
     let fits = body / 50;
-    if count as usize != fits || body % 50 != 0 {
+    // A count of 0 over whole triangles is an exporter's that never filled it in.
+    let unfilled = count == 0 && fits > 0;
+    if (count as usize != fits && !unfilled) || body % 50 != 0 {
         let over = body % 50;
         return Err(MeshError::Count {
             count,
@@ -246,12 +287,16 @@ fn read_ascii_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let mut corners: Vec<P3> = Vec::new();
     let mut in_loop = 0usize;
     let mut loop_start = (0usize, 0usize);
+    // Between an `outer loop` and its `endloop`.
+    let mut inside = false;
     for (ln, line) in lines(bytes) {
         let mut toks = tokens(line);
         let Some((col, word)) = toks.next() else {
             continue;
         };
-        match word {
+        // Keywords in any case, as exporters write them (`VERTEX`, `Facet`).
+        let word = word.to_ascii_lowercase();
+        match word.as_slice() {
             b"vertex" => {
                 let x = coord(toks.next(), ln, line.len() + 1, "vertex")?;
                 let y = coord(toks.next(), ln, line.len() + 1, "vertex")?;
@@ -268,6 +313,7 @@ fn read_ascii_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
             }
             b"outer" => {
                 in_loop = 0;
+                inside = true;
                 loop_start = (ln, col);
             }
             b"endloop" => {
@@ -282,6 +328,19 @@ fn read_ascii_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
                     });
                 }
                 in_loop = 0;
+                inside = false;
+            }
+            // Inside a facet's loop only vertices stand: another line there would drop
+            // the facet without a word.
+            _ if inside => {
+                return Err(MeshError::Syntax {
+                    at: Pos::Line { line: ln, col },
+                    text: text(line),
+                    why: format!(
+                        "a facet's loop (from line {}) holds only `vertex x y z` lines",
+                        loop_start.0
+                    ),
+                });
             }
             _ => {}
         }
@@ -310,7 +369,8 @@ struct FaceRef {
 pub fn read_obj(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let mut vertices: Vec<P3> = Vec::new();
     let mut faces: Vec<[FaceRef; 3]> = Vec::new();
-    for (ln, line) in lines(bytes) {
+    for (ln, line) in obj_lines(bytes) {
+        let line: &[u8] = &line;
         let body = match line.iter().position(|&b| b == b'#') {
             Some(h) => &line[..h],
             None => line,

@@ -350,3 +350,59 @@ fn bvh_ray_closest_and_signed_distance_on_a_sphere() {
     assert!(ob.signed_distance(c).is_err());
     assert!(bvh.closest(P3::new(f64::NAN, 0.0, 0.0)).is_err());
 }
+
+/// h49's readers findings: ASCII STL keywords in capitals (a facet silently dropped, an
+/// all-capitals file "a sketch"), an ASCII STL after a byte-order mark, blank lines or
+/// spaces (read as a damaged binary), a binary STL whose count an exporter left 0, and an
+/// OBJ face continued over lines with `\` (Rhino's) were refused or misread; trimesh
+/// reads each. They now read as the plain cube; another line inside a facet's loop is
+/// refused at that line, not at its `endloop`.
+#[test]
+fn stl_and_obj_as_exporters_write_them() {
+    let m = cube();
+    let ascii = write_ascii_stl(&m, "c");
+    let want = read_stl(ascii.as_bytes()).expect("ascii");
+    let upper = ascii.to_ascii_uppercase();
+    let mut one_upper = ascii.replacen("vertex", "VERTEX", 1);
+    one_upper = one_upper.replacen("endloop", "EndLoop", 1);
+    for (name, text) in [
+        ("upper", upper),
+        ("one facet upper", one_upper),
+        ("bom", format!("\u{feff}{ascii}")),
+        ("blank lines", format!("\n\r\n{ascii}")),
+        ("spaces", format!("   {ascii}")),
+    ] {
+        assert_eq!(Format::sniff(text.as_bytes()), Format::Stl, "{name}");
+        let got = read(text.as_bytes(), Format::Stl).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(got, want, "{name}");
+    }
+    let mut zero = binary_stl(&m);
+    zero[80..84].copy_from_slice(&0u32.to_le_bytes());
+    assert_eq!(read_stl(&zero).expect("count left 0"), want);
+    let typo = ascii.replacen("vertex", "vertx", 1);
+    let e = read_stl(typo.as_bytes()).expect_err("vertx");
+    assert!(
+        e.to_string().contains("holds only `vertex x y z` lines"),
+        "{e}"
+    );
+    let line = typo
+        .lines()
+        .position(|l| l.contains("vertx"))
+        .expect("typo")
+        + 1;
+    assert_eq!(
+        e.at(),
+        Some(Pos::Line {
+            line,
+            col: 1 + typo
+                .lines()
+                .nth(line - 1)
+                .map_or(0, |l| l.len() - l.trim_start().len())
+        })
+    );
+    let obj = "v 0 0 0\nv 2 0 0\nv 2 3 0\nv 0 3 0\nv 0 0 4\nv 2 0 4\nv 2 3 4\nv 0 3 4\n\
+               f 1 4 3 \\\n  2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 \\\r\n 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    let o = read_obj(obj.as_bytes()).expect("continued faces");
+    assert_eq!(o.triangles.len(), 12);
+    assert!(manifold_report(&o).closed_oriented());
+}

@@ -114,6 +114,10 @@ pub enum PostError {
     /// Reading or writing failed.
     #[error("{0}")]
     Io(String),
+    /// The posted path meets the part given as a mesh (`--part`): a rapid's tool tip, or
+    /// the head, runs into it. A real collision, not a fault of the post's.
+    #[error("the posted path meets the part: {0}")]
+    Collision(String),
     /// The posted program does not follow the intended path.
     #[error("verification failed: {0}")]
     Verify(String),
@@ -137,6 +141,7 @@ impl PostError {
             PostError::File { .. } => "fix the file; see docs/post.md for its keys",
             PostError::Empty(_) => "give a program with moves",
             PostError::Io(_) => "check the paths and free space",
+            PostError::Collision(_) => "the part (--part) stands in the way of the move named: move the part or the run's start (--origin, the setup), choose another index, or raise the safe height (clearance_z, safe_margin in the machine file); nothing was written",
             PostError::Verify(_) => "this is a lampost fault, or INPUT and POSTED do not belong together (verify takes the placement and the process options the program was posted with: --process, --power, --spindle, --coolant, --tool, --work-offset, --length-offset); nothing was written",
             PostError::Options(_) => "see `lampost post --help`",
         }

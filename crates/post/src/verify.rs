@@ -1803,7 +1803,7 @@ impl<'m> Safety<'m> {
             if let Some(what) =
                 crate::safety::rapid_meets_part(self.m, self.head, part, xs, rs, xe, re, lifting)?
             {
-                return Err(Self::fail(line, what));
+                return Err(PostError::Collision(format!("posted line {line}: {what}")));
             }
         }
         if vertical {

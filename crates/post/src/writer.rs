@@ -397,7 +397,7 @@ impl<'m, W: Write> Writer<'m, W> {
             if let Some(what) =
                 crate::safety::rapid_meets_part(self.m, self.head, part, &p, &old, &p, &rot, false)?
             {
-                return Err(PostError::Verify(format!("{file}:{line}: {what}")));
+                return Err(PostError::Collision(format!("{file}:{line}: {what}")));
             }
         }
         self.rot = Some(rot);
@@ -809,7 +809,7 @@ impl<'m, W: Write> Writer<'m, W> {
                 &rot,
                 lifting,
             )? {
-                return Err(PostError::Verify(format!("{file}:{line}: {what}")));
+                return Err(PostError::Collision(format!("{file}:{line}: {what}")));
             }
         }
         Ok(())
