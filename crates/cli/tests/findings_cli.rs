@@ -3071,3 +3071,20 @@ fn a_collision_with_the_part_is_no_lampost_fault() {
     );
     assert!(!out.exists(), "nothing is written");
 }
+
+/// h47: `check` after a refused feed (`F0` then `G1 X10`) read the next arc from where
+/// the refused move began, and reported the arc's radii as differing ("check the arc's
+/// end point and I/J/K"), though the arc is right from X10: 4 of the 14 errors on
+/// QtPlasmaC's `metric_wrench.ngc`. A refused feed now ends where it was programmed to,
+/// as a refused arc already did.
+#[test]
+fn a_refused_feed_does_not_make_the_next_arc_wrong() {
+    let work = tempdir("refused-feed");
+    let p = work.join("f0.ngc");
+    std::fs::write(&p, "G21 G90\nG0 X0 Y0\nF0\nG1 X10\nG3 X10 Y20 I0 J10\nM2\n").expect("writes");
+    let o = lampost(&["check", p.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("f0.ngc:4:"), "{err}");
+    assert!(!err.contains("radius at the start"), "{err}");
+}

@@ -2848,7 +2848,16 @@ impl Interpreter {
                     self.centre_words_unused(b, w, out)?;
                     self.endstop_move(b, w, out);
                 }
-                let feed = self.feed_for(b, w, out)?;
+                let feed = match self.feed_for(b, w, out) {
+                    Ok(feed) => feed,
+                    Err(e) => {
+                        // As a refused arc: the next block is read from where this one
+                        // was programmed to end (an arc after a refused F0 feed was
+                        // blamed for a start it did not have).
+                        self.pos = target;
+                        return Err(e);
+                    }
+                };
                 self.emit_comp(b, MoveKind::Linear, target, feed, origin, out)
             }
             Motion::ArcCw | Motion::ArcCcw => {
