@@ -421,13 +421,33 @@ pub fn slice(a: &SliceArgs) -> Result<(), CliError> {
         write_out(None, t.as_bytes())?;
     }
     if open > 0 {
-        return Err(CliError::failed(format!(
-            "error: {}: {open} chains could not be closed into loops (see the warnings above){}\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
-            a.file,
-            if a.output.is_some() { "; nothing written" } else { "" }
-        )));
+        return Err(open_chains(&a.file, open, &report, a.output.is_some()));
     }
     Ok(())
+}
+
+/// The error for slices whose chains did not close into loops. On a closed mesh with
+/// flipped faces (edges joining faces wound against each other) the flipped faces are
+/// named: a wider stitch would join a chain to its own flipped twin, a loop of no area
+/// deposited with the axis reversed (h49's cube with one face flipped).
+pub(crate) fn open_chains(
+    file: &str,
+    open: usize,
+    report: &lampost_mesh::ManifoldReport,
+    nothing_written: bool,
+) -> CliError {
+    let help = if report.inconsistent_edges > 0 && report.boundary_edges == 0 {
+        format!(
+            "{} edges join faces wound against each other (flipped faces): orient the mesh's faces consistently (MeshLab's Re-Orient, Blender's Recalculate Outside, trimesh's fix_normals) and slice again; a wider --stitch would join each chain to its flipped twin",
+            report.inconsistent_edges
+        )
+    } else {
+        "repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch".to_string()
+    };
+    CliError::failed(format!(
+        "error: {file}: {open} chains could not be closed into loops (see the warnings above){}\n  = help: {help}\n",
+        if nothing_written { "; nothing written" } else { "" }
+    ))
 }
 
 fn slicing_json(path: &str, s: &Slicing, report: &lampost_mesh::ManifoldReport) -> Obj {

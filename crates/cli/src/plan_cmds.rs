@@ -175,12 +175,14 @@ pub fn path(a: &PathArgs) -> Result<(), CliError> {
             )));
         }
     }
-    let (mesh, s, _, open) = sliced(&a.slice)?;
+    let (mesh, s, manifold, open) = sliced(&a.slice)?;
     if open > 0 {
-        return Err(CliError::failed(format!(
-            "error: {}: {open} chains could not be closed into loops (see the warnings above); nothing written\n  = help: repair the mesh (`lampost mesh info` names its bad edges) or widen --stitch\n",
-            a.slice.file
-        )));
+        return Err(crate::mesh_cmds::open_chains(
+            &a.slice.file,
+            open,
+            &manifold,
+            true,
+        ));
     }
     let opts = PlanOptions {
         perimeter: lampost_plan::PerimeterOptions {

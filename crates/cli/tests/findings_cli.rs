@@ -3088,3 +3088,26 @@ fn a_refused_feed_does_not_make_the_next_arc_wrong() {
     assert!(err.contains("f0.ngc:4:"), "{err}");
     assert!(!err.contains("radius at the start"), "{err}");
 }
+
+/// Finding 73 (h49): a closed cube with one face wound inwards (flipped normals) made
+/// slicing refuse with "repair the mesh … or widen --stitch"; a wider stitch then planned
+/// a loop of no area along the flipped face, deposited with the tool axis down. The help
+/// now names the flipped faces and says why a stitch is no cure.
+#[test]
+fn flipped_faces_are_named_not_stitched() {
+    let mesh = finding("73-cube-one-face-flipped.obj");
+    let m = mesh.to_str().expect("utf8");
+    for args in [
+        vec!["plan", "slice", m, "--layer", "2"],
+        vec!["plan", "path", m, "--layer", "2", "--check-only"],
+    ] {
+        let o = lampost(&args);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?}: {err}");
+        assert!(
+            err.contains("4 edges join faces wound against each other (flipped faces)")
+                && !err.contains("or widen --stitch"),
+            "{args:?}: {err}"
+        );
+    }
+}
