@@ -15,6 +15,8 @@ pub enum MeshUnits {
     Mm,
     /// Inches.
     In,
+    /// Metres (Blender's, a robot's CAD).
+    M,
 }
 
 impl MeshUnits {
@@ -22,6 +24,7 @@ impl MeshUnits {
         match self {
             MeshUnits::Mm => Units::Mm,
             MeshUnits::In => Units::In,
+            MeshUnits::M => Units::M,
         }
     }
 }
@@ -160,6 +163,13 @@ pub fn info(path: &str, units: Option<MeshUnits>, json_out: bool) -> Result<(), 
             lo.abs().max().max(hi.abs().max())
         )));
     }
+    // A part under 1 mm across, read in mm: likely a file in metres.
+    if u == Units::Mm && (hi - lo).max() < 1.0 {
+        eprintln!(
+            "note: {path}: the part is {:.6} mm across at most: a file in metres (Blender's, a robot's CAD) is read with --units m",
+            (hi - lo).max()
+        );
+    }
     let listed: Vec<_> = report.bad_edges.iter().take(MAX_EDGES_LISTED).collect();
     if json_out {
         let edges: Vec<Obj> = listed
@@ -290,6 +300,7 @@ pub(crate) fn plan_error(path: &str, e: &PlanError) -> CliError {
         PlanError::Direction { .. } => "give a non-zero direction, e.g. --build-dir 0,0,1",
         PlanError::Layer { what, .. } if *what == "layer height" => "give a positive layer height (mm), e.g. --layer 0.5",
         PlanError::Layer { .. } => "give a positive number (see `lampost plan path --help`)",
+        PlanError::LayerTooLarge { extent, .. } if *extent < 1.0 => "the layer must be smaller than the part's height along the build direction; a part under 1 mm may be in metres (Blender's, a robot's CAD): read it with --units m",
         PlanError::LayerTooLarge { .. } => "the layer must be smaller than the part's height along the build direction",
         PlanError::Fan(_) => "put the fan's axis along an edge of the part, with the part on the side build-dir × axis",
         _ => "repair the mesh",

@@ -453,6 +453,7 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
     let (mesh, unit) = match a.units {
         crate::mesh_cmds::MeshUnits::Mm => (mesh, "mm"),
         crate::mesh_cmds::MeshUnits::In => (mesh.scaled(1.0 / 25.4), "in"),
+        crate::mesh_cmds::MeshUnits::M => (mesh.scaled(1.0 / 1000.0), "m"),
     };
     let (lo, hi) = lampost_mesh::props::bounds(&mesh).unwrap_or_default();
     write_out(

@@ -87,7 +87,7 @@ pub struct Placement {
     #[arg(long)]
     pub part: Option<String>,
     /// Units of the --part mesh (default: the machine's).
-    #[arg(long, value_parser = ["inch", "mm"])]
+    #[arg(long, value_parser = ["inch", "mm", "m"])]
     pub part_units: Option<String>,
 }
 
@@ -102,6 +102,7 @@ fn part_mesh(
     let given = match pl.part_units.as_deref() {
         Some("mm") => Some(crate::mesh_cmds::MeshUnits::Mm),
         Some("inch") => Some(crate::mesh_cmds::MeshUnits::In),
+        Some("m") => Some(crate::mesh_cmds::MeshUnits::M),
         _ => None,
     };
     let want = crate::mesh_cmds::machine_units(m.units);

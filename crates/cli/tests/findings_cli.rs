@@ -3111,3 +3111,35 @@ fn flipped_faces_are_named_not_stitched() {
         );
     }
 }
+
+/// Finding 74 (h49): a mesh in metres (Blender's, a robot's CAD: trimesh's
+/// `ADIS16480.STL`) got no word of its units: `mesh info` printed a volume of 0.000004,
+/// and slicing told the user to make the layer smaller. `--units m` now reads it (also
+/// `post --part-units m`), `mesh info` notes a part under 1 mm across, and the slicing
+/// error's help names `--units m`.
+#[test]
+fn a_mesh_in_metres_is_named_and_read() {
+    let mesh = finding("74-box-in-metres.stl");
+    let m = mesh.to_str().expect("utf8");
+    let o = lampost(&["mesh", "info", m]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--units m"), "{}", stderr(&o));
+    let o = lampost(&["plan", "slice", m, "--layer", "0.5"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("read it with --units m"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&["mesh", "info", m, "--units", "m"]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("bounds -10.000000 -10.000000 0.000000 .. 10.000000 10.000000 10.000000"),
+        "{out}"
+    );
+    assert!(!stderr(&o).contains("--units m"), "{}", stderr(&o));
+    let o = lampost(&["plan", "slice", m, "--layer", "0.5", "--units", "m"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("layers 20"));
+}

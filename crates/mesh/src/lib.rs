@@ -60,6 +60,8 @@ pub enum Units {
     Mm,
     /// Inches.
     In,
+    /// Metres (Blender's, a robot's CAD).
+    M,
 }
 
 impl Units {
@@ -68,14 +70,16 @@ impl Units {
         match self {
             Units::Mm => 1.0,
             Units::In => 25.4,
+            Units::M => 1000.0,
         }
     }
 
-    /// `mm` or `in`.
+    /// `mm`, `in` or `m`.
     pub fn name(self) -> &'static str {
         match self {
             Units::Mm => "mm",
             Units::In => "in",
+            Units::M => "m",
         }
     }
 }
