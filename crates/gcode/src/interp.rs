@@ -488,6 +488,25 @@ pub(crate) fn has_integer_word(bytes: &[u8], with_feed: bool) -> bool {
     false
 }
 
+/// A position a block's words reach that is beyond any number (an incremental move added
+/// to one near the largest `f64`, `G91 G0 Z1.7e308` twice in a slicer's reading, which
+/// takes exponents): refused at the block's first axis word.
+fn beyond_any_number(b: &Block<'_>, w: &Words<'_, '_>, p: &Position) -> Res<()> {
+    if p.iter().all(|v| v.is_finite()) {
+        return Ok(());
+    }
+    let word = AXES.iter().find_map(|&l| w.word(l));
+    Err(diag(
+        b,
+        Severity::Error,
+        ErrorKind::BadValue {
+            word: word.map_or_else(String::new, |w| w.display()),
+            why: "the position it reaches is beyond any number",
+        },
+        word.map(|w| w.span),
+    ))
+}
+
 /// Under `linuxcnc`, the words a block's codes need and rs274 refuses the block
 /// without: an axis letter with no number (`G28 X`: "No characters found in reading
 /// real value"), G10 with no L, G52 with no axis word (G92's is said where it is
@@ -968,6 +987,10 @@ impl Interpreter {
         }
         let axes = p.axes();
         let target = self.target_of(|a| (axes & (1 << a) != 0).then_some(p.axis(a)), false);
+        if !target.iter().all(|v| v.is_finite()) {
+            // The reference path refuses it (`beyond_any_number`).
+            return None;
+        }
         let (kind, feed) = match motion {
             Motion::Rapid => (MoveKind::Rapid, 0.0),
             Motion::Linear => (MoveKind::Linear, modal_feed),
@@ -2032,7 +2055,7 @@ impl Interpreter {
                 }
                 280 | 300 | 1610 | 1620 => {
                     axes_used = true;
-                    self.home(b, w, c, out);
+                    self.home(b, w, c, out)?;
                 }
                 281 => self.home28 = self.pos,
                 301 => self.home30 = self.pos,
@@ -2472,7 +2495,13 @@ impl Interpreter {
         Ok(())
     }
 
-    fn home(&mut self, b: &Block<'_>, w: &Words<'_, '_>, code: u16, out: &mut impl FnMut(Event)) {
+    fn home(
+        &mut self,
+        b: &Block<'_>,
+        w: &Words<'_, '_>,
+        code: u16,
+        out: &mut impl FnMut(Event),
+    ) -> Res<()> {
         let home = if code == 300 {
             self.home30
         } else {
@@ -2509,6 +2538,7 @@ impl Interpreter {
                 None => {}
             }
         }
+        beyond_any_number(b, w, &inter)?;
         let mut mv = |s: Position, e: Position, this: &mut Self| {
             out(Event::Move(Move {
                 kind: MoveKind::Rapid,
@@ -2532,6 +2562,7 @@ impl Interpreter {
         }
         mv(inter, target, self);
         self.pos = target;
+        Ok(())
     }
 
     fn extrusion_now(&self) -> Option<f64> {
@@ -2745,6 +2776,7 @@ impl Interpreter {
                 [target[0], target[1]] = self.machine_xy(end);
             }
         }
+        beyond_any_number(b, w, &target)?;
         let origin = if g53 {
             Origin::MachineCoords
         } else {

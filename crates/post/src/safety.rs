@@ -111,14 +111,16 @@ impl WorkBounds {
             .chain(self.points.iter().copied())
     }
 
-    /// Every feed tip of `sections`' intended path (one pass over the input).
+    /// Every feed tip of `sections`' intended path (one pass over the input), read as
+    /// the post reads it for `process`.
     pub fn of_program(
         machine: &Machine,
         sections: &[Section],
         opts: IntendedOptions,
+        process: &crate::post::Process,
     ) -> Result<WorkBounds, PostError> {
         let mut b = WorkBounds::empty();
-        for s in Intended::new(machine, sections, opts) {
+        for s in Intended::new(machine, sections, opts).holding_spindle(process) {
             b.add_step(&s?);
         }
         Ok(b)

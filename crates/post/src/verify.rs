@@ -379,7 +379,7 @@ pub fn verify_traced<R: BufRead>(
     check_tolerance(tolerance)?;
     // The work the rapids must clear: the input's feed tips (a pass of its own) and the
     // part or stock given.
-    let mut bounds = WorkBounds::of_program(machine, sections, opts)?;
+    let mut bounds = WorkBounds::of_program(machine, sections, opts, process)?;
     if let Some(w) = work {
         bounds.union(w);
     }
