@@ -3143,3 +3143,140 @@ fn a_mesh_in_metres_is_named_and_read() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("layers 20"));
 }
+
+/// Finding 75 (h49): a UV sphere whose pole quads have coincident corners (as exporters
+/// write them; trimesh's `capsule.obj`) was "open", its volume withheld, and slicing
+/// warned of "0 boundary, 0 non-manifold, 0 inconsistent edges". Triangles with a
+/// repeated vertex bound nothing: the sphere is closed, and its volume is the
+/// divergence-theorem sum written out here over the file's faces.
+#[test]
+fn collapsed_pole_quads_leave_a_sphere_closed() {
+    let path = finding("75-uvsphere-pole-quads.obj");
+    let text = std::fs::read_to_string(&path).expect("fixture");
+    let mut v: Vec<[f64; 3]> = Vec::new();
+    let mut six_v = 0.0;
+    for l in text.lines() {
+        let w: Vec<&str> = l.split_whitespace().collect();
+        match w.first() {
+            Some(&"v") => v.push([1, 2, 3].map(|k| w[k].parse::<f64>().expect("number"))),
+            Some(&"f") => {
+                let ix: Vec<usize> = w[1..]
+                    .iter()
+                    .map(|t| {
+                        t.split('/')
+                            .next()
+                            .expect("index")
+                            .parse::<usize>()
+                            .expect("index")
+                            - 1
+                    })
+                    .collect();
+                for k in 1..ix.len() - 1 {
+                    let (a, b, c) = (v[ix[0]], v[ix[k]], v[ix[k + 1]]);
+                    six_v += a[0] * (b[1] * c[2] - b[2] * c[1])
+                        - a[1] * (b[0] * c[2] - b[2] * c[0])
+                        + a[2] * (b[0] * c[1] - b[1] * c[0]);
+                }
+            }
+            _ => {}
+        }
+    }
+    let want = six_v / 6.0;
+    let o = lampost(&["mesh", "info", "--json", path.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["closed"], true, "{doc}");
+    assert!(doc["degenerate_triangles"].as_u64() > Some(0), "{doc}");
+    let got = doc["volume"].as_f64().expect("a volume");
+    assert!(
+        (got - want).abs() < 1e-9 * want.abs(),
+        "{got} against {want}"
+    );
+    let o = lampost(&[
+        "plan",
+        "slice",
+        path.to_str().expect("utf8"),
+        "--layer",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("not a closed"), "{}", stderr(&o));
+}
+
+/// The session's fuzz findings. A machining program with no M3 and a machine's own
+/// M-code between its feeds posted, and `verify` then refused it: verify's pass over the
+/// input for the work's bounds read it as a deposition program (finding 65's refusal),
+/// not for the process posted. And a position or arc centre beyond any number (a
+/// slicer's reading takes exponents: `G91 G0 Z1.7e308` twice, G28's intermediate point,
+/// `R1.7e308`) was traced as `inf`/`NaN`; each is now refused at its word.
+#[test]
+fn fuzz_findings_of_the_eighth_probe_session() {
+    let work = tempdir("fuzz-findings-8");
+    let input = work.join("no-m3.nc");
+    std::fs::write(
+        &input,
+        "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nM71\nG1 X10\nG0 Z5\nM30\n",
+    )
+    .expect("writes");
+    let out = work.join("posted.nc");
+    let args = |cmd: &str| -> Vec<String> {
+        let mut a: Vec<String> = [
+            cmd,
+            "--machine",
+            "fadal-lamp",
+            "--convert-units",
+            "--process",
+            "machine",
+            "--head",
+            "spindle",
+            "--tool",
+            "1",
+            "--spindle",
+            "3000",
+        ]
+        .map(String::from)
+        .to_vec();
+        a.push(input.to_str().expect("utf8").into());
+        a
+    };
+    let mut post = args("post");
+    post.extend(["-o".into(), out.to_str().expect("utf8").into()]);
+    let o = lampost(&post.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut verify = args("verify");
+    verify.push(out.to_str().expect("utf8").into());
+    let o = lampost(&verify.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let big = "1.7976931348623157e308";
+    for (name, body, at) in [
+        (
+            "g91",
+            format!("G21 G90\nG0 X1 Y1 Z{big}\nG91 G0 Z{big}\nM30\n"),
+            ":3:",
+        ),
+        (
+            "g28",
+            format!("G21 G90\nG0 X1 Y1 Z{big}\nG28 G91 Z{big}\nM30\n"),
+            ":3:",
+        ),
+        (
+            "r",
+            format!("G21 G90\nG0 X1 Y1\nG1 X0 F100\nG3 X2 Y3 R{big}\nM30\n"),
+            ":4:",
+        ),
+    ] {
+        let p = work.join(format!("{name}.gcode"));
+        std::fs::write(&p, body).expect("writes");
+        let o = lampost(&["trace", "--flavor", "marlin", p.to_str().expect("utf8")]);
+        let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+        assert!(!o.status.success(), "{name}: {all}");
+        assert!(
+            all.contains(at) && all.contains("beyond any number"),
+            "{name}: {all}"
+        );
+        assert!(
+            !all.contains("inf") && !all.contains("NaN"),
+            "{name}: {all}"
+        );
+    }
+}

@@ -3683,7 +3683,20 @@ impl Interpreter {
                 // Left normal of the chord; a short CCW arc has its centre on the left.
                 let (lu, lv) = (-dv / d, du / d);
                 let side = if cw == (r < 0.0) { 1.0 } else { -1.0 };
-                (su + du / 2.0 + side * h * lu, sv + dv / 2.0 + side * h * lv)
+                let c = (su + du / 2.0 + side * h * lu, sv + dv / 2.0 + side * h * lv);
+                if !(c.0.is_finite() && c.1.is_finite()) {
+                    // R near the largest number: its square, and the centre, are beyond.
+                    return Err(diag(
+                        b,
+                        Severity::Error,
+                        ErrorKind::BadValue {
+                            word: rw.display(),
+                            why: "the arc's centre at this radius is beyond any number",
+                        },
+                        Some(rw.span),
+                    ));
+                }
+                c
             }
         };
         let feed = self.feed_for(b, w, out)?;

@@ -52,14 +52,18 @@ pub struct ManifoldReport {
     pub inconsistent_edges: usize,
     /// Triangles with a repeated vertex.
     pub degenerate_triangles: usize,
+    /// Triangles without one (those the edges are counted over).
+    pub faces: usize,
     /// Every bad edge, in vertex order.
     pub bad_edges: Vec<BadEdge>,
 }
 
 impl ManifoldReport {
-    /// True for a closed 2-manifold (orientation aside).
+    /// True for a closed 2-manifold (orientation aside). Triangles with a repeated
+    /// vertex bound nothing and are left out (a UV sphere's collapsed pole quads, as
+    /// exporters write them: the surface is closed without them, as trimesh finds).
     pub fn closed(&self) -> bool {
-        self.boundary_edges == 0 && self.non_manifold_edges == 0 && self.degenerate_triangles == 0
+        self.faces > 0 && self.boundary_edges == 0 && self.non_manifold_edges == 0
     }
 
     /// True for a closed 2-manifold whose triangles agree on their orientation.
@@ -93,6 +97,7 @@ pub fn manifold_report(mesh: &crate::Mesh) -> ManifoldReport {
     let (edges, degenerate) = sorted_edges(&mesh.triangles);
     let mut r = ManifoldReport {
         degenerate_triangles: degenerate,
+        faces: mesh.triangles.len() - degenerate,
         ..ManifoldReport::default()
     };
     let mut i = 0;

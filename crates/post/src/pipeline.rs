@@ -336,7 +336,8 @@ mod tests {
             };
             let mut spec = Vec::new();
             let r = post(&m, &secs, &cfg, &mut spec, |_| {}).expect("posts");
-            let mut all = WorkBounds::of_program(&m, &secs, cfg.intended, &cfg.process).expect("bounds");
+            let mut all =
+                WorkBounds::of_program(&m, &secs, cfg.intended, &cfg.process).expect("bounds");
             all.union(&extra);
             let truth = SafeHeights::new(&m, cfg.head, all).expect("heights");
             let guess = SafeHeights::new(&m, cfg.head, extra.clone()).expect("heights");
