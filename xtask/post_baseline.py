@@ -6,7 +6,8 @@ the table; tilted, the arc is no longer in the machine's XY plane, so it is writ
 chords to the same tolerance `lampost post` uses (0.01 mm). Travel is rebuilt as the post
 rebuilds it, so the output keeps the same safety rules: off the end of a run straight up to
 the safe height (the cell's 150 mm clearance, above this program's work), across there,
-straight down to 2.5 mm above the next start, and in at the feed; a lift and M2 at the end.
+straight down to 2.5 mm above the next start, and in at the feed (a straight feed of no
+length after travel is travel); a lift and M2 at the end.
 The cell's process codes frame each run as the post frames it: laser on at 1000 W and
 powder on (M71 S1000, M73) once the head is down, both off (M72, M74) before the lift, so
 `lampost verify` can hold the output to the same process rules. (It keeps no limits and
@@ -77,6 +78,10 @@ def main():
                 if in_run:
                     out.write(OFF + "G0 Z%.3f\n" % SAFE)
                     in_run = False
+                continue
+            if not in_run and motion == 1 and np.array_equal(pos, start):
+                # A straight feed of no length after travel moves nothing and burns
+                # nothing: travel, as the post reads it.
                 continue
             if not in_run:
                 # Over the start at the safe height, down to just above it, in at the feed.
