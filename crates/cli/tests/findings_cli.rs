@@ -3280,3 +3280,36 @@ fn fuzz_findings_of_the_eighth_probe_session() {
         );
     }
 }
+
+/// Finding 76 (h48): a Slic3r program for a food printer drives its extruder as the U axis
+/// (`G92 U0`, `G1 X30 Y10 U2.0014`); `check` said nothing and the post refused with "no
+/// move extrudes" without naming U. A printer's U or V word is now warned of as A, B and
+/// C are (finding 34), and the refusal's help names an extruder driven as an axis.
+#[test]
+fn a_printer_s_u_axis_extruder_is_named() {
+    let path = finding("76-slic3r-u-axis-extruder.gcode");
+    let p = path.to_str().expect("utf8");
+    let o = lampost(&["check", p]);
+    assert!(
+        stderr(&o).contains(":7:12") && stderr(&o).contains("a paste or food printer with U"),
+        "{}",
+        stderr(&o)
+    );
+    let work = tempdir("u-axis-extruder");
+    let out = work.join("posted.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("U or V words on the printing moves"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}

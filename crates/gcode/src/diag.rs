@@ -211,7 +211,7 @@ pub enum ErrorKind {
     CannedCyclePassedThrough(String),
     /// In a printer (slicer) program, an A, B or C word: an axis most printers do not
     /// have; QIDI's and MakerBot's firmware drive an extruder with it (reported once).
-    #[error("{0} in a printer's program: most printers have no such axis, and QIDI's and MakerBot's firmware drive an extruder with A and B; traced as a rotary axis (reported once)")]
+    #[error("{0} in a printer's program: most printers have no such axis, and some drive an extruder with it (QIDI's and MakerBot's firmware with A and B, a paste or food printer with U); traced as an axis, not extrusion (reported once)")]
     PrinterRotaryAxis(String),
     /// In a printer (slicer) program, a firmware's extended command that is a setting
     /// and moves nothing (Klipper's `SET_PRESSURE_ADVANCE ADVANCE=0.05`,
@@ -456,7 +456,7 @@ impl ErrorKind {
             ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
             ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
             ErrorKind::ForeignLanguage(f) => f.hint,
-            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin, reprap or makerbot) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values",
+            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin, reprap or makerbot) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values; an extruder driven as an axis (U or V words on the printing moves, a paste or food printer's; A or B: --flavor makerbot) is not E: write those words as E",
         }
     }
 }

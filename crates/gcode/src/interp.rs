@@ -966,9 +966,9 @@ impl Interpreter {
             None => self.modal.motion,
         };
         let modal_feed = p.feed().unwrap_or(self.modal.feed);
-        // The program's first line (a `%` after it ends the program) and a printer's A, B
-        // or C word not yet warned of take the reference path.
-        if !self.started || self.watch_printer_axes && p.axes() & 0b11_1000 != 0 {
+        // The program's first line (a `%` after it ends the program) and a printer's A, B,
+        // C, U or V word not yet warned of take the reference path.
+        if !self.started || self.watch_printer_axes && p.axes() & 0b1111_1000 != 0 {
             return None;
         }
         let runs_plainly = !self.ended
@@ -2154,7 +2154,10 @@ impl Interpreter {
         // nothing: `G1 E.8 F2400` (unretract) and `G1 F1200` set E and F only.
         let explicit_motion = explicit_motion && self.opts.e_word != EWord::Extrusion;
         if self.watch_printer_axes && !axes_used {
-            if let Some(word) = [b'A', b'B', b'C'].iter().find_map(|&l| w.word(l)) {
+            if let Some(word) = [b'A', b'B', b'C', b'U', b'V']
+                .iter()
+                .find_map(|&l| w.word(l))
+            {
                 self.watch_printer_axes = false;
                 self.warn(
                     b,
