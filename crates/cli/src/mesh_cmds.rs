@@ -191,6 +191,7 @@ pub fn info(path: &str, units: Option<MeshUnits>, json_out: bool) -> Result<(), 
                 "closed": report.closed(), "oriented": report.closed_oriented(),
                 "boundary_edges": report.boundary_edges, "non_manifold_edges": report.non_manifold_edges,
                 "inconsistent_edges": report.inconsistent_edges, "degenerate_triangles": report.degenerate_triangles,
+                "twin_faces": report.twin_faces,
                 "bad_edges": edges, "bad_edges_not_listed": report.bad_edges.len() - listed.len(),
             },
         );
@@ -212,6 +213,12 @@ pub fn info(path: &str, units: Option<MeshUnits>, json_out: bool) -> Result<(), 
         if report.closed_oriented() { "closed and oriented" } else if report.closed() { "closed, orientation inconsistent" } else { "open" },
         report.boundary_edges, report.non_manifold_edges, report.inconsistent_edges, report.degenerate_triangles
     ));
+    if report.twin_faces > 0 {
+        s.push_str(&format!(
+            "twin faces {} (each the reverse of another: a double-sided export, whose sides cancel in every slice)\n",
+            report.twin_faces
+        ));
+    }
     for e in &listed {
         let (a, b) = (mesh.vertices[e.a as usize], mesh.vertices[e.b as usize]);
         s.push_str(&format!(
@@ -389,7 +396,28 @@ pub(crate) fn sliced(
             );
         }
     }
+    let loops: usize = s.slices.iter().map(|sl| sl.loops.len()).sum();
+    if loops == 0 && open == 0 {
+        return Err(no_loop(&a.file, &report));
+    }
     Ok((mesh, s, report, open))
+}
+
+/// The error for slices that hold no loop and no open chain: the planes miss the part,
+/// or every face has its reverse twin (a double-sided export: the two sides of each
+/// slice cancel).
+fn no_loop(file: &str, report: &lampost_mesh::ManifoldReport) -> CliError {
+    let help = if report.twin_faces > 0 {
+        format!(
+            "{} of the {} faces come twice, once each way round (a double-sided export): export the part single-sided (or remove each face's reversed twin) and slice again",
+            report.twin_faces, report.faces
+        )
+    } else {
+        "the planes miss the part: check --layer, --first, --build-dir or the fan (`lampost mesh info` gives the part's bounds)".to_string()
+    };
+    CliError::failed(format!(
+        "error: {file}: the slices hold no loop; nothing written\n  = help: {help}\n"
+    ))
 }
 
 pub fn slice(a: &SliceArgs) -> Result<(), CliError> {

@@ -363,7 +363,12 @@ pub fn section_flavor(
 /// feed move (or the first move) of the first such section. The programs are read as the
 /// post reads them, up to the first extruding move (the start of a slicer program); a
 /// program that fails to read, or has no moves, is left to the post to report.
-fn refuse_dry(secs: &[Section], opts: &IntendedOptions, given: bool) -> Result<(), CliError> {
+fn refuse_dry(
+    secs: &[Section],
+    opts: &IntendedOptions,
+    given: bool,
+    flavor: &lampost_gcode::Resolved,
+) -> Result<(), CliError> {
     use lampost_gcode::{
         Diagnostic, EWord, ErrorKind, Event, LineReader, MoveKind, Options, Order, ProgramReader,
         Severity, Stream, Units,
@@ -414,9 +419,15 @@ fn refuse_dry(secs: &[Section], opts: &IntendedOptions, given: bool) -> Result<(
     while let Ok(Some(l)) = lines.next_line() {
         if l.number == line {
             let why = if given {
-                "--e-extrusion"
+                "--e-extrusion".to_string()
+            } else if flavor.auto {
+                format!(
+                    "implied by the printer flavour {}, which --flavor auto chose from {}; give --flavor for the control the program was written for when it is not a printer's",
+                    flavor.flavor.name(),
+                    flavor.reason
+                )
             } else {
-                "implied by the slicer flavour"
+                format!("implied by --flavor {}", flavor.flavor.name())
             };
             let d = Diagnostic::at(
                 Severity::Error,
@@ -433,12 +444,19 @@ fn refuse_dry(secs: &[Section], opts: &IntendedOptions, given: bool) -> Result<(
     Ok(())
 }
 
-/// How the sections' programs are read.
-fn intended_options(pl: &Placement, secs: &[Section]) -> Result<IntendedOptions, CliError> {
+/// How the sections' programs are read. A slicer flavour implies E as extrusion for
+/// deposition only: a machining job cuts along its feeds, E or none (a program `auto`
+/// took for a printer's on one `G4 S1` lost every cut as travel).
+fn intended_options(
+    pl: &Placement,
+    secs: &[Section],
+    process: &lampost_post::Process,
+) -> Result<IntendedOptions, CliError> {
     let flavor = section_flavor(pl, secs)?.flavor;
+    let deposit = matches!(process, lampost_post::Process::Deposit { .. });
     Ok(IntendedOptions {
         convert_units: pl.convert_units,
-        e_extrusion: pl.e_extrusion || flavor.is_slicer(),
+        e_extrusion: pl.e_extrusion || (deposit && flavor.is_slicer()),
         flavor,
         units: pl.units.map(gcode_units),
     })
@@ -699,6 +717,7 @@ fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
 pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostConfig, CliError> {
     let part = part_mesh(&a.place, m)?;
     let process = a.proc.to_process()?;
+    let intended = intended_options(&a.place, sections, &process)?;
     // The library's defaults (head, dialect, tolerances), then what the flags say.
     let defaults = PostConfig::new(m, process.clone());
     let head = match a.head.as_deref() {
@@ -772,7 +791,7 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
         dialect,
         renumber,
         tolerance,
-        intended: intended_options(&a.place, sections)?,
+        intended,
         near,
         program_number: a.program_number,
         header,
@@ -883,7 +902,12 @@ pub fn post(
     } else {
         let secs = sections(&m, &a.place, input.as_ref())?;
         let cfg = config(&m, a, &secs)?;
-        refuse_dry(&secs, &cfg.intended, a.place.e_extrusion)?;
+        refuse_dry(
+            &secs,
+            &cfg.intended,
+            a.place.e_extrusion,
+            &section_flavor(&a.place, &secs)?,
+        )?;
         let bar = crate::progress::Progress::counting("posting", "moves", a.place.quiet);
         // The post verifies every written feed point in-process (FK of the values as
         // written) and every rapid against the safe height; nothing reaches the user's
@@ -1180,7 +1204,7 @@ pub fn verify(
         )
     } else {
         let secs = sections(&m, place, input.as_ref())?;
-        let opts = intended_options(place, &secs)?;
+        let opts = intended_options(place, &secs, &process)?;
         let work = extra_work(place, part.as_deref())?;
         lampost_post::verify_traced(
             &m,

@@ -3313,3 +3313,375 @@ fn a_printer_s_u_axis_extruder_is_named() {
     );
     assert!(!out.exists());
 }
+
+/// Finding 77: a double-sided export (every face of the block also there wound the other
+/// way) sliced to no loop at all, and `plan slice` wrote an empty file with exit 0. The
+/// twins are counted by `mesh info`, and slicing is refused, naming them.
+#[test]
+fn a_double_sided_mesh_is_named_and_not_sliced_to_nothing() {
+    let path = finding("77-block-double-sided.stl");
+    let p = path.to_str().expect("utf8");
+    let o = lampost(&["mesh", "info", "--json", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["triangles"], 24, "{doc}");
+    assert_eq!(doc["twin_faces"], 24, "{doc}");
+    let text = String::from_utf8_lossy(&lampost(&["mesh", "info", p]).stdout).into_owned();
+    assert!(text.contains("twin faces 24"), "{text}");
+    // The block itself has none.
+    let block = root().join("fixtures/meshes/block.stl");
+    let o = lampost(&["mesh", "info", "--json", block.to_str().expect("utf8")]);
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["twin_faces"], 0, "{doc}");
+    let dir = tempdir("finding-77");
+    for cmd in ["slice", "path"] {
+        let out = dir.join(format!("{cmd}.csv"));
+        let o = lampost(&[
+            "plan",
+            cmd,
+            p,
+            "--layer",
+            "10",
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("the slices hold no loop; nothing written")
+                && e.contains("24 of the 24 faces come twice")
+                && e.contains("single-sided"),
+            "{cmd}: {e}"
+        );
+        assert!(!out.exists(), "{cmd} wrote {}", out.display());
+    }
+    // Planes that miss a part say so.
+    let o = lampost(&[
+        "plan",
+        "slice",
+        block.to_str().expect("utf8"),
+        "--layer",
+        "10",
+        "--first",
+        "80",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the planes miss the part"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Finding 78: `OFF8 6 12`, the vertex count written against the keyword (as ModelNet's
+/// files have it), was refused as not starting with `OFF`. It is the cube it says.
+#[test]
+fn an_off_count_against_its_keyword_is_read() {
+    let path = finding("78-off-count-after-keyword.off");
+    let o = lampost(&["mesh", "info", "--json", path.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(doc["triangles"], 12, "{doc}");
+    assert_eq!(doc["vertices"], 8, "{doc}");
+    assert_eq!(doc["closed"], true, "{doc}");
+    assert!(
+        (doc["volume"].as_f64().expect("volume") - 1.0).abs() < 1e-12,
+        "{doc}"
+    );
+    // A keyword with letters after it is still not OFF.
+    let dir = tempdir("finding-78");
+    let bad = dir.join("bad.off");
+    std::fs::write(&bad, "OFFX 8 6 12\n").expect("write");
+    let o = lampost(&["mesh", "info", bad.to_str().expect("utf8")]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("an OFF file starts with `OFF`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Finding 79 (h50): one `G4 S1` makes `auto` read a program as Marlin's, which implies
+/// E as extrusion. A program with no E was refused as "no move extrudes" even when
+/// machined, and the help said to leave out an option the user never gave. Machining now
+/// cuts along the feeds (E has no say there); deposition still refuses, naming the
+/// flavour `auto` chose and why, and what to give instead.
+#[test]
+fn a_printer_flavour_chosen_by_a_dwell_implies_no_extrusion_for_machining() {
+    let path = finding("79-g4-s-program-without-e.nc");
+    let p = path.to_str().expect("utf8");
+    let dir = tempdir("finding-79");
+    let out = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        "--process",
+        "machine",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let nc = std::fs::read_to_string(&out).expect("posted");
+    // The cut along X (the table's X is the part's -X on nrc-lc at B0 C0) is there.
+    assert!(nc.contains("Z-1.000") && nc.contains("X-10.000"), "{nc}");
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        "--process",
+        "machine",
+        p,
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(&out).expect("rm");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("implied by the printer flavour marlin, which --flavor auto chose from")
+            && e.contains("G4 S1")
+            && e.contains("give --flavor for the control"),
+        "{e}"
+    );
+    assert!(!e.contains("post without --e-extrusion"), "{e}");
+    assert!(!out.exists());
+}
+
+/// Finding 80 (h50): a laser program burning at S500 throughout (LaserBurn's) was posted
+/// at `--power` 1000 without a word, where a machining program's other spindle speed is
+/// warned of. It is said once a section, at the first deposit.
+#[test]
+fn a_laser_program_s_one_power_is_said_when_the_post_s_differs() {
+    let path = finding("80-laser-at-s500.nc");
+    let p = path.to_str().expect("utf8");
+    let dir = tempdir("finding-80");
+    let out = dir.join("out.nc");
+    let post = |power: &str| {
+        lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--power",
+            power,
+            p,
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+    };
+    let o = post("1000");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "80-laser-at-s500.nc:4: the input deposits at S500; the posted program deposits at power 1000 (--power"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    let o = post("500");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        !stderr(&o).contains("the input deposits at"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Finding 81: a program written for absolute arc centres with no G90.1 was refused arc
+/// by arc as "zero radius" or "radii differ", with no word of why. Where the centre words
+/// read as the centre's position make a good arc, the error says so and names G90.1;
+/// with G90.1 the program traces as rs274 does.
+#[test]
+fn arc_centres_written_absolute_are_named() {
+    let path = finding("81-absolute-arc-centres.nc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert_eq!(
+        e.matches(
+            "read as the centre's position (absolute, G90.1) they give an arc of radius 10.000000"
+        )
+        .count(),
+        4,
+        "{e}"
+    );
+    assert!(e.contains("put G90.1 before its first arc"), "{e}");
+    let dir = tempdir("finding-81");
+    let fixed = dir.join("g90-1.ngc");
+    let text = std::fs::read_to_string(&path).expect("fixture");
+    std::fs::write(&fixed, text.replacen("G21 G90", "G21 G90 G90.1", 1)).expect("write");
+    let o = lampost(&["check", fixed.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    if require_rs274().is_some() {
+        equal_to_rs274(&fixed, &dir, &["linuxcnc", "fadal"]);
+    }
+    // An arc whose end is off its circle names the limits it is held to, in any flavour.
+    let off = dir.join("off.gcode");
+    std::fs::write(
+        &off,
+        "G21 G90\nG0 X0 Y0 Z10\nG2 X15 Y20 I30 J40 Z20 F8000\n",
+    )
+    .expect("w");
+    let o = lampost(&["check", "--flavor", "marlin", off.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains("the limits LinuxCNC holds arcs to, and lampost every program"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Finding 82 (h51): under a printer's flavour a `G2 I5 J0 E3` (no X, Y or Z: a full
+/// circle, in Marlin's, Klipper's and RepRapFirmware's arc code) was read as moving
+/// nothing, like an unretract's `G1 E.8`: the circle was not deposited, its E went to the
+/// next move, and verify passed. It is a full circle, deposited.
+#[test]
+fn a_printer_s_full_circle_by_centre_words_alone_is_deposited() {
+    let path = finding("82-marlin-full-circle-ij-only.gcode");
+    let p = path.to_str().expect("utf8");
+    for flavor in ["auto", "marlin", "reprap"] {
+        let doc = trace_json(flavor, &path);
+        let moves = doc["moves"].as_array().expect("moves");
+        let arc = moves
+            .iter()
+            .find(|m| m["line"] == 7)
+            .unwrap_or_else(|| panic!("{flavor}: no move for line 7: {doc}"));
+        assert_eq!(arc["kind"]["type"], "arc", "{arc}");
+        assert_eq!(arc["kind"]["turns"], 1, "{arc}");
+        assert_eq!(arc["kind"]["center"][0], 15.0, "{arc}");
+        assert_eq!(arc["start"], arc["end"], "{arc}");
+        assert_eq!(arc["extruded"], 3.0, "{arc}");
+    }
+    let dir = tempdir("finding-82");
+    let out = dir.join("out.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        p,
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let nc = std::fs::read_to_string(&out).expect("posted");
+    // One run: on, the line to the circle, the circle (back where it began), on along X.
+    let on = nc.find("M71").expect("laser on");
+    let circle = nc
+        .find("G2 X-10.000 Y0.000 Z0.200 I-5.000 J0.000")
+        .expect("the circle");
+    let off = nc.find("M72").expect("laser off");
+    assert!(on < circle && circle < off, "{nc}");
+    assert_eq!(nc.matches("M71").count(), 1, "{nc}");
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        p,
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A G1 with E alone still moves nothing (an unretract).
+    let doc = trace_json("marlin", &finding("82-marlin-full-circle-ij-only.gcode"));
+    assert_eq!(doc["moves"].as_array().map(Vec::len), Some(4), "{doc}");
+}
+
+/// Finding 83 (h51): a belt printer's start code shifts Z with `G92 Z0 E0` after its
+/// purge lines (Kiri:Moto's CR-30 profile); the post's refusal named the next move, 12
+/// lines on in the real file. It names the G92's line, and the first move made shifted.
+#[test]
+fn a_frame_moved_mid_program_is_refused_where_it_moves() {
+    let path = finding("83-belt-printer-g92-z.gcode");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        path.to_str().expect("utf8"),
+        "-o",
+        "-",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(
+            "83-belt-printer-g92-z.gcode:10: the program's frame moves here, after the first move"
+        ) && e.contains("(the first at line 11)"),
+        "{e}"
+    );
+}
+
+/// Finding 84 (h51): Marlin's `G61 XY S0` (return to the position `G60 S0` saved; its
+/// axis letters are flags) was "the letter X has no number after it", and G61 was read
+/// as exact-stop mode. Under a printer's flavour G60 saves (nothing moves) and G61 is
+/// named as the move it is: not simulated, and the post refuses it there.
+#[test]
+fn marlin_s_saved_position_codes_are_named() {
+    let path = finding("84-marlin-g60-g61.gcode");
+    let p = path.to_str().expect("utf8");
+    let o = lampost(&["check", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("G61 (a printer's return to the position G60 saved: it moves the head) is not simulated"),
+        "{e}"
+    );
+    assert!(!e.contains("G60 ("), "{e}");
+    let o = lampost(&["post", "--machine", "nrc-lc", p, "-o", "-"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("84-marlin-g60-g61.gcode:9: G61 (a printer's return"),
+        "{}",
+        stderr(&o)
+    );
+    // Outside a printer's flavour G61 is exact-stop mode, as before.
+    let o = lampost(&["check", "--flavor", "fadal", p]);
+    assert!(
+        stderr(&o).contains("the letter X has no number after it"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Finding 85 (h50): a drilling cycle with its depth but no R plane was "needs Z (depth)
+/// and R" (a Haas class program's 33 errors); it names the missing word only, as rs274
+/// does ("R clearance plane unspecified in cycle").
+#[test]
+fn a_cycle_without_r_names_r_only() {
+    let path = finding("85-cycle-without-r.nc");
+    let o = lampost(&["check", path.to_str().expect("utf8")]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("canned cycle G82 needs R (the retract plane)"),
+        "{e}"
+    );
+    assert!(!e.contains("needs Z"), "{e}");
+    let dir = tempdir("finding-85");
+    let no_z = dir.join("no-z.nc");
+    std::fs::write(
+        &no_z,
+        "G20 G90 G17 G98\nG0 X0 Y0 Z1.\nG81 X1. Y1. R0.1 F10.\nG80\nM30\n",
+    )
+    .expect("w");
+    let o = lampost(&["check", no_z.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains("canned cycle G81 needs Z (the depth)\n"),
+        "{}",
+        stderr(&o)
+    );
+}

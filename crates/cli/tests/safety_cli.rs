@@ -1146,19 +1146,20 @@ fn verify_rejects_deviations_the_moves_alone_hide() {
 /// on the work offset in force, another work offset): LinuxCNC's rs274 reports the later
 /// moves in the moved frame (its SET_G92_OFFSET / SET_G5X_OFFSET lines), so the same
 /// numbers land elsewhere on the machine, and posting them where the first frame puts
-/// them deposits over what was deposited (the post used to do that). The refusal names
-/// the first move made in the moved frame. A G92 before the first move places the
-/// frame and is accepted. Nothing is written on refusal.
+/// them deposits over what was deposited (the post used to do that). The refusal is
+/// located at the line that moves the frame, and names the first move made in the moved
+/// frame. A G92 before the first move places the frame and is accepted. Nothing is
+/// written on refusal.
 #[test]
 fn a_frame_moved_after_the_first_move_is_refused() {
     let dir = tempdir("safety-frame");
     let out = dir.join("out.nc");
-    for (name, body, line) in [
-        ("G92", "G92 X0", 6),
-        ("G52", "G52 X5", 6),
-        ("G10 L20", "G10 L20 P1 X0", 6),
-        ("G10 L2, G55", "G10 L2 P2 X5\nG55", 7),
-        ("G55", "G55", 6),
+    for (name, body, line, first) in [
+        ("G92", "G92 X0", 5, 6),
+        ("G52", "G52 X5", 5, 6),
+        ("G10 L20", "G10 L20 P1 X0", 5, 6),
+        ("G10 L2, G55", "G10 L2 P2 X5\nG55", 6, 7),
+        ("G55", "G55", 5, 6),
     ] {
         let input = write(
             &dir,
@@ -1179,7 +1180,8 @@ fn a_frame_moved_after_the_first_move_is_refused() {
         ]);
         assert!(!o.status.success(), "{name}: posted");
         assert!(
-            stderr(&o).contains(&format!("frame.ngc:{line}:")),
+            stderr(&o).contains(&format!("frame.ngc:{line}:"))
+                && stderr(&o).contains(&format!("(the first at line {first})")),
             "{name}: {}",
             stderr(&o)
         );

@@ -157,7 +157,17 @@ fn e_extrusion_without_any_extruding_move_is_refused() {
         assert!(err.contains("no move of the program extrudes"), "{err}");
         assert!(err.contains("dry.gcode:5:1"), "{err}");
         assert!(err.contains("5 | G1 Z0.2 F600"), "{err}");
-        assert!(err.contains("= help: post without --e-extrusion"), "{err}");
+        assert!(
+            err.contains("= help: when E is not extrusion here")
+                && err.contains("without --e-extrusion"),
+            "{err}"
+        );
+        let why = if extra[0] == "--e-extrusion" {
+            "(--e-extrusion)"
+        } else {
+            "(implied by --flavor marlin)"
+        };
+        assert!(err.contains(why), "{err}");
         assert!(!out_path.exists(), "{extra:?}: nothing is written");
     }
     // One extruding move is enough.

@@ -63,7 +63,7 @@ pub enum ErrorKind {
     #[error("{0} is not a valid code number")]
     BadCodeNumber(String),
     /// An arc whose start and end radii differ beyond tolerance.
-    #[error("arc radius at the start ({start:.6}) and at the end ({end:.6}) differ by {diff:.6}: more than {tolerance:.6} and 0.1 % of the radius, or more than {:.6} (LinuxCNC's limits)", .tolerance * 100.0)]
+    #[error("arc radius at the start ({start:.6}) and at the end ({end:.6}) differ by {diff:.6}: more than {tolerance:.6} and 0.1 % of the radius, or more than {:.6} (the limits LinuxCNC holds arcs to, and lampost every program: a control that runs the arc draws a spiral to its end)", .tolerance * 100.0)]
     ArcRadiusMismatch {
         /// Radius from the centre to the start.
         start: f64,
@@ -92,6 +92,15 @@ pub enum ErrorKind {
     /// An arc with a zero radius.
     #[error("arc has zero radius")]
     ArcZeroRadius,
+    /// An arc whose centre words, read as offsets from the start (G91.1), make no arc
+    /// but read as the centre's position (G90.1) make one of this radius.
+    #[error("arc's I/J/K read as offsets from the start give no arc ({why}); read as the centre's position (absolute, G90.1) they give an arc of radius {radius:.6}")]
+    ArcCentreLooksAbsolute {
+        /// What is wrong with the incremental reading.
+        why: String,
+        /// The radius of the absolute reading.
+        radius: f64,
+    },
     /// Both centre words and a radius.
     #[error("arc has both I/J/K and R")]
     ArcBothForms,
@@ -369,7 +378,7 @@ pub enum ErrorKind {
     /// E is read as extrusion, but no move of the program extrudes: posted, it would be
     /// travel alone (reported at its first feed move, or its first move).
     #[error("E is read as extrusion ({0}), but no move of the program extrudes: E never grows along a move, so the post would write travel alone")]
-    NoExtrusion(&'static str),
+    NoExtrusion(String),
     /// A line that is not G-code but has the shape of another language's (Heidenhain
     /// Klartext, Sinumerik, APT CL data, a robot language): see [`crate::foreign_language`].
     #[error("this line is {}, not G-code", .0.name)]
@@ -402,6 +411,7 @@ impl ErrorKind {
             ErrorKind::ArcRadiusFullCircle => "write a full circle with I/J/K",
             ErrorKind::ArcRadiusTooSmall { .. } => "the radius must be at least half the chord; check R and the end point",
             ErrorKind::ArcZeroRadius => "check I/J/K or R",
+            ErrorKind::ArcCentreLooksAbsolute { .. } => "the program was written for absolute arc centres (Mach3's and some posts' `IJ absolute`): put G90.1 before its first arc, or post it again from the CAM system with incremental arc centres",
             ErrorKind::ArcBothForms => "use either I/J/K or R, not both",
             ErrorKind::ArcNormalCentreZero(_) => "remove it: LinuxCNC (`--flavor linuxcnc`) refuses a centre word off the active plane",
             ErrorKind::TextAfterEnd => "nothing to do for the motion; remove the text, or put it in a comment, to keep the file clean",
@@ -456,7 +466,7 @@ impl ErrorKind {
             ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
             ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
             ErrorKind::ForeignLanguage(f) => f.hint,
-            ErrorKind::NoExtrusion(_) => "post without --e-extrusion (and with --flavor other than marlin, reprap or makerbot) when E is not extrusion, e.g. a FADAL fixture offset; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values; an extruder driven as an axis (U or V words on the printing moves, a paste or food printer's; A or B: --flavor makerbot) is not E: write those words as E",
+            ErrorKind::NoExtrusion(_) => "when E is not extrusion here (a laser or machining program; a FADAL fixture offset), post with --flavor set to the control the program was written for (not marlin, reprap or makerbot) and without --e-extrusion; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values; an extruder driven as an axis (U or V words on the printing moves, a paste or food printer's; A or B: --flavor makerbot) is not E: write those words as E",
         }
     }
 }

@@ -309,6 +309,8 @@ pub struct Interpreter {
     comp_drawn: Position,
     /// The signs of a lathe program seen so far (`turning.rs`).
     lathe: crate::turning::LatheSigns,
+    /// The line of the last block that changed the offsets ([`Interpreter::offset_line`]).
+    offset_line: u32,
 }
 
 /// What a compensated move keeps of its block: line, end (for the axes off the plane),
@@ -622,6 +624,7 @@ impl Interpreter {
             comp: None,
             comp_drawn: [0.0; 9],
             lathe: crate::turning::LatheSigns::default(),
+            offset_line: 0,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -689,6 +692,22 @@ impl Interpreter {
     /// interpreted; the state may then be partly updated, so callers that need the
     /// motion stop there.
     pub fn block(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
+        let before = (self.offset_cache, self.modal.work_offset);
+        let done = self.block_inner(b, out);
+        if (self.offset_cache, self.modal.work_offset) != before {
+            self.offset_line = b.line;
+        }
+        done
+    }
+
+    /// The line of the last block that changed the offsets from program to machine
+    /// coordinates (`G92`, `G52`, a `G10` of the work offset in force, another work
+    /// offset selected); 0 before any.
+    pub fn offset_line(&self) -> u32 {
+        self.offset_line
+    }
+
+    fn block_inner(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
         if b.block_delete && self.opts.block_delete {
             return Ok(());
         }
@@ -816,7 +835,11 @@ impl Interpreter {
             self.polar_allowed(b, &w, settings)?;
         }
         if let Some(t) = w.first_text {
-            let homing = w.gs.iter().any(|g| matches!(g.1, 280 | 300 | 1610 | 1620));
+            // Marlin's G61 (return to a saved position) takes axis flags as homing does.
+            let slicer = self.opts.flavor.is_slicer();
+            let homing =
+                w.gs.iter()
+                    .any(|g| matches!(g.1, 280 | 300 | 1610 | 1620) || slicer && g.1 == 610);
             // Verbatim text stands only where a code may carry it (the parser reads it
             // after a setting M-code, a T word or a homing code); a bare letter is an axis
             // only for homing.
@@ -1002,7 +1025,9 @@ impl Interpreter {
                 if centres & (1 << n) != 0 || centres & (1 << u | 1 << v) == 0 {
                     return None;
                 }
-                let Ok((cu, cv)) = self.centre_of(p.centre(u), p.centre(v), &target) else {
+                let Ok((cu, cv)) =
+                    self.centre_of(p.centre(u), p.centre(v), &target, self.modal.arc_distance)
+                else {
                     return None;
                 };
                 let mut center = [self.pos[0], self.pos[1], self.pos[2]];
@@ -1305,6 +1330,25 @@ impl Interpreter {
     ) -> bool {
         let mut done = false;
         for &(gw, c, g) in &w.gs {
+            if c == 600 && self.opts.flavor.is_slicer() {
+                // Marlin's G60 saves the position for a G61: it moves nothing.
+                continue;
+            }
+            if c == 610 && self.opts.flavor.is_slicer() {
+                // Marlin's G61 returns to the position G60 saved (its axis letters are
+                // flags): a move to a place the trace does not hold.
+                done = true;
+                self.warn(
+                    b,
+                    out,
+                    ErrorKind::NotSimulated(format!(
+                        "{} (a printer's return to the position G60 saved: it moves the head)",
+                        gw.display_code()
+                    )),
+                    Some(gw.span),
+                );
+                continue;
+            }
             if g != GGroup::Other {
                 continue;
             }
@@ -2151,8 +2195,15 @@ impl Interpreter {
             self.refresh_offset();
         }
         // In slicer programs (E is extrusion) a motion code with no axis words moves
-        // nothing: `G1 E.8 F2400` (unretract) and `G1 F1200` set E and F only.
-        let explicit_motion = explicit_motion && self.opts.e_word != EWord::Extrusion;
+        // nothing: `G1 E.8 F2400` (unretract) and `G1 F1200` set E and F only. An arc
+        // with its centre words is a full circle there too (Marlin's, Klipper's and
+        // RepRapFirmware's `G2 I5 J0 E3`).
+        let full_circle = w
+            .g_in(GGroup::Motion)
+            .is_some_and(|(_, c)| c == 20 || c == 30)
+            && [b'I', b'J', b'K'].iter().any(|&l| w.word(l).is_some());
+        let explicit_motion =
+            explicit_motion && (self.opts.e_word != EWord::Extrusion || full_circle);
         if self.watch_printer_axes && !axes_used {
             if let Some(word) = [b'A', b'B', b'C', b'U', b'V']
                 .iter()
@@ -3643,8 +3694,11 @@ impl Interpreter {
             (true, None) => {
                 let iu = w.get(centre_letter(u)).unwrap_or(0.0);
                 let iv = w.get(centre_letter(v)).unwrap_or(0.0);
-                self.centre_of(iu, iv, &target)
-                    .map_err(|kind| diag(b, Severity::Error, kind, None))?
+                self.centre_of(iu, iv, &target, self.modal.arc_distance)
+                    .map_err(|kind| {
+                        let kind = self.centre_looks_absolute(iu, iv, &target, kind);
+                        diag(b, Severity::Error, kind, None)
+                    })?
             }
             (false, Some(rw)) => {
                 let r = rw.value;
@@ -3861,7 +3915,13 @@ impl Interpreter {
     /// The centre (in the plane's axes) of an arc from the tool's position to `target`
     /// given by its centre words `iu`, `iv`, with LinuxCNC's checks: not a zero radius,
     /// and the radii at the two ends within the spiral tolerance.
-    fn centre_of(&self, iu: f64, iv: f64, target: &Position) -> Result<(f64, f64), ErrorKind> {
+    fn centre_of(
+        &self,
+        iu: f64,
+        iv: f64,
+        target: &Position,
+        arc_distance: Distance,
+    ) -> Result<(f64, f64), ErrorKind> {
         let (u, v, _) = self.modal.plane.axes();
         let (spiral_tol, radius_tol) = match self.modal.units {
             Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
@@ -3869,7 +3929,7 @@ impl Interpreter {
         };
         let (su, sv) = (self.pos[u], self.pos[v]);
         let (eu, ev) = (target[u], target[v]);
-        let (cu, cv) = match self.modal.arc_distance {
+        let (cu, cv) = match arc_distance {
             Distance::Incremental => (su + iu, sv + iv),
             Distance::Absolute => {
                 let off = self.offset();
@@ -3892,6 +3952,31 @@ impl Interpreter {
             });
         }
         Ok((cu, cv))
+    }
+
+    /// An arc refused under incremental centres (`kind`) that its centre words, read as
+    /// the centre's position, make whole: said as [`ErrorKind::ArcCentreLooksAbsolute`]
+    /// (a program written for absolute arc centres, with no G90.1). Any other refusal
+    /// is `kind` itself.
+    fn centre_looks_absolute(
+        &self,
+        iu: f64,
+        iv: f64,
+        target: &Position,
+        kind: ErrorKind,
+    ) -> ErrorKind {
+        if self.modal.arc_distance != Distance::Incremental {
+            return kind;
+        }
+        let Ok((cu, cv)) = self.centre_of(iu, iv, target, Distance::Absolute) else {
+            return kind;
+        };
+        let (u, v, _) = self.modal.plane.axes();
+        let radius = (self.pos[u] - cu).hypot(self.pos[v] - cv);
+        ErrorKind::ArcCentreLooksAbsolute {
+            why: kind.to_string(),
+            radius,
+        }
     }
 
     fn canned_cycle(
@@ -3925,10 +4010,20 @@ impl Interpreter {
                 Severity::Error,
                 ErrorKind::CannedCycleIncomplete {
                     code: name,
-                    what: match n {
-                        2 => "Z (depth) and R (retract plane)",
-                        1 => "Y (depth, along the normal of the G18 plane) and R (retract plane)",
-                        _ => "X (depth, along the normal of the G19 plane) and R (retract plane)",
+                    // The words missing, and only those (rs274: "R clearance plane
+                    // unspecified in cycle").
+                    what: match (n, self.canned.z.is_none(), self.canned.r.is_none()) {
+                        (_, false, _) => "R (the retract plane)",
+                        (2, true, false) => "Z (the depth)",
+                        (2, true, true) => "Z (the depth) and R (the retract plane)",
+                        (1, true, false) => "Y (the depth, along the normal of the G18 plane)",
+                        (1, true, true) => {
+                            "Y (the depth, along the normal of the G18 plane) and R (the retract plane)"
+                        }
+                        (_, true, false) => "X (the depth, along the normal of the G19 plane)",
+                        (_, true, true) => {
+                            "X (the depth, along the normal of the G19 plane) and R (the retract plane)"
+                        }
                     },
                 },
                 None,

@@ -1286,6 +1286,9 @@ fn words_reference_items<'a>(
                                 (b'G', Some(c)) => {
                                     matches!(c, 280 | 290 | 300 | 1610 | 1620)
                                         || slicer && crate::modal::g_group(c).is_none()
+                                        // Marlin's G61 (return to a saved position)
+                                        // takes axis flags: `G61 XY S0`.
+                                        || slicer && c == 610
                                 }
                                 // RepRapFirmware's macro call takes a file name:
                                 // `M98 P"/macros/purge.g"`.

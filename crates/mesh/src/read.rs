@@ -498,13 +498,16 @@ fn indexed(vertices: Vec<P3>, faces: Vec<[FaceRef; 3]>, base: i64) -> Result<Mes
 }
 
 /// `OFF`, `COFF`, `NOFF`, `CNOFF`, `STOFF`… header keyword (not `4OFF`/`nOFF`), and the
-/// rest of the line.
+/// rest of the line. The vertex count may follow the keyword with no blank between
+/// (`OFF8 6 12`, as ModelNet's files have it, and as readers that take the keyword's
+/// three bytes and then numbers read it).
 fn off_header(line: &[u8]) -> Option<&[u8]> {
     let (_, word) = tokens(line).next()?;
-    let ok = word.ends_with(b"OFF")
-        && word[..word.len() - 3]
-            .iter()
-            .all(|b| matches!(b, b'C' | b'N' | b'S' | b'T'));
+    let end = word.windows(3).position(|w| w == b"OFF")? + 3;
+    let ok = word[..end - 3]
+        .iter()
+        .all(|b| matches!(b, b'C' | b'N' | b'S' | b'T'))
+        && word[end..].iter().all(u8::is_ascii_digit);
     if !ok {
         return None;
     }

@@ -54,6 +54,10 @@ pub struct ManifoldReport {
     pub degenerate_triangles: usize,
     /// Triangles without one (those the edges are counted over).
     pub faces: usize,
+    /// Triangles whose twin, the same three vertices wound the other way, is in the mesh
+    /// too (each of a pair counted): a double-sided export, whose two sides cancel in
+    /// every slice.
+    pub twin_faces: usize,
     /// Every bad edge, in vertex order.
     pub bad_edges: Vec<BadEdge>,
 }
@@ -131,5 +135,46 @@ pub fn manifold_report(mesh: &crate::Mesh) -> ManifoldReport {
         }
         i = j;
     }
+    r.twin_faces = twin_faces(&mesh.triangles);
     r
+}
+
+/// Triangles whose reverse (the same vertices wound the other way) is in the mesh too.
+fn twin_faces(triangles: &[[u32; 3]]) -> usize {
+    // Each triangle by its vertices in ascending order and its winding's parity against
+    // that order; a twin has the same vertices and the other parity.
+    let mut keyed: Vec<([u32; 3], bool)> = triangles
+        .iter()
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .map(|t| {
+            // The rotation starting at the smallest vertex; even when the next is the
+            // middle one.
+            let r = if t[0] < t[1] && t[0] < t[2] {
+                *t
+            } else if t[1] < t[2] {
+                [t[1], t[2], t[0]]
+            } else {
+                [t[2], t[0], t[1]]
+            };
+            let even = r[1] < r[2];
+            let mut k = r;
+            k.sort_unstable();
+            (k, even)
+        })
+        .collect();
+    keyed.sort_unstable();
+    let mut n = 0;
+    let mut i = 0;
+    while i < keyed.len() {
+        let mut j = i + 1;
+        while j < keyed.len() && keyed[j].0 == keyed[i].0 {
+            j += 1;
+        }
+        let even = keyed[i..j].iter().filter(|k| k.1).count();
+        if even > 0 && even < j - i {
+            n += j - i;
+        }
+        i = j;
+    }
+    n
 }

@@ -237,6 +237,10 @@ pub struct Intended<'a> {
     /// and the section in which the input's speed and coolant were last warned of.
     posted_spindle: Option<PostedSpindle>,
     warned_spindle: [Option<usize>; 4],
+    /// The power a deposition program is posted at (`--power`), and the line of the
+    /// section's first deposit made at a power (see [`Intended::holding_spindle`]).
+    posted_power: Option<f64>,
+    first_powered: u32,
     done: bool,
     /// The last move's end, in the program and the part frame, with its (section,
     /// layer): the next move starts there, so its start needs no transform.
@@ -397,6 +401,8 @@ impl<'a> Intended<'a> {
             power_ahead: LaserAhead::Never,
             dim_deposit: None,
             powers: None,
+            posted_power: None,
+            first_powered: 0,
             extruder: None,
             frame_at_first: None,
         }
@@ -453,17 +459,24 @@ impl<'a> Intended<'a> {
         match &self.frame_at_first {
             Some((sec, first, modal)) if *sec == self.idx => {
                 let moved = off.iter().zip(first).any(|(a, b)| a != b);
+                // Located where the frame moved, when the interpreter saw it (a
+                // slicer's `G92 Z0 E0` after its purge lines), else at this move.
+                let (line, next) = match interp.offset_line() {
+                    0 => (m.line, String::new()),
+                    l if l == m.line => (l, String::new()),
+                    l => (l, format!(" (the first at line {})", m.line)),
+                };
                 let what = if modal.work_offset != m.modal.work_offset {
-                    "this move is in another work offset (G54…G59, FADAL E…) than the first move: the post places the program's frame once, and the other offsets are not known here"
+                    format!("another work offset (G54…G59, FADAL E…) than the first move's is in force for the moves after this line{next}: the post places the program's frame once, and the other offsets are not known here")
                 } else if moved {
-                    "the program's frame moved before this move, after the first one (G92, G52, or G10 setting the work offset in force): the control would run the later moves shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job"
+                    format!("the program's frame moves here, after the first move (G92, G52, or G10 setting the work offset in force): the control would run the moves after it{next} shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job")
                 } else {
                     return Ok(());
                 };
                 Err(PostError::Unsupported {
                     file: file.to_string(),
-                    line: m.line,
-                    what: what.into(),
+                    line,
+                    what,
                 })
             }
             _ => {
@@ -590,13 +603,27 @@ impl<'a> Intended<'a> {
                             n - 1
                         ));
                     }
-                    if let Some((lo, hi, Some(line))) = self.powers {
-                        self.notes.push(format!(
+                    match (self.powers, self.posted_power) {
+                        (Some((lo, hi, Some(line))), _) => self.notes.push(format!(
                             "{}:{line}: the input's laser power varies (S{} to S{}: a greyscale image's, or power by speed), and the posted program deposits at one power throughout (the machine's laser_on with --power)",
                             sec.name,
                             lampost_gcode::Readable(lo),
                             lampost_gcode::Readable(hi)
-                        ));
+                        )),
+                        // One power throughout, another than the post's: said as a
+                        // machining program's other spindle speed is.
+                        (Some((s, _, None)), Some(p))
+                            if (s - p).abs() > 1e-9 * p.abs().max(1.0) =>
+                        {
+                            self.notes.push(format!(
+                                "{}:{}: the input deposits at S{}; the posted program deposits at power {} (--power, in the machine's laser_on and laser_power_word)",
+                                sec.name,
+                                self.first_powered,
+                                lampost_gcode::Readable(s),
+                                lampost_gcode::Readable(p)
+                            ))
+                        }
+                        _ => {}
                     }
                     if self
                         .stream
@@ -1109,6 +1136,9 @@ impl Intended<'_> {
         } else {
             self.tools = Tools::Refuse;
         }
+        if let Process::Deposit { power } = process {
+            self.posted_power = Some(*power);
+        }
         self
     }
 
@@ -1278,6 +1308,9 @@ impl Intended<'_> {
         }
         if powered && self.posted_spindle.is_none() {
             let s = m.modal.speed;
+            if self.powers.is_none() {
+                self.first_powered = m.line;
+            }
             let p = self.powers.get_or_insert((s, s, None));
             if s != p.0 || s != p.1 {
                 p.2.get_or_insert(m.line);
