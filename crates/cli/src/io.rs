@@ -480,6 +480,53 @@ impl Drop for Output {
     }
 }
 
+/// Where `path` leads, for telling files apart: its canonical path, or (not there yet)
+/// its folder's with its name; `None` for standard input or output (`-`) and for a
+/// folder that is not there.
+fn identity(path: &str) -> Option<PathBuf> {
+    if path == "-" {
+        return None;
+    }
+    let p = Path::new(path);
+    if let Ok(c) = p.canonicalize() {
+        return Some(c);
+    }
+    let dir = p
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    Some(dir.canonicalize().ok()?.join(p.file_name()?))
+}
+
+/// Outputs (`(flag, path)`) that would overwrite each other or an input (`(what, path)`)
+/// are refused before anything is read: `--json-report` at `-o`'s path replaced the
+/// posted program, and `-o` at the input's replaced the input.
+pub fn distinct_outputs(
+    outputs: &[(&str, Option<&str>)],
+    inputs: &[(&str, Option<&str>)],
+) -> Result<(), CliError> {
+    let outs: Vec<(&str, &str, PathBuf)> = outputs
+        .iter()
+        .filter_map(|&(f, p)| p.and_then(|p| identity(p).map(|i| (f, p, i))))
+        .collect();
+    for (k, (flag, path, id)) in outs.iter().enumerate() {
+        if let Some((other, _, _)) = outs[..k].iter().find(|o| o.2 == *id) {
+            return Err(CliError::usage(format!(
+                "error: {flag} {path}: the same file as {other}'s: one would overwrite the other\n  = help: give each output its own path\n"
+            )));
+        }
+        if let Some((what, _)) = inputs
+            .iter()
+            .find(|(_, p)| p.and_then(identity).is_some_and(|i| i == *id))
+        {
+            return Err(CliError::usage(format!(
+                "error: {flag} {path}: the same file as the {what}: writing it would destroy the {what}\n  = help: write the output to another path\n"
+            )));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

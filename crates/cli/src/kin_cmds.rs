@@ -158,6 +158,17 @@ pub fn builtin_names() -> Vec<&'static str> {
 }
 
 /// Load a machine by built-in name or path.
+/// A machine file is a file: a named pipe with no writer would wait for ever, a
+/// device give endless bytes.
+pub(crate) fn regular_machine_file(spec: &str) -> Result<(), CliError> {
+    if std::fs::metadata(spec).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        return Err(CliError::usage(format!(
+            "error: --machine {spec}: not a regular file (a pipe or a device)\n  = help: give the path of a machine file, or a built-in machine's name\n"
+        )));
+    }
+    Ok(())
+}
+
 pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
     let ov = overrides(sets)?;
     if crate::robot_cmds::arm_for(spec)?.is_some() {
@@ -168,6 +179,7 @@ pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
     if builtin_text(spec).is_some() {
         return Machine::builtin(spec, &ov).map_err(kin_error);
     }
+    regular_machine_file(spec)?;
     let text = crate::io::read_file_to_string(spec).map_err(|e| {
         let names = builtin_names();
         CliError::usage(format!(

@@ -845,6 +845,18 @@ pub fn post(
             a.machine
         )));
     }
+    crate::io::distinct_outputs(
+        &[
+            ("-o", output),
+            ("--json-report", json_report),
+            ("--preview", a.preview.as_deref()),
+        ],
+        &[
+            ("input", input),
+            ("part mesh (--part)", a.place.part.as_deref()),
+            ("machine file (--machine)", Some(a.machine.as_str())),
+        ],
+    )?;
     let m = load_machine(&a.machine, &a.set)?;
     if let Some(max) = max_bytes {
         if max < MIN_PIECE_BYTES {

@@ -25,6 +25,7 @@ pub fn arm_for(spec: &str) -> Result<Option<Arm>, CliError> {
     if lampost_kinematics::builtin_text(spec).is_some() {
         return Ok(None);
     }
+    crate::kin_cmds::regular_machine_file(spec)?;
     let Ok(text) = crate::io::read_file_to_string(spec) else {
         return Ok(None);
     };

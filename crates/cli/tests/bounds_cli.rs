@@ -315,7 +315,12 @@ fn an_endless_device_as_any_input_stops_at_once() {
             "{cmd}: {:?} {e}",
             o.status.code()
         );
-        assert!(e.contains("NUL bytes in a row"), "{cmd}: {e}");
+        // A device as the machine file is refused before it is read.
+        assert!(
+            e.contains("NUL bytes in a row")
+                || cmd.contains(&format!("--machine {z}")) && e.contains("not a regular file"),
+            "{cmd}: {e}"
+        );
         assert!(!dir.join("out").exists(), "{cmd}: an output was written");
     }
 }

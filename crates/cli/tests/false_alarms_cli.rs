@@ -68,9 +68,9 @@ fn path_changing_codes_warn_and_the_post_refuses_their_line() {
         assert!(err.contains("path.nc:4:"), "{line}: {err}");
     }
     // An extended work offset is selected as G55 is: no warning, and after the first
-    // move the post refuses the first move in it as in another work offset (its values
-    // are the control's).
-    for (line, at) in [("G54.1 P1 G0 X2", 4), ("G154 P3", 5)] {
+    // move the post refuses the line selecting it (the first move in it named), as
+    // another work offset (its values are the control's).
+    for (line, at) in [("G54.1 P1 G0 X2", 4), ("G154 P3", 4)] {
         let src = format!("G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z1 F100\n{line}\nG1 X10 F100\nM30\n");
         let (ok, err) = check(&[], &src);
         assert!(ok && !err.contains("warning:"), "{line}: {err}");

@@ -3685,3 +3685,64 @@ fn a_cycle_without_r_names_r_only() {
         stderr(&o)
     );
 }
+
+/// Finding 90 (h53: LinuxCNC programs against rs274). Each of these read other moves
+/// than rs274's, or refused what it runs, or ran what it refuses: `else if` with a blank
+/// (cnc-club/linuxcnc-features and probe-screen-ng write it: every branch after it was
+/// taken), `endsub [value]`, `(ABORT, …)`, the predefined named parameters
+/// (`#<_metric>`, `#<_feed>`…) and setting them, `#<_x>` after a G92, block-deleted
+/// O-word lines, an F beside G8, a G71's own F. Each is now as rs274 has it.
+#[test]
+fn linuxcnc_programs_of_the_tenth_probe_are_read_as_rs274_reads_them() {
+    let dir = root().join("fixtures/findings/90-linuxcnc");
+    let work = tempdir("finding-90");
+    // Moves equal to rs274's.
+    for (name, moves) in [
+        ("A-else-space-if.ngc", 1),
+        ("E-endsub-value.ngc", 2),
+        ("D-predefined-named-params.ngc", 2),
+        ("F-stale-x-after-g92.ngc", 2),
+        ("B-block-delete-oword.ngc", 3),
+        ("L1-g8-f-dropped.ngc", 1),
+        ("L2-g71-block-f-ignored.ngc", 76),
+        ("features-circle-elseif.ngc", 0),
+    ] {
+        let path = dir.join(name);
+        let doc = trace_json("linuxcnc", &path);
+        assert_eq!(doc["ok"], true, "{name}: {doc}");
+        let n = doc["moves"].as_array().map_or(0, Vec::len);
+        if moves > 0 {
+            assert_eq!(n, moves, "{name}");
+        }
+        if require_rs274().is_some() {
+            equal_to_rs274(&path, &work, &["linuxcnc"]);
+        }
+    }
+    // The values themselves, without rs274.
+    let ends_of = |name: &str| ends(&trace_json("linuxcnc", &dir.join(name)));
+    assert_eq!(ends_of("A-else-space-if.ngc"), vec![[0.0, -6.0, 0.0]]);
+    assert_eq!(ends_of("E-endsub-value.ngc")[1], [5.0, 1.0, 1.0]);
+    assert_eq!(
+        ends_of("D-predefined-named-params.ngc")[1],
+        [1.0, 1.0, 100.0]
+    );
+    assert_eq!(ends_of("F-stale-x-after-g92.ngc")[1], [0.0, 0.0, 0.0]);
+    // Refused where rs274 refuses.
+    for (name, at, says) in [
+        ("C-abort-comment.ngc", ":3:", "the program aborts here"),
+        ("K-readonly-assign.ngc", ":2:", "#<_metric> is read only"),
+    ] {
+        let o = lampost(&[
+            "check",
+            "--flavor",
+            "linuxcnc",
+            dir.join(name).to_str().expect("utf8"),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        assert!(
+            stderr(&o).contains(at) && stderr(&o).contains(says),
+            "{name}: {}",
+            stderr(&o)
+        );
+    }
+}

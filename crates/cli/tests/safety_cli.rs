@@ -2081,3 +2081,345 @@ fn a_program_stop_in_the_input_is_posted_where_it_stands() {
     args.extend_from_slice(&[&tiny, &check]);
     fails_at(&lampost(&args), "the input stops here (M0 at input line 6)");
 }
+
+/// h52 (findings 86, 87): tampering verify let through. A posted program whose index line
+/// (or one rotary word of it) is deleted was verified as if the table stood at 0: on the
+/// machine it stands wherever the last program left it. Powder left on over travel, or
+/// never turned off, passed too. Each now fails, and the program as posted passes.
+#[test]
+fn verify_catches_an_index_or_powder_tampered_with() {
+    let dir = tempdir("safety-h52-tamper");
+    let posted = post_patch(&dir, "A=0,B=0");
+    assert!(verify(&dir, "A=0,B=0", &posted, &[]).status.success());
+    let index = posted
+        .lines()
+        .find(|l| l.contains("(INDEX)"))
+        .expect("an index line")
+        .to_string();
+    // The index line gone; then only its B word.
+    let no_index: String = posted
+        .lines()
+        .filter(|l| *l != index)
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n";
+    let o = verify(&dir, "A=0,B=0", &no_index, &[]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("a move before the program sets A and B"),
+        "{}",
+        stderr(&o)
+    );
+    let no_b = posted.replacen(
+        &index,
+        &index
+            .split(' ')
+            .filter(|w| !w.starts_with('B'))
+            .collect::<Vec<_>>()
+            .join(" "),
+        1,
+    );
+    let o = verify(&dir, "A=0,B=0", &no_b, &[]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("a move before the program sets B"),
+        "{}",
+        stderr(&o)
+    );
+    // Powder: never off, and on over travel.
+    let powder_off = posted
+        .lines()
+        .find(|l| *l == "M74" || l.ends_with(" M74"))
+        .expect("powder off")
+        .to_string();
+    let never_off: String = posted
+        .lines()
+        .filter(|l| *l != powder_off)
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n";
+    let o = verify(&dir, "A=0,B=0", &never_off, &[]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("with the powder on"), "{}", stderr(&o));
+    let on_in_travel = posted.replacen(&powder_off, &powder_off.replace("M74", "M73"), 1);
+    let o = verify(&dir, "A=0,B=0", &on_in_travel, &[]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("powder on"), "{}", stderr(&o));
+}
+
+/// h52 (finding 88): process codes that make a program verify refuses (or worse) were
+/// written without a word: an empty `laser_off` left the laser on over every traverse;
+/// `M30`, `M2`, `M99`, `M98 P…` as process codes; an empty or non-ending `program_end`;
+/// the same code on and off; `laser_on` holding the power word (`M71 S500 S1000`). Each
+/// is refused in the machine file, located, and nothing is written.
+#[test]
+fn process_codes_that_break_a_program_are_refused_in_the_machine_file() {
+    let dir = tempdir("safety-h52-codes");
+    let o = lampost(&["machines", "show", "fadal-lamp"]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let out = dir.join("out.nc");
+    for (key, from, to, says) in [
+        (
+            "laser_off",
+            "laser_off = \"M72\"",
+            "laser_off = \"\"",
+            "could never turn it off",
+        ),
+        (
+            "powder_on",
+            "powder_on = \"M73\"",
+            "powder_on = \"\"",
+            "could never turn it on",
+        ),
+        (
+            "laser_on",
+            "laser_on = \"M71\"",
+            "laser_on = \"M30\"",
+            "ends the program",
+        ),
+        (
+            "laser_off",
+            "laser_off = \"M72\"",
+            "laser_off = \"M2\"",
+            "ends the program",
+        ),
+        (
+            "laser_on",
+            "laser_on = \"M71\"",
+            "laser_on = \"M98 P1000\"",
+            "subprogram",
+        ),
+        (
+            "program_end",
+            "program_end = \"M30\"",
+            "program_end = \"\"",
+            "M2 or M30",
+        ),
+        (
+            "program_end",
+            "program_end = \"M30\"",
+            "program_end = \"M99\"",
+            "subprogram",
+        ),
+        (
+            "laser_off",
+            "laser_off = \"M72\"",
+            "laser_off = \"M71\"",
+            "the same as",
+        ),
+        (
+            "laser_on",
+            "laser_on = \"M71\"",
+            "laser_on = \"M71 S500\"",
+            "writes the power itself",
+        ),
+        (
+            "spindle_on",
+            "spindle_on = \"M3\"",
+            "spindle_on = \"M3 M0\"",
+            "stops the program",
+        ),
+    ] {
+        assert!(text.contains(from), "{from}");
+        let bad = write(&dir, "bad.toml", &text.replacen(from, to, 1));
+        let o = lampost(&[
+            "post",
+            "--machine",
+            bad.as_str(),
+            "--index",
+            "A=0,B=0",
+            &fx("issue11-patch.nc"),
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        assert!(!o.status.success(), "{to}: posted");
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("`process.{key}`")) && e.contains(says) && e.contains("bad.toml:"),
+            "{to}: {e}"
+        );
+        assert!(!out.exists(), "{to}: written");
+    }
+    // A head beyond any machine (parry panicked on 1e200 with --part).
+    let huge = write(
+        &dir,
+        "huge.toml",
+        &text.replacen("\n[process]\n", "\n[process]\nhead_radius = 1e200\n", 1),
+    );
+    let o = lampost(&[
+        "post",
+        "--machine",
+        huge.as_str(),
+        "--index",
+        "A=0,B=0",
+        &fx("issue11-patch.nc"),
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("head_radius` = 1e200"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// h52 (finding 89): an output at another output's path, or at an input's, replaced it
+/// (`--json-report` at `-o`'s path left JSON where the program was; `-o` at the input's
+/// replaced the input); a named pipe as `--machine` waited for ever. Each is refused
+/// before anything is read or written.
+#[test]
+fn outputs_never_overwrite_each_other_or_an_input() {
+    let dir = tempdir("safety-h52-outputs");
+    let input = write(
+        &dir,
+        "in.nc",
+        &std::fs::read_to_string(fx("issue11-patch.nc")).expect("fixture"),
+    );
+    let before = std::fs::read(&input).expect("input");
+    let out = dir.join("out.nc").to_string_lossy().into_owned();
+    for (args, says) in [
+        (
+            vec!["-o", out.as_str(), "--json-report", out.as_str()],
+            "the same file as -o's",
+        ),
+        (vec!["-o", input.as_str()], "the same file as the input"),
+        (
+            vec!["-o", out.as_str(), "--preview", input.as_str()],
+            "the same file as the input",
+        ),
+    ] {
+        let mut a = vec![
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            "A=0,B=0",
+            &input,
+        ];
+        a.extend(args.iter().copied());
+        let o = lampost(&a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+        assert_eq!(std::fs::read(&input).expect("input"), before, "{args:?}");
+        assert!(!Path::new(&out).exists(), "{args:?}");
+    }
+    let fifo = dir.join("machine.toml");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if made {
+        let o = limited(
+            &format!(
+                "\"$LAMPOST\" post --machine {} {} -o {}",
+                fifo.display(),
+                input,
+                out
+            ),
+            1 << 20,
+            20,
+        );
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("not a regular file"), "{}", stderr(&o));
+    }
+}
+
+/// h52 (finding 90): a split piece began `G0 Z150.` then `Y-51.`, its X left where the
+/// last piece wrote it: read alone (`lampost check`, rs274) it started from X0 and its
+/// first arc's radii differed. Each piece's first move now says every axis the last
+/// piece left (where the machine already is), and every piece checks alone; the size
+/// refusal gives the `--max-bytes` that works. FADAL program numbers stay within O9999.
+#[test]
+fn split_pieces_read_alone_and_program_numbers_stay_in_range() {
+    let dir = tempdir("safety-h52-split");
+    let input = root()
+        .join("fixtures/real-programs/hand-python/2_heatsink_milling.gcode")
+        .to_string_lossy()
+        .into_owned();
+    let out = dir.join("out.nc");
+    let base = [
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        "--process",
+        "machine",
+        "--tool",
+        "1",
+        "--length-offset",
+        "1",
+    ];
+    let post = |max: &str| {
+        let mut a = base.to_vec();
+        a.extend(["--max-bytes", max, input.as_str(), "-o"]);
+        a.push(out.to_str().expect("utf8"));
+        lampost(&a)
+    };
+    let o = post("300");
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    let need: String = e
+        .split("it needs --max-bytes ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("{e}"))
+        .to_string();
+    let o = post(&need);
+    assert!(o.status.success(), "--max-bytes {need}: {}", stderr(&o));
+    let mut pieces: Vec<_> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.to_string_lossy().contains("out.0"))
+        .collect();
+    pieces.sort();
+    assert!(pieces.len() > 2, "{pieces:?}");
+    for p in &pieces {
+        let o = lampost(&["check", p.to_str().expect("utf8")]);
+        assert!(o.status.success(), "{}: {}", p.display(), stderr(&o));
+    }
+    let mut v = vec!["verify", "--machine", "nrc-lc", "--index", "B=0,C=0"];
+    v.extend([
+        "--process",
+        "machine",
+        "--tool",
+        "1",
+        "--length-offset",
+        "1",
+    ]);
+    v.push(input.as_str());
+    for p in &pieces {
+        v.push(p.to_str().expect("utf8"));
+    }
+    let o = lampost(&v);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (n, says) in [("10000", "O0 to O9999"), ("9999", "would pass O9999")] {
+        let fout = dir.join(format!("f{n}.nc"));
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--convert-units",
+            "--index",
+            "A=0,B=0",
+            "--process",
+            "machine",
+            "--tool",
+            "1",
+            "--length-offset",
+            "1",
+            "--program-number",
+            n,
+            "--max-bytes",
+            "4000",
+            input.as_str(),
+            "-o",
+            fout.to_str().expect("utf8"),
+        ]);
+        assert!(!o.status.success(), "{n}");
+        assert!(stderr(&o).contains(says), "{n}: {}", stderr(&o));
+        assert!(!fout.exists());
+    }
+}

@@ -371,6 +371,9 @@ pub enum ErrorKind {
         /// Its message (the comment after the assignment).
         message: String,
     },
+    /// LinuxCNC's `(ABORT, message)` comment: rs274 stops the program with the message.
+    #[error("the program aborts here (`(ABORT, …)`){}: LinuxCNC stops it", if .0.is_empty() { String::new() } else { format!(" with `{}`", .0) })]
+    Abort(String),
     /// A Fanuc Macro B stop with a message (`#3006 = n (MESSAGE)`): the control stops
     /// until cycle start.
     #[error("the program stops here with the message `{0}` (#3006) until cycle start; the trace goes on")]
@@ -464,6 +467,7 @@ impl ErrorKind {
             ErrorKind::RenumberOverflow { .. } => "renumber with a smaller start or step, or split the program",
             ErrorKind::LineTooLong(_) => "split the line; controllers take lines of a few hundred characters",
             ErrorKind::MacroAlarm { .. } => "the program stops itself here on purpose: check the condition that raises the alarm (its IF) and the values it reads",
+            ErrorKind::Abort(_) => "the program stops itself here on purpose (a probing macro's guard, typically): check the condition that leads to this line and the values it reads",
             ErrorKind::MacroStop(_) => "the operator must act on the message before cycle start; check the program's intent at this line",
             ErrorKind::ForeignLanguage(f) => f.hint,
             ErrorKind::NoExtrusion(_) => "when E is not extrusion here (a laser or machining program; a FADAL fixture offset), post with --flavor set to the control the program was written for (not marlin, reprap or makerbot) and without --e-extrusion; for a slicer program, check that it writes E on its printing moves (relative E needs M83); extruder on/off codes without E (M101/M103 of old RepRap \"3D\" firmware, KISSlicer's and Skeinforge's option) are not read as deposition: slice with E values; an extruder driven as an axis (U or V words on the printing moves, a paste or food printer's; A or B: --flavor makerbot) is not E: write those words as E",

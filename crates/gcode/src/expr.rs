@@ -43,6 +43,9 @@ pub struct Params {
     saved: Vec<[f64; SUB_PARAMS]>,
     /// Fanuc Macro B variables (see Macro B (`macrob.rs`)), when the flavour reads them.
     pub(crate) fanuc: Option<Box<FanucVars>>,
+    /// The interpreter's modal state before the line being evaluated, for LinuxCNC's
+    /// predefined named parameters (`#<_metric>`, `#<_feed>`…; see [`predefined`]).
+    modal: Option<crate::modal::Modal>,
 }
 
 /// Fanuc Macro B variables: `#1`–`#33` local to each macro level (the main program's,
@@ -228,6 +231,7 @@ impl Default for Params {
             locals: vec![HashMap::new()],
             saved: Vec::new(),
             fanuc: None,
+            modal: None,
         }
     }
 }
@@ -241,6 +245,127 @@ enum Param {
 
 /// LinuxCNC's names of the position parameters `#5420`–`#5428` (`#<_x>` …).
 const POSITION_NAMES: [&str; 9] = ["_x", "_y", "_z", "_a", "_b", "_c", "_u", "_v", "_w"];
+
+/// LinuxCNC's predefined named parameters lampost holds (read only; rs274's values
+/// from the modal state, its standalone interpreter's for `_task`), by name.
+const PREDEFINED: [&str; 31] = [
+    "_motion_mode",
+    "_plane",
+    "_ccomp",
+    "_metric",
+    "_imperial",
+    "_absolute",
+    "_incremental",
+    "_inverse_time",
+    "_units_per_minute",
+    "_units_per_rev",
+    "_coord_system",
+    "_tool_offset",
+    "_retract_r_plane",
+    "_retract_old_z",
+    "_ijk_absolute_mode",
+    "_spindle_on",
+    "_spindle_cw",
+    "_mist",
+    "_flood",
+    "_feed",
+    "_rpm",
+    "_current_tool",
+    "_selected_tool",
+    "_task",
+    "_call_level",
+    "_remap_level",
+    "_value",
+    "_value_returned",
+    "_spindle_rpm_mode",
+    "_spindle_css_mode",
+    "_lathe_radius_mode",
+];
+
+/// Read-only names LinuxCNC has that lampost does not hold (they depend on the machine's
+/// configuration or switches): refused by name when read, and when set.
+const PREDEFINED_UNKNOWN: [&str; 12] = [
+    "_vmajor",
+    "_vminor",
+    "_line",
+    "_current_pocket",
+    "_selected_pocket",
+    "_speed_override",
+    "_feed_override",
+    "_adaptive_feed",
+    "_feed_hold",
+    "_lathe_diameter_mode",
+    "_abs_x",
+    "_abs_y",
+];
+
+/// A predefined named parameter's value from the modal state `m` (`None` for a name
+/// that is not one of [`PREDEFINED`], or that needs more than the modal state).
+fn predefined(name: &str, m: &crate::modal::Modal, call_level: usize) -> Option<f64> {
+    use crate::modal::{CutterComp, Distance, FeedMode, Motion, Plane, Retract, Spindle, Units};
+    let b = |v: bool| if v { 1.0 } else { 0.0 };
+    Some(match name {
+        "_motion_mode" => f64::from(match m.motion {
+            Motion::Rapid => 0,
+            Motion::Linear => 10,
+            Motion::ArcCw => 20,
+            Motion::ArcCcw => 30,
+            Motion::Thread => 330,
+            Motion::Probe => 382,
+            Motion::Canned(c) => c,
+            Motion::None => 800,
+        }),
+        "_plane" => match m.plane {
+            Plane::XY => 170.0,
+            Plane::XZ => 180.0,
+            Plane::YZ => 190.0,
+        },
+        "_ccomp" => match m.cutter_comp {
+            CutterComp::Off => 400.0,
+            CutterComp::Left => 410.0,
+            CutterComp::Right => 420.0,
+        },
+        "_metric" => b(m.units == Units::Mm),
+        "_imperial" => b(m.units == Units::Inch),
+        "_absolute" => b(m.distance == Distance::Absolute),
+        "_incremental" => b(m.distance == Distance::Incremental),
+        "_inverse_time" => b(m.feed_mode == FeedMode::InverseTime),
+        "_units_per_minute" => b(m.feed_mode == FeedMode::PerMinute),
+        "_units_per_rev" => b(m.feed_mode == FeedMode::PerRevolution),
+        "_coord_system" => match m.work_offset {
+            crate::modal::WorkOffset::G5x(i @ 1..=6) => 530.0 + 10.0 * f64::from(i),
+            crate::modal::WorkOffset::G5x(i @ 7..=9) => 584.0 + f64::from(i),
+            _ => return None,
+        },
+        "_tool_offset" => b(m.tool_length.is_some()),
+        "_retract_r_plane" => b(m.retract == Retract::RPlane),
+        "_retract_old_z" => b(m.retract == Retract::InitialZ),
+        "_ijk_absolute_mode" => b(m.arc_distance == Distance::Absolute),
+        "_spindle_on" => b(m.spindle != Spindle::Off),
+        "_spindle_cw" => b(m.spindle == Spindle::Cw),
+        "_mist" => b(m.mist),
+        "_flood" => b(m.flood),
+        "_feed" => m.feed,
+        "_rpm" => m.speed,
+        "_current_tool" => f64::from(m.tool),
+        "_selected_tool" => f64::from(m.selected_tool),
+        // rs274 standalone (and the preview) run with 0; the machine's task with 1.
+        "_task" => 0.0,
+        "_call_level" => call_level as f64,
+        "_remap_level" => 0.0,
+        // lampost traces G97 and radius mode (G96 and G7 are named where they stand).
+        "_spindle_rpm_mode" | "_lathe_radius_mode" => 1.0,
+        "_spindle_css_mode" => 0.0,
+        _ => return None,
+    })
+}
+
+/// Whether `name` (lower case, with its `_`) is one of LinuxCNC's read-only parameters.
+fn read_only(name: &str) -> bool {
+    (PREDEFINED.contains(&name) && !matches!(name, "_value" | "_value_returned"))
+        || PREDEFINED_UNKNOWN.contains(&name)
+        || POSITION_NAMES.contains(&name)
+}
 
 impl Params {
     /// The parameters of a Fanuc Macro B program (see Macro B (`macrob.rs`)): `#` numbers are
@@ -273,6 +398,14 @@ impl Params {
                 end: interp.program_position(),
                 machine: *interp.position(),
             };
+        }
+    }
+
+    /// Note the interpreter's modal state, for LinuxCNC's predefined named parameters:
+    /// the stream calls it before it evaluates a LinuxCNC macro or O-word line.
+    pub fn note_modal(&mut self, interp: &crate::interp::Interpreter) {
+        if self.fanuc.is_none() {
+            self.modal = Some(*interp.modal());
         }
     }
 
@@ -317,6 +450,13 @@ impl Params {
             // `#<_x>` … `#<_w>`: the position, LinuxCNC's aliases of `#5420`–`#5428`.
             if let Some(i) = POSITION_NAMES.iter().position(|&n| n == name) {
                 return Some(self.numbered[5420 + i]);
+            }
+            if let Some(v) = self.modal.as_ref().and_then(|m| {
+                (!matches!(name.as_str(), "_value" | "_value_returned"))
+                    .then(|| predefined(&name, m, self.saved.len()))
+                    .flatten()
+            }) {
+                return Some(v);
             }
             self.globals.get(&name).copied()
         } else {
@@ -594,6 +734,8 @@ impl<'t, 'p> Eval<'t, 'p> {
             Param::Named(name) => self.params.named(name).ok_or_else(|| {
                 let what = if name.to_ascii_lowercase().starts_with("_hal[") {
                     format!("#<{name}> is a HAL pin, whose value only the machine knows (QtPlasmaC reads its cut feed rate from one); LinuxCNC's standalone rs274 refuses it too: write the value in its place")
+                } else if PREDEFINED_UNKNOWN.contains(&name.to_ascii_lowercase().as_str()) {
+                    format!("#<{name}> is one of LinuxCNC's predefined parameters whose value depends on the machine (its configuration, switches or tool table), which lampost does not hold: write the value in its place")
                 } else {
                     format!("parameter #<{name}> is not set")
                 };
@@ -1186,6 +1328,20 @@ pub fn eval_line<'a>(
                             i,
                         )));
                     }
+                }
+                let fixed = match &p {
+                    Param::Named(n) => read_only(n),
+                    Param::Numbered(n) => !macro_b && (5420..=5428).contains(n),
+                };
+                if fixed {
+                    return Err(err((
+                        format!(
+                            "{} is read only (one of LinuxCNC's predefined parameters; rs274 refuses to set it)",
+                            &text[start..i].split('=').next().unwrap_or("").trim()
+                        ),
+                        start,
+                        i,
+                    )));
                 }
                 sets.push((p, (!vacant).then_some(v)));
             }

@@ -11,7 +11,7 @@
 
 use serde::Serialize;
 
-use crate::ast::{Block, BlockKind, Item, Word};
+use crate::ast::{Block, BlockKind, CommentStyle, Item, Word};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::modal::*;
 use crate::parse::PlainMotion;
@@ -311,6 +311,8 @@ pub struct Interpreter {
     lathe: crate::turning::LatheSigns,
     /// The line of the last block that changed the offsets ([`Interpreter::offset_line`]).
     offset_line: u32,
+    /// How many blocks changed them ([`Interpreter::offset_changes`]).
+    offset_changes: u64,
 }
 
 /// What a compensated move keeps of its block: line, end (for the axes off the plane),
@@ -625,6 +627,7 @@ impl Interpreter {
             comp_drawn: [0.0; 9],
             lathe: crate::turning::LatheSigns::default(),
             offset_line: 0,
+            offset_changes: 0,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -696,8 +699,14 @@ impl Interpreter {
         let done = self.block_inner(b, out);
         if (self.offset_cache, self.modal.work_offset) != before {
             self.offset_line = b.line;
+            self.offset_changes += 1;
         }
         done
+    }
+
+    /// How many blocks have changed the offsets so far (see [`Interpreter::offset_line`]).
+    pub fn offset_changes(&self) -> u64 {
+        self.offset_changes
     }
 
     /// The line of the last block that changed the offsets from program to machine
@@ -710,6 +719,25 @@ impl Interpreter {
     fn block_inner(&mut self, b: &Block<'_>, out: &mut impl FnMut(Event)) -> Res<()> {
         if b.block_delete && self.opts.block_delete {
             return Ok(());
+        }
+        if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
+            // `(ABORT, message)`: rs274 stops the program there, with the message.
+            if let Some(c) = b.items.iter().find_map(|it| match it {
+                Item::Comment(c) if c.style == CommentStyle::Paren => {
+                    let t = c.text.trim_start();
+                    t.get(..6)
+                        .filter(|k| k.eq_ignore_ascii_case("abort,"))
+                        .map(|_| (t[6..].trim(), c.span))
+                }
+                _ => None,
+            }) {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::Abort(c.0.to_string()),
+                    Some(c.1),
+                ));
+            }
         }
         if b.block_delete && self.opts.post_notes && b.has_words() {
             self.warn(b, out, ErrorKind::BlockDeletePosted, None);
@@ -1297,6 +1325,13 @@ impl Interpreter {
             None | Some(OtherCode::Unsimulated(_)) => true,
             // A setting's arguments are its own (`G187 P1 E.002`), but a move in its
             // block is a move (`G103 P1 G1 X1 F100`).
+            // LinuxCNC's G8 (lathe radius mode) has none: a feed beside it is the
+            // program's (`G18 G21 G90 G8 F100`).
+            Some(OtherCode::Setting)
+                if code == 80 && self.opts.flavor == crate::flavor::Flavor::LinuxCnc =>
+            {
+                false
+            }
             Some(OtherCode::Setting) => w.g_in(GGroup::Motion).is_none() && !w.has_axes(),
             // Fanuc `G05 P10000` and `G05.1 Q1` are settings; LinuxCNC's splines have
             // axis or I/J words.
@@ -3139,6 +3174,14 @@ impl Interpreter {
         }
         if self.modal.feed_mode == FeedMode::InverseTime {
             return Err(fail(None, "inverse time feed (G93): use G94".into()));
+        }
+        // The block's own F is the cuts' feed (`G71 Q100 … F100`), as rs274 sets it
+        // before the cycle.
+        if let Some(f) = w
+            .word(b'F')
+            .filter(|f| f.value > 0.0 && f.value.is_finite())
+        {
+            self.modal.feed = f.value;
         }
         // The cycle's start: X and Z of the block, from the position in G91; the rapid
         // there reads them as absolute (rs274 switches to G90 before it).

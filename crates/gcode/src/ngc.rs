@@ -100,7 +100,26 @@ pub(crate) fn parse_oword(text: &str) -> Option<(String, Kw, usize)> {
     while i < b.len() && b[i].is_ascii_alphabetic() {
         i += 1;
     }
-    let kw = match text[s..i].to_ascii_lowercase().as_str() {
+    let mut word = text[s..i].to_ascii_lowercase();
+    // rs274 reads a line with its blanks taken out: `else if` is `elseif`, `end sub`
+    // is `endsub` (probe-screen-ng's and linuxcnc-features' macros write them so).
+    let mut j = i;
+    skip(&mut j);
+    let t = j;
+    while j < b.len() && b[j].is_ascii_alphabetic() {
+        j += 1;
+    }
+    if j > t {
+        let joined = format!("{word}{}", text[t..j].to_ascii_lowercase());
+        if matches!(
+            joined.as_str(),
+            "elseif" | "endsub" | "endif" | "endwhile" | "endrepeat"
+        ) {
+            word = joined;
+            i = j;
+        }
+    }
+    let kw = match word.as_str() {
         "sub" => Kw::Sub,
         "endsub" => Kw::EndSub,
         "call" => Kw::Call,
@@ -264,14 +283,14 @@ impl Control {
                 Ok(Some(self.entries[end].next))
             }
             Kw::EndSub | Kw::Return => {
-                let value = if kw == Kw::Return {
+                // `return [v]` and `endsub [v]` both give the call a value (rs274 sets
+                // `#<_value>` from either).
+                let value = {
                     let mut ev = Eval::new(text, rest, params);
                     match ev.peek_value() {
                         true => Some(ev.value()?),
                         false => None,
                     }
-                } else {
-                    None
                 };
                 let Some(f) = self.frames.pop() else {
                     return Err((

@@ -983,6 +983,12 @@ fn words_reference_items<'a>(
         }
         _ => {}
     }
+    if block.block_delete {
+        // `/ o100 repeat [2]`: an O-word line may be block-deleted too.
+        while i < bytes.len() && matches!(bytes[i], b' ' | b'\t') {
+            i += 1;
+        }
+    }
     if bytes.get(i).is_some_and(|c| matches!(c, b'o' | b'O')) && is_oword(text[i..].trim_start()) {
         block.kind = BlockKind::Macro(MacroKind::LinuxCncOWord);
         return Ok(());

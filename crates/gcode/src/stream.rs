@@ -407,9 +407,11 @@ impl<S: LineSource> Iterator for Stream<S> {
                             );
                         }
                     } else if block.kind != BlockKind::Words && parsed.is_ok() {
+                        params.note_modal(&self.interp);
                         parsed = evaluate(&line, &mut block, params, &mut control);
                     }
                 }
+                let offsets = self.interp.offset_changes();
                 let failed = match parsed {
                     Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
                         Ok(()) => {
@@ -417,7 +419,10 @@ impl<S: LineSource> Iterator for Stream<S> {
                                 // The queue held nothing before this block: its events are
                                 // exactly the block's.
                                 after_moves(params, queue);
-                                if ends_with_probe(queue) {
+                                // A frame moved (G92, G10 L20, G52, G55…): the position in
+                                // it (rs274 sets `#5420`… at once).
+                                if ends_with_probe(queue) || self.interp.offset_changes() != offsets
+                                {
                                     // A probe may leave the tool off its end (backed off,
                                     // `interp::probe_rest`): the position is the tool's.
                                     params.note_position(&self.interp.program_position());
@@ -446,6 +451,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                     params.after_block(&self.interp);
                     MacroKind::FanucMacroB
                 } else {
+                    params.note_modal(&self.interp);
                     MacroKind::LinuxCncOWord
                 };
                 let done = match call.take() {

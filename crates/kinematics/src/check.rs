@@ -265,9 +265,104 @@ fn label(what: &str, value: &str) -> Result<(), Refusal> {
     }
 }
 
+/// The M codes (whole numbers) of a checked code string.
+fn m_codes(code: &str) -> impl Iterator<Item = f64> + '_ {
+    code.split(' ')
+        .filter_map(|w| w.strip_prefix('M'))
+        .filter_map(|n| n.parse::<f64>().ok())
+}
+
+/// The process codes as a set: each switch that goes on goes off (an empty `laser_off`
+/// left the laser on over every traverse), on and off differ, no code stops, ends or
+/// calls the program but `program_end` (which ends it: M2 or M30), no code changes the
+/// tool but `tool_change`, and `laser_on` leaves the power word to the post (which
+/// writes `--power` with it: `M71 S500 S1000`).
+fn process_codes_together(p: &crate::def::ProcessDef) -> Result<(), (Place, Refusal)> {
+    let at = |key: &'static str, message: String| (Place::Process(key), refuse(0, message));
+    for (on_key, on, off_key, off) in [
+        ("laser_on", &p.laser_on, "laser_off", &p.laser_off),
+        ("powder_on", &p.powder_on, "powder_off", &p.powder_off),
+        ("spindle_on", &p.spindle_on, "spindle_off", &p.spindle_off),
+        ("coolant_on", &p.coolant_on, "coolant_off", &p.coolant_off),
+    ] {
+        if !on.is_empty() && off.is_empty() {
+            return Err(at(
+                off_key,
+                format!(
+                    "`process.{off_key}` is empty while `process.{on_key}` is \"{on}\": the post could never turn it off (before travel, at a stop, at the end); give the machine's code, or leave both empty"
+                ),
+            ));
+        }
+        if on.is_empty() && !off.is_empty() {
+            return Err(at(
+                on_key,
+                format!(
+                    "`process.{on_key}` is empty while `process.{off_key}` is \"{off}\": the post could never turn it on; give the machine's code, or leave both empty"
+                ),
+            ));
+        }
+        if !on.is_empty() && on == off {
+            return Err(at(
+                off_key,
+                format!("`process.{off_key}` is \"{off}\", the same as `process.{on_key}`: a switch needs two codes"),
+            ));
+        }
+    }
+    for (key, code) in p.codes() {
+        for m in m_codes(code) {
+            let why = match m {
+                _ if m == 0.0 || m == 1.0 || m == 60.0 => "stops the program",
+                // A tool change may be a control's macro (`M98 P9000`).
+                _ if m == 98.0 && key == "tool_change" => continue,
+                _ if m == 98.0 || m == 99.0 => "calls or returns from a subprogram",
+                _ if (m == 2.0 || m == 30.0) && key != "program_end" => "ends the program",
+                _ if m == 6.0 && key != "tool_change" => "changes the tool",
+                _ => continue,
+            };
+            return Err(at(
+                key,
+                format!(
+                    "`process.{key}` holds M{m}, which {why}: the post writes stops, ends, calls and tool changes itself where the input has them; remove it"
+                ),
+            ));
+        }
+    }
+    if !m_codes(&p.program_end).any(|m| m == 2.0 || m == 30.0) {
+        return Err(at(
+            "program_end",
+            format!(
+                "`process.program_end` is \"{}\": it must end the program with M2 or M30 (verify holds a posted program to ending)",
+                p.program_end
+            ),
+        ));
+    }
+    let power = p.laser_power_word.as_str();
+    if p.laser_on
+        .split(' ')
+        .any(|w| !power.is_empty() && w.starts_with(power))
+    {
+        return Err(at(
+            "laser_on",
+            format!(
+                "`process.laser_on` is \"{}\", with a {power} word: the post writes the power itself in `laser_power_word` ({power}, from --power); remove it",
+                p.laser_on
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The longest head the post takes (radius or length, in machine units): beyond any
+/// machine, and far within what the collision checks compute with.
+const MAX_HEAD: f64 = 1e6;
+
 /// An optional length: finite and at least (or above) 0.
 fn length(key: &str, value: Option<f64>, zero_ok: bool, default: &str) -> Result<(), Refusal> {
     match value {
+        Some(v) if v.is_finite() && v > MAX_HEAD => Err(refuse(
+            0,
+            format!("`process.{key}` = {v:e}: it must be at most {MAX_HEAD} in machine units"),
+        )),
         Some(v) if v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0)) => Ok(()),
         Some(v) => Err(refuse(
             0,
@@ -341,6 +436,7 @@ impl MachineDef {
         }
         p.laser_power_word =
             power_word(&p.laser_power_word).map_err(|r| (Place::Process("laser_power_word"), r))?;
+        process_codes_together(p)?;
         let at = Place::Process;
         length("safe_margin", p.safe_margin, true, "0.2 in, 5 mm")
             .map_err(|r| (at("safe_margin"), r))?;
@@ -860,19 +956,15 @@ mod tests {
         for (value, stored) in [
             ("M71", "M71"),
             ("M3", "M3"),
-            ("M98 P10", "M98 P10"),
-            ("M30", "M30"),
-            ("", ""),
-            ("   ", ""),
             ("m3 s1200", "M3 S1200"),
-            (" M98  P10 Q2.5 ", "M98 P10 Q2.5"),
+            (" M3  P10 Q2.5 ", "M3 P10 Q2.5"),
             ("S-1 M3", "S-1 M3"),
             ("M3 S.5", "M3 S.5"),
         ] {
-            let text = with_line(fadal(), "laser_on", &format!("laser_on = \"{value}\""));
+            let text = with_line(fadal(), "spindle_on", &format!("spindle_on = \"{value}\""));
             let d =
                 MachineDef::from_toml(&text, "m.toml").unwrap_or_else(|e| panic!("{value}: {e}"));
-            assert_eq!(d.process.laser_on, stored);
+            assert_eq!(d.process.spindle_on, stored);
         }
     }
 

@@ -869,6 +869,7 @@ pub fn verify_points_traced<R: BufRead>(
             }
             Event::Move(m) => {
                 rep.moves += 1;
+                crate::verify::rotaries_commanded(&m, &ix[3..], ix[2])?;
                 rules.check(&m, &ix[3..])?;
                 let lin = |p: &[f64; 9]| [p[ix[0]], p[ix[1]], p[ix[2]]];
                 let rot = |p: &[f64; 9]| [p[ix[3]], p[ix[4]]];

@@ -214,6 +214,9 @@ pub(crate) fn axis_letters(m: &Machine) -> [u8; 5] {
     ]
 }
 
+/// The largest FADAL program number (O9999).
+pub const MAX_PROGRAM_NUMBER: u32 = 9999;
+
 /// The program number and header comments, then the modal preamble (units, absolute,
 /// per-minute feed, XY plane, no compensation, no canned cycle).
 pub(crate) fn write_header<W: Write>(
@@ -222,6 +225,12 @@ pub(crate) fn write_header<W: Write>(
     units: Units,
 ) -> Result<(), PostError> {
     if cfg.dialect == PostDialect::Fadal {
+        if cfg.program_number > MAX_PROGRAM_NUMBER {
+            return Err(PostError::Options(format!(
+                "--program-number {}: a FADAL program number is O0 to O{MAX_PROGRAM_NUMBER}",
+                cfg.program_number
+            )));
+        }
         em.program_number(
             cfg.program_number,
             Some(&comment_text(cfg.header.first().map_or("", String::as_str)).to_uppercase()),
@@ -259,8 +268,9 @@ pub(crate) fn write_header<W: Write>(
 /// spaces, so
 /// no text can close the comment or start a block of its own.
 pub fn comment_text(s: &str) -> String {
+    // `%` too: a tape's end to a DNC sender or a FADAL, even inside a comment.
     s.chars()
-        .filter(|&c| c != '(' && c != ')')
+        .filter(|&c| c != '(' && c != ')' && c != '%')
         .map(|c| if c.is_control() { ' ' } else { c })
         .collect()
 }

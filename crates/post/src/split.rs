@@ -58,6 +58,8 @@ struct Modal {
     motion: Option<(u16, String)>,
     /// The feed word (`F508`).
     feed: Option<String>,
+    /// The last word written of each axis (`X-81.500`), by [`AXES`] index.
+    axes: [Option<String>; 9],
     inverse_time: bool,
 }
 
@@ -79,6 +81,11 @@ impl Modal {
                 (b'G', Some(930)) => self.inverse_time = true,
                 (b'G', Some(940 | 950)) => self.inverse_time = false,
                 (b'F', _) => self.feed = Some(w.display()),
+                (l, _) if w.register.is_none() => {
+                    if let Some(i) = AXES.iter().position(|&a| a == l) {
+                        self.axes[i] = Some(w.display());
+                    }
+                }
                 _ => {}
             }
         }
@@ -128,6 +135,18 @@ impl Opening {
                         None => (0, String::new()),
                     });
                 }
+            }
+            // The axes the block leaves out, where the last piece left them (the
+            // machine is there already: no motion), so that the piece read alone
+            // starts where it runs (a lift `G0 Z150.` then `Y-51.` left X at 0).
+            let missing: String = AXES
+                .iter()
+                .zip(&self.at.axes)
+                .filter(|(&l, v)| v.is_some() && b.word(l).is_none())
+                .filter_map(|(_, v)| v.as_ref().map(|v| format!(" {v}")))
+                .collect();
+            if let (false, Some(last)) = (missing.is_empty(), b.words().last()) {
+                ins.push((last.span.end, missing));
             }
         }
         if self.need_feed {
@@ -319,9 +338,17 @@ pub fn split<F: Read + Seek>(
         }
         let Some(end) = best else {
             let next = cuts.iter().copied().find(|&c| c > start).unwrap_or(b1);
+            let tail = if next == b1 && !fadal {
+                suffix.len() as u64
+            } else {
+                0
+            };
+            let need = next - start + tail + head + overhead as u64;
             return Err(PostError::Options(format!(
-                "a stretch of {} bytes has no point where the head travels with the process off, more than --max-bytes {max_bytes}; raise the limit",
-                next - start
+                "a stretch of {} bytes has no point where the head travels with the process off: with the {} bytes its piece starts{} with, it needs --max-bytes {need} or more (given {max_bytes}); raise the limit",
+                next - start,
+                head + overhead as u64,
+                if tail > 0 { " and ends" } else { "" }
             )));
         };
         pieces_ranges.push((start, end));
@@ -359,7 +386,17 @@ pub fn split<F: Read + Seek>(
             let mut text = b"%\n".to_vec();
             let mut calls = Vec::new();
             for (k, body) in bodies.into_iter().enumerate() {
-                let n = program_number + 1 + k as u32;
+                let n = u32::try_from(k)
+                    .ok()
+                    .and_then(|k| program_number.checked_add(1 + k))
+                    .filter(|&n| n <= crate::post::MAX_PROGRAM_NUMBER)
+                    .ok_or_else(|| {
+                        PostError::Options(format!(
+                            "--program-number {program_number}: the {count} subprograms after it would pass O{}; give a number of at most {}",
+                            crate::post::MAX_PROGRAM_NUMBER,
+                            crate::post::MAX_PROGRAM_NUMBER.saturating_sub(count as u32)
+                        ))
+                    })?;
                 let head = format!("O{n} (PART {} OF {count})\n", k + 1);
                 if head.len() + body.len() + 4 > max_bytes {
                     return Err(PostError::Options(format!(
@@ -427,17 +464,24 @@ mod tests {
     fn a_piece_says_its_motion_and_feed_again() {
         let before =
             "N10 G21 G90 G94 G17 G40 G80\nN20 G0 Z5\nN30 G1 Z0 F508\nN40 X1 F381\nN50 G0 Z5\n";
-        // The motion code after the N word, the feed at the end of the first feed move.
+        // The motion code after the N word, the axes the last piece left at the end of
+        // the first move (X1: the machine is there), the feed at the end of the first
+        // feed move.
         assert_eq!(
             walk(before, "N60 Z150 (UP)\nN70 X2\nN80 G1 Z0\nN90 X3\n"),
-            "N60 G0 Z150 (UP)\nN70 X2\nN80 G1 Z0 F381\nN90 X3\n"
+            "N60 G0 Z150 X1 (UP)\nN70 X2\nN80 G1 Z0 F381\nN90 X3\n"
         );
-        // Blocks that say it themselves are left alone; so is a piece with no N words.
-        assert_eq!(walk(before, "G0 Z150\nG1 X2 F10\n"), "G0 Z150\nG1 X2 F10\n");
-        assert_eq!(walk(before, "M72\nZ150\n"), "M72\nG0 Z150\n");
+        // Blocks that say it themselves are left alone (but for the axes); so is a
+        // piece with no N words.
+        assert_eq!(
+            walk(before, "G0 Z150\nG1 X2 F10\n"),
+            "G0 Z150 X1\nG1 X2 F10\n"
+        );
+        assert_eq!(walk(before, "M72\nZ150\n"), "M72\nG0 Z150 X1\n");
         // A feed piece start (machining) gets its feed; G80 leaves nothing to repeat.
-        assert_eq!(walk("G1 X0 F10.\n", "Y1\nX1\n"), "G1 Y1 F10.\nX1\n");
-        assert_eq!(walk("G0 X0\nG80\n", "Z1\n"), "Z1\n");
+        assert_eq!(walk("G1 X0 F10.\n", "Y1\nX1\n"), "G1 Y1 X0 F10.\nX1\n");
+        assert_eq!(walk("G0 X0\nG80\n", "Z1\n"), "Z1 X0\n");
+        assert_eq!(walk("G0 X0 Y1 Z2 B30\n", "X5\n"), "G0 X5 Y1 Z2 B30\n");
     }
 
     #[test]

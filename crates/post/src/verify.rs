@@ -679,6 +679,7 @@ pub fn verify_traced<R: BufRead>(
             }
             Event::Move(m) => {
                 rep.moves += 1;
+                rotaries_commanded(&m, &rot_idx, lin_idx[2])?;
                 if let (true, Some(s)) = (m.modal.tool != rules.tool, current) {
                     return Err(PostError::Verify(format!(
                         "posted line {}: a tool change (to T{}) within the move of input line {}",
@@ -934,6 +935,9 @@ pub(crate) struct Switches {
     /// Any coolant (the machine's `coolant_on`, `M7` or `M8`; off by `coolant_off` or
     /// `M9`).
     pub(crate) coolant: Option<u32>,
+    /// The machine has no powder codes (`powder_on = ""`: a wire-fed head): a deposit
+    /// needs the laser alone.
+    pub(crate) no_powder: bool,
 }
 
 /// The words of the machine's process codes; for deposition, the power word the
@@ -994,6 +998,10 @@ impl Screen {
                 power,
                 no_work_offset: posted_work_offset(process)?.1.is_none(),
             }),
+            switches: Rc::new(Cell::new(Switches {
+                no_powder: p.powder_on.is_empty(),
+                ..Switches::default()
+            })),
             ..Screen::default()
         })
     }
@@ -1069,12 +1077,21 @@ impl Screen {
 }
 
 impl Screen {
-    /// At the end of the posted text: the program ends with M2 or M30. (Read in
-    /// execution order, a FADAL subprogram's `M99` returns into the main program, whose
-    /// end comes after it; an `M99` read last ends the main program, and a control runs
-    /// such a program again without end.)
+    /// At the end of the posted text: the program ends with M2 or M30, with the laser
+    /// and the powder off (the machine's own codes; a control's program end may leave
+    /// either on). (Read in execution order, a FADAL subprogram's `M99` returns into the
+    /// main program, whose end comes after it; an `M99` read last ends the main program,
+    /// and a control runs such a program again without end.)
     pub(crate) fn finish(&self) -> Result<(), PostError> {
         self.check()?;
+        let s = self.switches.get();
+        for (what, on) in [("laser", s.laser), ("powder", s.powder)] {
+            if let Some(l) = on {
+                return Err(PostError::Verify(format!(
+                    "the posted program ends with the {what} on (turned on at posted line {l}): the post turns it off with the machine's code before the end"
+                )));
+            }
+        }
         match self.last_end.get() {
             Some((line, 990)) => Err(PostError::Verify(format!(
                 "posted line {line}: the program ends with M99, and a control runs such a main program again without end (the post ends with M30)"
@@ -1493,6 +1510,11 @@ pub(crate) fn process_state(
             "a rapid with the laser on (turned on at posted line {l}): it would deposit along the travel"
         ));
     }
+    if let (false, Some(l)) = (feed, s.powder) {
+        return fail(format!(
+            "a rapid with the powder on (turned on at posted line {l}): it would blow powder over the work along the travel; the post turns it off before any travel"
+        ));
+    }
     match process {
         Process::Deposit { .. } => {
             if let Some((l, _)) = s.spindle {
@@ -1505,7 +1527,7 @@ pub(crate) fn process_state(
                     "coolant on (posted line {l}) in a program posted for deposition: the post never turns it on"
                 ));
             }
-            if let (true, Some(l), None) = (feed, s.laser, s.powder) {
+            if let (true, Some(l), None, false) = (feed, s.laser, s.powder, s.no_powder) {
                 return fail(format!(
                     "a feed with the laser on (posted line {l}) and no powder: it would melt the work without adding to it"
                 ));
@@ -1552,6 +1574,37 @@ pub(crate) fn process_state(
             }
         }
     }
+}
+
+/// A posted move made before the program has set every rotary axis: the table stands
+/// wherever the last program left it, not at 0 as a replay from the start would have
+/// it (a posted program with its index line deleted verified). Only a rapid raising Z
+/// alone may come first (the post's lift to the safe height before it indexes).
+pub(crate) fn rotaries_commanded(m: &Move, rot_idx: &[usize], z: usize) -> Result<(), PostError> {
+    let mask = rot_idx.iter().fold(0u16, |a, &i| a | 1 << i);
+    if m.axes_named & mask == mask {
+        return Ok(());
+    }
+    let lift = matches!(m.kind, MoveKind::Rapid)
+        && (0..9).all(|k| k == z || m.start[k] == m.end[k])
+        && m.end[z] >= m.start[z];
+    if lift {
+        return Ok(());
+    }
+    let missing: Vec<char> = rot_idx
+        .iter()
+        .filter(|&&i| m.axes_named & 1 << i == 0)
+        .map(|&i| char::from(AXES[i]))
+        .collect();
+    Err(PostError::Verify(format!(
+        "posted line {}: a move before the program sets {}: the table stands wherever the last program left it, and the move would be made there; the post indexes every rotary before the first move (after the lift)",
+        m.line,
+        missing
+            .iter()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join(" and ")
+    )))
 }
 
 /// A posted arc from `p0` through `p1` (a little way along it, part frame) turns the

@@ -36,6 +36,12 @@ impl Codes {
     fn of(m: &Machine, process: &Process) -> Result<Codes, PostError> {
         let p = &m.def.process;
         let mut laser_on = code_words(&p.laser_on)?;
+        if let (Process::Deposit { .. }, true) = (process, laser_on.is_empty()) {
+            return Err(PostError::Options(format!(
+                "machine {}: its file has no laser codes (`process.laser_on` is empty), so it cannot deposit: post with --process machine, or give the machine's laser_on and laser_off",
+                m.def.name
+            )));
+        }
         if let Process::Deposit { power } = process {
             let letter = p
                 .laser_power_word
@@ -923,6 +929,10 @@ fn emit_words<W: Write>(
     w: &[(u8, f64)],
     comment: Option<&str>,
 ) -> Result<(), PostError> {
+    if w.is_empty() && comment.is_none() {
+        // A code the machine has none of (`powder_on = ""`): no line.
+        return Ok(());
+    }
     for &(l, v) in w {
         if l == b'F' {
             feed_writable(v)?;
