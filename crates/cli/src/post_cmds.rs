@@ -742,6 +742,23 @@ pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostCon
             "error: --tolerance {tolerance}: must be positive\n"
         )));
     }
+    // The written numbers are on the output's grid (0.0001 in, 0.001 mm, or the
+    // machine's coarser resolution): a tolerance below half its step cannot be held, and
+    // the in-process check would call it a fault.
+    let step = m.def.linear.iter().map(|l| l.resolution).fold(
+        match m.units {
+            lampost_kinematics::Units::Inch => 1e-4,
+            lampost_kinematics::Units::Mm => 1e-3,
+        },
+        f64::max,
+    );
+    if tolerance < step / 2.0 {
+        return Err(CliError::usage(format!(
+            "error: --tolerance {}: finer than the program can be written (its linear words are on a grid of {step}); give at least {}\n",
+            lampost_gcode::Readable(tolerance),
+            step / 2.0
+        )));
+    }
     let renumber = a
         .renumber
         .as_deref()
@@ -836,15 +853,6 @@ pub fn post(
     json_report: Option<&str>,
 ) -> Result<(), CliError> {
     let t0 = std::time::Instant::now();
-    if let Some(arm) = crate::robot_cmds::arm_for(&a.machine)? {
-        return crate::robot_cmds::post(&arm, a, input, output, max_bytes, json_report);
-    }
-    if a.config.is_some() || a.spacing.is_some() || a.chunk_points.is_some() {
-        return Err(CliError::usage(format!(
-            "error: --config, --spacing and --chunk-points are for arms; {} is a table machine\n",
-            a.machine
-        )));
-    }
     crate::io::distinct_outputs(
         &[
             ("-o", output),
@@ -857,6 +865,15 @@ pub fn post(
             ("machine file (--machine)", Some(a.machine.as_str())),
         ],
     )?;
+    if let Some(arm) = crate::robot_cmds::arm_for(&a.machine)? {
+        return crate::robot_cmds::post(&arm, a, input, output, max_bytes, json_report);
+    }
+    if a.config.is_some() || a.spacing.is_some() || a.chunk_points.is_some() {
+        return Err(CliError::usage(format!(
+            "error: --config, --spacing and --chunk-points are for arms; {} is a table machine\n",
+            a.machine
+        )));
+    }
     let m = load_machine(&a.machine, &a.set)?;
     if let Some(max) = max_bytes {
         if max < MIN_PIECE_BYTES {

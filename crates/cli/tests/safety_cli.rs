@@ -2423,3 +2423,38 @@ fn split_pieces_read_alone_and_program_numbers_stay_in_range() {
         assert!(!fout.exists());
     }
 }
+
+/// h52 (finding 91): an option's value the control's word cannot hold (`--index
+/// C=1e6`, `--power 1e308`) was refused with "check the paths and free space", and a
+/// `--tolerance` finer than the written grid was called a lampost fault by the in-process
+/// check. Each names the option now, and nothing is written.
+#[test]
+fn option_values_the_program_cannot_hold_are_the_option_s_errors() {
+    let dir = tempdir("safety-h52-options");
+    let out = dir.join("out.nc");
+    let input = fx("patch-20mm.nc");
+    for (extra, says) in [
+        (
+            vec!["--index", "B=0,C=1e6"],
+            "the value comes from an option (--index",
+        ),
+        (
+            vec!["--index", "B=0,C=0", "--power", "1e9"],
+            "the value comes from an option (--index, --power",
+        ),
+        (
+            vec!["--index", "B=0,C=0", "--tolerance", "1e-300"],
+            "--tolerance 1e-300: finer than the program can be written (its linear words are on a grid of 0.001); give at least 0.0005",
+        ),
+    ] {
+        let mut a = vec!["post", "--machine", "nrc-lc"];
+        a.extend(extra.iter().copied());
+        a.extend([input.as_str(), "-o", out.to_str().expect("utf8")]);
+        let o = lampost(&a);
+        assert!(!o.status.success(), "{extra:?}");
+        let e = stderr(&o);
+        assert!(e.contains(says), "{extra:?}: {e}");
+        assert!(!e.contains("free space") && !e.contains("lampost fault"), "{e}");
+        assert!(!out.exists(), "{extra:?}");
+    }
+}

@@ -150,6 +150,15 @@ impl PostError {
 
 impl From<std::io::Error> for PostError {
     fn from(e: std::io::Error) -> Self {
-        PostError::Io(e.to_string())
+        let text = e.to_string();
+        // The emitter's refusal of a value its dialect cannot hold, met where no input
+        // line is at fault (the index, the power, the header): an option's value, or the
+        // machine file's. Not a file's trouble.
+        if e.kind() == std::io::ErrorKind::InvalidData && text.starts_with("refused to write") {
+            return PostError::Options(format!(
+                "{text}: the value comes from an option (--index, --power, --spindle, --origin, --renumber, …) or the machine file; give one the control's word holds"
+            ));
+        }
+        PostError::Io(text)
     }
 }
