@@ -138,6 +138,9 @@ fn read_path(
 /// resampled as they come on this one, in batches: the same samples, and the same
 /// error, as reading the whole path and then resampling it (a row's error comes first,
 /// as it would when the file is read before it is resampled).
+/// The least feed a path for an arm may give (units a minute).
+const MIN_FEED: f64 = 1e-3;
+
 fn read_and_resample(
     text: &str,
     name: &str,
@@ -151,7 +154,21 @@ fn read_and_resample(
         let reader = s.spawn(move || -> Result<(), lampost_post::PostError> {
             let mut batch = Vec::with_capacity(BATCH);
             for p in points(text, name) {
-                batch.push(p?);
+                let p = p?;
+                // A feed so slow that its times run past any controller's word (1e-300
+                // wrote a `dt` of 300 digits).
+                if p.feed * k < MIN_FEED {
+                    return Err(lampost_post::PostError::File {
+                        file: name.to_string(),
+                        line: p.line,
+                        column: 1,
+                        message: format!(
+                            "the feed {} is under {MIN_FEED} a minute: one step of the path would take days, past any controller's time word",
+                            lampost_gcode::Readable(p.feed)
+                        ),
+                    });
+                }
+                batch.push(p);
                 if batch.len() == BATCH {
                     let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
                     // The resampler stopped (its own error): the rest is not needed.
@@ -357,6 +374,113 @@ pub fn post(
 }
 
 /// `lampost verify --machine ARM DIR --input PATH`.
+/// The manifest's figures against what verification found (a controller is loaded by
+/// them: `chunk_points` is its memory, `safe` where each chunk starts): every count equal
+/// to the chunks' and the path's, `chunk_points` holding every chunk, the units, the
+/// safe location and the times those of the arm and the path, and each chunk file's
+/// header naming the machine, configuration and units. The first disagreement.
+fn manifest_agrees(
+    arm: &Arm,
+    cfg: Config,
+    m: &serde_json::Value,
+    samples: &[Sample],
+    files: &[ChunkFile],
+    list: &[serde_json::Value],
+) -> Result<(), String> {
+    let units = if arm.units == lampost_robot::Units::Mm {
+        "mm"
+    } else {
+        "inch"
+    };
+    let num = |v: Option<&serde_json::Value>, what: &str| {
+        v.and_then(serde_json::Value::as_f64)
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("`{what}` is not a number"))
+    };
+    let near = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0);
+    if m.get("units").and_then(serde_json::Value::as_str) != Some(units) {
+        return Err(format!("`units` is not {units}, the arm's"));
+    }
+    let total = num(m.get("locations"), "locations")?;
+    if total != samples.len() as f64 {
+        return Err(format!(
+            "`locations` is {total}, but the path has {} locations",
+            samples.len()
+        ));
+    }
+    let mut largest = 0usize;
+    for (k, (c, f)) in list.iter().zip(files).enumerate() {
+        let n = num(c.get("locations"), "locations")?;
+        if n != (f.count + 2) as f64 {
+            return Err(format!(
+                "chunk {}: `locations` is {n}, but the chunk holds {} (its {} path locations and the safe location at each end)",
+                k + 1,
+                f.count + 2,
+                f.count
+            ));
+        }
+        largest = largest.max(f.count + 2);
+        let secs: f64 = samples
+            .get(f.first + 1..f.first + f.count)
+            .map_or(0.0, |s| s.iter().map(|s| s.dt).sum());
+        if !near(num(c.get("path_s"), "path_s")?, secs) {
+            return Err(format!(
+                "chunk {}: `path_s` is not the chunk's time along the path ({secs} s)",
+                k + 1
+            ));
+        }
+        let header = |key: &str, want: &str| {
+            let line = format!("# {key} {want}");
+            if f.text
+                .lines()
+                .take_while(|l| l.starts_with('#'))
+                .any(|l| l == line)
+            {
+                Ok(())
+            } else {
+                Err(format!(
+                    "chunk {} ({}): its header does not say `{line}`",
+                    k + 1,
+                    f.name
+                ))
+            }
+        };
+        header("machine", &arm.name)?;
+        header("config", &cfg.letters())?;
+        header("units", &format!("{units}, degrees, seconds"))?;
+    }
+    let room = num(m.get("chunk_points"), "chunk_points")?;
+    if room < largest as f64 {
+        return Err(format!(
+            "`chunk_points` is {room}, but a chunk holds {largest} locations: a controller loaded by it would not hold the chunk"
+        ));
+    }
+    let seconds: f64 = samples.iter().map(|s| s.dt).sum();
+    let laser: f64 = samples.iter().filter(|s| s.deposit).map(|s| s.dt).sum();
+    if !near(num(m.get("path_s"), "path_s")?, seconds) {
+        return Err(format!("`path_s` is not the path's time ({seconds} s)"));
+    }
+    if !near(num(m.get("laser_on_s"), "laser_on_s")?, laser) {
+        return Err(format!(
+            "`laser_on_s` is not the path's time with the laser on ({laser} s)"
+        ));
+    }
+    let safe = m
+        .get("safe")
+        .and_then(serde_json::Value::as_array)
+        .filter(|a| a.len() == arm.safe.len())
+        .ok_or("`safe` is not the arm's six joints")?;
+    for (j, (v, want)) in safe.iter().zip(arm.safe.map(f64::to_degrees)).enumerate() {
+        if !v.as_f64().is_some_and(|v| near(v, want)) {
+            return Err(format!(
+                "`safe` joint {} is not the arm's safe location ({want}°)",
+                j + 1
+            ));
+        }
+    }
+    Ok(())
+}
+
 pub fn verify(
     arm: &Arm,
     place: &Placement,
@@ -379,6 +503,17 @@ pub fn verify(
             None,
         )
     };
+    // Files of a folder `post` wrote: a named pipe among them would wait for ever.
+    let regular = |p: &Path| {
+        if std::fs::metadata(p).is_ok_and(|m| !m.is_file()) {
+            return Err(CliError::usage(format!(
+                "error: {}: not a regular file (a pipe, a device or a folder)\n  = help: give the folder `lampost post` wrote\n",
+                p.display()
+            )));
+        }
+        Ok(())
+    };
+    regular(&mpath)?;
     let mtext = crate::io::read_file_to_string(&mpath)
         .map_err(|e| CliError::usage(format!("error: cannot read {mname}: {e}\n  = help: give the folder `lampost post --machine {} … -o DIR` wrote\n", arm.name)))?;
     let m: serde_json::Value =
@@ -424,6 +559,7 @@ pub fn verify(
                 .ok_or_else(|| bad(0, format!("chunk {}: `{key}` is not a count", k + 1)))
         };
         let path = Path::new(dir).join(&file);
+        regular(&path)?;
         let text = crate::io::read_file_to_string(&path).map_err(|e| {
             bad(
                 0,
@@ -451,6 +587,7 @@ pub fn verify(
         )));
     }
     let rep = chunk::verify(arm, &samples, cfg, &files, tol).map_err(|e| robot_error(e, None))?;
+    manifest_agrees(arm, cfg, &m, &samples, &files, list).map_err(|msg| bad(0, msg))?;
     let out = if json_out {
         format!(
             "{}\n",

@@ -536,3 +536,135 @@ fn a_bad_row_is_refused_at_its_line_whatever_the_resampler_met_first() {
     );
     assert!(!dir.join("far").exists());
 }
+
+/// A change made to a manifest.
+type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+
+/// h54 (finding 92): verify read the manifest for the chunks' places only, so a
+/// controller's figures could be edited and verify passed: `chunk_points` (the memory
+/// the chunks were cut for) set below a chunk, the counts, the units, the safe location,
+/// the times; a chunk file's header saying inches. Each now fails, and a chunk or
+/// manifest that is a named pipe is refused rather than waited on.
+#[test]
+fn the_manifest_and_chunk_headers_are_held_to_what_verify_finds() {
+    let dir = tempdir("robot-h54-manifest");
+    std::fs::write(dir.join("p.csv"), plate(0.2, 2, 40, 600.0)).expect("write");
+    ok(&post(
+        &dir,
+        "p.csv",
+        "good.robot",
+        &["--chunk-points", "400"],
+    ));
+    ok(&verify(&dir, "p.csv", "good.robot"));
+    let manifest: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("good.robot/manifest.json")).expect("manifest"),
+    )
+    .expect("json");
+    let edits: Vec<(&str, Edit, &str)> = vec![
+        (
+            "locations",
+            Box::new(|m| m["locations"] = (m["locations"].as_u64().unwrap_or(0) + 1).into()),
+            "`locations` is",
+        ),
+        (
+            "a chunk's locations",
+            Box::new(|m| {
+                m["chunks"][0]["locations"] =
+                    (m["chunks"][0]["locations"].as_u64().unwrap_or(0) + 1).into()
+            }),
+            "chunk 1: `locations`",
+        ),
+        (
+            "chunk_points",
+            Box::new(|m| m["chunk_points"] = 10.into()),
+            "`chunk_points` is 10",
+        ),
+        (
+            "units",
+            Box::new(|m| m["units"] = "inch".into()),
+            "`units` is not mm",
+        ),
+        (
+            "safe",
+            Box::new(|m| m["safe"][0] = 10.0.into()),
+            "`safe` joint 1",
+        ),
+        (
+            "times",
+            Box::new(|m| m["laser_on_s"] = (-5.0).into()),
+            "`laser_on_s`",
+        ),
+    ];
+    for (what, edit, says) in edits {
+        let t = dir.join("t.robot");
+        let _ = std::fs::remove_dir_all(&t);
+        std::fs::create_dir_all(&t).expect("dir");
+        for e in std::fs::read_dir(dir.join("good.robot")).expect("read") {
+            let e = e.expect("entry");
+            std::fs::copy(e.path(), t.join(e.file_name())).expect("copy");
+        }
+        let mut m = manifest.clone();
+        edit(&mut m);
+        std::fs::write(t.join("manifest.json"), m.to_string()).expect("write");
+        let e = err(&verify(&dir, "p.csv", "t.robot"));
+        assert!(e.contains(says), "{what}: {e}");
+    }
+    // A chunk header in other units.
+    let t = dir.join("t.robot");
+    let c1 = t.join("chunk-001.loc");
+    std::fs::write(t.join("manifest.json"), manifest.to_string()).expect("write");
+    let text = std::fs::read_to_string(dir.join("good.robot/chunk-001.loc")).expect("chunk");
+    std::fs::write(&c1, text.replacen("# units mm,", "# units inch,", 1)).expect("write");
+    let e = err(&verify(&dir, "p.csv", "t.robot"));
+    assert!(e.contains("its header does not say `# units mm"), "{e}");
+    // A named pipe instead of a chunk.
+    std::fs::remove_file(&c1).expect("rm");
+    if std::process::Command::new("mkfifo")
+        .arg(&c1)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        let o = common::limited(
+            &format!(
+                "\"$LAMPOST\" verify --machine puma-lens {} --input {}",
+                t.display(),
+                dir.join("p.csv").display()
+            ),
+            1 << 20,
+            20,
+        );
+        assert_eq!(o.status.code(), Some(2), "{}", common::stderr(&o));
+        assert!(common::stderr(&o).contains("not a regular file"));
+    }
+}
+
+/// h54 (finding 93): a path's header was passed over and its columns read by place:
+/// `x y z feed i j k laser` had its feed read as the tool axis, and verify passed it,
+/// reading the file the same way. A laser value other than 0 or 1, and a feed so slow
+/// its times ran to 300 digits, were taken too. Each is refused at its line and column; nothing is written.
+#[test]
+fn a_path_s_header_and_values_are_held_to_its_columns() {
+    let dir = tempdir("robot-h54-path");
+    for (name, text, says) in [
+        (
+            "reordered.csv",
+            "x y z feed i j k laser\n-50 0 10 600 0 0 1 0\n0 0 10 600 0 0 1 1\n",
+            "reordered.csv:1:1: the header `x y z feed i j k laser` does not name the columns",
+        ),
+        (
+            "laser.csv",
+            "x y z i j k feed laser\n-50 0 10 0 0 1 600 0\n0 0 10 0 0 1 600 -1\n",
+            "laser.csv:3:18: the laser column is 1 (on) or 0 (off), not `-1`",
+        ),
+        (
+            "slow.csv",
+            "x y z i j k feed laser\n-50 0 10 0 0 1 600 0\n0 0 10 0 0 1 1e-300 1\n",
+            "slow.csv:3:1: the feed 1e-300 is under 0.001 a minute",
+        ),
+    ] {
+        std::fs::write(dir.join(name), text).expect("write");
+        let e = err(&post(&dir, name, "out.robot", &[]));
+        assert!(e.contains(says), "{name}: {e}");
+        assert!(!dir.join("out.robot").exists(), "{name}: written");
+    }
+}

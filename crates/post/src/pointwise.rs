@@ -209,6 +209,26 @@ impl Iterator for Points<'_> {
                 && fields.iter().all(|(_, f)| f.parse::<f64>().is_err())
             {
                 self.seen = true;
+                // The header names the columns, which are read by place: it must name
+                // them in that place (`x y z feed i j k laser` had its feed read as i).
+                let names = ["x", "y", "z", "i", "j", "k", "feed", "laser"];
+                let fits = (6..=8).contains(&all.n)
+                    && fields
+                        .iter()
+                        .zip(names)
+                        .all(|((_, f), n)| f.eq_ignore_ascii_case(n));
+                if !fits {
+                    self.done = true;
+                    return Some(Err(file_err(
+                        self.file,
+                        line,
+                        1,
+                        format!(
+                            "the header `{}` does not name the columns as they are read: x y z i j k [feed] [laser], in that order; write the columns so (and the header with them)",
+                            raw.trim()
+                        ),
+                    )));
+                }
                 continue;
             }
             self.seen = true;
@@ -268,6 +288,17 @@ fn row(
             ));
         }
         *feed = Some(v[6]);
+    }
+    if fields.len() >= 8 && v[7] != 0.0 && v[7] != 1.0 {
+        return Err(file_err(
+            file,
+            line,
+            fields[7].0 + 1,
+            format!(
+                "the laser column is 1 (on) or 0 (off), not `{}`",
+                fields[7].1
+            ),
+        ));
     }
     let Some(f) = *feed else {
         return Err(file_err(
