@@ -449,17 +449,17 @@ fn refuse_dry(
 /// took for a printer's on one `G4 S1` lost every cut as travel).
 fn intended_options(
     pl: &Placement,
-    secs: &[Section],
+    flavor: &lampost_gcode::Resolved,
     process: &lampost_post::Process,
-) -> Result<IntendedOptions, CliError> {
-    let flavor = section_flavor(pl, secs)?.flavor;
+) -> IntendedOptions {
+    let flavor = flavor.flavor;
     let deposit = matches!(process, lampost_post::Process::Deposit { .. });
-    Ok(IntendedOptions {
+    IntendedOptions {
         convert_units: pl.convert_units,
         e_extrusion: pl.e_extrusion || (deposit && flavor.is_slicer()),
         flavor,
         units: pl.units.map(gcode_units),
-    })
+    }
 }
 
 /// Build the sections from the placement options and INPUT (kept open while the
@@ -713,11 +713,17 @@ fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
     })
 }
 
-/// The post configuration from the options.
-pub fn config(m: &Machine, a: &PostArgs, sections: &[Section]) -> Result<PostConfig, CliError> {
+/// The post configuration from the options, the sections and their flavour (resolved once,
+/// by [`section_flavor`]).
+pub fn config(
+    m: &Machine,
+    a: &PostArgs,
+    sections: &[Section],
+    flavor: &lampost_gcode::Resolved,
+) -> Result<PostConfig, CliError> {
     let part = part_mesh(&a.place, m)?;
     let process = a.proc.to_process()?;
-    let intended = intended_options(&a.place, sections, &process)?;
+    let intended = intended_options(&a.place, flavor, &process);
     // The library's defaults (head, dialect, tolerances), then what the flags say.
     let defaults = PostConfig::new(m, process.clone());
     let head = match a.head.as_deref() {
@@ -901,7 +907,7 @@ pub fn post(
         // The per-point post, then its verification of what was written.
         let (frame, mut pts, name) = per_point_input(&a.place, path)?;
         per_point_units(&m, &a.place, &name, &mut pts)?;
-        let mut cfg = config(&m, a, &[])?;
+        let mut cfg = config(&m, a, &[], &section_flavor(&a.place, &[])?)?;
         let csv_bytes = std::fs::metadata(&path.path).map_or(0, |md| md.len());
         cfg.max_output_bytes = Some(output_bound(a.max_growth, csv_bytes)?);
         let short = Path::new(&name)
@@ -930,13 +936,9 @@ pub fn post(
         (report, cfg)
     } else {
         let secs = sections(&m, &a.place, input.as_ref())?;
-        let cfg = config(&m, a, &secs)?;
-        refuse_dry(
-            &secs,
-            &cfg.intended,
-            a.place.e_extrusion,
-            &section_flavor(&a.place, &secs)?,
-        )?;
+        let flavor = section_flavor(&a.place, &secs)?;
+        let cfg = config(&m, a, &secs, &flavor)?;
+        refuse_dry(&secs, &cfg.intended, a.place.e_extrusion, &flavor)?;
         let bar = crate::progress::Progress::counting("posting", "moves", a.place.quiet);
         // The post verifies every written feed point in-process (FK of the values as
         // written) and every rapid against the safe height; nothing reaches the user's
@@ -1233,7 +1235,7 @@ pub fn verify(
         )
     } else {
         let secs = sections(&m, place, input.as_ref())?;
-        let opts = intended_options(place, &secs, &process)?;
+        let opts = intended_options(place, &section_flavor(place, &secs)?, &process);
         let work = extra_work(place, part.as_deref())?;
         lampost_post::verify_traced(
             &m,

@@ -458,7 +458,10 @@ impl<'a> Intended<'a> {
         let off = [here[0] - prog[0], here[1] - prog[1], here[2] - prog[2]];
         match &self.frame_at_first {
             Some((sec, first, modal)) if *sec == self.idx => {
-                let moved = off.iter().zip(first).any(|(a, b)| a != b);
+                let other_offset = modal.work_offset != m.modal.work_offset;
+                if !other_offset && off == *first {
+                    return Ok(());
+                }
                 // Located where the frame moved, when the interpreter saw it (a
                 // slicer's `G92 Z0 E0` after its purge lines), else at this move.
                 let (line, next) = match interp.offset_line() {
@@ -466,12 +469,10 @@ impl<'a> Intended<'a> {
                     l if l == m.line => (l, String::new()),
                     l => (l, format!(" (the first at line {})", m.line)),
                 };
-                let what = if modal.work_offset != m.modal.work_offset {
+                let what = if other_offset {
                     format!("another work offset (G54…G59, FADAL E…) than the first move's is in force for the moves after this line{next}: the post places the program's frame once, and the other offsets are not known here")
-                } else if moved {
-                    format!("the program's frame moves here, after the first move (G92, G52, or G10 setting the work offset in force): the control would run the moves after it{next} shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job")
                 } else {
-                    return Ok(());
+                    format!("the program's frame moves here, after the first move (G92, G52, or G10 setting the work offset in force): the control would run the moves after it{next} shifted by the change, and the post places the frame once; program one frame, or post the parts as sections of a job")
                 };
                 Err(PostError::Unsupported {
                     file: file.to_string(),
