@@ -286,24 +286,144 @@ pub fn display_name(path: &str) -> String {
     }
 }
 
-/// Temporary files alive now: removed if the process is interrupted (SIGINT, SIGTERM,
-/// SIGHUP), so no run leaves one behind.
-static LIVE_TEMPS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+/// What a run has made and not yet put in place: temporary files, and folders it
+/// created for its output. Removed if the process is interrupted (SIGINT, SIGTERM,
+/// SIGHUP), so no run leaves one behind. Files are registered under the lock before
+/// they are created, and the handler keeps the lock until the process exits, so no file
+/// is made after it has looked.
+#[derive(Default)]
+struct Live {
+    files: Vec<PathBuf>,
+    dirs: Vec<PathBuf>,
+}
 
-fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
-    LIVE_TEMPS
-        .lock()
+static LIVE: std::sync::Mutex<Live> = std::sync::Mutex::new(Live {
+    files: Vec::new(),
+    dirs: Vec::new(),
+});
+
+fn live() -> std::sync::MutexGuard<'static, Live> {
+    LIVE.lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
-/// On SIGINT, SIGTERM or SIGHUP: remove every temporary file alive, then exit with 130.
+/// On SIGINT, SIGTERM or SIGHUP: remove every temporary file alive and every folder
+/// this run created that is then empty, then exit with 130. A set of files being put in
+/// place ([`persist_set`]) is finished first.
 pub fn remove_temps_on_signal() {
     let _ = ctrlc::set_handler(|| {
-        for p in live().drain(..) {
+        let mut live = live();
+        for p in live.files.drain(..) {
             let _ = fs::remove_file(p);
         }
+        for d in live.dirs.drain(..).rev() {
+            let _ = fs::remove_dir(d);
+        }
+        // Exits with the lock held: no thread registers (or makes) a file after this.
         std::process::exit(130);
     });
+}
+
+/// A folder made for a run's output: removed again (when empty) if the run fails or is
+/// interrupted, unless [`NewDir::keep`] is called; a folder that was there is left
+/// alone.
+#[derive(Debug)]
+pub struct NewDir {
+    made: Option<PathBuf>,
+}
+
+impl NewDir {
+    /// Make `dir` (and its parents) unless it exists.
+    pub fn create(dir: &Path) -> io::Result<NewDir> {
+        if dir.is_dir() {
+            return Ok(NewDir { made: None });
+        }
+        let mut live = live();
+        fs::create_dir_all(dir)?;
+        live.dirs.push(dir.to_path_buf());
+        Ok(NewDir {
+            made: Some(dir.to_path_buf()),
+        })
+    }
+
+    /// The run succeeded: the folder stays.
+    pub fn keep(mut self) {
+        if let Some(d) = self.made.take() {
+            live().dirs.retain(|p| p != &d);
+        }
+    }
+}
+
+impl Drop for NewDir {
+    fn drop(&mut self) {
+        if let Some(d) = self.made.take() {
+            let _ = fs::remove_dir(&d);
+            live().dirs.retain(|p| p != &d);
+        }
+    }
+}
+
+/// Put a set of temporary files in place, in the order given, as one step: an interrupt
+/// arriving meanwhile waits until every file is renamed, so the set is left entirely old
+/// or entirely new. `first` (a file that names the set, such as a manifest) is removed
+/// before any rename, so a folder a crash leaves half updated has none; `after` runs
+/// within the step once every rename succeeded (to remove what the set replaces). On an
+/// error the files not yet in place are removed.
+pub fn persist_set(
+    files: Vec<(TempFile, PathBuf)>,
+    first: Option<&Path>,
+    after: impl FnOnce(),
+) -> Result<(), CliError> {
+    let mut live = live();
+    let mut done = first.map_or(Ok(()), |p| match fs::remove_file(p) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(cannot_write(p, &e)),
+        _ => Ok(()),
+    });
+    for (t, target) in files {
+        // Its removal is done here, under the lock (a drop would take it again).
+        let path = t.into_path();
+        if done.is_ok() {
+            done = place(&path, &target).map_err(|e| cannot_write(&target, &e));
+            commit_pause();
+        }
+        if done.is_err() || path.exists() {
+            let _ = fs::remove_file(&path);
+        }
+        live.files.retain(|p| p != &path);
+    }
+    if done.is_ok() {
+        after();
+    }
+    done
+}
+
+/// Test builds only: `LAMPOST_TEST_COMMIT_PAUSE_MS` slows [`persist_set`] down between
+/// renames, so a test can interrupt it in the middle.
+fn commit_pause() {
+    #[cfg(debug_assertions)]
+    if let Some(ms) = std::env::var("LAMPOST_TEST_COMMIT_PAUSE_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+}
+
+fn cannot_write(target: &Path, e: &io::Error) -> CliError {
+    CliError::usage(format!("error: cannot write {}: {e}", target.display()))
+}
+
+/// Rename `path` over `target`; a device or a pipe (`/dev/null`, a FIFO) gets its
+/// contents written to it instead (a rename would replace the device with a file), and
+/// `path` stays for the caller to remove.
+fn place(path: &Path, target: &Path) -> io::Result<()> {
+    if is_special(target) {
+        let mut from = File::open(path)?;
+        let mut to = fs::OpenOptions::new().write(true).open(target)?;
+        io::copy(&mut from, &mut to)?;
+        return to.flush();
+    }
+    fs::rename(path, target)
 }
 
 /// Whether `path` names something that is not a regular file or a folder: a character
@@ -349,6 +469,8 @@ impl TempFile {
 
     fn create(dir: &Path, name: &str) -> Result<(TempFile, File), CliError> {
         let mut k = 0u32;
+        // Registered before it exists (see [`Live`]).
+        let mut live = live();
         loop {
             let path = dir.join(format!(".{name}.{}.{k}.tmp", std::process::id()));
             match fs::OpenOptions::new()
@@ -358,7 +480,7 @@ impl TempFile {
                 .open(&path)
             {
                 Ok(f) => {
-                    live().push(path.clone());
+                    live.files.push(path.clone());
                     return Ok((TempFile { path }, f));
                 }
                 Err(e) if e.kind() == io::ErrorKind::AlreadyExists && k < 1000 => k += 1,
@@ -380,30 +502,22 @@ impl TempFile {
     /// Rename it over `target`; a device or a pipe (`/dev/null`, a FIFO) gets its
     /// contents written to it instead (a rename would replace the device with a file).
     pub fn persist(self, target: &Path) -> Result<(), CliError> {
-        let werr = |e: io::Error| {
-            CliError::usage(format!("error: cannot write {}: {e}", target.display()))
-        };
-        if is_special(target) {
-            let mut from = File::open(&self.path).map_err(werr)?;
-            let mut to = fs::OpenOptions::new()
-                .write(true)
-                .open(target)
-                .map_err(werr)?;
-            io::copy(&mut from, &mut to).map_err(werr)?;
-            to.flush().map_err(werr)?;
-            return Ok(()); // dropped: the temporary file is removed
-        }
-        fs::rename(&self.path, target).map_err(werr)?;
-        live().retain(|p| p != &self.path);
+        persist_set(vec![(self, target.to_path_buf())], None, || {})
+    }
+
+    /// Its path, no longer removed when dropped (still registered in [`Live`]).
+    fn into_path(self) -> PathBuf {
+        let path = self.path.clone();
         std::mem::forget(self);
-        Ok(())
+        path
     }
 }
 
 impl Drop for TempFile {
     fn drop(&mut self) {
+        let mut live = live();
         let _ = fs::remove_file(&self.path);
-        live().retain(|p| p != &self.path);
+        live.files.retain(|p| p != &self.path);
     }
 }
 

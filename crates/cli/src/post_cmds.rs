@@ -1019,12 +1019,15 @@ pub fn post(
             staged.push((t, PathBuf::from(path)));
         }
     }
-    for (t, target) in staged {
-        t.persist(&target)?;
-    }
-    if let Some(out) = file_out {
-        remove_stale_pieces(out, written.len());
-    } else if let Some(t) = whole {
+    // Every file in place as one step (an interrupt waits), with the pieces of an
+    // earlier, longer split removed.
+    let pieces = written.len();
+    crate::io::persist_set(staged, None, || {
+        if let Some(out) = file_out {
+            remove_stale_pieces(out, pieces);
+        }
+    })?;
+    if let (None, Some(t)) = (file_out, whole) {
         let mut f = std::fs::File::open(t.path()).map_err(werr)?;
         let mut out = std::io::stdout().lock();
         std::io::copy(&mut f, &mut out).map_err(werr)?;

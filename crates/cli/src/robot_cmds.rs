@@ -270,8 +270,8 @@ pub fn post(
     // Each chunk is written, verified as `lampost verify` reads it, and staged beside its
     // target as soon as it is; nothing is renamed into place until every chunk and the
     // manifest are (a failure removes what was staged).
-    let existed = Path::new(dir).is_dir();
-    std::fs::create_dir_all(dir)
+    // A folder this run makes goes again if it fails or is interrupted.
+    let made = crate::io::NewDir::create(Path::new(dir))
         .map_err(|e| CliError::usage(format!("error: cannot create the folder {dir}: {e}\n")))?;
     let staged: std::sync::Mutex<Vec<(TempFile, PathBuf)>> = std::sync::Mutex::new(Vec::new());
     let stage = |file: &str, body: &[u8]| -> Result<(), CliError> {
@@ -300,9 +300,7 @@ pub fn post(
         Err(e) => {
             // What was staged goes; so does the folder where this run made it.
             drop(staged);
-            if !existed {
-                let _ = std::fs::remove_dir(dir);
-            }
+            drop(made);
             return Err(match e {
                 chunk::PostError::Verify(e) => CliError::failed(format!(
                     "error: {e}\n  = help: this is a lampost fault; nothing was written\n"
@@ -347,17 +345,20 @@ pub fn post(
         let last = |p: &PathBuf| p.ends_with("manifest.json");
         (last(&a.1), &a.1).cmp(&(last(&b.1), &b.1))
     });
-    for (t, target) in staged {
-        t.persist(&target)?;
-    }
-    // Chunks of an earlier, longer run are stale.
-    for k in total + 1.. {
-        let stale = Path::new(dir).join(chunk::file_name(k));
-        if std::fs::remove_file(&stale).is_err() {
-            break;
+    // As one step (an interrupt waits for it): the old manifest removed first, so a
+    // folder a crash leaves half updated has none; the chunks of an earlier, longer run
+    // removed last.
+    let manifest_path = Path::new(dir).join("manifest.json");
+    crate::io::persist_set(staged, Some(&manifest_path), || {
+        for k in total + 1.. {
+            let stale = Path::new(dir).join(chunk::file_name(k));
+            if std::fs::remove_file(&stale).is_err() {
+                break;
+            }
+            eprintln!("removed {}: a chunk of an earlier run", stale.display());
         }
-        eprintln!("removed {}: a chunk of an earlier run", stale.display());
-    }
+    })?;
+    made.keep();
     if !a.place.quiet {
         let sizes: Vec<String> = files.iter().map(|f| (f.count + 2).to_string()).collect();
         eprintln!(

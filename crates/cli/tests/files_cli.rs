@@ -246,3 +246,121 @@ fn output_to_a_device_is_written_through_not_replaced() {
         "a temporary file was left in /dev"
     );
 }
+
+/// A path for the robot cell: a pass to and fro along x under the focus, the approach
+/// +z, laser off on each pass's first point.
+fn robot_path(passes: usize, n: usize, y: f64) -> String {
+    let mut s = String::from("x y z i j k feed laser\n");
+    for k in 0..passes {
+        for i in 0..n {
+            let u = -60.0 + 120.0 * i as f64 / (n - 1) as f64;
+            let x = if k % 2 == 0 { u } else { -u };
+            s += &format!(
+                "{x:.4} {:.4} 0 0 0 1 600 {}\n",
+                y + k as f64,
+                u8::from(i > 0)
+            );
+        }
+    }
+    s
+}
+
+/// A robot post writes a folder of chunks and a manifest; interrupted at any moment it
+/// leaves no temporary file, no folder of its own making unless complete, and over an
+/// earlier run's folder either that folder whole or the new one whole (never new chunks
+/// with the old manifest).
+#[test]
+fn an_interrupted_robot_post_leaves_the_folder_old_or_new() {
+    let dir = tempdir("files-robot-signal");
+    std::fs::write(dir.join("old.csv"), robot_path(4, 100, 0.0)).expect("write");
+    std::fs::write(dir.join("new.csv"), robot_path(120, 100, 5.0)).expect("write");
+    let out = dir.join("K");
+    let post = |path: &str, pause_ms: u32| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_lampost"));
+        c.args([
+            "post",
+            "--machine",
+            "puma-lens",
+            "--chunk-points",
+            "250",
+            "-q",
+        ])
+        .arg(dir.join(path))
+        .arg("-o")
+        .arg(&out)
+        .env("LAMPOST_TEST_COMMIT_PAUSE_MS", pause_ms.to_string())
+        .stderr(std::process::Stdio::null());
+        c
+    };
+    let verifies = |path: &str| {
+        lampost(&[
+            "verify",
+            "--machine",
+            "puma-lens",
+            "-q",
+            &out.to_string_lossy(),
+            "--input",
+            &dir.join(path).to_string_lossy(),
+        ])
+        .status
+        .success()
+    };
+    let kill = |child: &std::process::Child| {
+        let _ = Command::new("kill")
+            .arg("-TERM")
+            .arg(child.id().to_string())
+            .status();
+    };
+    // Interrupted in the middle of putting the chunks in place (slowed down to 10 ms a
+    // file, the signal sent once some are): the set is finished, then the run exits.
+    assert!(post("old.csv", 0).status().expect("run").success());
+    let mut child = post("new.csv", 10).spawn().expect("spawn");
+    let t0 = std::time::Instant::now();
+    let mut most = 0;
+    loop {
+        let n = temps(&out).len();
+        most = most.max(n);
+        if (most > 100 && n < most - 5) || t0.elapsed().as_secs() > 60 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    kill(&child);
+    let status = child.wait().expect("wait");
+    assert!(temps(&out).is_empty(), "left {:?}", temps(&out));
+    assert!(
+        verifies("new.csv"),
+        "after {status}: interrupted while renaming, the folder is not the new output"
+    );
+    // Interrupted at other moments, over an earlier output or into a new folder.
+    let t0 = std::time::Instant::now();
+    assert!(post("new.csv", 0).status().expect("run").success());
+    let whole = t0.elapsed();
+    let mut outcomes = [0usize; 3];
+    for k in 1..=8 {
+        let fresh = k % 4 == 0;
+        let _ = std::fs::remove_dir_all(&out);
+        if !fresh {
+            assert!(post("old.csv", 0).status().expect("run").success());
+        }
+        let mut child = post("new.csv", 0).spawn().expect("spawn");
+        std::thread::sleep(whole.mul_f64(0.3 + 0.12 * k as f64));
+        kill(&child);
+        let status = child.wait().expect("wait");
+        assert!(temps(&out).is_empty(), "left {:?}", temps(&out));
+        let (old, new) = (!fresh && verifies("old.csv"), verifies("new.csv"));
+        if fresh && !new {
+            assert!(
+                !out.exists(),
+                "a folder of its own making left half written"
+            );
+        } else {
+            assert!(
+                old || new,
+                "after {status}: neither the old nor the new output"
+            );
+        }
+        outcomes[usize::from(status.success()) + usize::from(new)] += 1;
+    }
+    eprintln!("outcomes (interrupted and old, interrupted and new, finished): {outcomes:?}");
+}
