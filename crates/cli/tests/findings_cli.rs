@@ -3746,3 +3746,34 @@ fn linuxcnc_programs_of_the_tenth_probe_are_read_as_rs274_reads_them() {
         );
     }
 }
+
+/// Finding 94: the first move after `G40` starts where the compensated tool was left and
+/// reads its words from the programmed point (rs274), so `G40` then `G0 Z5` rises over
+/// the programmed corner, and `G91 G0 X-10` goes 10 from it.
+#[test]
+fn the_move_after_g40_goes_from_the_programmed_point() {
+    let dir = root().join("fixtures/findings/94-g40-exit");
+    let work = tempdir("finding-94");
+    for (name, last_two) in [
+        ("omitted-axes.ngc", [[20.0, 20.0, 5.0], [-10.0, 20.0, 5.0]]),
+        ("incremental.ngc", [[10.0, 20.0, -1.0], [10.0, 20.0, 5.0]]),
+        (
+            "compensation-again.ngc",
+            [[31.0, 30.0, -1.0], [40.0, 30.0, -1.0]],
+        ),
+    ] {
+        let path = dir.join(name);
+        let doc = trace_json("linuxcnc", &path);
+        assert_eq!(doc["ok"], true, "{name}: {doc}");
+        let e = ends(&doc);
+        assert_eq!(e[e.len() - 2..], last_two, "{name}");
+        // The lift starts where the tool was drawn (X18, on the compensated path).
+        if name == "omitted-axes.ngc" {
+            let start = &doc["moves"][e.len() - 2]["start"];
+            assert_eq!(start["X"].as_f64(), Some(18.0), "{doc}");
+        }
+        if require_rs274().is_some() {
+            equal_to_rs274(&path, &work, &["linuxcnc"]);
+        }
+    }
+}

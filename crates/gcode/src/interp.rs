@@ -313,6 +313,9 @@ pub struct Interpreter {
     offset_line: u32,
     /// How many blocks changed them ([`Interpreter::offset_changes`]).
     offset_changes: u64,
+    /// After `G40`: where the compensated tool was left, the start of the next move
+    /// (the position is the programmed point, from which its words are read).
+    comp_exit: Option<Position>,
 }
 
 /// What a compensated move keeps of its block: line, end (for the axes off the plane),
@@ -628,6 +631,7 @@ impl Interpreter {
             lathe: crate::turning::LatheSigns::default(),
             offset_line: 0,
             offset_changes: 0,
+            comp_exit: None,
             offset_cache: [0.0; 9],
             offset_zero: true,
         }
@@ -1001,8 +1005,9 @@ impl Interpreter {
     // Not inlined, like `parse::plain_motion` (see there).
     #[inline(never)]
     pub(crate) fn plain_motion(&mut self, p: &PlainMotion, line: u32) -> Option<Move> {
-        if self.profile.is_some() || self.comp.is_some() {
-            // Compensated moves are held (`comp.rs`): the reference path makes them.
+        if self.profile.is_some() || self.comp.is_some() || self.comp_exit.is_some() {
+            // Compensated moves are held (`comp.rs`), and the one after starts where
+            // the tool was drawn: the reference path makes them.
             return None;
         }
         if self.lathe.recognised() && p.axes() & C_AXIS != 0 {
@@ -2408,8 +2413,16 @@ impl Interpreter {
             };
             if let Some(c) = self.comp.take() {
                 // G40 (or a new G41/G42): the held moves go as they are.
+                let programmed = self.pos;
                 self.comp_release(*c, out)
                     .map_err(|e| comp_diag(b, e, Some(gw.span)))?;
+                if self.modal.cutter_comp == CutterComp::Off {
+                    // The next move starts where the tool was drawn, but goes to its
+                    // words from the programmed point (rs274: after `G40`, `G0 Z5`
+                    // rises to the programmed X and Y, not the compensated ones).
+                    self.comp_exit = Some(self.pos);
+                    self.pos = programmed;
+                }
             }
             let plane = self.modal.plane;
             if let (Some((side, radius, orientation)), true) =
@@ -2798,6 +2811,10 @@ impl Interpreter {
         origin: Origin,
         out: &mut impl FnMut(Event),
     ) {
+        if let Some(drawn) = self.comp_exit.take() {
+            // The first move after `G40`: from where the tool was drawn.
+            self.pos = drawn;
+        }
         out(Event::Move(self.make_move(line, kind, end, feed, origin)));
     }
 
