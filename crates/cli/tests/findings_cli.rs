@@ -2192,13 +2192,15 @@ fn fanuc_s_back_boring_cycle_bores_upward_from_r() {
             stderr(&o)
         );
     }
-    // (Its Q, which no LinuxCNC code of the block reads, is refused first.)
+    // (Its Q and P, which no LinuxCNC code of the block reads, are refused first, as
+    // rs274 refuses them.)
     let o = lampost(&["check", "--flavor", "linuxcnc", p]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains(":13:"), "{}", stderr(&o));
     let no_q = std::fs::read_to_string(&path)
         .expect("fixture")
-        .replace(" Q0.01", "");
+        .replace(" Q0.01", "")
+        .replace(" P0 ", " ");
     let work = tempdir("g87-no-q");
     let f = work.join("no-q.nc");
     std::fs::write(&f, no_q).expect("writes");
@@ -3775,5 +3777,90 @@ fn the_move_after_g40_goes_from_the_programmed_point() {
         if require_rs274().is_some() {
             equal_to_rs274(&path, &work, &["linuxcnc"]);
         }
+    }
+}
+
+/// Finding 96: a recognised lathe program's arcs checked with X as a diameter, its G75
+/// named; `G81 … P` refused under `linuxcnc` as rs274 refuses it; a vacant `F#650` and
+/// a G-code beside G65 named for what they are.
+#[test]
+fn lathe_arcs_cycles_and_vacant_feeds_of_the_cam_probe() {
+    let dir = root().join("fixtures/findings/96-cam-probe");
+    let check = |flavor: &str, name: &str| {
+        lampost(&[
+            "check",
+            "--flavor",
+            flavor,
+            dir.join(name).to_str().expect("utf8"),
+        ])
+    };
+    for name in [
+        "lathe-diameter-arc.nc",
+        "lathe-diameter-r-arc.nc",
+        "lathe-g75.nc",
+    ] {
+        for flavor in ["haas", "fanuc", "auto"] {
+            let o = check(flavor, name);
+            assert!(o.status.success(), "{name} {flavor}: {}", stderr(&o));
+        }
+    }
+    let o = check("haas", "lathe-g75.nc");
+    assert!(
+        stderr(&o).contains("G75 (a lathe's grooving or cut-off cycle) is not simulated"),
+        "{}",
+        stderr(&o)
+    );
+    // The arc's centre is given as a diameter, as X is: X0.32 (a 0.16 radius, I0).
+    let doc = trace_json("haas", &dir.join("lathe-diameter-arc.nc"));
+    let arc = doc["moves"]
+        .as_array()
+        .expect("moves")
+        .iter()
+        .find(|m| m["g"] == "G3")
+        .expect("the arc");
+    assert_eq!(arc["kind"]["center"][0].as_f64(), Some(0.32), "{arc}");
+    // A mill program's arc of the same words is still a spiral.
+    let work = tempdir("finding-96");
+    let mill = work.join("mill.nc");
+    std::fs::write(
+        &mill,
+        "G18 G20\nG00 X0.32 Z-0.468\nG01 F4.\nG03 X0.36 Z-0.488 I0.0 K-0.02\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", "--flavor", "haas", mill.to_str().expect("utf8")]);
+    assert!(stderr(&o).contains("differ by 0.020000"), "{}", stderr(&o));
+    for (flavor, name, at, says) in [
+        (
+            "linuxcnc",
+            "g81-p-linuxcnc.ngc",
+            ":3:",
+            "no code of the block reads P",
+        ),
+        (
+            "fanuc",
+            "F-vacant-common.nc",
+            ":4:",
+            "the block's F reads a vacant variable",
+        ),
+        (
+            "fanuc",
+            "g54-g65.nc",
+            ":4:",
+            "write G54 on a line of its own before the call",
+        ),
+    ] {
+        let o = check(flavor, name);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        assert!(
+            stderr(&o).contains(at) && stderr(&o).contains(says),
+            "{name}: {}",
+            stderr(&o)
+        );
+    }
+    if require_rs274().is_some() {
+        let (o, _) = rs274_exec(&dir.join("g81-p-linuxcnc.ngc"), &work);
+        let said =
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+        assert!(said.contains("P word with no"), "{said}");
     }
 }

@@ -205,6 +205,9 @@ pub struct Block<'a> {
     pub items: SmallVec<[Item<'a>; 8]>,
     /// The whole line as written, without the line ending.
     pub raw: &'a str,
+    /// The letters (bit `letter - 'A'`) of words left out because their value was a
+    /// vacant variable (Fanuc Macro B: `F#650` with `#650` vacant gives no F).
+    pub vacant: u32,
 }
 
 impl<'a> Block<'a> {
@@ -217,6 +220,7 @@ impl<'a> Block<'a> {
             block_delete: false,
             items: SmallVec::new(),
             raw: "",
+            vacant: 0,
         }
     }
 

@@ -133,6 +133,10 @@ pub enum ErrorKind {
     /// A feed move with no feed rate.
     #[error("feed move with no feed rate (F) set")]
     NoFeedRate,
+    /// The block's F word read a vacant variable (Fanuc: the word is left out), and no
+    /// feed was set before.
+    #[error("feed move with no feed rate: the block's F reads a vacant variable, so the control leaves the F out, and no F was set before")]
+    FeedVacant,
     /// A feed move at the feed rate F0 (LinuxCNC: "Cannot do G1 with zero feed rate").
     #[error("feed move at feed rate zero (the F in force is F0): the move would never end")]
     ZeroFeedRate,
@@ -424,6 +428,7 @@ impl ErrorKind {
             ErrorKind::ArcWrongPlaneWord(_) => "select the plane with G17/G18/G19 or use its centre words (XY: I J, XZ: I K, YZ: J K)",
             ErrorKind::NoMotionMode => "add G0 or G1 to the block",
             ErrorKind::NoFeedRate => "set a feed rate with F before the first feed move",
+            ErrorKind::FeedVacant => "a common variable (#100–#199, #500–#999) keeps its value on the control from earlier programs, and lampost runs this one alone (a local one, #1–#33, comes from the macro call's arguments): set the variable before this line (`#650 = 2000.`) to trace it",
             ErrorKind::ZeroFeedRate => "give the move a feed rate above zero (a CAM job whose tool controller has no feed writes `F0`, as FreeCAD Path does)",
             ErrorKind::FirmwareInitialFeed { .. } => "set a feed rate with F before the first feed move to be sure: a firmware's configuration may change its initial feed rate",
             ErrorKind::InverseTimeNeedsF => "in G93 every feed move needs its own F",

@@ -1356,6 +1356,7 @@ pub fn eval_line<'a>(
                 let end = ev.pos;
                 if ev.vacant {
                     // Fanuc: a word whose value is a vacant variable is left out.
+                    block.vacant |= crate::parse::letter_bit(letter);
                     i = end;
                     continue;
                 }

@@ -1176,8 +1176,8 @@ impl Interpreter {
     /// Under `linuxcnc`, what rs274 refuses of a block's motion code (`c`, ten times the
     /// number) with the words and codes beside it: a G10, G28, G30, G52 or G92 in the
     /// block (both would use the axis words: `G0 G28 G91 Z0.`, which Fanuc reads); a Q
-    /// that no code of the block reads (`G84 … Q3.`, a Fanuc post's); G82, G86, G88 or
-    /// G89 begun without its dwell P.
+    /// that no code of the block reads (`G84 … Q3.`, a Fanuc post's), or a P (`G81 … P0.5`);
+    /// G82, G86, G88 or G89 begun without its dwell P.
     fn linuxcnc_motion_words(
         &self,
         b: &Block<'_>,
@@ -1219,6 +1219,20 @@ impl Interpreter {
                     q.display(),
                     "no code of the block reads Q (rs274 refuses it: LinuxCNC's cycles take a peck depth Q only in G73 and G83)",
                     q.span,
+                );
+            }
+        }
+        if let Some(p) = w.word(b'P') {
+            // rs274: "P word with no G2 G3 G4 G10 G64 G5 G5.2 G76 G82 G86 G88 G89 to use
+            // it" (M-codes that read P are left to it).
+            let p_read = matches!(c, 740 | 760 | 820 | 840 | 860 | 880 | 890)
+                || w.gs.iter().any(|g| matches!(g.1, 40 | 100 | 640))
+                || !w.ms.is_empty();
+            if cycle && !p_read {
+                return refuse(
+                    p.display(),
+                    "no code of the block reads P (rs274 refuses it: of LinuxCNC's cycles only G74, G76, G82, G84, G86, G88 and G89 read a P)",
+                    p.span,
                 );
             }
         }
@@ -1520,6 +1534,14 @@ impl Interpreter {
                         _ if self.opts.flavor == crate::flavor::Flavor::Haas
                             && (crate::modal::haas_pattern(code).is_some()
                                 || crate::modal::haas_work_offset(code)) =>
+                        {
+                            GGroup::Other
+                        }
+                        // A Fanuc or Haas lathe's grooving cycle, in a program
+                        // recognised as a lathe's (on a mill G75 is no code).
+                        None if code == 750
+                            && self.lathe.recognised()
+                            && self.opts.flavor != crate::flavor::Flavor::LinuxCnc =>
                         {
                             GGroup::Other
                         }
@@ -2764,6 +2786,9 @@ impl Interpreter {
                     _ if self.feed_given && self.modal.feed == 0.0 => {
                         Err(diag(b, Severity::Error, ErrorKind::ZeroFeedRate, None))
                     }
+                    _ if b.vacant & crate::parse::letter_bit(b'F') != 0 => {
+                        Err(diag(b, Severity::Error, ErrorKind::FeedVacant, None))
+                    }
                     _ => Err(diag(b, Severity::Error, ErrorKind::NoFeedRate, None)),
                 }
             }
@@ -3737,8 +3762,10 @@ impl Interpreter {
             Units::Inch => ARC_RADIUS_TOLERANCE.0,
             Units::Mm => ARC_RADIUS_TOLERANCE.1,
         };
-        let (su, sv) = (self.pos[u], self.pos[v]);
-        let (eu, ev) = (target[u], target[v]);
+        // In a lathe's diameters (see [`Interpreter::diameter_scale`]).
+        let (ku, kv) = (self.diameter_scale(u), self.diameter_scale(v));
+        let (su, sv) = (self.pos[u] * ku, self.pos[v] * kv);
+        let (eu, ev) = (target[u] * ku, target[v] * kv);
         let (cu, cv) = match (has_ijk, radius_word) {
             (true, Some(r)) => {
                 return Err(diag(
@@ -3813,7 +3840,7 @@ impl Interpreter {
                         Some(rw.span),
                     ));
                 }
-                c
+                (c.0 / ku, c.1 / kv)
             }
         };
         let feed = self.feed_for(b, w, out)?;
@@ -3972,6 +3999,22 @@ impl Interpreter {
         self.pos = programmed;
     }
 
+    /// What turns a position along `axis` into a distance from the turning axis: ½ for
+    /// X in a program recognised as a Fanuc or Haas lathe's, which gives X as a
+    /// diameter and its arcs' I and R as radii (a turned arc from X0.32 to X0.36 with
+    /// K-0.02 is a 0.02 radius at both ends); else 1. Arcs are checked, and their
+    /// centres found, in such distances, the centre then given back in the program's X.
+    fn diameter_scale(&self, axis: usize) -> f64 {
+        if axis == 0
+            && self.lathe.recognised()
+            && self.opts.flavor != crate::flavor::Flavor::LinuxCnc
+        {
+            0.5
+        } else {
+            1.0
+        }
+    }
+
     /// The centre (in the plane's axes) of an arc from the tool's position to `target`
     /// given by its centre words `iu`, `iv`, with LinuxCNC's checks: not a zero radius,
     /// and the radii at the two ends within the spiral tolerance.
@@ -3987,13 +4030,14 @@ impl Interpreter {
             Units::Inch => (ARC_SPIRAL_TOLERANCE.0, ARC_RADIUS_TOLERANCE.0),
             Units::Mm => (ARC_SPIRAL_TOLERANCE.1, ARC_RADIUS_TOLERANCE.1),
         };
-        let (su, sv) = (self.pos[u], self.pos[v]);
-        let (eu, ev) = (target[u], target[v]);
+        let (ku, kv) = (self.diameter_scale(u), self.diameter_scale(v));
+        let (su, sv) = (self.pos[u] * ku, self.pos[v] * kv);
+        let (eu, ev) = (target[u] * ku, target[v] * kv);
         let (cu, cv) = match arc_distance {
             Distance::Incremental => (su + iu, sv + iv),
             Distance::Absolute => {
                 let off = self.offset();
-                (iu + off[u], iv + off[v])
+                ((iu + off[u]) * ku, (iv + off[v]) * kv)
             }
         };
         let r1 = (su - cu).hypot(sv - cv);
@@ -4011,7 +4055,7 @@ impl Interpreter {
                 tolerance: spiral_tol,
             });
         }
-        Ok((cu, cv))
+        Ok((cu / ku, cv / kv))
     }
 
     /// An arc refused under incremental centres (`kind`) that its centre words, read as

@@ -307,7 +307,15 @@ pub fn call(
     };
     let bad = |msg: String, sp: crate::ast::Span| {
         let (s, e) = rel(sp);
-        located(line, line_no, offset, (msg, s, e))
+        Diagnostic::at(
+            Severity::Error,
+            ErrorKind::MacroB(msg),
+            line_no,
+            offset,
+            line,
+            s,
+            e,
+        )
     };
     let mut number = None;
     let mut repeats = 1u32;
@@ -339,6 +347,16 @@ pub fn call(
                     ));
                 }
                 repeats = w.value as u32;
+            }
+            b'G' => {
+                return Err(bad(
+                    format!(
+                        "{} beside G65: lampost reads a G65 block as the macro call and its arguments (A–F, H, I–K, M, Q–Z) only; write {} on a line of its own before the call",
+                        w.display(),
+                        w.display()
+                    ),
+                    w.span,
+                ))
             }
             l => match argument(l) {
                 Some(n) => args[n - 1] = Some(w.value),

@@ -452,6 +452,8 @@ pub fn other_code(code: u16) -> Option<OtherCode> {
         // Haas's cancels of its dynamic work offset (G255) and feature coordinates (G269).
         80 | 110 | 670 | 1030 | 1870 | 2550 | 2690 => Setting,
         120 | 130 => Unsimulated("circular pocket milling"),
+        // Only a program recognised as a lathe's brings G75 here.
+        750 => Unsimulated("a lathe's grooving or cut-off cycle"),
         // Only LinuxCNC's reading brings these here (elsewhere G70/G71 set the units).
         700 | 710..=712 | 720..=722 => Unsimulated("lathe roughing or finishing cycle"),
         434 | 435 => Unsimulated("tool centre point control"),

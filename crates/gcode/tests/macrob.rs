@@ -450,7 +450,12 @@ fn bad_macro_b_is_located() {
             1,
             "needs the macro's program number",
         ),
-        ("G0 X0\nG65 P1 G1\nM30\nO1\nM99\n", 2, 8, "not an argument"),
+        (
+            "G0 X0\nG65 P1 G1\nM30\nO1\nM99\n",
+            2,
+            8,
+            "G1 beside G65: lampost reads a G65 block as the macro call",
+        ),
         (
             "G0 X0\nG65 P1 N5 O3\nM30\nO1\nM99\n",
             2,
