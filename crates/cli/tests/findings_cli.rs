@@ -3864,3 +3864,42 @@ fn lathe_arcs_cycles_and_vacant_feeds_of_the_cam_probe() {
         assert!(said.contains("P word with no"), "{said}");
     }
 }
+
+/// Finding 97: LinuxCNC's `#5220` (the coordinate system) and `#5400` (the tool) are
+/// read from the modal state; the machine's own parameters (tool table, stored offsets,
+/// homes) are read as 0 as rs274 starts them, with a warning, once a parameter.
+#[test]
+fn linuxcnc_system_parameters_are_read_or_named() {
+    let work = tempdir("finding-97");
+    let prog = work.join("system.ngc");
+    std::fs::write(
+        &prog,
+        "G20 G90 F10\nT7 M6\nG56\nG0 X#5220 Y#5400\nG0 Z#5410\nG0 Z[#5410 + 1]\n#5181 = 2\nG0 X#5181\nM2\n",
+    )
+    .expect("write");
+    let o = lampost(&[
+        "trace",
+        "--flavor",
+        "linuxcnc",
+        prog.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stderr(&o);
+    let warned: Vec<&str> = said
+        .lines()
+        .filter(|l| l.contains("is read as 0"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{}", stderr(&o));
+    assert!(
+        warned[0].contains("#5410 (the tool's diameter"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains(":5:"), "{}", stderr(&o));
+    let e = ends(&trace_json("linuxcnc", &prog));
+    assert_eq!(e[0][..2], [3.0, 7.0]);
+    assert_eq!(e[3][0], 2.0);
+    if require_rs274().is_some() {
+        equal_to_rs274(&prog, &work, &["linuxcnc"]);
+    }
+}

@@ -334,6 +334,10 @@ pub enum ErrorKind {
         /// The value in whole units, with its unit.
         units: String,
     },
+    /// A LinuxCNC numbered parameter only the machine knows (its tool table, offsets,
+    /// homes: [`crate::expr::machine_parameter`]) read before the program set it.
+    #[error("#{number} ({what}) is read as 0: lampost holds none of the machine's tool table, stored offsets and homes (LinuxCNC's standalone rs274 starts them at 0 too)")]
+    MachineParameter { number: usize, what: &'static str },
     /// A Fanuc Macro B statement or `G65` call that cannot be followed.
     #[error("{0}")]
     MacroB(String),
@@ -462,6 +466,7 @@ impl ErrorKind {
             ErrorKind::TooManyCalls { .. } => "check the L repeats of nested calls; split the program",
             ErrorKind::TooManyPrograms(_) => "split the file",
             ErrorKind::IntegerWord { .. } => "write the decimal point where whole units are meant (`X10.`; CAM posts for these controls always do); a program written for least increments has every such number that many times too large here. The post refuses the program until each has its point",
+            ErrorKind::MachineParameter { .. } => "on the machine the value is its own, and the moves computed from it may differ from the trace: check them on the machine's preview, or write the value in the parameter's place",
             ErrorKind::MacroB(_) => "check the Macro B structure: each WHILE [..] DOm closed by its ENDm (nested loops numbered apart), each GOTO n to a block Nn of the same program, each G65 P.. to a program of this file that ends in M99",
             ErrorKind::MainProgramLoops(_) => "end the program with M30; to run its body several times, make it a subprogram and call it with M98 P… L…",
             ErrorKind::ReturnOutsideSubprogram => "end the program with M30 (M99 returns from a subprogram called with M98)",

@@ -46,6 +46,31 @@ pub struct Params {
     /// The interpreter's modal state before the line being evaluated, for LinuxCNC's
     /// predefined named parameters (`#<_metric>`, `#<_feed>`…; see [`predefined`]).
     modal: Option<crate::modal::Modal>,
+    /// The machine's numbered parameters ([`machine_parameter`]) the program set itself,
+    /// and those read before it did, not yet warned of (taken by
+    /// [`Params::take_machine_reads`]) or already warned of.
+    machine_set: Vec<usize>,
+    machine_reads: std::cell::RefCell<(Vec<usize>, Vec<usize>)>,
+}
+
+/// What a LinuxCNC numbered parameter holds that only the machine knows (its tool table,
+/// its stored offsets and homes, its inputs), read as 0 here as LinuxCNC's standalone
+/// rs274 starts it: `None` for every other.
+pub fn machine_parameter(n: usize) -> Option<&'static str> {
+    Some(match n {
+        5161..=5169 => "G28's home position",
+        5181..=5189 => "G30's home position",
+        5210 => "whether a G92 offset is in force",
+        5211..=5219 => "the G92 offset",
+        5221..=5390 => "a work offset (G54 to G59.3) the machine holds",
+        5399 => "the result of M66 (an input the machine reads)",
+        5401..=5409 => "the tool's offsets in the machine's tool table",
+        5410 => "the tool's diameter in the machine's tool table",
+        5411..=5413 => "the tool's angles or orientation in the machine's tool table",
+        5599 => "the machine's debug switch",
+        5600 | 5601 => "the tool changer's fault",
+        _ => return None,
+    })
 }
 
 /// Fanuc Macro B variables: `#1`–`#33` local to each macro level (the main program's,
@@ -232,6 +257,8 @@ impl Default for Params {
             saved: Vec::new(),
             fanuc: None,
             modal: None,
+            machine_set: Vec::new(),
+            machine_reads: std::cell::RefCell::new((Vec::new(), Vec::new())),
         }
     }
 }
@@ -438,6 +465,34 @@ impl Params {
         self.numbered.get(n).copied()
     }
 
+    /// A numbered parameter as a LinuxCNC program reads it: `#5220` the coordinate
+    /// system in force (1 for G54 … 9 for G59.3), `#5400` the tool in the spindle, from
+    /// the modal state; a [`machine_parameter`] the program has not set is noted for a
+    /// warning ([`Params::take_machine_reads`]) and read as 0.
+    fn read_numbered(&self, n: usize) -> f64 {
+        if let Some(m) = &self.modal {
+            match (n, m.work_offset) {
+                (5220, crate::modal::WorkOffset::G5x(i)) => return f64::from(i),
+                (5400, _) => return f64::from(m.tool),
+                _ => {}
+            }
+        }
+        if machine_parameter(n).is_some() && !self.machine_set.contains(&n) {
+            let mut r = self.machine_reads.borrow_mut();
+            if !r.1.contains(&n) {
+                r.1.push(n);
+                r.0.push(n);
+            }
+        }
+        self.get(n).unwrap_or(0.0)
+    }
+
+    /// The machine's parameters read since the last call, each once a program, for a
+    /// warning: their values here are 0, the machine's are its own.
+    pub fn take_machine_reads(&mut self) -> Vec<usize> {
+        std::mem::take(&mut self.machine_reads.get_mut().0)
+    }
+
     /// A named parameter (name without `#<>`, any case). A HAL pin (`#<_hal[…]>`) is
     /// known only on the machine: never set here, as in LinuxCNC's standalone rs274
     /// ("Named parameter #<_hal[…]> not defined").
@@ -485,6 +540,9 @@ impl Params {
             Param::Numbered(n) => {
                 if let Some(slot) = self.numbered.get_mut(*n) {
                     *slot = v;
+                }
+                if machine_parameter(*n).is_some() && !self.machine_set.contains(n) {
+                    self.machine_set.push(*n);
                 }
             }
             Param::Named(name) => self.set_named(name, v),
@@ -730,7 +788,7 @@ impl<'t, 'p> Eval<'t, 'p> {
             return Ok(v.unwrap_or(0.0));
         }
         match p {
-            Param::Numbered(n) => Ok(self.params.get(*n).unwrap_or(0.0)),
+            Param::Numbered(n) => Ok(self.params.read_numbered(*n)),
             Param::Named(name) => self.params.named(name).ok_or_else(|| {
                 let what = if name.to_ascii_lowercase().starts_with("_hal[") {
                     format!("#<{name}> is a HAL pin, whose value only the machine knows (QtPlasmaC reads its cut feed rate from one); LinuxCNC's standalone rs274 refuses it too: write the value in its place")

@@ -409,6 +409,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                     } else if block.kind != BlockKind::Words && parsed.is_ok() {
                         params.note_modal(&self.interp);
                         parsed = evaluate(&line, &mut block, params, &mut control);
+                        machine_reads(params, line.number, line.offset, line.bytes, queue);
                     }
                 }
                 let offsets = self.interp.offset_changes();
@@ -465,6 +466,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                     Some(_) => Some(Ok(())),
                     None => self.src.control(&text, number, offset, params),
                 };
+                machine_reads(params, number, offset, text.as_bytes(), &mut self.queue);
                 match done {
                     Some(Ok(())) => {}
                     Some(Err(d)) => {
@@ -1000,5 +1002,28 @@ mod tests {
         assert!(!run("G2 X3 Y0"));
         assert!(run("G1 X2"));
         assert_eq!(events.len(), 3);
+    }
+}
+
+/// A warning for each of the machine's parameters the line read before the program set
+/// it ([`crate::expr::Params::take_machine_reads`]).
+fn machine_reads(
+    params: &mut Params,
+    number: u32,
+    offset: usize,
+    bytes: &[u8],
+    queue: &mut std::collections::VecDeque<Event>,
+) {
+    for n in params.take_machine_reads() {
+        let what = crate::expr::machine_parameter(n).unwrap_or("a machine setting");
+        queue.push_back(Event::Diagnostic(Diagnostic::at(
+            Severity::Warning,
+            ErrorKind::MachineParameter { number: n, what },
+            number,
+            offset,
+            bytes,
+            0,
+            bytes.len(),
+        )));
     }
 }
