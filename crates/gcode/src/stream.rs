@@ -799,6 +799,29 @@ fn firmware_command(line: &[u8]) -> Option<(ErrorKind, usize)> {
     Some((kind, text_end))
 }
 
+/// A warning for each of the machine's parameters the line read before the program set
+/// it ([`crate::expr::Params::take_machine_reads`]).
+fn machine_reads(
+    params: &mut Params,
+    number: u32,
+    offset: usize,
+    bytes: &[u8],
+    queue: &mut std::collections::VecDeque<Event>,
+) {
+    for n in params.take_machine_reads() {
+        let what = crate::expr::machine_parameter(n).unwrap_or("a machine setting");
+        queue.push_back(Event::Diagnostic(Diagnostic::at(
+            Severity::Warning,
+            ErrorKind::MachineParameter { number: n, what },
+            number,
+            offset,
+            bytes,
+            0,
+            bytes.len(),
+        )));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1002,28 +1025,5 @@ mod tests {
         assert!(!run("G2 X3 Y0"));
         assert!(run("G1 X2"));
         assert_eq!(events.len(), 3);
-    }
-}
-
-/// A warning for each of the machine's parameters the line read before the program set
-/// it ([`crate::expr::Params::take_machine_reads`]).
-fn machine_reads(
-    params: &mut Params,
-    number: u32,
-    offset: usize,
-    bytes: &[u8],
-    queue: &mut std::collections::VecDeque<Event>,
-) {
-    for n in params.take_machine_reads() {
-        let what = crate::expr::machine_parameter(n).unwrap_or("a machine setting");
-        queue.push_back(Event::Diagnostic(Diagnostic::at(
-            Severity::Warning,
-            ErrorKind::MachineParameter { number: n, what },
-            number,
-            offset,
-            bytes,
-            0,
-            bytes.len(),
-        )));
     }
 }
