@@ -63,11 +63,13 @@ fn drill_cycles_keep_their_initial_level_in_every_flavour() {
         "17-g91-cycle-r-from-initial-level.nc",
     ] {
         let path = finding(name);
-        equal_to_rs274(
-            &path,
-            &work,
-            &["fadal", "fanuc", "haas", "mach3", "linuxcnc"],
-        );
+        // A FADAL takes a cycle stated under G91 for an error (finding 98).
+        let flavors: &[&str] = if name.starts_with("17-") {
+            &["fanuc", "haas", "mach3", "linuxcnc"]
+        } else {
+            &["fadal", "fanuc", "haas", "mach3", "linuxcnc"]
+        };
+        equal_to_rs274(&path, &work, flavors);
     }
 }
 
@@ -523,7 +525,8 @@ fn a_drill_cycle_outside_g17_drills_along_the_plane_s_normal() {
     )
     .expect("write");
     let canon = rs274_to_end(&both, &work).expect("rs274 runs it");
-    for flavor in ["fadal", "fanuc", "haas", "mach3", "linuxcnc"] {
+    // (Not `fadal`: its cycles are stated in absolute only, finding 98.)
+    for flavor in ["fanuc", "haas", "mach3", "linuxcnc"] {
         let doc = trace_json(flavor, &both);
         compare_with_rs274(&doc, &canon).unwrap_or_else(|e| panic!("{flavor}: {e}"));
     }
@@ -3902,4 +3905,76 @@ fn linuxcnc_system_parameters_are_read_or_named() {
     if require_rs274().is_some() {
         equal_to_rs274(&prog, &work, &["linuxcnc"]);
     }
+}
+
+/// Finding 98: only G81–G89 and the rigid taps are cycles (G85.1 is no G81); a rigid
+/// tap feeds out; FADAL's G84.2 alone moves nothing; a FADAL keeps a cycle's Z and R0
+/// absolute under G91, and refuses a cycle stated under G91.
+#[test]
+fn fadal_cycles_are_the_control_s() {
+    let dir = root().join("fixtures/findings/98-fadal-cycles");
+    let tap = ends(&trace_json("fadal", &dir.join("g84.1-rigid-tap.nc")));
+    assert_eq!(
+        tap[1..5],
+        [
+            [1.0, 1.0, 1.0],
+            [1.0, 1.0, 0.1],
+            [1.0, 1.0, -0.5],
+            [1.0, 1.0, 0.1]
+        ]
+    );
+    let doc = trace_json("fadal", &dir.join("g84.1-rigid-tap.nc"));
+    // The feed out of the hole is a feed, not a rapid.
+    assert_eq!(doc["moves"][4]["origin"], "canned_cycle", "{doc}");
+    assert_eq!(doc["moves"][4]["kind"]["type"], "linear", "{doc}");
+    let mode = ends(&trace_json("fadal", &dir.join("g84.2-mode.nc")));
+    assert_eq!(mode[3], [1.0, 1.0, -0.5]);
+    for flavor in ["fadal", "fanuc", "haas", "mach3"] {
+        let o = lampost(&[
+            "check",
+            "--flavor",
+            flavor,
+            dir.join("g85.1.nc").to_str().expect("utf8"),
+        ]);
+        assert!(
+            stderr(&o).contains(":3:9") && stderr(&o).contains("unknown G-code G85.1"),
+            "{flavor}: {}",
+            stderr(&o)
+        );
+    }
+    // Twenty-one holes, every one to Z-0.1 from R0.1, 0.5 apart.
+    let holes: Vec<[f64; 3]> = ends(&trace_json("fadal", &dir.join("g91-repeat.nc")))
+        .into_iter()
+        .filter(|e| e[2] == -0.1)
+        .collect();
+    assert_eq!(holes.len(), 21);
+    assert!((holes[20][0] - 10.0).abs() < 1e-9, "{holes:?}");
+    let work = tempdir("finding-98");
+    let stated = work.join("g91-stated.nc");
+    std::fs::write(
+        &stated,
+        "G90 G20 G0 X0 Y0 Z1.\nS1000 M3\nG91 G81 G98 Z-.2 R0-.9 F50.\nG80 G90\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", "--flavor", "fadal", stated.to_str().expect("utf8")]);
+    assert!(
+        stderr(&o).contains(":3:") && stderr(&o).contains("BAD Z OR R0 IN CANNED CYCLE"),
+        "{}",
+        stderr(&o)
+    );
+    // Posted: the tap's way out is a feed, and verify holds the post to it.
+    let out = work.join("tap.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--index",
+        "A=0,B=0",
+        dir.join("g84.1-rigid-tap.nc").to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }

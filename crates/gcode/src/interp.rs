@@ -1726,7 +1726,7 @@ impl Interpreter {
             return refuse("not as NURBS control points", None);
         }
         let canned = match w.g_in(GGroup::Motion) {
-            Some((_, c)) => matches!(c, 730 | 740 | 810..=890),
+            Some((_, c)) => matches!(c, 730 | 740) || crate::modal::is_drill_cycle(c),
             None => matches!(self.modal.motion, Motion::Canned(_)),
         };
         let plane_after = w
@@ -2026,7 +2026,7 @@ impl Interpreter {
             let canned_block = w
                 .g_in(GGroup::Motion)
                 .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {
-                    matches!(c, 730 | 740 | 760 | 810..=890)
+                    matches!(c, 730 | 740 | 760) || crate::modal::is_drill_cycle(c)
                 });
             if !canned_block && !w.has_g(100) {
                 if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
@@ -2095,7 +2095,7 @@ impl Interpreter {
                     Some(gw.span),
                 );
             }
-            if !matches!(c, 730 | 740 | 760 | 810..=890) {
+            if !(matches!(c, 730 | 740 | 760) || crate::modal::is_drill_cycle(c)) {
                 self.canned = CannedParams::default();
             }
         }
@@ -4108,6 +4108,15 @@ impl Interpreter {
         if let Some(p) = w.get(b'P') {
             self.canned.p = p;
         }
+        if self.opts.flavor == crate::flavor::Flavor::Fadal
+            && matches!(code, 742 | 842)
+            && !w.has_axes()
+            && w.get(b'R').is_none()
+        {
+            // Fusion's FADAL post: `G84.2` (`G74.2`) alone selects rigid tapping for the
+            // `G84.1` (`G74.1`) after it; nothing moves.
+            return Ok(());
+        }
         let (Some(zv), Some(rv)) = (self.canned.z, self.canned.r) else {
             return Err(diag(
                 b,
@@ -4140,7 +4149,7 @@ impl Interpreter {
             );
             self.warn(b, out, ErrorKind::DwellLeftOut(what), None);
         }
-        let passthrough = matches!(code, 740 | 760 | 870 | 880);
+        let passthrough = matches!(code, 740..=742 | 760 | 870 | 880);
         let needs_q = matches!(code, 730 | 830);
         let q = self.canned.q.unwrap_or(0.0);
         if needs_q && q <= 0.0 {
@@ -4182,13 +4191,32 @@ impl Interpreter {
             None => 1,
         };
         let off = self.offset();
+        let fadal = self.opts.flavor == crate::flavor::Flavor::Fadal;
         let incremental = self.modal.distance == Distance::Incremental;
+        if fadal && incremental && (w.get(depth_letter).is_some() || w.get(b'R').is_some()) {
+            // The FADAL takes a cycle's Z and R0 in absolute only ("BAD Z OR R0 IN
+            // CANNED CYCLE … canned cycle not stated in absolute as required").
+            return Err(diag(
+                b,
+                Severity::Error,
+                ErrorKind::BadValue {
+                    word: format!("G{name} under G91"),
+                    why: "a FADAL takes a canned cycle's Z and R0 in absolute only (its error BAD Z OR R0 IN CANNED CYCLE); state the cycle under G90, then G91 may step the holes",
+                },
+                None,
+            ));
+        }
+        // A FADAL keeps the Z and R0 stated (in absolute) for the holes after, G91
+        // stepping X and Y only (its manual: `G81 G98 Z-.1 R0+.1 … M45`, then `G91 X.5
+        // L20` "drills twenty holes in the X axis .5 apart"); elsewhere G91 reads them
+        // as distances, as Fanuc, Haas and rs274 do.
+        let depth_incremental = incremental && !fadal;
         // The initial level: where Z was when this series of cycles began (rs274's
         // `cycle_il`; Fanuc's and Haas's "initial point", the Z before the cycle was
         // first given), in every flavour: after a G99 hole the tool is at R, and a later
         // G98 still returns to that level, and G91's R still counts from it.
         let initial = *self.canned.initial_z.get_or_insert(self.pos[n]);
-        let (r_abs, bottom) = if incremental {
+        let (r_abs, bottom) = if depth_incremental {
             let r = initial + rv;
             (r, r + zv)
         } else {
@@ -4371,8 +4399,9 @@ impl Interpreter {
                     let t = at(self.pos, clear);
                     self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                 }
-                840 | 850 => {
-                    // Feed in, feed out to R, then rapid to the clearance level.
+                840..=843 | 850 => {
+                    // Feed in, feed out to R, then rapid to the clearance level (a
+                    // rigid tap too: the spindle reverses at the bottom).
                     let t = at(self.pos, bottom);
                     self.emit(b.line, MoveKind::Linear, t, feed, Origin::CannedCycle, out);
                     let t = at(self.pos, r_abs);

@@ -312,12 +312,25 @@ impl GGroup {
     }
 }
 
+/// The drilling cycles G81–G89 and the rigid tapping codes G84.1 and G74.1 (FADAL, as
+/// Fusion's FADAL post writes them, after its rigid-tap mode block `G84.2`/`G74.2`),
+/// G84.2 and G84.3 (Fanuc: right- and left-hand rigid tapping), given as ten times their
+/// number. No other code from G81 to G89.9 is one: `G85.1` or `G82.7` (other controls'
+/// variants, whose motion lampost does not know) are unknown, never read as G81.
+pub fn is_drill_cycle(code: u16) -> bool {
+    matches!(
+        code,
+        741 | 742 | 810 | 820 | 830 | 840 | 841 | 842 | 843 | 850 | 860 | 870 | 880 | 890
+    )
+}
+
 /// The group of a G-code given as ten times its number (`G31.1` = 311), or `None` when
 /// the code is unknown to both LinuxCNC and the FADAL.
 pub fn g_group(code: u16) -> Option<GGroup> {
     use GGroup::*;
     Some(match code {
-        0 | 10 | 20 | 30 | 330 | 331 | 382..=385 | 730 | 740 | 760 | 800 | 810..=890 => Motion,
+        0 | 10 | 20 | 30 | 330 | 331 | 382..=385 | 730 | 740 | 760 | 800 => Motion,
+        c if is_drill_cycle(c) => Motion,
         40
         | 100
         | 280
