@@ -3978,3 +3978,50 @@ fn fadal_cycles_are_the_control_s() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Finding 99: a bare path whose coolant codes switch between its feeds (a WAAM torch's
+/// `M08`/`M09`) is refused, not deposited along its travel.
+#[test]
+fn a_torch_switched_by_coolant_codes_is_refused() {
+    let path = root().join("fixtures/findings/99-ded-probe/m08-welder.nc");
+    let work = tempdir("finding-99");
+    let out = work.join("o.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        path.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("m08-welder.nc:6:")
+            && stderr(&o).contains("the coolant is turned on (M7/M8/M9) between the feeds"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    // Mended as the message says (M3 S… on, M5 off), it posts.
+    let text = std::fs::read_to_string(&path)
+        .expect("read")
+        .replace("M08", "M3 S500")
+        .replace("M09", "M5");
+    let mended = work.join("mended.nc");
+    std::fs::write(&mended, text).expect("write");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        "--power",
+        "500",
+        mended.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -2458,3 +2458,53 @@ fn option_values_the_program_cannot_hold_are_the_option_s_errors() {
         assert!(!out.exists(), "{extra:?}");
     }
 }
+
+/// Finding 99: the laser's power word set inside a run (an `S0` line: the laser on at
+/// power 0, nothing deposited) fails verify; the untouched program passes.
+#[test]
+fn a_power_word_set_inside_a_run_fails_verify() {
+    let dir = tempdir("safety-s0");
+    let input = root().join("fixtures/findings/99-ded-probe/verify-s0-input.nc");
+    let input = input.to_str().expect("utf8");
+    let posted = dir.join("posted.nc");
+    let args = [
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        "--power",
+        "500",
+    ];
+    let mut post = vec!["post"];
+    post.extend_from_slice(&args);
+    post.extend_from_slice(&[input, "-o", posted.to_str().expect("utf8")]);
+    let o = lampost(&post);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&posted).expect("read");
+    let verify = |p: &Path| {
+        let mut v = vec!["verify"];
+        v.extend_from_slice(&args);
+        v.extend_from_slice(&[input, p.to_str().expect("utf8")]);
+        lampost(&v)
+    };
+    assert!(verify(&posted).status.success());
+    let lines: Vec<&str> = text.lines().collect();
+    let on = lines
+        .iter()
+        .position(|l| l.contains("M73"))
+        .expect("the powder goes on");
+    for tamper in ["S0", "S250", "N85 S0"] {
+        let mut t = lines.clone();
+        t.insert(on + 1, tamper);
+        let bad = dir.join("tampered.nc");
+        std::fs::write(&bad, t.join("\n") + "\n").expect("write");
+        let o = verify(&bad);
+        assert_eq!(o.status.code(), Some(1), "{tamper}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!("posted line {}", on + 2))
+                && stderr(&o).contains("another power"),
+            "{tamper}: {}",
+            stderr(&o)
+        );
+    }
+}

@@ -4201,7 +4201,7 @@ impl Interpreter {
                 Severity::Error,
                 ErrorKind::BadValue {
                     word: format!("G{name} under G91"),
-                    why: "a FADAL takes a canned cycle's Z and R0 in absolute only (its error BAD Z OR R0 IN CANNED CYCLE); state the cycle under G90, then G91 may step the holes",
+                    why: "a FADAL takes a canned cycle's Z and R0 in absolute only (its error BAD Z OR R0 IN CANNED CYCLE); state the cycle under G90, then G91 may step the holes (for a program written for another control, give its --flavor)",
                 },
                 None,
             ));
@@ -4647,8 +4647,23 @@ mod tests {
 
     /// Moves and diagnostics of `text`, every line read.
     fn run(text: &str) -> (Vec<Move>, Vec<Diagnostic>) {
+        run_as(text, Options::default())
+    }
+
+    /// [`run`] read as a LinuxCNC program (G91 cycles, which a FADAL refuses).
+    fn run_linuxcnc(text: &str) -> (Vec<Move>, Vec<Diagnostic>) {
+        run_as(
+            text,
+            Options {
+                flavor: crate::flavor::Flavor::LinuxCnc,
+                ..Options::default()
+            },
+        )
+    }
+
+    fn run_as(text: &str, opts: Options) -> (Vec<Move>, Vec<Diagnostic>) {
         let (mut moves, mut diags) = (Vec::new(), Vec::new());
-        for e in Stream::from_bytes(text.as_bytes(), Options::default(), false) {
+        for e in Stream::from_bytes(text.as_bytes(), opts, false) {
             match e.expect("in memory") {
                 Event::Move(m) => moves.push(m),
                 Event::Diagnostic(d) => diags.push(d),
@@ -4740,11 +4755,11 @@ mod tests {
         // Repeats count: 10 deep in 0.1 pecks is 101 feeds a hole (the hundredth peck
         // lands a hair above the bottom, so a last short one goes to it, as rs274 makes
         // them); 99 holes are 9,999 feeds, and one more hole is refused.
-        let (moves, diags) = run("G91 F10 G83 X1 R0 Z-10 Q0.1 L99\n");
+        let (moves, diags) = run_linuxcnc("G91 F10 G83 X1 R0 Z-10 Q0.1 L99\n");
         assert!(diags.is_empty(), "{diags:?}");
         let feeds = moves.iter().filter(|m| m.kind == MoveKind::Linear).count();
         assert_eq!(feeds, 9_999);
-        let (_, diags) = run("G91 F10 G73 X1 R0 Z-10 Q0.1 L100\n");
+        let (_, diags) = run_linuxcnc("G91 F10 G73 X1 R0 Z-10 Q0.1 L100\n");
         assert!(diags[0].to_string().contains("more than 10000 pecks"));
         // A peck smaller than the spacing of floats at the depth never gets deeper (rs274
         // would loop without end): refused.
@@ -4757,7 +4772,7 @@ mod tests {
         // G91 R0.281 Z-0.4 in 0.2 pecks: R is -0.323 (as rounded), the bottom -0.723, and
         // the second peck lands a hair above the bottom, so a third feed goes to it (as
         // rs274 writes them; 0.4 / 0.2 would say two).
-        let (moves, diags) = run("F10 G0 X1 Y1 Z-0.604\nG91 G83 Q.2 X0.5 R0.281 Z-0.4\n");
+        let (moves, diags) = run_linuxcnc("F10 G0 X1 Y1 Z-0.604\nG91 G83 Q.2 X0.5 R0.281 Z-0.4\n");
         assert!(diags.is_empty(), "{diags:?}");
         let feeds: Vec<f64> = moves
             .iter()

@@ -265,6 +265,9 @@ pub struct Intended<'a> {
     /// The laser (spindle) state the section's moves have shown: (section, turned on
     /// by M3/M4, run at a power S above 0, a feed with it off noted).
     laser_seen: (usize, bool, bool, bool),
+    /// In a deposition program that never turns a laser on with M3/M4: the section and
+    /// coolant state (M7/M8 on) of its first feed ([`Intended::laser_off_feed`]).
+    coolant_at_first: Option<(usize, bool)>,
     /// What the look at the section's first moves found of its laser ([`laser_ahead`]):
     /// the first move made with it on, and the first made with it on at a power above
     /// S0.
@@ -395,6 +398,7 @@ impl<'a> Intended<'a> {
             warned: Vec::new(),
             noted_zero_axes: false,
             laser_seen: (usize::MAX, false, false, false),
+            coolant_at_first: None,
             laser_ahead: LaserAhead::Never,
             dark_deposit: None,
             deposit_end: None,
@@ -1272,6 +1276,28 @@ impl Intended<'_> {
             self.laser_seen = (self.idx, false, false, false);
         }
         let on = m.modal.spindle != lampost_gcode::Spindle::Off;
+        let coolant = m.modal.flood || m.modal.mist;
+        let bare = !on
+            && !self.laser_seen.1
+            && !matches!(self.laser_ahead, LaserAhead::On(_))
+            && self.posted_spindle.is_none();
+        match self.coolant_at_first {
+            Some((idx, first)) if idx == self.idx && bare && first != coolant => {
+                // A bare path deposits along every feed; a torch or powder switched by
+                // the coolant codes (a WAAM program's `M08` weld, `M09` stop) would
+                // have its travel deposited too.
+                return Err(PostError::Unsupported {
+                    file: sec.name.clone(),
+                    line: m.line,
+                    what: format!(
+                        "the coolant is turned {} (M7/M8/M9) between the feeds of a program that never turns a laser on with M3/M4: such a program is a bare path, deposited along every feed, and on a welding or DED machine these codes may switch the torch or the powder (then its travel would be deposited too); if they do, write M3 (with S for the power) where the deposit starts and M5 where it stops, then post again; if not, remove them (a deposition program is posted without coolant)",
+                        if coolant { "on" } else { "off" }
+                    ),
+                });
+            }
+            Some((idx, _)) if idx == self.idx => {}
+            _ => self.coolant_at_first = Some((self.idx, coolant)),
+        }
         if let (true, Some(dark)) = (on, self.dark_deposit) {
             return Err(PostError::Unsupported {
                 file: sec.name.clone(),

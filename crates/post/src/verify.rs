@@ -1046,7 +1046,7 @@ impl Screen {
                 "posted line {line}: a program stop (M0, M1 or M60) with the laser on: it stays on over one spot while the program waits; the post turns it off first"
             ))),
             Some((line, LASER_POWER)) => Err(PostError::Verify(format!(
-                "posted line {line}: the laser goes on at another power than the program was posted with ({}{}; verify --power names it)",
+                "posted line {line}: the laser goes on, or its power is set, at another power than the program was posted with ({}{}; verify --power names it)",
                 char::from(self.codes.power.map_or(b'S', |p| p.0)),
                 lampost_gcode::Readable(self.codes.power.map_or(0.0, |p| p.1))
             ))),
@@ -1196,17 +1196,25 @@ impl ProcessCodes {
                 .any(|c| codes.contains(&c))
         };
         let mut wrong_power = false;
+        let posted_power = |w: &lampost_gcode::Word, want: f64| {
+            (w.value - want).abs() <= SPEED_SLACK * want.abs().max(1.0)
+        };
         if holds(&self.off) {
             switches.laser = None;
         } else if holds(&self.on) {
             switches.laser = switches.laser.or(Some(number));
             // The power posted, as written (the emitter's rounding allowed).
             if let Some((letter, want)) = self.power {
-                wrong_power = !block.words().any(|w| {
-                    w.letter == letter
-                        && (w.value - want).abs() <= SPEED_SLACK * want.abs().max(1.0)
-                });
+                wrong_power = !block
+                    .words()
+                    .any(|w| w.letter == letter && posted_power(w, want));
             }
+        } else if let Some((letter, want)) = self.power {
+            // The post writes the power word in the laser-on line only: one elsewhere
+            // (an `S0` inside a run) sets the laser to another power.
+            wrong_power = block
+                .words()
+                .any(|w| w.letter == letter && !posted_power(w, want));
         }
         if holds(&self.powder_off) {
             switches.powder = None;
@@ -1246,8 +1254,13 @@ fn screen_line(
     if bytes.iter().find(|c| !c.is_ascii_whitespace()) == Some(&b'/') {
         return (Some(BLOCK_DELETE), None, false);
     }
+    // Lines with a G, an M or the laser's power word are parsed.
+    let power = codes.power.map_or(0, |p| p.0 | 0x20);
     let (g, m) = bytes.iter().fold((false, false), |(g, m), &c| {
-        (g || c | 0x20 == b'g', m || c | 0x20 == b'm')
+        (
+            g || c | 0x20 == b'g',
+            m || c | 0x20 == b'm' || c | 0x20 == power,
+        )
     });
     if !(g || m) {
         return (None, None, false);
