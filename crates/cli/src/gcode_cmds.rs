@@ -178,7 +178,7 @@ pub fn fmt(
     dialect: Option<DialectArg>,
     renumber: Option<&str>,
     suppress_modal: bool,
-    (start_units, flavor): (UnitsArg, FlavorArg),
+    (start_units, flavor): (Option<UnitsArg>, FlavorArg),
 ) -> Result<(), CliError> {
     let name = display_name(file);
     let renumber = renumber.map(parse_renumber).transpose()?;
@@ -189,7 +189,8 @@ pub fn fmt(
         }),
         renumber,
         suppress_modal,
-        units: units(start_units),
+        units: units(start_units.unwrap_or(UnitsArg::Mm)),
+        units_given: start_units.is_some(),
     };
     let mut src = open_seekable(file)?;
     let flavor = resolve(flavor, &mut src).map_err(|e| io_err(&name, e))?;
@@ -223,6 +224,31 @@ pub fn fmt(
                         eprint!("{}", report::render(&name, &d));
                     }
                 }),
+            };
+            // Renumbering moves the blocks' numbers, not the jumps to them: a jump by
+            // block number (`GOTO N3`, `GOTO 5`, `M97 P30`, `M99 P30`) would be left
+            // pointing at a number no block has.
+            let jump = opts.renumber.is_some()
+                && parsed.is_ok()
+                && (line
+                    .bytes
+                    .windows(4)
+                    .any(|w| w.eq_ignore_ascii_case(b"GOTO"))
+                    || b.words()
+                        .any(|w| w.letter == b'M' && matches!(w.code(), Some(970 | 990)))
+                        && b.word(b'P').is_some());
+            let parsed = if jump {
+                Err(Diagnostic::at(
+                    lampost_gcode::Severity::Error,
+                    ErrorKind::RenumberJump,
+                    line.number,
+                    line.offset,
+                    line.bytes,
+                    0,
+                    line.bytes.len(),
+                ))
+            } else {
+                parsed
             };
             let refused = match parsed {
                 Ok(()) => match em.block(&b) {

@@ -776,9 +776,10 @@ enum Command {
         /// Leave out repeated motion G-codes and feed rates.
         #[arg(long)]
         suppress_modal: bool,
-        /// Units before the program's first G20/G21 (decides decimals).
-        #[arg(long, value_enum, default_value = "mm")]
-        units: UnitsArg,
+        /// Units before the program's first G20/G21 (decides a dialect's decimals; with
+        /// --dialect and a program that says none before its first coordinate, required).
+        #[arg(long, value_enum)]
+        units: Option<UnitsArg>,
         /// The control the program was written for (marlin and reprap read number exponents).
         #[arg(long, value_enum, default_value = "auto")]
         flavor: FlavorArg,

@@ -127,6 +127,8 @@ fn fmt_refuses_values_the_dialect_cannot_hold() {
             "-",
             "--dialect",
             "fadal",
+            "--units",
+            "mm",
             "-o",
             &out.to_string_lossy(),
         ],
@@ -182,7 +184,16 @@ fn fmt_refuses_values_the_dialect_cannot_hold() {
 fn renumbering_refuses_to_pass_the_largest_n() {
     let src = b"G0 X1\nX2\nX3\n";
     let o = lampost_stdin(
-        &["fmt", "-", "--dialect", "fadal", "--renumber", "99990,5"],
+        &[
+            "fmt",
+            "-",
+            "--dialect",
+            "fadal",
+            "--units",
+            "mm",
+            "--renumber",
+            "99990,5",
+        ],
         src,
     );
     let e = stderr(&o);
@@ -210,7 +221,16 @@ fn renumbering_refuses_to_pass_the_largest_n() {
     );
     // In range: numbered as asked.
     let o = lampost_stdin(
-        &["fmt", "-", "--dialect", "fadal", "--renumber", "99985,5"],
+        &[
+            "fmt",
+            "-",
+            "--dialect",
+            "fadal",
+            "--units",
+            "mm",
+            "--renumber",
+            "99985,5",
+        ],
         src,
     );
     assert!(o.status.success(), "{}", stderr(&o));

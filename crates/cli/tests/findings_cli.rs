@@ -4025,3 +4025,50 @@ fn a_torch_switched_by_coolant_codes_is_refused() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Finding 100: a FADAL comment open to the end of its line is a comment; `fmt` with a
+/// dialect refuses to guess a program's units; `fmt --renumber` refuses a program whose
+/// jumps name block numbers.
+#[test]
+fn fadal_comments_and_fmt_s_units_and_jumps() {
+    let dir = root().join("fixtures/findings/100-fadal-fmt");
+    let p = |n: &str| dir.join(n).to_str().expect("utf8").to_string();
+    let o = lampost(&["check", &p("open-comment.nc")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("0 error(s)"), "{}", stderr(&o));
+    // Elsewhere it is still an error, as rs274 has it.
+    let o = lampost(&["check", "--flavor", "linuxcnc", &p("open-comment.nc")]);
+    assert!(
+        stderr(&o).contains("comment is not closed"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&["fmt", "--dialect", "fadal", &p("inch-no-units.nc")]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains(":2:11") && stderr(&o).contains("has not said its units"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&[
+        "fmt",
+        "--dialect",
+        "fadal",
+        "--units",
+        "inch",
+        &p("inch-no-units.nc"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("X1.0625 Y0.3125"));
+    // Verbatim, nothing is rounded and nothing is asked.
+    assert!(lampost(&["fmt", &p("inch-no-units.nc")]).status.success());
+    for (name, at) in [("renumber-goto.nc", ":5:"), ("renumber-m97.nc", ":3:")] {
+        let o = lampost(&["fmt", "--renumber", "10,10", &p(name)]);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        assert!(
+            stderr(&o).contains(at) && stderr(&o).contains("a jump to a block by its number"),
+            "{name}: {}",
+            stderr(&o)
+        );
+    }
+}

@@ -10,8 +10,9 @@ fn bad_input_gets_located_errors() {
     let dir = tempdir("bad");
     let cases: Vec<(&str, Vec<u8>, &str, &str)> = vec![
         (
+            // (A `;` comment: not a FADAL program, whose comments may stay open.)
             "unterminated",
-            b"G0 X1\nG1 X2 (oops\n".to_vec(),
+            b"G0 X1 ; start\nG1 X2 (oops\n".to_vec(),
             ":2:7",
             "comment is not closed",
         ),

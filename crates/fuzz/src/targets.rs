@@ -498,6 +498,7 @@ impl Ctx {
             renumber,
             suppress_modal: r.coin(),
             units: if r.coin() { Units::Mm } else { Units::Inch },
+            units_given: true,
         };
         *note = format!("{opts:?}");
         self.made(input, note);

@@ -338,6 +338,13 @@ pub enum ErrorKind {
     /// homes: [`crate::expr::machine_parameter`]) read before the program set it.
     #[error("#{number} ({what}) is read as 0: lampost holds none of the machine's tool table, stored offsets and homes (LinuxCNC's standalone rs274 starts them at 0 too)")]
     MachineParameter { number: usize, what: &'static str },
+    /// A coordinate written in a dialect before the program said its units, with none
+    /// given (`fmt --units`).
+    #[error("{0}: the program has not said its units (G20/G21, FADAL G70/G71) before it, and the dialect's decimals depend on them")]
+    UnitsNotSaid(String),
+    /// `fmt --renumber` on a program that jumps to a block by its number.
+    #[error("a jump to a block by its number (GOTO, M97 P, M99 P): renumbering would move the block's number and leave the jump pointing at a number no block has")]
+    RenumberJump,
     /// A Fanuc Macro B statement or `G65` call that cannot be followed.
     #[error("{0}")]
     MacroB(String),
@@ -467,6 +474,8 @@ impl ErrorKind {
             ErrorKind::TooManyPrograms(_) => "split the file",
             ErrorKind::IntegerWord { .. } => "write the decimal point where whole units are meant (`X10.`; CAM posts for these controls always do); a program written for least increments has every such number that many times too large here. The post refuses the program until each has its point",
             ErrorKind::MachineParameter { .. } => "on the machine the value is its own, and the moves computed from it may differ from the trace: check them on the machine's preview, or write the value in the parameter's place",
+            ErrorKind::RenumberJump => "leave out --renumber for a program with jumps (its block numbers are labels)",
+            ErrorKind::UnitsNotSaid(_) => "give --units inch or --units mm (the units the program is written in), or write G20 or G21 at its start",
             ErrorKind::MacroB(_) => "check the Macro B structure: each WHILE [..] DOm closed by its ENDm (nested loops numbered apart), each GOTO n to a block Nn of the same program, each G65 P.. to a program of this file that ends in M99",
             ErrorKind::MainProgramLoops(_) => "end the program with M30; to run its body several times, make it a subprogram and call it with M98 P… L…",
             ErrorKind::ReturnOutsideSubprogram => "end the program with M30 (M99 returns from a subprogram called with M98)",

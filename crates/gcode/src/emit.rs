@@ -29,6 +29,10 @@ pub struct EmitOptions {
     pub suppress_modal: bool,
     /// Units before any G20/G21 (decides decimals).
     pub units: Units,
+    /// Whether `units` is known (the machine's, or said by the user); when not, a
+    /// dialect refuses a coordinate written before the program's first G20/G21 (FADAL
+    /// G70/G71), whose decimals would be a guess.
+    pub units_given: bool,
 }
 
 impl Default for EmitOptions {
@@ -38,6 +42,7 @@ impl Default for EmitOptions {
             renumber: None,
             suppress_modal: false,
             units: Units::Mm,
+            units_given: true,
         }
     }
 }
@@ -51,6 +56,9 @@ pub struct Emitter<W: Write> {
     /// `next_n` in decimal, kept by decimal addition of the step (no division per line).
     n_text: Counter,
     units: Units,
+    /// The units are known: given, or said by the program (see
+    /// [`EmitOptions::units_given`]).
+    units_known: bool,
     motion: Option<u16>,
     feed: Option<f64>,
     inverse_time: bool,
@@ -718,6 +726,7 @@ impl<W: Write> Emitter<W> {
             next_n: opts.renumber.map_or(0, |r| r.0),
             n_text: Counter::new(opts.renumber.map_or(0, |r| r.0)),
             units: opts.units,
+            units_known: opts.units_given,
             motion: None,
             feed: None,
             inverse_time: false,
@@ -883,8 +892,8 @@ impl<W: Write> Emitter<W> {
     #[inline]
     fn track_g(&mut self, c: i64) {
         match c {
-            200 | 700 => self.units = Units::Inch,
-            210 | 710 => self.units = Units::Mm,
+            200 | 700 => (self.units, self.units_known) = (Units::Inch, true),
+            210 | 710 => (self.units, self.units_known) = (Units::Mm, true),
             930 => self.inverse_time = true,
             940 | 950 => self.inverse_time = false,
             _ => {}
@@ -994,6 +1003,13 @@ impl<W: Write> Emitter<W> {
                         continue;
                     }
                     self.track(w.letter, w.value);
+                    if !self.units_known
+                        && self.opts.dialect.is_some()
+                        && b"XYZIJKRUVW".contains(&w.letter)
+                    {
+                        let kind = ErrorKind::UnitsNotSaid(w.display());
+                        return Err(self.block_error(b, kind, Some(w.span)));
+                    }
                     if self.suppressed(w.letter, w.value) {
                         continue;
                     }
@@ -1486,6 +1502,7 @@ mod tests {
                 renumber: renumber.then_some((10, 5)),
                 suppress_modal: true,
                 units,
+                units_given: true,
             },
         )
     }

@@ -32,6 +32,9 @@ pub struct Reading {
     /// ISO code) and the block skip levels `/1`–`/9` (Fanuc's additional optional block
     /// skip, which Mazak's EIA programs use too).
     pub fanuc_tape: bool,
+    /// The FADAL's comments: a `(` with no `)` after it comments to the end of the line
+    /// (its manual writes `N1 O1 (START OF PROGRAM`); elsewhere it is an error.
+    pub open_comment: bool,
 }
 
 impl Reading {
@@ -43,6 +46,7 @@ impl Reading {
             slicer,
             polar: flavor == Flavor::LinuxCnc,
             fanuc_tape: matches!(flavor, Flavor::Fanuc | Flavor::Haas),
+            open_comment: flavor == Flavor::Fadal && !slicer,
         }
     }
 }
@@ -53,6 +57,7 @@ impl From<bool> for Reading {
             slicer,
             polar: false,
             fanuc_tape: false,
+            open_comment: false,
         }
     }
 }
@@ -1031,6 +1036,14 @@ fn words_reference_items<'a>(
                     }));
                     i = end + 1;
                 }
+                None if reading.open_comment => {
+                    block.items.push(Item::Comment(Comment {
+                        text: &text[i + 1..],
+                        style: CommentStyle::Paren,
+                        span: Span::new(offset + i, offset + bytes.len()),
+                    }));
+                    i = bytes.len();
+                }
                 None => return Err(err(ErrorKind::UnterminatedComment, i, bytes.len())),
             },
             b';' | b'\'' => {
@@ -1398,6 +1411,7 @@ mod tests {
                 slicer,
                 polar: false,
                 fanuc_tape: false,
+                open_comment: false,
             };
             for s in ["G0 X - [1 + 4]", "G0 Y - #1", "G0 Z -\t[2]"] {
                 let mut b = Block::empty(1, 0);
@@ -1816,6 +1830,7 @@ mod tests {
             slicer: false,
             polar: true,
             fanuc_tape: false,
+            open_comment: false,
         };
         let mut b = Block::empty(1, 0);
         parse_line_with(b"G1 @ 1.5 ^-30 (c) F10", 1, 0, &mut b, polar).expect("parses");

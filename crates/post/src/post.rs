@@ -197,6 +197,7 @@ pub(crate) fn emitter<W: Write>(out: W, cfg: &PostConfig, units: Units) -> Emitt
             renumber,
             suppress_modal: true,
             units,
+            units_given: true,
         },
     )
 }
