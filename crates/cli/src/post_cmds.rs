@@ -303,7 +303,21 @@ fn per_point_input(
 
 fn index_arg(m: &Machine, text: &str) -> Result<[f64; 2], CliError> {
     let v = crate::kin_cmds::joints_arg(m, "--index", text, &[3, 4], &[3, 4])?;
-    Ok([v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)])
+    let index = [v[3].unwrap_or(0.0), v[4].unwrap_or(0.0)];
+    // A continuous rotary indexed past a turn would wind the table round for nothing
+    // (a FADAL moves a rotary at most 1080° in a block: `A1500.` stops it).
+    for (r, a) in m.rotary.iter().zip(index) {
+        if r.continuous && a.abs() > 360.0 {
+            return Err(CliError::usage(format!(
+                "error: --index {}={}: more than a turn; the same orientation is {}={}\n  = help: give a continuous rotary's index within ±360°\n",
+                r.name,
+                lampost_gcode::Readable(a),
+                r.name,
+                lampost_gcode::Readable(a.rem_euclid(360.0))
+            )));
+        }
+    }
+    Ok(index)
 }
 
 fn file_error(file: &str, text: &str, e: &toml::de::Error) -> CliError {

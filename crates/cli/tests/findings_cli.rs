@@ -4072,3 +4072,33 @@ fn fadal_comments_and_fmt_s_units_and_jumps() {
         );
     }
 }
+
+/// Finding 100: an index of a continuous rotary past a turn is refused, naming the same
+/// orientation within one.
+#[test]
+fn an_index_past_a_turn_is_refused() {
+    let input = root().join("fixtures/findings/100-fadal-fmt/index-a1500.nc");
+    let work = tempdir("finding-100-index");
+    let out = work.join("o.nc");
+    let post = |index: &str| {
+        lampost(&[
+            "post",
+            "--machine",
+            "fadal-lamp",
+            "--index",
+            index,
+            input.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+    };
+    let o = post("A=1500,B=0");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--index A=1500: more than a turn; the same orientation is A=60"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    assert!(post("A=60,B=0").status.success());
+}
