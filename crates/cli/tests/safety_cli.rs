@@ -2435,8 +2435,9 @@ fn option_values_the_program_cannot_hold_are_the_option_s_errors() {
     let input = fx("patch-20mm.nc");
     for (extra, says) in [
         (
+            // (Refused first as more than a turn, since finding 100.)
             vec!["--index", "B=0,C=1e6"],
-            "the value comes from an option (--index",
+            "--index C=1000000: more than a turn",
         ),
         (
             vec!["--index", "B=0,C=0", "--power", "1e9"],
