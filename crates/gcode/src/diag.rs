@@ -335,7 +335,7 @@ pub enum ErrorKind {
         units: String,
     },
     /// A LinuxCNC numbered parameter only the machine knows (its tool table, offsets,
-    /// homes: [`crate::expr::machine_parameter`]) read before the program set it.
+    /// homes: `expr::machine_parameter`) read before the program set it.
     #[error("#{number} ({what}) is read as 0: lampost holds none of the machine's tool table, stored offsets and homes (LinuxCNC's standalone rs274 starts them at 0 too)")]
     MachineParameter { number: usize, what: &'static str },
     /// A coordinate written in a dialect before the program said its units, with none
