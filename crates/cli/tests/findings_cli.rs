@@ -3962,6 +3962,18 @@ fn fadal_cycles_are_the_control_s() {
         "{}",
         stderr(&o)
     );
+    // Fusion's shrinking FADAL peck is named, at its I, not asked for a Q.
+    let o = lampost(&[
+        "check",
+        "--flavor",
+        "fadal",
+        dir.join("g83-ijk-peck.nc").to_str().expect("utf8"),
+    ]);
+    assert!(
+        stderr(&o).contains(":4:34") && stderr(&o).contains("a FADAL peck given by I, J and K"),
+        "{}",
+        stderr(&o)
+    );
     // Posted: the tap's way out is a feed, and verify holds the post to it.
     let out = work.join("tap.nc");
     let o = lampost(&[

@@ -4152,6 +4152,21 @@ impl Interpreter {
         let passthrough = matches!(code, 740..=742 | 760 | 870 | 880);
         let needs_q = matches!(code, 730 | 830);
         let q = self.canned.q.unwrap_or(0.0);
+        if needs_q && q <= 0.0 && self.opts.flavor == crate::flavor::Flavor::Fadal {
+            if let Some(i) = w.word(b'I') {
+                // Fusion's FADAL post writes a peck that shrinks as I (first peck), J
+                // (reduction) and K (least peck) instead of Q.
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: format!("G{name} {}", i.display()),
+                        why: "a FADAL peck given by I, J and K (the first peck, its reduction, the least peck) is not simulated; post the operation with a constant peck (Q), without peck reduction",
+                    },
+                    Some(i.span),
+                ));
+            }
+        }
         if needs_q && q <= 0.0 {
             return Err(diag(
                 b,
