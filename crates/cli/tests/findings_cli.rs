@@ -4114,3 +4114,203 @@ fn an_index_past_a_turn_is_refused() {
     assert!(!out.exists());
     assert!(post("A=60,B=0").status.success());
 }
+
+/// Finding 101 (h57): a FADAL program's own subroutines (the manual's layout: `L0100`
+/// headings, `M17`, the `M30` that separates them from the main program, `Lnnkk` calls)
+/// were traced as the main program, and the real main program after that M30 was dropped
+/// (warned only as "not followed"). Now each call runs its subroutine where it stands,
+/// subroutines calling others, in trace, post and verify alike; what the control refuses
+/// is refused at the line.
+#[test]
+fn fadal_subroutines_run_where_they_are_called() {
+    let slots = finding("101-fadal-subroutines/slots.nc");
+    let doc = trace_json("fadal", &slots);
+    let xy: Vec<[f64; 2]> = ends(&doc).iter().map(|e| [e[0], e[1]]).collect();
+    // L102: sub 1 twice (X+1, sub 2: Y+.5 and back, X-1); then L101 once at X3.
+    let slot = |x: f64| [[x + 1.0, 1.0], [x + 1.0, 1.5], [x + 1.0, 1.0], [x, 1.0]];
+    let mut want = vec![[1.0, 1.0], [1.0, 1.0]];
+    want.extend(slot(1.0));
+    want.extend(slot(1.0));
+    want.extend([[1.0, 1.0], [3.0, 1.0], [3.0, 1.0]]);
+    want.extend(slot(3.0));
+    want.push([3.0, 1.0]);
+    assert_eq!(xy, want);
+    let o = lampost(&["check", slots.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(
+        o.status.success() && err.contains("0 error(s), 0 warning(s)"),
+        "{err}"
+    );
+    // Posted with every call followed, and verified against the same reading.
+    let work = tempdir("fadal-subroutines");
+    let out = work.join("slots.post.nc");
+    let args = [
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--index",
+        "A=0,B=0",
+    ];
+    let mut post = vec!["post"];
+    post.extend_from_slice(&args);
+    post.extend_from_slice(&[
+        slots.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let o = lampost(&post);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        !err.contains("M17"),
+        "M17 is the subroutine's return: {err}"
+    );
+    let posted = std::fs::read_to_string(&out).expect("posted");
+    assert_eq!(posted.matches("Y1.5000").count(), 3, "{posted}");
+    let mut verify = vec!["verify"];
+    verify.extend_from_slice(&args);
+    verify.extend_from_slice(&[slots.to_str().expect("utf8"), out.to_str().expect("utf8")]);
+    let o = lampost(&verify);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A posted program that runs the subroutine once too few times fails.
+    let short = work.join("short.nc");
+    let cut = posted.replacen("Y1.5000", "Y1.0000", 1);
+    std::fs::write(&short, cut).expect("write");
+    let mut verify = vec!["verify"];
+    verify.extend_from_slice(&args);
+    verify.extend_from_slice(&[slots.to_str().expect("utf8"), short.to_str().expect("utf8")]);
+    assert!(!lampost(&verify).status.success());
+    for (file, at, says) in [
+        ("no-m30.nc", ":1:4", "MAIN PROG. NOT FOUND"),
+        ("no-such-sub.nc", ":6:4", "SUBR. DOES NOT EXIST"),
+    ] {
+        let o = lampost(&[
+            "trace",
+            finding(&format!("101-fadal-subroutines/{file}"))
+                .to_str()
+                .expect("utf8"),
+        ]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{file}: {err}");
+        assert!(err.contains(at) && err.contains(says), "{file}: {err}");
+    }
+}
+
+/// Finding 102 (h59): a shift the program states before its first move (`G52 X10. Y5.`)
+/// placed the posted moves 10 and 5 away from the program's work zero without a word; and
+/// the Fanuc safety line `G00 G17 G40 G49 G80` (a traverse to where the tool stands) was
+/// taken for the first move, so such a shift after it was refused. Now the shift is said,
+/// with what --origin then places, and a move that goes nowhere is no first move.
+#[test]
+fn a_shift_before_the_first_move_is_said() {
+    let work = tempdir("g52-first");
+    let out = work.join("g52.nc");
+    let input = finding("102-frame-and-chords/g52-after-bare-g00.nc");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--process",
+        "machine",
+        "--index",
+        "A=0,B=0",
+        "--flavor",
+        "fanuc",
+        "--convert-units",
+        input.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("shifted by (10, 5, 0)")
+            && err.contains("at line 5")
+            && err.contains("--origin"),
+        "{err}"
+    );
+}
+
+/// Finding 103 (h59): the post's own check looked at the written chord points of a
+/// linearised arc, `verify` at the middle of every written segment too: the post said
+/// 5.9e-5 where verify found 5.1e-4 on the same file, and on a coarse grid a chord's
+/// middle could pass the post and fail verify. Now each chord point's check carries the
+/// chord's sagitta (the middle is within it plus the larger end distance), the chord
+/// count leaves room for the grid's rounding, and the post's figure is never below
+/// verify's.
+#[test]
+fn the_post_s_check_of_chords_is_never_weaker_than_verify() {
+    let work = tempdir("chord-middles");
+    let input = finding("102-frame-and-chords/tilted-circle.nc");
+    let figure = |text: &str, key: &str| -> f64 {
+        text.split(key)
+            .nth(1)
+            .and_then(|r| r.split_whitespace().next())
+            .and_then(|v| v.trim_end_matches(',').parse().ok())
+            .unwrap_or_else(|| panic!("no `{key}` in {text}"))
+    };
+    for tolerance in [None, Some("0.0001")] {
+        let out = work.join("circle.nc");
+        let mut args = vec![
+            "--machine",
+            "fadal-lamp",
+            "--process",
+            "machine",
+            "--index",
+            "A=0,B=-20",
+            "--convert-units",
+        ];
+        let mut post = vec!["post"];
+        post.extend_from_slice(&args);
+        if let Some(t) = tolerance {
+            post.extend_from_slice(&["--tolerance", t]);
+        }
+        post.extend_from_slice(&[
+            input.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        let o = lampost(&post);
+        let perr = stderr(&o);
+        assert!(o.status.success(), "{perr}");
+        let posted = figure(&perr, "max tip error ");
+        // verify at the tolerance the post checked at (twice its chord tolerance).
+        let vt = tolerance.map(|t| format!("{}", 2.0 * t.parse::<f64>().expect("number")));
+        if let Some(t) = &vt {
+            args.extend_from_slice(&["--tolerance", t.as_str()]);
+        }
+        let mut verify = vec!["verify"];
+        verify.extend_from_slice(&args);
+        verify.extend_from_slice(&[input.to_str().expect("utf8"), out.to_str().expect("utf8")]);
+        let o = lampost(&verify);
+        let verr = stderr(&o);
+        assert!(o.status.success(), "{verr}");
+        let verified = figure(&verr, "max tip error ");
+        assert!(
+            posted >= verified,
+            "post {posted} < verify {verified}: {perr}\n{verr}"
+        );
+    }
+}
+
+/// Finding 104 (h59): a line of text written without parentheses (`roughing pass`) was
+/// "the letter R has no number after it … give the word a value, e.g. `X0`". It is named
+/// as text, with the parentheses to add.
+#[test]
+fn a_line_of_text_is_named_as_text() {
+    let o = lampost(&[
+        "check",
+        finding("102-frame-and-chords/text-line.nc")
+            .to_str()
+            .expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("`roughing pass` is text")
+            && err.contains(":3:1")
+            && err.contains("inside a comment"),
+        "{err}"
+    );
+}

@@ -25,6 +25,9 @@ pub enum ErrorKind {
     /// An address letter with no number after it.
     #[error("the letter {0} has no number after it")]
     LetterWithoutNumber(char),
+    /// Words of text written without their comment's parentheses (`roughing pass`).
+    #[error("`{0}` is text, not G-code words: the control reads its letters as addresses without numbers")]
+    TextNotComment(String),
     /// A number with no address letter in front of it.
     #[error("number `{0}` has no address letter")]
     NumberWithoutLetter(String),
@@ -265,6 +268,10 @@ pub enum ErrorKind {
     /// A call to a program number the file does not hold.
     #[error("M98 P{0}: this file holds no program O{0}")]
     UnknownProgram(u32),
+    /// A FADAL subroutine section (`L0100` … `M17`, closed by `M30`) or call (`L0101`)
+    /// the control refuses.
+    #[error("{0}")]
+    FadalSubroutine(String),
     /// A call to a program that is in the file more than once.
     #[error(
         "M98 P{number}: O{number} is in this file more than once (lines {first} and {second})"
@@ -410,6 +417,7 @@ impl ErrorKind {
             ErrorKind::InvalidUtf8 => "save the file as UTF-8 or ASCII; controllers read ASCII only",
             ErrorKind::UnterminatedComment => "add `)` at the end of the comment",
             ErrorKind::LetterWithoutNumber(_) => "give the word a value, e.g. `X0`, or remove the letter",
+            ErrorKind::TextNotComment(_) => "put the text inside a comment `( … )`, or remove it",
             ErrorKind::NumberWithoutLetter(_) => "put the address letter in front of the number, e.g. `X1.5`",
             ErrorKind::UnexpectedCharacter('\r') => "the file's line ends are a bare carriage return (old Mac): convert them to LF or CR LF",
             ErrorKind::UnexpectedCharacter(c) if c.is_control() || *c == '\u{feff}' => "remove the invisible character (an editor that shows control characters finds it)",
@@ -466,6 +474,7 @@ impl ErrorKind {
             ErrorKind::StrayWord { .. } => "remove the word (a typo, most likely), or read the program with --flavor fadal if it was written for a FADAL (L: a subroutine call, E: a fixture offset)",
             ErrorKind::Polar(_) => "LinuxCNC reads `@` and `^` in place of X and Y on moves (G0-G3, G33, G38.x) and canned cycles in G17, about the origin of the work system in force; give the point's X and Y where that does not hold",
             ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",
+            ErrorKind::FadalSubroutine(_) => "write the subroutines first, each from its heading (L0100 for subroutine 1) to the next heading or M17, then M30 on a line of its own, then the main program; call subroutine n k times with Lnnkk (L0103: subroutine 1, three times)",
             ErrorKind::DuplicateProgram { .. } => "give every program in the file its own O number",
             ErrorKind::NotASubprogram { .. } => "end the subprogram with M99, or correct P",
             ErrorKind::RecursiveCall { .. } => "a subprogram may not call itself, directly or through others",

@@ -824,8 +824,11 @@ impl Interpreter {
         };
         self.collect(b, &mut w)?;
         if self.opts.post_notes {
+            // FADAL's M17 ends a subroutine, where the source follows them.
+            let fadal_return = self.opts.flavor == crate::flavor::Flavor::Fadal
+                && self.calls != Calls::NotFollowed;
             for &(mw, c) in &w.ms {
-                if !m_known(c) {
+                if !(m_known(c) || c == 170 && fadal_return) {
                     self.warn(
                         b,
                         out,
@@ -2028,7 +2031,11 @@ impl Interpreter {
                 .map_or(matches!(m.motion, Motion::Canned(_)), |(_, c)| {
                     matches!(c, 730 | 740 | 760) || crate::modal::is_drill_cycle(c)
                 });
-            if !canned_block && !w.has_g(100) {
+            // A FADAL subroutine's heading or call, where the source follows them.
+            let followed = self.opts.flavor == crate::flavor::Flavor::Fadal
+                && self.calls != Calls::NotFollowed
+                && crate::program::fadal_sub_line(b).is_some();
+            if !canned_block && !w.has_g(100) && !followed {
                 if self.opts.flavor == crate::flavor::Flavor::LinuxCnc {
                     // G41.1/G42.1's L is a lathe tool's orientation.
                     if !w.has_g(411) && !w.has_g(421) {

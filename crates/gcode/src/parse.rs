@@ -1216,6 +1216,30 @@ fn words_reference_items<'a>(
                                 start,
                                 j + n.len(),
                             ),
+                            // A line that starts with a run of letters
+                            // (`roughing pass`): text written without its
+                            // parentheses, not a word.
+                            // (Not `GOO`, a G-oh-oh typo; not `OCIRCLE`, a
+                            // Fanuc program's name.)
+                            None if letter | 0x20 != b'o'
+                                && bytes[..start].iter().all(u8::is_ascii_whitespace)
+                                && bytes[start..]
+                                    .iter()
+                                    .take_while(|b| b.is_ascii_alphabetic())
+                                    .count()
+                                    >= 4 =>
+                            {
+                                let end = bytes[start..]
+                                    .iter()
+                                    .position(|&b| b == b'(' || b == b';')
+                                    .map_or(bytes.len(), |p| start + p);
+                                let shown = text[start..end].trim_end();
+                                err(
+                                    ErrorKind::TextNotComment(shown.chars().take(40).collect()),
+                                    start,
+                                    start + shown.len(),
+                                )
+                            }
                             None => err(
                                 ErrorKind::LetterWithoutNumber(char::from(letter)),
                                 start,

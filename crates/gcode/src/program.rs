@@ -23,6 +23,17 @@
 //! is its own main program, read from the top. A file without `O` lines or M98 reads
 //! exactly as a plain [`crate::LineReader`] reads it.
 //!
+//! FADAL's own subroutines (read under the `fadal` flavour, [`LineSource::set_flavor`]):
+//! the program starts with its subroutine section, each subroutine from its heading
+//! (`L0100`, subroutine 1; the heading's line is not run) to the next heading or its
+//! `M17`, the section closed by an `M30` that separates it from the main program; `Lnnkk`
+//! (a line of `N` and `L` alone) runs subroutine `nn` `kk` times. In execution order
+//! the main program skips the section; in file order every line is handed out but the
+//! separating `M30`. (FADAL manual, section 10: MAIN PROG. NOT FOUND, SUBR. NESTING
+//! ERROR; section 18's slot example.) Fixed subroutines (`L91nn`…`L99nn`: probing,
+//! engraving, bolt holes, pockets) and `L` words with other words (`L0101 G66`, a modal
+//! call) are left to the interpreter, which warns.
+//!
 //! Hostile input cannot hang or exhaust memory: an `L` repeat is at most 10,000, calls
 //! nest at most [`MAX_NESTING`] deep, recursion is refused, and at most [`MAX_RUNS`]
 //! subprogram runs and [`MAX_CALL_LINES`] lines are read through calls in all; the index
@@ -36,7 +47,7 @@ use crate::ast::{Block, BlockKind};
 use crate::diag::{Diagnostic, ErrorKind, Severity};
 use crate::interp::Calls;
 use crate::lines::{Line, LineReader};
-use crate::parse::{parse_line, MAX_LINE_BYTES};
+use crate::parse::{parse_line_with, Reading, MAX_LINE_BYTES};
 use crate::stream::LineSource;
 
 /// The deepest calls are followed (the main program is depth 0).
@@ -94,6 +105,8 @@ struct Frame {
     local: bool,
     /// A Fanuc `G65` macro call: its own level of local variables.
     macro_call: bool,
+    /// A FADAL subroutine: `prog` indexes `subs`.
+    fadal: bool,
 }
 
 /// What a line asks of the reader.
@@ -105,6 +118,8 @@ enum Action {
     Call {
         prog: usize,
         repeats: u32,
+        /// A FADAL subroutine (`prog` indexes `subs`).
+        fadal: bool,
     },
     /// Haas `M97 P…`: the block labelled `N…` of this file, to its first M99.
     Local {
@@ -162,12 +177,73 @@ pub struct ProgramReader<R> {
     macro_returns: u32,
     /// A line has failed (see `note_error`): loops are not run again from here.
     after_error: bool,
+    /// FADAL subroutines are read (the `fadal` flavour).
+    fadal: bool,
+    /// FADAL subroutines: `number` the subroutine, `start` where a call starts (after its
+    /// heading), `end` where it returns (past its M17, or at the next heading or M30).
+    subs: Vec<Program>,
+    /// The FADAL subroutine section.
+    section: Option<SubSection>,
 }
 
-fn may_matter(bytes: &[u8]) -> bool {
-    // An `O` word or an M98/M99 needs the letter; most motion lines have neither. A line
-    // the parser refuses for its length is not scanned.
-    bytes.len() <= MAX_LINE_BYTES && bytes.iter().any(|&c| matches!(c | 0x20, b'o' | b'm'))
+/// Where the FADAL subroutine section lies (offset of a line, and its number).
+#[derive(Debug, Clone, Copy)]
+struct SubSection {
+    /// Its first heading.
+    first: usize,
+    /// The `M30` line that closes it.
+    close: usize,
+    /// The line after that `M30`: the main program.
+    after: (usize, u32),
+}
+
+fn may_matter(bytes: &[u8], fadal: bool) -> bool {
+    // An `O` word or an M98/M99 needs the letter, a FADAL subroutine line an L; most
+    // motion lines have neither. A line the parser refuses for its length is not scanned.
+    bytes.len() <= MAX_LINE_BYTES
+        && bytes
+            .iter()
+            .any(|&c| matches!(c | 0x20, b'o' | b'm') || (fadal && c | 0x20 == b'l'))
+}
+
+/// The largest FADAL user subroutine (the `L91nn`…`L99nn` are the fixed subroutines).
+const FADAL_SUBS: u32 = 90;
+
+/// A FADAL subroutine line: a block of `N` and one whole `L` word alone, naming a user
+/// subroutine (`L0100`…`L9099`): the subroutine and its runs (0: its heading).
+pub(crate) fn fadal_sub_line(b: &Block<'_>) -> Option<(u32, u32)> {
+    if b.kind != BlockKind::Words {
+        return None;
+    }
+    let mut l = None;
+    for w in b.words() {
+        match w.letter {
+            b'N' if w.register.is_none() => {}
+            b'L' if w.register.is_none() && l.is_none() => l = Some(w.value),
+            _ => return None,
+        }
+    }
+    let v = l?;
+    let whole = v.fract() == 0.0 && v >= 100.0 && v < f64::from((FADAL_SUBS + 1) * 100);
+    whole.then_some((v as u32 / 100, v as u32 % 100))
+}
+
+/// A line parsed as the reader's flavour reads it (FADAL: a `(` left open comments to the
+/// end of the line, as its manual writes them).
+fn parse_as(
+    bytes: &[u8],
+    number: u32,
+    offset: usize,
+    fadal: bool,
+) -> Result<Block<'_>, Diagnostic> {
+    let mut b = Block::empty(number, offset);
+    let reading = if fadal {
+        Reading::of(crate::flavor::Flavor::Fadal, false)
+    } else {
+        Reading::from(false)
+    };
+    parse_line_with(bytes, number, offset, &mut b, reading)?;
+    Ok(b)
 }
 
 fn has_m(b: &Block<'_>, code: u16) -> bool {
@@ -224,7 +300,16 @@ impl<R: Read + Seek> ProgramReader<R> {
             macrob: None,
             macro_returns: 0,
             after_error: false,
+            fadal: false,
+            subs: Vec::new(),
+            section: None,
         }
+    }
+
+    /// Read FADAL subroutines (see the module documentation) when `fadal`; before the
+    /// first line is read.
+    pub fn fadal_subroutines(&mut self, fadal: bool) {
+        self.fadal = fadal;
     }
 
     /// At most `n` blocks are run again by loops and subroutine calls (default
@@ -442,6 +527,7 @@ impl<R: Read + Seek> ProgramReader<R> {
             repeats_left: repeats - 1,
             local: false,
             macro_call: args.is_some(),
+            fadal: false,
         });
         let p = self.programs[prog];
         self.pos = p.start;
@@ -590,17 +676,18 @@ impl<R: Read + Seek> ProgramReader<R> {
                 }
             }
             let need_words = !main_words && !words_after;
-            if !need_words && !may_matter(line.bytes) {
+            if !need_words && !may_matter(line.bytes, self.fadal) {
                 continue;
             }
-            let (number, words, m99) = match parse_line(line.bytes, line.number, line.offset) {
-                Ok(b) => (
-                    program_number(&b),
-                    b.has_words() || matches!(b.kind, BlockKind::Macro(_)),
-                    has_m(&b, 990),
-                ),
-                Err(_) => (None, true, false),
-            };
+            let (number, words, m99) =
+                match parse_as(line.bytes, line.number, line.offset, self.fadal) {
+                    Ok(b) => (
+                        program_number(&b),
+                        b.has_words() || matches!(b.kind, BlockKind::Macro(_)),
+                        has_m(&b, 990),
+                    ),
+                    Err(_) => (None, true, false),
+                };
             if let Some(n) = number {
                 main_words |= words_after;
                 if programs.len() >= MAX_PROGRAMS {
@@ -639,6 +726,93 @@ impl<R: Read + Seek> ProgramReader<R> {
         self.programs = programs;
         self.by_number = by_number;
         self.next_body = 0;
+        if self.fadal {
+            self.index_fadal()?;
+        }
+        Ok(())
+    }
+
+    /// Read the whole file once more and note its FADAL subroutines and their section.
+    fn index_fadal(&mut self) -> io::Result<()> {
+        self.lines.seek_line(0, 1)?;
+        let mut subs: Vec<Program> = Vec::new();
+        // The last subroutine has not ended yet.
+        let mut open = false;
+        let mut first: Option<(usize, Diagnostic)> = None;
+        let mut close: Option<(usize, (usize, u32))> = None;
+        while let Some((line, end)) = self.lines.next_line_end()? {
+            if !may_matter(line.bytes, true) {
+                continue;
+            }
+            let Ok(b) = parse_as(line.bytes, line.number, line.offset, self.fadal) else {
+                continue;
+            };
+            let next = (end, line.number.saturating_add(1));
+            if let Some((n, 0)) = fadal_sub_line(&b) {
+                let span = b.word(b'L').map(|w| w.span);
+                let refuse = |why: String| err_at(&line, ErrorKind::FadalSubroutine(why), span);
+                if close.is_some() {
+                    self.pending.push_back(refuse(format!(
+                        "L{:04}: a subroutine heading after the M30 that ends the subroutine section (the control stops: SUBR. NESTING ERROR)",
+                        n * 100
+                    )));
+                    continue;
+                }
+                if let Some(p) = subs.iter().find(|p| p.number == n) {
+                    self.pending.push_back(refuse(format!(
+                        "L{:04}: subroutine {n} is defined twice (its first heading is on line {})",
+                        n * 100,
+                        p.line.saturating_sub(1)
+                    )));
+                    continue;
+                }
+                if open {
+                    if let Some(p) = subs.last_mut() {
+                        p.end = Some((line.offset, line.number));
+                    }
+                }
+                if first.is_none() {
+                    first = Some((line.offset, refuse(format!(
+                        "L{:04}: the subroutines at the start of the program are not closed by an M30 before the main program (the control stops: MAIN PROG. NOT FOUND)",
+                        n * 100
+                    ))));
+                }
+                subs.push(Program {
+                    number: n,
+                    start: next.0,
+                    line: next.1,
+                    end: None,
+                });
+                open = true;
+            } else if first.is_some() && close.is_none() {
+                if has_m(&b, 300) {
+                    if open {
+                        if let Some(p) = subs.last_mut() {
+                            p.end = Some((line.offset, line.number));
+                        }
+                    }
+                    open = false;
+                    close = Some((line.offset, next));
+                } else if has_m(&b, 170) && open {
+                    if let Some(p) = subs.last_mut() {
+                        p.end = Some(next);
+                    }
+                    open = false;
+                }
+            }
+        }
+        match (first, close) {
+            (Some((first, _)), Some((close, after))) => {
+                self.subs = subs;
+                self.section = Some(SubSection {
+                    first,
+                    close,
+                    after,
+                });
+            }
+            (Some((_, not_closed)), None) => self.pending.push_back(not_closed),
+            _ => {}
+        }
         Ok(())
     }
 
@@ -652,9 +826,25 @@ impl<R: Read + Seek> ProgramReader<R> {
             if f.local {
                 break;
             }
-            match self.programs[f.prog].end {
+            let p = if f.fadal {
+                self.subs[f.prog]
+            } else {
+                self.programs[f.prog]
+            };
+            match p.end {
                 Some((end, _)) if self.pos < end => break,
                 _ => self.ret(),
+            }
+        }
+        // The FADAL subroutine section: the main program (execution order) steps over
+        // it; read in file order, only its closing M30 is left out.
+        if let Some(sec) = self.section.filter(|_| self.stack.is_empty()) {
+            let from = match self.order {
+                Order::Execution => sec.first,
+                Order::File => sec.close,
+            };
+            if self.pos == from {
+                (self.pos, self.line) = sec.after;
             }
         }
         if self.stack.is_empty() && self.skip_bodies {
@@ -701,8 +891,8 @@ impl<R: Read + Seek> ProgramReader<R> {
         }
         let action = {
             let line = self.lines.last_line();
-            let parsed = if may_matter(line.bytes) {
-                parse_line(line.bytes, line.number, line.offset).ok()
+            let parsed = if may_matter(line.bytes, self.fadal) {
+                parse_as(line.bytes, line.number, line.offset, self.fadal).ok()
             } else {
                 None
             };
@@ -711,22 +901,38 @@ impl<R: Read + Seek> ProgramReader<R> {
                 Some(b) if !self.indexed => {
                     let needs_index = has_m(&b, 980)
                         || has_m(&b, 970)
-                        || (self.order == Order::Execution && program_number(&b).is_some());
+                        || (self.order == Order::Execution && program_number(&b).is_some())
+                        || (self.fadal && fadal_sub_line(&b).is_some());
                     if needs_index {
                         Action::Index
                     } else {
                         Action::Nothing
                     }
                 }
-                Some(b) => action(
-                    &line,
-                    &b,
-                    self.order,
-                    &self.programs,
-                    &self.by_number,
-                    &self.stack,
-                    (self.runs, self.max_runs),
-                ),
+                Some(b) => self
+                    .fadal
+                    .then(|| {
+                        fadal_action(
+                            &line,
+                            &b,
+                            self.order,
+                            &self.subs,
+                            &self.stack,
+                            (self.runs, self.max_runs),
+                        )
+                    })
+                    .flatten()
+                    .unwrap_or_else(|| {
+                        action(
+                            &line,
+                            &b,
+                            self.order,
+                            &self.programs,
+                            &self.by_number,
+                            &self.stack,
+                            (self.runs, self.max_runs),
+                        )
+                    }),
             }
         };
         match action {
@@ -739,7 +945,11 @@ impl<R: Read + Seek> ProgramReader<R> {
                 return self.next_line();
             }
             Action::Error(d) => self.pending.push_back(d),
-            Action::Call { prog, repeats } => {
+            Action::Call {
+                prog,
+                repeats,
+                fadal,
+            } => {
                 self.runs += u64::from(repeats);
                 self.stack.push(Frame {
                     prog,
@@ -747,8 +957,13 @@ impl<R: Read + Seek> ProgramReader<R> {
                     repeats_left: repeats - 1,
                     local: false,
                     macro_call: false,
+                    fadal,
                 });
-                let p = self.programs[prog];
+                let p = if fadal {
+                    self.subs[prog]
+                } else {
+                    self.programs[prog]
+                };
                 self.pos = p.start;
                 self.line = p.line;
             }
@@ -807,6 +1022,7 @@ impl<R: Read + Seek> ProgramReader<R> {
                         repeats_left: repeats - 1,
                         local: true,
                         macro_call: false,
+                        fadal: false,
                     });
                     (self.pos, self.line) = start;
                     None
@@ -830,7 +1046,11 @@ impl<R: Read + Seek> ProgramReader<R> {
                 (self.pos, self.line) = if f.local {
                     self.locals[f.prog]
                 } else {
-                    let p = self.programs[f.prog];
+                    let p = if f.fadal {
+                        self.subs[f.prog]
+                    } else {
+                        self.programs[f.prog]
+                    };
                     (p.start, p.line)
                 };
             } else {
@@ -850,6 +1070,72 @@ impl<R: Read + Seek> ProgramReader<R> {
     pub fn take_diagnostic(&mut self) -> Option<Diagnostic> {
         self.pending.pop_front()
     }
+}
+
+/// What `b` (the block of `line`) asks of the reader as a FADAL subroutine line (a call
+/// `Lnnkk`, a heading, the M17 that returns), or `None` when it is none.
+fn fadal_action(
+    line: &Line<'_>,
+    b: &Block<'_>,
+    order: Order,
+    subs: &[Program],
+    stack: &[Frame],
+    (runs, max_runs): (u64, u64),
+) -> Option<Action> {
+    if has_m(b, 170) && order == Order::Execution && stack.last().is_some_and(|f| f.fadal) {
+        return Some(Action::Return);
+    }
+    let (n, runs_asked) = fadal_sub_line(b)?;
+    if runs_asked == 0 {
+        // A heading: the main program skips the section; read in file order, it is
+        // a line like another (one after the section was refused when indexed).
+        return Some(Action::Nothing);
+    }
+    let span = b.word(b'L').map(|w| w.span);
+    let word = format!("L{:04}", n * 100 + runs_asked);
+    let refuse = |why: String| {
+        Some(Action::Error(err_at(
+            line,
+            ErrorKind::FadalSubroutine(why),
+            span,
+        )))
+    };
+    let Some(prog) = subs.iter().position(|p| p.number == n) else {
+        return refuse(format!(
+            "{word}: this program has no subroutine {n} (a heading L{:04} before the M30 that ends its subroutines; the control stops: SUBR. DOES NOT EXIST)",
+            n * 100
+        ));
+    };
+    if order == Order::File {
+        return Some(Action::Nothing);
+    }
+    if stack.iter().any(|f| f.fadal && f.prog == prog) {
+        return refuse(format!(
+            "{word}: subroutine {n} is already running: a subroutine may not call itself, directly or through others"
+        ));
+    }
+    if stack.len() >= MAX_NESTING {
+        return Some(Action::Error(err_at(
+            line,
+            ErrorKind::CallsTooDeep(MAX_NESTING),
+            span,
+        )));
+    }
+    if runs + u64::from(runs_asked) > max_runs {
+        return Some(Action::Error(err_at(
+            line,
+            ErrorKind::TooManyCalls {
+                limit: max_runs,
+                what: "subprogram runs",
+            },
+            span,
+        )));
+    }
+    Some(Action::Call {
+        prog,
+        repeats: runs_asked,
+        fadal: true,
+    })
 }
 
 /// What `b` (the block of `line`) asks of the reader.
@@ -977,7 +1263,7 @@ fn action(
     if order == Order::File || repeats == 0 {
         return Action::Nothing;
     }
-    if stack.iter().any(|f| f.prog == prog) {
+    if stack.iter().any(|f| f.prog == prog && !f.local && !f.fadal) {
         let mut chain: Vec<String> = stack
             .iter()
             .map(|f| format!("O{}", programs[f.prog].number))
@@ -1009,12 +1295,20 @@ fn action(
             Some(m98.span),
         ));
     }
-    Action::Call { prog, repeats }
+    Action::Call {
+        prog,
+        repeats,
+        fadal: false,
+    }
 }
 
 impl<R: Read + Seek> LineSource for ProgramReader<R> {
     fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
         ProgramReader::next_line(self)
+    }
+
+    fn set_flavor(&mut self, flavor: crate::flavor::Flavor) {
+        self.fadal_subroutines(flavor == crate::flavor::Flavor::Fadal);
     }
 
     fn calls(&self) -> Calls {
@@ -1284,9 +1578,120 @@ mod tests {
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(moves.len(), 1 + 6);
         assert_eq!(moves.last().map(|m| m.end[0]), Some(6.0));
-        // L without M98 is still a FADAL subroutine call, not followed.
+        // L without M98 is a FADAL subroutine call: to a subroutine the program does
+        // not hold, refused; a fixed subroutine (L9101, probing) is not followed.
         let (_, d) = run("G20 G0 X0\nL105\n", Order::Execution);
-        assert!(matches!(d[0].kind, ErrorKind::SubprogramNotFollowed(_)));
+        assert!(matches!(d[0].kind, ErrorKind::FadalSubroutine(_)), "{d:?}");
+        let (_, d) = run("G20 G0 X0\nL9101 R1+1.\n", Order::Execution);
+        assert!(
+            d.iter()
+                .any(|d| matches!(d.kind, ErrorKind::SubprogramNotFollowed(_))),
+            "{d:?}"
+        );
+    }
+
+    /// The FADAL manual's layout (section 10, MAIN PROG. NOT FOUND; section 18's slot
+    /// program): subroutines first, each from its heading to the next heading or M17,
+    /// the section closed by M30, then the main program; `Lnnkk` runs subroutine nn kk
+    /// times, subroutines calling others; comments left open as the manual writes them.
+    #[test]
+    fn fadal_subroutines_run_where_called() {
+        let text = "N1 O1 (FADAL PART\nN2 L100 (SUB 1\nN3 G91 G1 X1. F20.\nN4 L201\n\
+                    N5 L200 (SUB 2\nN6 Y1.\nN7 Y-1.\nN8 M17\nN9 (\nN10 M30\n\
+                    N11 (MAIN PROGRAM\nN12 G70 G90 G0 X0 Y0 Z0\nN13 L102\nN14 G90 G0 X5.\nN15 M2\n";
+        let (moves, d) = run(text, Order::Execution);
+        assert!(d.is_empty(), "{d:?}");
+        let ends: Vec<[f64; 2]> = moves.iter().map(|m| [m.end[0], m.end[1]]).collect();
+        assert_eq!(
+            ends,
+            [
+                [0.0, 0.0],
+                [1.0, 0.0],
+                [1.0, 1.0],
+                [1.0, 0.0],
+                [2.0, 0.0],
+                [2.0, 1.0],
+                [2.0, 0.0],
+                [5.0, 0.0]
+            ]
+        );
+        // Every line read in file order but the M30 that closes the section: no
+        // "after the program's end", no call refused.
+        let mut r = ProgramReader::new(io::Cursor::new(text.as_bytes()), Order::File);
+        r.fadal_subroutines(true);
+        let mut lines = Vec::new();
+        while let Some(l) = r.next_line().expect("reads") {
+            lines.push(l.number);
+        }
+        assert_eq!(lines, [1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14, 15]);
+        let (_, d) = run(text, Order::File);
+        assert!(d.is_empty(), "{d:?}");
+        // Outside the `fadal` flavour an L word is no call.
+        let mut o = opts();
+        o.flavor = crate::flavor::Flavor::Fanuc;
+        let r = ProgramReader::new(io::Cursor::new(text.as_bytes()), Order::Execution);
+        let n = Stream::new(r, o, false)
+            .filter_map(|e| match e {
+                Ok(Event::Move(_)) => Some(()),
+                _ => None,
+            })
+            .count();
+        assert_ne!(n, 8);
+    }
+
+    /// What the control refuses is refused at the line: no M30 before the main program
+    /// (MAIN PROG. NOT FOUND), a heading after it (SUBR. NESTING ERROR), a call to a
+    /// subroutine not there (SUBR. DOES NOT EXIST), a subroutine defined twice,
+    /// recursion.
+    #[test]
+    fn fadal_subroutine_errors_are_located() {
+        for (text, line, says) in [
+            (
+                "N1 L100\nN2 G1 X1. F20.\nN3 M17\nN4 G70 G0 X0\nN5 L101\nN6 M2\n",
+                1,
+                "MAIN PROG. NOT FOUND",
+            ),
+            (
+                "N1 L100\nN2 G1 X1. F20.\nN3 M17\nN4 M30\nN5 G70 G0 X0\nN6 L200\nN7 M2\n",
+                6,
+                "NESTING",
+            ),
+            (
+                "N1 L100\nN2 G1 X1. F20.\nN3 M17\nN4 M30\nN5 G70 G0 X0\nN6 L301\nN7 M2\n",
+                6,
+                "no subroutine 3",
+            ),
+            (
+                "N1 L100\nN2 X1.\nN3 L100\nN4 M17\nN5 M30\nN6 G70 G0 X0\nN7 M2\n",
+                3,
+                "twice",
+            ),
+            (
+                "N1 L100\nN2 G1 X1. F20.\nN3 L101\nN4 M17\nN5 M30\nN6 G70 G0 X0\nN7 L101\nN8 M2\n",
+                3,
+                "already running",
+            ),
+        ] {
+            let (_, d) = run(text, Order::Execution);
+            let e = d
+                .iter()
+                .find(|d| d.severity == Severity::Error)
+                .unwrap_or_else(|| panic!("{text}: no error in {d:?}"));
+            assert_eq!(e.line, line, "{text}: {e:?}");
+            assert!(e.kind.to_string().contains(says), "{text}: {e:?}");
+        }
+    }
+
+    /// A FADAL subroutine that calls an `O` subprogram (the probe manual's layout, O101
+    /// before the program): each call is its own level.
+    #[test]
+    fn fadal_subroutines_and_subprograms_mix() {
+        let text = "%\nN1O101 (SUB FOR PART\nN2G1G90X0F250.\nN4X1.\nN8M99\nN1O9110 (MAIN\n\
+                    N2L100 (SUB\nN4M98P101\nN5M17\nN6M30\nN7 G70 G90 G0 X0 Y0 Z0\nN8L102\nN9 M2\n%\n";
+        let (moves, d) = run(text, Order::Execution);
+        assert!(d.is_empty(), "{d:?}");
+        let xs: Vec<f64> = moves.iter().map(|m| m.end[0]).collect();
+        assert_eq!(xs, [0.0, 0.0, 1.0, 0.0, 1.0]);
     }
 
     #[test]

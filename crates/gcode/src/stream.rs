@@ -23,6 +23,10 @@ pub trait LineSource {
         Calls::NotFollowed
     }
 
+    /// The flavour the program is read in, told before its first line (a source that
+    /// follows calls reads FADAL's own subroutines under `fadal`).
+    fn set_flavor(&mut self, _flavor: crate::flavor::Flavor) {}
+
     /// A problem the source found (a call to a missing program, say), reported after the
     /// line it concerns.
     fn take_diagnostic(&mut self) -> Option<Diagnostic> {
@@ -126,7 +130,8 @@ impl<S: LineSource> Stream<S> {
     /// A stream over `src`. With `stop_on_error`, the stream ends after the first error
     /// (what follows an error cannot be trusted for motion); without it, every block is
     /// read and every problem reported.
-    pub fn new(src: S, opts: Options, stop_on_error: bool) -> Self {
+    pub fn new(mut src: S, opts: Options, stop_on_error: bool) -> Self {
+        src.set_flavor(opts.flavor);
         let mut interp = Interpreter::new(opts);
         interp.set_calls(src.calls());
         let params = if opts.flavor.macro_b() {

@@ -32,6 +32,12 @@ pub(crate) struct FeedCheck {
     pub(crate) tol: f64,
     /// A point planned on the reading thread: (joints, is the step's end, its check).
     pub(crate) planned_check: Option<([f64; 3], bool, EndCheck)>,
+    /// While a linearised arc is written: how far its chords leave the arc between
+    /// their points (the chord's sagitta), added to each point's distance. `verify`
+    /// checks the middle of every written segment too; the middle of a chord lies at most
+    /// this plus the larger of its ends' distances from the arc, so the check here is
+    /// never the weaker one.
+    pub(crate) bulge: f64,
 }
 
 impl FeedCheck {
@@ -45,6 +51,7 @@ impl FeedCheck {
             axis_err: None,
             tol: cfg.verify_tolerance,
             planned_check: None,
+            bulge: 0.0,
         }
     }
 
@@ -91,7 +98,7 @@ impl FeedCheck {
             // end-or-path rule).
             Some((j, end, e)) if end == is_end && j == *x => e,
             _ => self.distance(scale, x, is_end),
-        };
+        } + self.bulge;
         if err > self.tol {
             return Err(self.off_path(scale, x, line, err));
         }

@@ -142,7 +142,7 @@ impl PostError {
             PostError::Empty(_) => "give a program with moves",
             PostError::Io(_) => "check the paths and free space",
             PostError::Collision(_) => "the part (--part) stands in the way of the move named: move the part or the run's start (--origin, the setup), choose another index, or raise the safe height (clearance_z, safe_margin in the machine file); nothing was written",
-            PostError::Verify(_) => "this is a lampost fault, or INPUT and POSTED do not belong together (verify takes the placement and the process options the program was posted with: --process, --power, --spindle, --coolant, --tool, --work-offset, --length-offset); nothing was written",
+            PostError::Verify(_) => "this is a lampost fault, or INPUT and POSTED do not belong together (verify takes the placement and the process options the program was posted with: --process, --power, --spindle, --coolant, --tool, --work-offset, --length-offset); a post that fails its own check writes nothing",
             PostError::Options(_) => "see `lampost post --help`",
         }
     }

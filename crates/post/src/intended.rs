@@ -484,7 +484,27 @@ impl<'a> Intended<'a> {
                     what,
                 })
             }
+            // A move that goes nowhere (the Fanuc safety line `G00 G17 G40 G49 G80`,
+            // which rs274 reads as a traverse to where it stands) is no first move: the
+            // frame may still be placed after it.
+            _ if (0..3).all(|k| m.start[k] == m.end[k]) => Ok(()),
             _ => {
+                if off != [0.0; 3] {
+                    // Placed by a shift the program states (G52 X10 Y5 before its
+                    // first move): the numbers it cuts at are not its work offset's.
+                    let at = match interp.offset_line() {
+                        0 => String::new(),
+                        l => format!(" at line {l}"),
+                    };
+                    let r = lampost_gcode::Readable;
+                    self.notes.push(format!(
+                        "{file}:{}: the program's moves are in a frame shifted by ({}, {}, {}) from its work offset's zero (G52, G92 or G10{at}, before its first move): --origin places that shifted frame on the part; where the part's zero is the work offset's, add the shift to --origin",
+                        m.line,
+                        r(off[0]),
+                        r(off[1]),
+                        r(off[2])
+                    ));
+                }
                 self.frame_at_first = Some((self.idx, off, m.modal));
                 Ok(())
             }
@@ -696,8 +716,11 @@ impl<'a> Intended<'a> {
                         ErrorKind::MainProgramLoops(control) => Some(format!(
                             "M99 in the main program: a {control} control runs it again without end, and the post writes one pass; end the program with M30"
                         )),
-                        ErrorKind::NotSimulated(what) => Some(format!(
+                        ErrorKind::NotSimulated(what) if what.contains("firmware") => Some(format!(
                             "{what} changes the path; the post cannot follow it"
+                        )),
+                        ErrorKind::NotSimulated(what) => Some(format!(
+                            "{what} changes the path; the post cannot follow it: have the CAM system write the moves it stands for (a pocket or circle as its arcs and lines, a rotated, scaled or mirrored frame as the moves in the program's own frame), or remove it where it changes nothing"
                         )),
                         ErrorKind::CutterCompTraced(what) => Some(format!(
                             "{what}: cutter radius compensation changes the path; the post writes no compensated path (program the tool's centre path, G40)"

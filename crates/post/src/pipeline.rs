@@ -201,7 +201,7 @@ fn post_pass<W: Write>(
         sections,
         head: cfg.head,
         scale: linear_scale(program_units(machine)),
-        tolerance: cfg.tolerance,
+        tolerance: crate::post::chord_tolerance(machine, cfg),
         cache: None,
     };
     std::thread::scope(|scope| {

@@ -378,6 +378,19 @@ pub(crate) fn index_maps(m: &Machine, head: usize, rot: &[f64; 2]) -> (Affine, A
     )
 }
 
+/// The chord tolerance arcs are linearised to: `cfg.tolerance`, or less where the
+/// written points' rounding would carry a chord's middle past the verification tolerance.
+/// (The middle of a written chord lies within the chord's sagitta plus the larger of its
+/// ends' distances from the arc; an end is off by at most half a grid step on each
+/// linear axis, √3/2 of a step; `verify` checks the middles.)
+pub(crate) fn chord_tolerance(m: &Machine, cfg: &PostConfig) -> f64 {
+    let grid = (0..3)
+        .map(|k| m.linear[k].resolution)
+        .fold(1.0 / linear_scale(program_units(m)), f64::max);
+    let room = cfg.verify_tolerance - 0.5 * 3f64.sqrt() * grid;
+    cfg.tolerance.min(room.max(0.05 * cfg.tolerance))
+}
+
 /// How an arc is written under a table position: kept as an arc (its plane is the
 /// machine's XY plane, counter-clockwise in joint X/Y when `ccw`), or linearised into
 /// `chords` straight moves to the chord tolerance.
@@ -456,6 +469,7 @@ pub(crate) fn post_steps<W: Write>(
     batches: impl Iterator<Item = Batch>,
     mut give_back: impl FnMut(Batch),
 ) -> Result<(PostReport, Vec<HeightUsed>), PostError> {
+    let chord_tol = chord_tolerance(machine, cfg);
     let mut w = Writer::new(machine, cfg, heights, out)?;
     w.preamble(cfg)?;
     let mut cur_key: Option<(usize, usize)> = None;
@@ -567,13 +581,7 @@ pub(crate) fn post_steps<W: Write>(
                 } => {
                     // The arc stays an arc when its plane is the machine's XY plane.
                     let way = arc_way(
-                        machine,
-                        &w.rot_sc,
-                        &step,
-                        &center,
-                        &normal,
-                        sweep,
-                        cfg.tolerance,
+                        machine, &w.rot_sc, &step, &center, &normal, sweep, chord_tol,
                     );
                     let center_j = joints(&jm, &center);
                     // An arc kept must read back as itself: one whose end rounds onto its
@@ -597,12 +605,12 @@ pub(crate) fn post_steps<W: Write>(
                                 round_warned = Some(step.section as usize);
                                 w.report.warnings.push(format!("{file}:{}: an arc that would not read back as itself at the output resolution (its end rounding onto or past its start reads as a full circle, or nearly one; or its radii as written beyond the control's arc tolerance) is written as chords", step.line));
                             }
-                            Some(chord_count(&step, &center, sweep, cfg.tolerance))
+                            Some(chord_count(&step, &center, sweep, chord_tol))
                         }
                         ArcWay::Chords(n) => {
                             if arc_warned != Some(step.section as usize) {
                                 arc_warned = Some(step.section as usize);
-                                w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, cfg.tolerance));
+                                w.report.warnings.push(format!("{file}:{}: an arc in a plane the index does not keep is linearised (chord tolerance {})", step.line, chord_tol));
                             }
                             Some(n)
                         }
@@ -616,12 +624,12 @@ pub(crate) fn post_steps<W: Write>(
                             let v = p - center;
                             (v - normal * normal.dot(&v)).norm()
                         };
-                        let needed = chords_needed(&step, &center, sweep, cfg.tolerance);
+                        let needed = chords_needed(&step, &center, sweep, chord_tol);
                         if needed > MAX_CHORDS as f64 {
                             return Err(PostError::Unsupported {
                                 file: file.to_string(),
                                 line: step.line,
-                                what: format!("the arc needs {needed:.0} chords to stay within the chord tolerance {} at this table position, more than {MAX_CHORDS} (fewer would leave the path between them): split it, keep it in the index's plane, or post with a larger --tolerance", cfg.tolerance),
+                                what: format!("the arc needs {needed:.0} chords to stay within the chord tolerance {} at this table position, more than {MAX_CHORDS} (fewer would leave the path between them): split it, keep it in the index's plane, or post with a larger --tolerance", chord_tol),
                             });
                         }
                         let off = (radial(&step.end) - radial(&step.start)).abs();
@@ -637,6 +645,9 @@ pub(crate) fn post_steps<W: Write>(
                         let chords = planned
                             .and_then(|p| points.get(p.chords.0 as usize..p.chords.1 as usize))
                             .filter(|c| c.len() == n);
+                        // How far a chord leaves the arc between its points.
+                        let r = radial(&step.start).max(radial(&step.end));
+                        w.feed_check.bulge = r * (1.0 - (0.5 * sweep.abs() / n as f64).cos());
                         for k in 1..=n {
                             // The last chord ends exactly where the move does (an arc whose
                             // end is off its start's radius by the program's rounding too).
@@ -648,6 +659,7 @@ pub(crate) fn post_steps<W: Write>(
                             w.feed_check.planned_check = check.map(|c| (q, k == n, c));
                             w.linear(1.0, &q, Some(step.feed), file, step.line, k == n)?;
                         }
+                        w.feed_check.bulge = 0.0;
                     }
                 }
                 _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
