@@ -460,7 +460,7 @@ pub fn pivot(
         // layout kept), or of the built-in it names.
         let original = match lampost_kinematics::builtin_text(machine) {
             Some(t) => t.to_string(),
-            None => crate::io::read_file_to_string(machine)
+            None => crate::io::read_settings_file(machine)
                 .map_err(|e| CliError::usage(format!("error: cannot read {machine}: {e}\n")))?,
         };
         let text = lampost_align::calibrated_text(&original, &m, &res, &name)
@@ -765,6 +765,15 @@ pub fn probe_poses(
         return Err(CliError::usage(
             "error: need --points ≥ 4 and positive --radius and --stylus-radius\n".to_string(),
         ));
+    }
+    // The program holds every touch of every pose: bounded as the other probing
+    // programs are (a count of 2³² asked 412 GB).
+    let max = crate::align_cmds::MAX_TOUCHES;
+    if points.saturating_mul(set.len()) > max {
+        return Err(CliError::usage(format!(
+            "error: --points {points}: {} poses of {points} touches is more than {max} touches in one program\n  = help: 12 to 30 touches a pose fit each ball centre well\n",
+            set.len()
+        )));
     }
     // A set that fixes nothing (no poses, every pose at the same angles) is refused,
     // not written as if it fixed R.

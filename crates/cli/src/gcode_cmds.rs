@@ -207,9 +207,20 @@ pub fn fmt(
         while let Some(line) = reader.next_line().map_err(|e| io_err(&name, e))? {
             let mut scratch = None;
             let mut b = Block::empty(line.number, line.offset);
-            let parsed = match line.too_long() {
-                Some(d) => Err(d),
-                None => parse_line_lenient(
+            // A Fanuc or Haas Macro B statement (`IF [#1 LT 3] GOTO 2`, `WHILE […] DO1`,
+            // `END1`) is copied as it stands, as macro lines are.
+            let statement = flavor
+                .flavor
+                .macro_b()
+                .then(|| lampost_gcode::macro_b_statement(line.bytes, line.number, line.offset))
+                .flatten();
+            let parsed = match (line.too_long(), statement) {
+                (Some(d), _) => Err(d),
+                (None, Some(st)) => {
+                    b = st;
+                    Ok(())
+                }
+                (None, None) => parse_line_lenient(
                     line.bytes,
                     line.number,
                     line.offset,
@@ -251,6 +262,9 @@ pub fn fmt(
                 parsed
             };
             let refused = match parsed {
+                // To standard output nothing is written after the first error line (the
+                // lines after it are still read, for their errors).
+                Ok(()) if errors > 0 && output.is_none() => None,
                 Ok(()) => match em.block(&b) {
                     Ok(()) => None,
                     // A word the dialect cannot hold, or renumbering past its largest N:
@@ -273,7 +287,11 @@ pub fn fmt(
                 }
             }
         }
-        em.finish().map_err(werr)?;
+        if errors > 0 {
+            em.finish_cut().map_err(werr)?;
+        } else {
+            em.finish().map_err(werr)?;
+        }
     }
     if errors > 0 {
         // Dropping `out` removes the temporary file: no half-written output.

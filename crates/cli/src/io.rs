@@ -13,6 +13,7 @@ pub fn open_input(path: &str) -> Result<Box<dyn BufRead>, CliError> {
     if path == "-" {
         return Ok(Box::new(BufReader::with_capacity(1 << 16, io::stdin())));
     }
+    note_input(path);
     let f = File::open(path).map_err(|e| {
         CliError::usage(format!(
             "error: cannot open {path}: {e}\n  = help: check the path; use - to read standard input"
@@ -36,6 +37,7 @@ fn cannot_open(path: &str, e: &io::Error) -> CliError {
 /// to a temporary file that is removed as soon as it is open, so memory stays flat.
 pub fn open_seekable(path: &str) -> Result<Box<dyn ReadSeek>, CliError> {
     if path != "-" {
+        note_input(path);
         let f = File::open(path).map_err(|e| cannot_open(path, &e))?;
         if f.metadata().is_ok_and(|m| m.is_file()) {
             return Ok(Box::new(f));
@@ -102,6 +104,7 @@ pub fn read_to_string_checked(from: &mut dyn Read, out: &mut String) -> io::Resu
 
 /// The file at `path` read whole by [`read_to_end_checked`] (as `fs::read` reads it).
 pub fn read_file(path: impl AsRef<Path>) -> io::Result<Vec<u8>> {
+    note_input(path.as_ref());
     let mut out = Vec::new();
     read_to_end_checked(&mut File::open(path)?, &mut out)?;
     Ok(out)
@@ -110,9 +113,59 @@ pub fn read_file(path: impl AsRef<Path>) -> io::Result<Vec<u8>> {
 /// The file at `path` read whole as text by [`read_to_string_checked`] (as
 /// `fs::read_to_string` reads it).
 pub fn read_file_to_string(path: impl AsRef<Path>) -> io::Result<String> {
+    note_input(path.as_ref());
+    read_settings_file(path)
+}
+
+/// [`read_file_to_string`] for a machine file, which a run may rewrite in place
+/// (`lampost calibrate pivot --machine m.toml --write m.toml`): not noted as an input
+/// that no output may replace.
+pub fn read_settings_file(path: impl AsRef<Path>) -> io::Result<String> {
     let mut out = String::new();
     read_to_string_checked(&mut File::open(path)?, &mut out)?;
     Ok(out)
+}
+
+/// The files this run reads (their canonical paths): no output is put in their place
+/// ([`persist_set`] refuses), so `trace in.nc -o in.nc` cannot destroy its program.
+static INPUTS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Note `path` as an input of this run (a regular file; stdin and devices are not).
+pub fn note_input(path: impl AsRef<Path>) {
+    let p = path.as_ref();
+    if p.as_os_str() == "-" || !fs::metadata(p).is_ok_and(|m| m.is_file()) {
+        return;
+    }
+    if let Ok(c) = p.canonicalize() {
+        let mut inputs = INPUTS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !inputs.contains(&c) {
+            inputs.push(c);
+        }
+    }
+}
+
+/// Whether `target` is a file this run read (see [`note_input`]).
+fn is_input(target: &Path) -> bool {
+    target.canonicalize().is_ok_and(|c| {
+        INPUTS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .contains(&c)
+    })
+}
+
+/// Where an output named `target` goes: through a symbolic link to the file it names
+/// (`-o link` writes the file, not a new file in the link's place; `-o /dev/stdout` is
+/// the run's standard output), else `target`.
+fn real_target(target: &Path) -> PathBuf {
+    if fs::symlink_metadata(target).is_ok_and(|m| m.file_type().is_symlink()) {
+        if let Ok(c) = target.canonicalize() {
+            return c;
+        }
+    }
+    target.to_path_buf()
 }
 
 /// [`read_to_end_checked`] with the bound on size given.
@@ -190,6 +243,9 @@ pub struct Concat {
 impl Concat {
     /// The files `paths`, in order.
     pub fn open(paths: &[String]) -> Result<Self, CliError> {
+        for p in paths {
+            note_input(p);
+        }
         let mut parts = Vec::with_capacity(paths.len());
         let mut starts = Vec::with_capacity(paths.len());
         let mut total = 0u64;
@@ -379,6 +435,14 @@ pub fn persist_set(
         Err(e) if e.kind() != io::ErrorKind::NotFound => Err(cannot_write(p, &e)),
         _ => Ok(()),
     });
+    if done.is_ok() {
+        if let Some((_, target)) = files.iter().find(|(_, t)| is_input(t)) {
+            done = Err(CliError::usage(format!(
+                "error: {}: the same file as an input of this run: writing it would destroy the input\n  = help: write the output to another path\n",
+                target.display()
+            )));
+        }
+    }
     for (t, target) in files {
         // Its removal is done here, under the lock (a drop would take it again).
         let path = t.into_path();
@@ -417,6 +481,7 @@ fn cannot_write(target: &Path, e: &io::Error) -> CliError {
 /// contents written to it instead (a rename would replace the device with a file), and
 /// `path` stays for the caller to remove.
 fn place(path: &Path, target: &Path) -> io::Result<()> {
+    let target = &real_target(target);
     if is_special(target) {
         let mut from = File::open(path)?;
         let mut to = fs::OpenOptions::new().write(true).open(target)?;
@@ -443,7 +508,10 @@ pub struct TempFile {
 impl TempFile {
     /// A new, empty temporary file for `target` (`None` or `-`: standard output).
     pub fn beside(target: Option<&str>) -> Result<(TempFile, File), CliError> {
-        let target = target.filter(|t| *t != "-");
+        let real = target
+            .filter(|t| *t != "-")
+            .map(|t| real_target(Path::new(t)));
+        let target = real.as_deref().and_then(Path::to_str);
         let dir = match target {
             // A device or a pipe (`-o /dev/null`) is written through, never renamed over:
             // its temporary file lives in the temporary folder.

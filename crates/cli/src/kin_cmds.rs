@@ -180,7 +180,7 @@ pub fn load_machine(spec: &str, sets: &[String]) -> Result<Machine, CliError> {
         return Machine::builtin(spec, &ov).map_err(kin_error);
     }
     regular_machine_file(spec)?;
-    let text = crate::io::read_file_to_string(spec).map_err(|e| {
+    let text = crate::io::read_settings_file(spec).map_err(|e| {
         let names = builtin_names();
         CliError::usage(format!(
             "error: --machine {spec}: not a built-in machine and not a readable file ({e})\n  = help: built-in machines: {}; or give the path of a machine file\n",

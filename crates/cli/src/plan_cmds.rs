@@ -435,8 +435,8 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
     let mesh = lampost_plan::demo::twisted_plate(a.scale, a.thickness, a.along, a.across)
         .ok_or_else(|| {
             CliError::usage(format!(
-                "error: plan demo: --scale {} --thickness {} --along {} --across {}: give positive sizes and 1 to 100000 quads each way\n  = help: e.g. --scale 0.25 --thickness 3\n",
-                a.scale, a.thickness, a.along, a.across
+                "error: plan demo: --scale {} --thickness {} --along {} --across {}: give positive sizes, 1 to 100000 quads each way and at most {} in all\n  = help: e.g. --scale 0.25 --thickness 3\n",
+                a.scale, a.thickness, a.along, a.across, lampost_plan::demo::MAX_QUADS
             ))
         })?;
     let (lo, hi) = lampost_mesh::props::bounds(&mesh).unwrap_or_default();

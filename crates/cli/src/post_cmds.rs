@@ -194,6 +194,7 @@ impl InputFile {
                 "error: cannot open {input}\n  = help: check the path; use - for standard input\n"
             )));
         }
+        crate::io::note_input(path);
         Ok(InputFile {
             name: input.to_string(),
             path: PathBuf::from(input),
@@ -580,6 +581,7 @@ pub fn sections(
                     k + 1
                 )));
             }
+            crate::io::note_input(&path);
             out.push(Section {
                 name,
                 source: Source::Path(path),

@@ -26,7 +26,7 @@ pub fn arm_for(spec: &str) -> Result<Option<Arm>, CliError> {
         return Ok(None);
     }
     crate::kin_cmds::regular_machine_file(spec)?;
-    let Ok(text) = crate::io::read_file_to_string(spec) else {
+    let Ok(text) = crate::io::read_settings_file(spec) else {
         return Ok(None);
     };
     if !lampost_robot::is_arm_text(&text) {

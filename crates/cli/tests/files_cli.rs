@@ -364,3 +364,78 @@ fn an_interrupted_robot_post_leaves_the_folder_old_or_new() {
     }
     eprintln!("outcomes (interrupted and old, interrupted and new, finished): {outcomes:?}");
 }
+
+/// Finding 107 (h58): only `post` refused an output at its input's path; `trace in.nc -o
+/// in.nc`, `plan slice m.stl -o m.stl` and a dozen others replaced their input and exited
+/// 0, and `post` itself missed a job's section program. An output over any file the run
+/// read is now refused, and the input is left as it was. A machine file may still be
+/// rewritten in place (`calibrate pivot --machine m.toml --write m.toml`).
+#[test]
+fn no_output_replaces_an_input_of_the_run() {
+    let dir = tempdir("output-over-input");
+    let prog = dir.join("in.nc");
+    let text = "G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F100\nG1 X10\nG0 Z5\nM2\n";
+    std::fs::write(&prog, text).expect("write");
+    let p = prog.to_str().expect("utf8");
+    let o = lampost(&["trace", p, "-o", p]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("the same file as an input"), "{err}");
+    assert_eq!(std::fs::read_to_string(&prog).expect("read"), text);
+    let job = dir.join("job.toml");
+    std::fs::write(
+        &job,
+        "[[section]]\nprogram = \"in.nc\"\nindex = { B = 0.0, C = 0.0 }\n",
+    )
+    .expect("write");
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--job",
+        job.to_str().expect("utf8"),
+        "-o",
+        p,
+    ]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&prog).expect("read"), text);
+    let mesh = dir.join("m.stl");
+    let m = mesh.to_str().expect("utf8");
+    assert!(lampost(&["plan", "demo", "--scale", "0.1", "-o", m])
+        .status
+        .success());
+    let before = std::fs::read(&mesh).expect("mesh");
+    let o = lampost(&["plan", "slice", "--layer", "1", m, "-o", m]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&mesh).expect("mesh"), before);
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+}
+
+/// Finding 107 (h58): `-o LINK` replaced the symbolic link with a new file (as root,
+/// `-o /dev/stdout` with standard output sent to a file replaced `/dev/stdout` itself,
+/// and the file got nothing). The output now goes where the link leads; the link stays.
+#[test]
+fn an_output_through_a_symbolic_link_writes_its_target() {
+    let dir = tempdir("output-symlink");
+    let prog = dir.join("in.nc");
+    std::fs::write(&prog, "G21 G90\nG0 X1\nM2\n").expect("write");
+    let target = dir.join("target.nc");
+    std::fs::write(&target, "old\n").expect("write");
+    let link = dir.join("link.nc");
+    std::os::unix::fs::symlink(&target, &link).expect("symlink");
+    let o = lampost(&[
+        "fmt",
+        prog.to_str().expect("utf8"),
+        "-o",
+        link.to_str().expect("utf8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::symlink_metadata(&link)
+        .expect("link")
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::read_to_string(&target)
+        .expect("target")
+        .contains("G0 X1"));
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+}

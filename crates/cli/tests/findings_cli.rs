@@ -4314,3 +4314,143 @@ fn a_line_of_text_is_named_as_text() {
         "{err}"
     );
 }
+
+/// Finding 105 (h57, h59): `fmt` refused a Fanuc Macro B program's statements (`IF [#1 LT
+/// 3] GOTO 2` was "the letter I has no number after it") that `check` and `trace`
+/// evaluate; and `--flavor auto` read a Fanuc program's `#4= 7. / 2.` (an expression
+/// without brackets, which LinuxCNC refuses) as LinuxCNC's for its `#`, and refused it at
+/// the `/`. The statements are now copied as they stand, with or without a dialect; the
+/// unbracketed assignment decides Fanuc.
+#[test]
+fn macro_b_statements_are_copied_and_an_unbracketed_assignment_is_fanuc() {
+    let loops = finding("105-macro-b/loops.nc");
+    let text = std::fs::read_to_string(&loops).expect("fixture");
+    for extra in [&[][..], &["--dialect", "fadal", "--units", "inch"][..]] {
+        let mut args = vec!["fmt", "--flavor", "fanuc"];
+        args.extend_from_slice(extra);
+        args.push(loops.to_str().expect("utf8"));
+        let o = lampost(&args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        for st in [
+            "IF [#1 LT 3] GOTO 2",
+            "WHILE [#1 LT 5] DO1",
+            "END1",
+            "GOTO 9",
+        ] {
+            assert!(
+                out.lines().any(|l| l == st),
+                "{extra:?}: {st} missing:\n{out}"
+            );
+        }
+        if extra.is_empty() {
+            assert_eq!(out, text);
+        }
+    }
+    let o = lampost(&[
+        "check",
+        finding("105-macro-b/unbracketed.nc")
+            .to_str()
+            .expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("flavour fanuc (auto: a Macro B assignment"),
+        "{err}"
+    );
+}
+
+/// Finding 106 (h58): a few hundred bytes ran without bound. Loops and calls capped the
+/// blocks run, not the moves each made: a `G81 … L9999` in a subprogram called 10⁶ times
+/// traced 3.6 GB in a minute, and zero-depth holes (no text written, so `--max-bytes`
+/// never stopped it) held `post` for an hour and a half. The moves blocks make beyond
+/// one each are now capped at 5,000,000 a program, refused at the line. The demo plate
+/// (`--along 100000 --across 100000` asked 480 GB and aborted) and `probe poses`
+/// (`--points 4294967296`, 412 GB) are bounded too; `fmt` to standard output writes
+/// nothing after its first error line, as it says, and no closing `%` after a cut.
+#[test]
+fn hostile_sizes_are_refused_not_run() {
+    for (args, says) in [
+        (
+            vec!["trace", "106-hostile/cycle-repeats-in-calls.nc", "-o", "-"],
+            "more than 5000000 moves made by canned or lathe cycles",
+        ),
+        (
+            vec![
+                "post",
+                "--machine",
+                "nrc-lc",
+                "106-hostile/zero-depth-cycle-in-repeat.ngc",
+                "-o",
+                "OUT",
+            ],
+            "more than 5000000 moves made by canned or lathe cycles",
+        ),
+    ] {
+        let work = tempdir("hostile");
+        let out = work.join("out.nc");
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| {
+                if a.starts_with("106-") {
+                    finding(a).to_string_lossy().into_owned()
+                } else if *a == "OUT" {
+                    out.to_string_lossy().into_owned()
+                } else {
+                    (*a).to_string()
+                }
+            })
+            .collect();
+        let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+        let t = std::time::Instant::now();
+        let o = lampost(&argv);
+        let err = stderr(&o);
+        assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
+        assert!(!out.exists());
+        // (A bound on the work, not a timing test: unbounded, these ran for hours.)
+        assert!(t.elapsed().as_secs() < 120, "{args:?}");
+    }
+    let work = tempdir("hostile-sizes");
+    let stl = work.join("d.stl");
+    let o = lampost(&[
+        "plan",
+        "demo",
+        "--along",
+        "100000",
+        "--across",
+        "100000",
+        "-o",
+        stl.to_str().expect("utf8"),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("at most 250000 in all"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lampost(&[
+        "probe",
+        "poses",
+        "--machine",
+        "fadal-lamp",
+        "--ball",
+        "3,-2,1.5",
+        "--radius",
+        "0.5",
+        "--stylus-radius",
+        "0.1",
+        "--points",
+        "4294967296",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("more than 10000 touches"),
+        "{}",
+        stderr(&o)
+    );
+    let prog = work.join("big.nc");
+    std::fs::write(&prog, "G21\nG1 X1 F100\nG1 X123456789\nG1 X3\nM2\n").expect("write");
+    let o = lampost(&["fmt", "--dialect", "fadal", prog.to_str().expect("utf8")]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(!o.status.success());
+    assert_eq!(out, "%\nG21\nG1 X1.000 F100.\n", "{}", stderr(&o));
+}

@@ -268,6 +268,9 @@ pub enum ErrorKind {
     /// A call to a program number the file does not hold.
     #[error("M98 P{0}: this file holds no program O{0}")]
     UnknownProgram(u32),
+    /// More moves made by cycles and their repeats than lampost follows.
+    #[error("more than {0} moves made by canned or lathe cycles and their repeats (L) in one program: a repeat inside loops or calls that multiplies without end?")]
+    TooManyExpanded(u64),
     /// A FADAL subroutine section (`L0100` … `M17`, closed by `M30`) or call (`L0101`)
     /// the control refuses.
     #[error("{0}")]
@@ -474,6 +477,7 @@ impl ErrorKind {
             ErrorKind::StrayWord { .. } => "remove the word (a typo, most likely), or read the program with --flavor fadal if it was written for a FADAL (L: a subroutine call, E: a fixture offset)",
             ErrorKind::Polar(_) => "LinuxCNC reads `@` and `^` in place of X and Y on moves (G0-G3, G33, G38.x) and canned cycles in G17, about the origin of the work system in force; give the point's X and Y where that does not hold",
             ErrorKind::UnknownProgram(_) => "put the subprogram (O number … M99) in the same file, or correct P",
+            ErrorKind::TooManyExpanded(_) => "check the cycles' L repeat counts and the loops and calls around them; lampost follows at most 5,000,000 such moves",
             ErrorKind::FadalSubroutine(_) => "write the subroutines first, each from its heading (L0100 for subroutine 1) to the next heading or M17, then M30 on a line of its own, then the main program; call subroutine n k times with Lnnkk (L0103: subroutine 1, three times)",
             ErrorKind::DuplicateProgram { .. } => "give every program in the file its own O number",
             ErrorKind::NotASubprogram { .. } => "end the subprogram with M99, or correct P",

@@ -1382,6 +1382,16 @@ impl<W: Write> Emitter<W> {
         self.flush_line()
     }
 
+    /// The lines written so far, without the dialect's closing `%`, and the writer: a
+    /// program cut short at an error must not read as a whole tape.
+    pub fn finish_cut(mut self) -> io::Result<W> {
+        self.line.truncate(self.start);
+        self.out.write_all(&self.line)?;
+        self.line.clear();
+        self.out.flush()?;
+        Ok(self.out)
+    }
+
     /// Close the program (FADAL: a final `%` if the last line was not one) and hand
     /// back the writer.
     pub fn finish(mut self) -> io::Result<W> {

@@ -179,6 +179,42 @@ fn contains_ci(hay: &str, needle: &str) -> bool {
 /// LinuxCNC writes one: `#` then a digit, `<` or `[` (`#1=5`, `X#<x>`, `#[1+2]`). A
 /// `#` and a blank is a FADAL statement's (`# V1 = 2.`) or a script's note (`# 4mm
 /// square`), no sign of LinuxCNC.
+/// A numbered parameter set to an expression written without brackets (`#4= 7. / 2.`,
+/// `#1=#2+1`): Fanuc's Macro B; LinuxCNC refuses it (its expressions are in `[…]`). A
+/// sign before the value is no operator (`#1=-5`), nor one in an exponent.
+fn unbracketed_assignment(code: &str) -> bool {
+    let t: Vec<u8> = code.bytes().filter(|c| !c.is_ascii_whitespace()).collect();
+    let Some(rest) = t.strip_prefix(b"#") else {
+        return false;
+    };
+    let digits = rest.iter().take_while(|c| c.is_ascii_digit()).count();
+    let Some(value) = rest[digits..].strip_prefix(b"=").filter(|_| digits > 0) else {
+        return false;
+    };
+    let mut depth = 0i32;
+    let mut operand = false;
+    for (i, &c) in value.iter().enumerate() {
+        match c {
+            b'[' => depth += 1,
+            // (After a bracket, `#17=[#2607-54]*5`, the line may be another control's
+            // (DDCS): not counted.)
+            b']' => {
+                depth -= 1;
+                operand = false;
+            }
+            b'+' | b'-' | b'*' | b'/' if depth == 0 => {
+                let exponent = i > 0 && matches!(value[i - 1], b'E' | b'e');
+                if operand && !exponent {
+                    return true;
+                }
+            }
+            c if c.is_ascii_alphanumeric() || c == b'.' || c == b'#' => operand = true,
+            _ => {}
+        }
+    }
+    false
+}
+
 fn parameter_read(code: &str) -> bool {
     let b = code.as_bytes();
     b.iter().enumerate().any(|(i, &c)| {
@@ -463,6 +499,12 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
         {
             return (Flavor::Fanuc, at("a Fanuc Macro B word"));
         }
+        if unbracketed_assignment(code) {
+            return (
+                Flavor::Fanuc,
+                at("a Macro B assignment with an operator outside brackets (LinuxCNC needs `[…]`)"),
+            );
+        }
         if c.m82_83 {
             return (Flavor::Marlin, at("an extruder mode code"));
         }
@@ -624,6 +666,26 @@ mod tests {
             // Not an image block: a comment that merely says so, or a `(…)` comment.
             ("; png of the part begins here\nG0 X1\n", Flavor::LinuxCnc),
             ("(thumbnail begin)\nG0 X1\n", Flavor::Fadal),
+        ] {
+            assert_eq!(detect(text.as_bytes()).0, want, "{text:?}");
+        }
+    }
+
+    /// A Macro B assignment with its operator outside brackets (h59: `#4= 7. / 2.` from a
+    /// Fanuc program) decides Fanuc: LinuxCNC refuses it, and it was read as LinuxCNC's
+    /// for its `#` and refused at the `/`. A bracketed one, a sign or an exponent does not.
+    #[test]
+    fn an_unbracketed_assignment_is_fanuc_s() {
+        for (text, want) in [
+            (
+                "%\nO00068\nG52 X [ 0. ]\n#4= 7. / 2.\nG0 Y#4\n",
+                Flavor::Fanuc,
+            ),
+            ("#1=#2+1\n", Flavor::Fanuc),
+            ("#1 = [#2 + 1]\n", Flavor::LinuxCnc),
+            ("#1=-5\n", Flavor::LinuxCnc),
+            ("#1=1E-5\n", Flavor::LinuxCnc),
+            ("#<a> = [1] \n#1=#2+1\n", Flavor::LinuxCnc),
         ] {
             assert_eq!(detect(text.as_bytes()).0, want, "{text:?}");
         }

@@ -57,6 +57,7 @@ pub use interp::{
     ARC_RADIUS_TOLERANCE, ARC_SPIRAL_RELATIVE, ARC_SPIRAL_TOLERANCE,
 };
 pub use lines::{Line, LineReader, Lines, CHECKED_CHUNK, MAX_NUL_RUN};
+pub use macrob::statement_block as macro_b_statement;
 pub use modal::{FeedMode, Modal, Plane, Position, Spindle, Units, WorkOffset, AXES};
 pub use ngc::MAX_BLOCKS;
 pub use parse::{

@@ -101,6 +101,20 @@ pub(crate) fn statement(text: &str) -> Option<(Stmt, usize, Option<u32>)> {
     None
 }
 
+/// A Fanuc Macro B statement line (`IF […] GOTO n`, `IF […] THEN …`, `WHILE […] DOm`,
+/// `DOm`, `ENDm`, `GOTO n`; after an optional `/` and `N` number) as a block kept
+/// verbatim ([`crate::MacroKind::FanucMacroB`]), for a writer that copies what it does not
+/// run (`lampost fmt`); `None` for any other line (read it as words).
+pub fn statement_block(line: &[u8], number: u32, offset: usize) -> Option<crate::Block<'_>> {
+    let text = std::str::from_utf8(line).ok()?;
+    statement(text)?;
+    let mut b = crate::Block::empty(number, offset);
+    b.kind = crate::BlockKind::Macro(crate::MacroKind::FanucMacroB);
+    b.span = crate::Span::new(offset, offset + line.len());
+    b.raw = text;
+    Some(b)
+}
+
 /// The loop number after `DO` or `END` at `i` (blanks allowed): 1 to 3 on Fanuc.
 fn loop_number(text: &str, i: usize) -> Result<(u8, usize), EvalError> {
     let b = text.as_bytes();

@@ -1223,6 +1223,10 @@ fn words_reference_items<'a>(
                             // Fanuc program's name.)
                             None if letter | 0x20 != b'o'
                                 && bytes[..start].iter().all(u8::is_ascii_whitespace)
+                                && !bytes
+                                    .iter()
+                                    .take_while(|&&b| b != b'(' && b != b';')
+                                    .any(|b| b.is_ascii_digit() || b"[#=".contains(b))
                                 && bytes[start..]
                                     .iter()
                                     .take_while(|b| b.is_ascii_alphabetic())

@@ -14,6 +14,34 @@ use crate::parse::{
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
+/// Count the moves a block made beyond its first (a canned cycle's holes and their
+/// `L` repeats, a lathe cycle's passes): past [`MAX_EXPANDED`] in the program, an
+/// error is queued after them and `true` comes back (the block failed). Loops and
+/// calls cap the blocks run, not what each makes: a `G81 … L9999` inside them would
+/// make billions of moves from a few hundred bytes.
+fn expanded_past_cap(expanded: &mut u64, queue: &mut VecDeque<Event>, line: &Line<'_>) -> bool {
+    let moves = queue.iter().filter(|e| matches!(e, Event::Move(_))).count() as u64;
+    *expanded += moves.saturating_sub(1);
+    if *expanded <= MAX_EXPANDED {
+        return false;
+    }
+    queue.push_back(Event::Diagnostic(Diagnostic::at(
+        Severity::Error,
+        ErrorKind::TooManyExpanded(MAX_EXPANDED),
+        line.number,
+        line.offset,
+        line.bytes,
+        0,
+        line.bytes.len(),
+    )));
+    true
+}
+
+/// The most moves blocks may make beyond one each in a program (canned cycles' holes and
+/// their `L` repeats, lathe cycles' passes), however the blocks are repeated by loops and
+/// calls: 5,000,000 (a few seconds of tracing; real programs make thousands).
+pub const MAX_EXPANDED: u64 = 5_000_000;
+
 pub trait LineSource {
     /// The next line, or `None` at the end.
     fn next_line(&mut self) -> io::Result<Option<Line<'_>>>;
@@ -124,6 +152,8 @@ pub struct Stream<S> {
     /// The source's call depth (see [`LineSource::call_depth`]) where a lathe profile
     /// cycle called its subroutine: the profile is complete when reading is back there.
     profile_depth: usize,
+    /// Moves made by blocks beyond their first so far (see `expanded_past_cap`).
+    expanded: u64,
 }
 
 impl<S: LineSource> Stream<S> {
@@ -154,6 +184,7 @@ impl<S: LineSource> Stream<S> {
             warned_text_after_end: false,
             warned_vendor: Vec::new(),
             profile_depth: 0,
+            expanded: 0,
         }
     }
 
@@ -420,6 +451,7 @@ impl<S: LineSource> Iterator for Stream<S> {
                 let offsets = self.interp.offset_changes();
                 let failed = match parsed {
                     Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
+                        Ok(()) if expanded_past_cap(&mut self.expanded, queue, &line) => true,
                         Ok(()) => {
                             if let Some(params) = self.params.as_deref_mut() {
                                 // The queue held nothing before this block: its events are

@@ -18,15 +18,20 @@ pub const LENGTH: f64 = 600.0;
 /// The full-size part's width, the distance from the twisting edge (mm).
 pub const WIDTH: f64 = 200.0;
 
+/// The most quads the demo plate is made of (along × across): about 1.5 M triangles and
+/// a few hundred MB; 1000 × 1000 took 1.3 GB and 10⁵ × 10⁵ asked 480 GB.
+pub const MAX_QUADS: usize = 250_000;
+
 /// The twisted plate, `LENGTH × WIDTH` times `scale`, wall thickness `thickness` (mm),
-/// `nu` quads along the edge and `nv` across; `None` for non-positive or non-finite
-/// sizes or no quads.
+/// `nu` quads along the edge and `nv` across (at most [`MAX_QUADS`] in all); `None` for
+/// non-positive or non-finite sizes, no quads or too many.
 pub fn twisted_plate(scale: f64, thickness: f64, nu: usize, nv: usize) -> Option<Mesh> {
     if !(scale.is_finite() && scale > 0.0 && thickness.is_finite() && thickness > 0.0)
         || nu == 0
         || nv == 0
         || nu > 100_000
         || nv > 100_000
+        || nu.saturating_mul(nv) > MAX_QUADS
     {
         return None;
     }
