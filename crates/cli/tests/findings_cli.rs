@@ -4373,7 +4373,12 @@ fn macro_b_statements_are_copied_and_an_unbracketed_assignment_is_fanuc() {
 fn hostile_sizes_are_refused_not_run() {
     for (args, says) in [
         (
-            vec!["trace", "106-hostile/cycle-repeats-in-calls.nc", "-o", "-"],
+            vec![
+                "trace",
+                "106-hostile/cycle-repeats-in-calls.nc",
+                "-o",
+                "OUT",
+            ],
             "more than 5000000 moves made by canned or lathe cycles",
         ),
         (
@@ -4453,4 +4458,45 @@ fn hostile_sizes_are_refused_not_run() {
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(!o.status.success());
     assert_eq!(out, "%\nG21\nG1 X1.000 F100.\n", "{}", stderr(&o));
+}
+
+/// Finding 106 (h58), loops: the cap of 10⁶ blocks run again held for short blocks only;
+/// a 60 KB expression line in a loop ran for about 4 minutes. Blocks run again are now
+/// capped at 64 MiB too. And a LinuxCNC G70 roughing a profile inside `o… repeat` made
+/// 77,000 moves a pass, at the end of its profile, where the cycles' cap did not look:
+/// it is counted there too.
+#[test]
+fn long_lines_in_loops_and_profile_cycles_in_repeats_are_bounded() {
+    let work = tempdir("hostile-loops");
+    let long = work.join("long.ngc");
+    let terms = vec!["1"; 30_000].join("+");
+    std::fs::write(
+        &long,
+        format!("G21 G90\n#1=0\no1 while [#1 LT 999999]\n#2=[{terms}]\n#1=[#1+1]\no1 endwhile\nG0 X1\nM2\n"),
+    )
+    .expect("write");
+    for (file, says) in [
+        (long, "bytes of blocks run again"),
+        (
+            finding("106-hostile/g70-in-repeat.ngc"),
+            "moves made by canned or lathe cycles",
+        ),
+    ] {
+        let out = work.join("out.trace");
+        let o = lampost(&[
+            "trace",
+            "--flavor",
+            "linuxcnc",
+            file.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && err.contains(says),
+            "{}: {err}",
+            file.display()
+        );
+        assert!(!out.exists());
+    }
 }

@@ -484,6 +484,8 @@ pub(crate) struct Control {
     /// Offsets of the `O` lines, in file order.
     programs: Vec<usize>,
     blocks: u64,
+    /// Bytes of blocks run again so far.
+    bytes: u64,
     pub(crate) max_blocks: u64,
 }
 
@@ -551,8 +553,21 @@ impl Control {
         (start, end)
     }
 
-    fn count(&mut self, from: u32, to: u32, len: usize) -> Result<(), CtlError> {
-        self.blocks += u64::from(from.saturating_sub(to)) + 1;
+    /// A jump back from `from` to `to` (offset, line): the blocks (and bytes) it runs
+    /// again, counted against the caps ([`crate::ngc::MAX_LOOP_BYTES`] for bytes).
+    fn count(&mut self, from: (usize, u32), to: (usize, u32), len: usize) -> Result<(), CtlError> {
+        self.blocks += u64::from(from.1.saturating_sub(to.1)) + 1;
+        self.bytes += from.0.saturating_sub(to.0) as u64;
+        if self.bytes > crate::ngc::MAX_LOOP_BYTES {
+            return Err((
+                format!(
+                    "more than {} bytes of blocks run again through loops and jumps (long lines in a loop that runs long?)",
+                    crate::ngc::MAX_LOOP_BYTES
+                ),
+                0,
+                len,
+            ));
+        }
         if self.blocks > self.max_blocks {
             return Err((
                 format!(
@@ -648,7 +663,7 @@ impl Control {
                     return Err((format!("END{m} without DO{m} before it"), 0, len));
                 }
                 let (o, line, next, e) = self.entries[open];
-                self.count(number, line, len)?;
+                self.count((offset, number), (o, line), len)?;
                 Ok(Some(match e {
                     // Back to the WHILE, whose condition is read again.
                     Entry::Do { while_: true, .. } => (o, line),
@@ -744,7 +759,7 @@ impl Control {
             ));
         };
         if o <= offset {
-            self.count(number, line, text.len())?;
+            self.count((offset, number), (o, line), text.len())?;
         }
         Ok(Some((o, line)))
     }

@@ -9,7 +9,8 @@
 //!
 //! Bounds: calls nest at most [`MAX_SUB_DEPTH`] deep (LinuxCNC's limit; recursion is
 //! allowed to that depth), and the blocks run again by loops and calls are counted:
-//! beyond [`MAX_BLOCKS`] the run stops with an error at the line that would go on. A
+//! beyond [`MAX_BLOCKS`] (or [`MAX_LOOP_BYTES`] of them) the run stops with an error at
+//! the line that would go on. A
 //! `repeat` count over [`MAX_BLOCKS`] is refused at once.
 
 use std::collections::HashMap;
@@ -20,6 +21,10 @@ use crate::expr::{Eval, EvalError, Params};
 pub const MAX_SUB_DEPTH: usize = 10;
 /// The most blocks run again through loops and subroutine calls in one program.
 pub const MAX_BLOCKS: u64 = 1_000_000;
+
+/// The most bytes of blocks run again through loops and calls (64 MiB, about a second
+/// of evaluation): 10⁶ blocks of a long expression each would take minutes.
+pub const MAX_LOOP_BYTES: u64 = 64 << 20;
 /// The most O-word lines indexed in one file.
 const MAX_ENTRIES: usize = 1_000_000;
 
@@ -173,6 +178,8 @@ pub(crate) struct Control {
     branch: Option<usize>,
     blocks: u64,
     pub(crate) max_blocks: u64,
+    /// Bytes of blocks run again so far (see [`MAX_LOOP_BYTES`]).
+    bytes: u64,
 }
 
 impl Control {
@@ -180,6 +187,7 @@ impl Control {
     pub(crate) fn new() -> Self {
         Control {
             max_blocks: MAX_BLOCKS,
+            bytes: 0,
             ..Control::default()
         }
     }
@@ -234,8 +242,22 @@ impl Control {
             .find(|&j| want(&self.entries[j]))
     }
 
-    fn count(&mut self, from: u32, to: u32, len: usize) -> Result<(), CtlError> {
-        self.blocks += u64::from(from.saturating_sub(to)) + 1;
+    /// A jump back from `from` to `to` (offset, line): the blocks (and bytes) it runs
+    /// again, counted against [`MAX_BLOCKS`] (and [`MAX_LOOP_BYTES`]).
+    fn count(
+        &mut self,
+        (from, to): ((usize, u32), (usize, u32)),
+        len: usize,
+    ) -> Result<(), CtlError> {
+        self.blocks += u64::from(from.1.saturating_sub(to.1)) + 1;
+        self.bytes += from.0.saturating_sub(to.0) as u64;
+        if self.bytes > MAX_LOOP_BYTES {
+            return Err((
+                format!("more than {MAX_LOOP_BYTES} bytes of blocks run again through loops and subroutine calls (long lines in a loop that runs long?)"),
+                0,
+                len,
+            ));
+        }
         if self.blocks > self.max_blocks {
             return Err((
                 format!(
@@ -350,7 +372,7 @@ impl Control {
                     let d = self
                         .before(&list, k, |x| x.kw == Kw::Do)
                         .ok_or_else(|| (format!("{} has no do", name("while")), 0, len))?;
-                    self.count(e.at.1, self.entries[d].at.1, len)?;
+                    self.count((e.at, self.entries[d].at), len)?;
                     Ok(Some(self.entries[d].next))
                 } else {
                     Ok(None)
@@ -370,7 +392,7 @@ impl Control {
                 let w = self
                     .before(&list, k, |x| x.kw == Kw::While && !x.do_while)
                     .ok_or_else(|| (format!("{} has no while", name("endwhile")), 0, len))?;
-                self.count(e.at.1, self.entries[w].at.1, len)?;
+                self.count((e.at, self.entries[w].at), len)?;
                 Ok(Some(self.entries[w].at))
             }
             Kw::Repeat => {
@@ -405,7 +427,7 @@ impl Control {
                     .ok_or_else(|| (format!("{} outside its repeat", name("endrepeat")), 0, len))?;
                 let (r, left) = self.repeats[pos];
                 if left > 1 {
-                    self.count(e.at.1, self.entries[r].at.1, len)?;
+                    self.count((e.at, self.entries[r].at), len)?;
                     self.repeats[pos].1 = left - 1;
                     Ok(Some(self.entries[r].next))
                 } else {
@@ -436,7 +458,7 @@ impl Control {
                     }
                     Ok(Some(self.entries[close].next))
                 } else if ok == Kw::While {
-                    self.count(e.at.1, self.entries[open].at.1, len)?;
+                    self.count((e.at, self.entries[open].at), len)?;
                     Ok(Some(self.entries[open].at))
                 } else {
                     Ok(Some(self.entries[close].at))
@@ -470,8 +492,8 @@ impl Control {
                 "subroutine calls nest more than {MAX_SUB_DEPTH} deep (recursion without end?)"
             ));
         }
-        let (sl, el) = (self.entries[sub].at.1, self.entries[end].at.1);
-        self.count(el, sl, 0).map_err(|(m, _, _)| m)?;
+        self.count((self.entries[end].at, self.entries[sub].at), 0)
+            .map_err(|(m, _, _)| m)?;
         self.frames.push(Frame {
             back,
             repeats_base: self.repeats.len(),

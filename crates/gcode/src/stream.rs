@@ -14,27 +14,18 @@ use crate::parse::{
 use crate::program::{Order, ProgramReader};
 
 /// Anything that hands out lines one at a time.
-/// Count the moves a block made beyond its first (a canned cycle's holes and their
-/// `L` repeats, a lathe cycle's passes): past [`MAX_EXPANDED`] in the program, an
-/// error is queued after them and `true` comes back (the block failed). Loops and
-/// calls cap the blocks run, not what each makes: a `G81 … L9999` inside them would
-/// make billions of moves from a few hundred bytes.
-fn expanded_past_cap(expanded: &mut u64, queue: &mut VecDeque<Event>, line: &Line<'_>) -> bool {
-    let moves = queue.iter().filter(|e| matches!(e, Event::Move(_))).count() as u64;
-    *expanded += moves.saturating_sub(1);
-    if *expanded <= MAX_EXPANDED {
-        return false;
-    }
-    queue.push_back(Event::Diagnostic(Diagnostic::at(
-        Severity::Error,
-        ErrorKind::TooManyExpanded(MAX_EXPANDED),
-        line.number,
-        line.offset,
-        line.bytes,
-        0,
-        line.bytes.len(),
-    )));
-    true
+/// Count the moves a block (or a lathe profile cycle) made beyond its first: `true`
+/// when the program is past [`MAX_EXPANDED`]. Loops and calls cap the blocks run, not
+/// what each makes: a `G81 … L9999` inside them would make billions of moves from a few
+/// hundred bytes.
+fn expanded_past_cap(expanded: &mut u64, moves: usize) -> bool {
+    *expanded += moves.saturating_sub(1) as u64;
+    *expanded > MAX_EXPANDED
+}
+
+/// Moves among `events`.
+fn moves_in<'e>(events: impl Iterator<Item = &'e Event>) -> usize {
+    events.filter(|e| matches!(e, Event::Move(_))).count()
 }
 
 /// The most moves blocks may make beyond one each in a program (canned cycles' holes and
@@ -451,7 +442,18 @@ impl<S: LineSource> Iterator for Stream<S> {
                 let offsets = self.interp.offset_changes();
                 let failed = match parsed {
                     Ok(()) => match self.interp.block(&block, &mut |e| queue.push_back(e)) {
-                        Ok(()) if expanded_past_cap(&mut self.expanded, queue, &line) => true,
+                        Ok(()) if expanded_past_cap(&mut self.expanded, moves_in(queue.iter())) => {
+                            queue.push_back(Event::Diagnostic(Diagnostic::at(
+                                Severity::Error,
+                                ErrorKind::TooManyExpanded(MAX_EXPANDED),
+                                line.number,
+                                line.offset,
+                                line.bytes,
+                                0,
+                                line.bytes.len(),
+                            )));
+                            true
+                        }
                         Ok(()) => {
                             if let Some(params) = self.params.as_deref_mut() {
                                 // The queue held nothing before this block: its events are
@@ -606,6 +608,13 @@ impl<S: LineSource> Stream<S> {
             }
             if let Err(d) = done {
                 self.queue.push_back(Event::Diagnostic(d));
+                return true;
+            }
+            if expanded_past_cap(&mut self.expanded, moves_in(self.queue.range(start..))) {
+                self.queue.push_back(Event::Diagnostic(Diagnostic::whole(
+                    Severity::Error,
+                    ErrorKind::TooManyExpanded(MAX_EXPANDED),
+                )));
                 return true;
             }
         }
