@@ -559,7 +559,10 @@ impl<'a> Intended<'a> {
         }
     }
 
-    fn next_step(&mut self) -> Result<Option<Step>, PostError> {
+    /// The next step, `None` at the end: the iterator's item, as the post's reading
+    /// thread takes it (without the iterator's `Option<Result<…>>`, a copy of every
+    /// step). After an error it is not to be called again.
+    pub(crate) fn next_step(&mut self) -> Result<Option<Step>, PostError> {
         loop {
             if self.done {
                 return Ok(None);
@@ -615,8 +618,9 @@ impl<'a> Intended<'a> {
             if let Some(m) = self.pending.take() {
                 return self.move_step(&m).map(Some);
             }
+            // Read in place (a move is some hundreds of bytes: each move of it a copy).
             let ev = self.stream.as_mut().and_then(Iterator::next);
-            let ev = match ev {
+            let ev = match &ev {
                 None => {
                     if self.moves_in_section == 0 {
                         return Err(PostError::Empty(sec.name.clone()));
@@ -685,7 +689,7 @@ impl<'a> Intended<'a> {
                         }
                         return Err(PostError::Input {
                             file,
-                            diag: Box::new(d),
+                            diag: Box::new(d.clone()),
                         });
                     }
                     let refuse = match &d.kind {
@@ -777,8 +781,8 @@ impl<'a> Intended<'a> {
                     }
                     continue;
                 }
-                Event::Stop(stop) => return Ok(Some(self.stop_step(stop))),
-                Event::Move(m) => return self.move_step(&m).map(Some),
+                Event::Stop(stop) => return Ok(Some(self.stop_step(*stop))),
+                Event::Move(m) => return self.move_step(m).map(Some),
             }
         }
     }

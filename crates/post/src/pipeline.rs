@@ -36,11 +36,15 @@ pub(crate) struct PlannedEnd {
 /// would make it: against the end for the last point, against the path before).
 pub(crate) type PlannedPoint = ([f64; 3], EndCheck);
 
-/// Steps passed from the reading thread to the writing one, with the chord points
-/// planned for them.
+/// Steps passed from the reading thread to the writing one, with what was planned for
+/// them: `ends[i]` for `steps[i]`, chord points in `points`. Steps stay where the
+/// reading thread put them (the writer reads them in place).
 pub(crate) struct Batch {
-    pub(crate) steps: Vec<Result<Planned, PostError>>,
+    pub(crate) steps: Vec<Step>,
+    pub(crate) ends: Vec<Option<PlannedEnd>>,
     pub(crate) points: Vec<PlannedPoint>,
+    /// The error that stopped the reading thread, after `steps`.
+    pub(crate) error: Option<PostError>,
 }
 
 /// A rotary position, its (sin, cos), joints map and written tip map.
@@ -102,9 +106,6 @@ impl Planner<'_> {
         })
     }
 }
-
-/// A step and what the reading thread planned for it.
-pub(crate) type Planned = (Step, Option<PlannedEnd>);
 
 /// Steps handed from the reading thread to the writing one at a time.
 const BATCH: usize = 1024;
@@ -216,20 +217,25 @@ fn post_pass<W: Write>(
                 let fresh = || {
                     back_rx.try_recv().unwrap_or_else(|_| Batch {
                         steps: Vec::with_capacity(BATCH),
+                        ends: Vec::with_capacity(BATCH),
                         points: Vec::new(),
+                        error: None,
                     })
                 };
                 let mut batch = fresh();
                 let mut intended =
                     Intended::new(machine, sections, opts).holding_spindle(&cfg.process);
-                for step in intended.by_ref() {
-                    let failed = step.is_err();
-                    let planned = step.map(|s| {
-                        seen.add_step(&s);
-                        let end = planner.plan(&s, &mut batch.points);
-                        (s, end)
-                    });
-                    batch.steps.push(planned);
+                loop {
+                    match intended.next_step() {
+                        Ok(Some(s)) => {
+                            seen.add_step(&s);
+                            batch.ends.push(planner.plan(&s, &mut batch.points));
+                            batch.steps.push(s);
+                        }
+                        Ok(None) => break,
+                        Err(e) => batch.error = Some(e),
+                    }
+                    let failed = batch.error.is_some();
                     if batch.steps.len() == BATCH || failed {
                         let full = std::mem::replace(&mut batch, fresh());
                         // A closed channel: the writer stopped (an error); so do we.

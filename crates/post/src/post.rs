@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 
 use crate::error::PostError;
 use crate::intended::{IntendedOptions, Orient, Section, Step, StepKind};
-use crate::pipeline::{Batch, HeightUsed, Planned};
+use crate::pipeline::{Batch, HeightUsed};
 use crate::safety::SafeHeights;
 use crate::writer::Writer;
 
@@ -484,9 +484,13 @@ pub(crate) fn post_steps<W: Write>(
     let mut cut = false;
     for batch in batches {
         let mut batch = batch;
-        let Batch { steps, points } = &mut batch;
-        for step in steps.drain(..) {
-            let (step, planned): Planned = step?;
+        let Batch {
+            steps,
+            ends,
+            points,
+            error,
+        } = &mut batch;
+        for (step, &planned) in steps.iter().zip(ends.iter()) {
             if count % 4096 == 0 {
                 progress(count);
             }
@@ -543,7 +547,7 @@ pub(crate) fn post_steps<W: Write>(
                 StepKind::Rapid | StepKind::Retract | StepKind::Stop(_) | StepKind::ToolChange(_)
             );
             // The move being written, for the in-process verification (approach included).
-            w.feed_check.step = if travel { None } else { Some(step) };
+            w.feed_check.step = if travel { None } else { Some(*step) };
             if travel {
                 // Input travel is not written as it stands: the head lifts off the end of
                 // the run to the safe height, and is brought over the next start from there.
@@ -563,7 +567,7 @@ pub(crate) fn post_steps<W: Write>(
                 continue;
             }
             cut = true;
-            w.holds_tool(&step, file)?;
+            w.holds_tool(step, file)?;
             let on_grid = w.on_grid(&start);
             let at_start = w
                 .pos
@@ -580,9 +584,7 @@ pub(crate) fn post_steps<W: Write>(
                     sweep,
                 } => {
                     // The arc stays an arc when its plane is the machine's XY plane.
-                    let way = arc_way(
-                        machine, &w.rot_sc, &step, &center, &normal, sweep, chord_tol,
-                    );
+                    let way = arc_way(machine, &w.rot_sc, step, &center, &normal, sweep, chord_tol);
                     let center_j = joints(&jm, &center);
                     // An arc kept must read back as itself: one whose end rounds onto its
                     // start (or past it) at the output resolution would read as a full
@@ -597,7 +599,7 @@ pub(crate) fn post_steps<W: Write>(
                                 &joints(&jm, &step.at(0.5)),
                             ) =>
                         {
-                            w.arc(&step, &start, &end, &center_j, ccw, sweep, file)?;
+                            w.arc(step, &start, &end, &center_j, ccw, sweep, file)?;
                             None
                         }
                         ArcWay::Kept { .. } => {
@@ -605,7 +607,7 @@ pub(crate) fn post_steps<W: Write>(
                                 round_warned = Some(step.section as usize);
                                 w.report.warnings.push(format!("{file}:{}: an arc that would not read back as itself at the output resolution (its end rounding onto or past its start reads as a full circle, or nearly one; or its radii as written beyond the control's arc tolerance) is written as chords", step.line));
                             }
-                            Some(chord_count(&step, &center, sweep, chord_tol))
+                            Some(chord_count(step, &center, sweep, chord_tol))
                         }
                         ArcWay::Chords(n) => {
                             if arc_warned != Some(step.section as usize) {
@@ -624,7 +626,7 @@ pub(crate) fn post_steps<W: Write>(
                             let v = p - center;
                             (v - normal * normal.dot(&v)).norm()
                         };
-                        let needed = chords_needed(&step, &center, sweep, chord_tol);
+                        let needed = chords_needed(step, &center, sweep, chord_tol);
                         if needed > MAX_CHORDS as f64 {
                             return Err(PostError::Unsupported {
                                 file: file.to_string(),
@@ -665,6 +667,11 @@ pub(crate) fn post_steps<W: Write>(
                 _ => w.linear(1.0, &end, Some(step.feed), file, step.line, true)?,
             }
         }
+        if let Some(e) = error.take() {
+            return Err(e);
+        }
+        steps.clear();
+        ends.clear();
         points.clear();
         give_back(batch);
     }
