@@ -4500,3 +4500,40 @@ fn long_lines_in_loops_and_profile_cycles_in_repeats_are_bounded() {
         assert!(!out.exists());
     }
 }
+
+/// Finding 108 (h59): a Haas program typed from the manual, each block ended by a bare
+/// `;`, was read as LinuxCNC's (for its "`;` comments") and refused at its `G12` as an
+/// unknown G-code, with no word of the flavour. A bare `;` ending a block now decides
+/// Fanuc, where G12 is named (circular pocket, not simulated); under LinuxCNC's reading
+/// the refusal says the code is other controls' and which `--flavor` to give.
+#[test]
+fn a_bare_semicolon_ending_blocks_reads_as_fanuc() {
+    let f = finding("108-haas-eob/g12-semicolon-ends.nc");
+    let f = f.to_str().expect("utf8");
+    let o = lampost(&["check", f]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("flavour fanuc (auto: a bare `;` ending a block")
+            && err.contains("G12 (circular pocket milling) is not simulated"),
+        "{err}"
+    );
+    let o = lampost(&["check", "--flavor", "linuxcnc", f]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("unknown G-code G12: LinuxCNC has none")
+            && err.contains(":6:1")
+            && err.contains("--flavor fanuc, haas, mach3 or fadal"),
+        "{err}"
+    );
+    // A code no control has is unknown as before.
+    let p = tempdir("finding-108").join("g999.nc");
+    std::fs::write(&p, "G21 G90\nG0 X1 ; go\nG99.9 X2\nM2\n").expect("writes");
+    let o = lampost(&["check", p.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("G99.9") && !err.contains("LinuxCNC has none"),
+        "{err}"
+    );
+}

@@ -62,6 +62,10 @@ pub enum ErrorKind {
     /// A G-code this interpreter does not know.
     #[error("unknown G-code G{0}")]
     UnknownGCode(String),
+    /// A G-code LinuxCNC does not have, which other controls do (`G12`, a Haas or
+    /// FADAL circular pocket), in a program read as LinuxCNC's.
+    #[error("unknown G-code G{0}: LinuxCNC has none, which other controls have (the program is read as LinuxCNC's)")]
+    NotLinuxCncCode(String),
     /// A G or M number with more than one decimal.
     #[error("{0} is not a valid code number")]
     BadCodeNumber(String),
@@ -434,6 +438,7 @@ impl ErrorKind {
             ErrorKind::DuplicateWord(_) => "keep one value per letter in a block",
             ErrorKind::ModalGroupConflict { .. } => "keep one code of each modal group per block",
             ErrorKind::UnknownGCode(_) => "check the code against the controller's manual, or remove it",
+            ErrorKind::NotLinuxCncCode(_) => "if the program is for a Fanuc, Haas, Mach3 or FADAL control, read it with --flavor fanuc, haas, mach3 or fadal (--flavor auto takes a `;` comment or a parameter for LinuxCNC's); if it is for LinuxCNC, remove the code",
             ErrorKind::BadCodeNumber(_) => "G and M codes have at most one decimal, e.g. G31.1",
             ErrorKind::ArcRadiusMismatch { .. } => "check the arc's end point and I/J/K (incremental from the start unless G90.1)",
             ErrorKind::ArcWithoutCenter => "add I/J/K (centre offset) or R (radius)",

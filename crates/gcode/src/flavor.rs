@@ -556,6 +556,15 @@ pub fn detect(head: &[u8]) -> (Flavor, String) {
             ))
         } else if polar_word(code) {
             Some((2, Flavor::LinuxCnc, "a polar coordinate (`@`, `^`)"))
+        } else if semicolon_block_end(line) {
+            // Fanuc's and Haas's manuals (and programs typed from them) end each block
+            // with `;`, the end-of-block character as ISO code prints it; a `;` comment
+            // of LinuxCNC's, grbl's or a hobby CAM system's has its text after it.
+            Some((
+                1,
+                Flavor::Fanuc,
+                "a bare `;` ending a block (the end of block as Fanuc's and Haas's manuals print programs)",
+            ))
         } else if semicolon_comment(line) {
             // FADAL's comments are `(…)` and, in macros, `'…`; a `;` comment is ISO's
             // (grbl, LinuxCNC, Mach3, most hobby CAM).
@@ -617,6 +626,21 @@ fn thumbnail_begin(line: &str) -> bool {
 }
 
 /// A `;` outside `(…)` comments: a `;` comment.
+/// A block of code ended by a `;` with nothing after it (`G00 X0 Y0 ;`), outside
+/// parentheses.
+fn semicolon_block_end(line: &str) -> bool {
+    let Some(code) = line.trim_end().strip_suffix(';') else {
+        return false;
+    };
+    !code.contains(';')
+        && !semicolon_comment(code)
+        && code.bytes().filter(|&b| b == b'(').count()
+            == code.bytes().filter(|&b| b == b')').count()
+        && code.as_bytes().windows(2).any(|w| {
+            w[0].is_ascii_alphabetic() && (w[1].is_ascii_digit() || w[1] == b'-' || w[1] == b'.')
+        })
+}
+
 fn semicolon_comment(line: &str) -> bool {
     let mut in_paren = false;
     for c in line.bytes() {
@@ -688,6 +712,27 @@ mod tests {
             ("#<a> = [1] \n#1=#2+1\n", Flavor::LinuxCnc),
         ] {
             assert_eq!(detect(text.as_bytes()).0, want, "{text:?}");
+        }
+    }
+
+    /// Blocks ended by a bare `;` (h59: a Haas G12 sample typed from the manual, read as
+    /// LinuxCNC's for its `;` and refused at G12) are Fanuc's; a `;` with text after it,
+    /// a `;` alone, or one inside a comment are not.
+    #[test]
+    fn a_bare_semicolon_ending_blocks_is_fanuc_s() {
+        for (text, want) in [
+            (
+                "%\n(SAMPLE G12)\nT1 M06 ;\nG00 G90 G40 G49 G54 ;\nG12 I0.75 F10. Z-1.2 D01 ;\nM30 ;\n%\n",
+                Flavor::Fanuc,
+            ),
+            ("G0 X1 Y2;\n", Flavor::Fanuc),
+            ("G0 X1 ; rapid\nG1 X2 ;\n", Flavor::LinuxCnc),
+            (";\nG0 X1\n", Flavor::LinuxCnc),
+            ("(a;\nG0 X1\n", Flavor::Fadal),
+            ("; only text ;\nG0 X1\n", Flavor::LinuxCnc),
+        ] {
+            let (f, why) = detect(text.as_bytes());
+            assert_eq!(f, want, "{text:?}: {why}");
         }
     }
 

@@ -1517,12 +1517,13 @@ impl Interpreter {
                     if self.opts.flavor == crate::flavor::Flavor::LinuxCnc
                         && !crate::modal::linuxcnc_knows(code)
                     {
-                        return Err(diag(
-                            b,
-                            Severity::Error,
-                            ErrorKind::UnknownGCode(code_text(code)),
-                            Some(word.span),
-                        ));
+                        // Another control's code (it has a group), or no control's.
+                        let kind = if g_group(code).is_some() {
+                            ErrorKind::NotLinuxCncCode(code_text(code))
+                        } else {
+                            ErrorKind::UnknownGCode(code_text(code))
+                        };
+                        return Err(diag(b, Severity::Error, kind, Some(word.span)));
                     }
                     let group = match g_group(code) {
                         // LinuxCNC's lathe roughing and finishing cycles (elsewhere
