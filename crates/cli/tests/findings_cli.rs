@@ -4537,3 +4537,31 @@ fn a_bare_semicolon_ending_blocks_reads_as_fanuc() {
         "{err}"
     );
 }
+
+/// Finding 109 (h58): `preview` held every point and the whole SVG in memory; 6.4 KB of
+/// cycle repeats made a 618 MB SVG in 1.4 GB. A picture now holds at most 4,000,000
+/// points, refused at the move that passes the bound, nothing written.
+#[test]
+fn a_preview_is_bounded() {
+    let work = tempdir("finding-109");
+    let svg = work.join("p.svg");
+    let o = lampost(&[
+        "preview",
+        "--machine",
+        "nrc-lc",
+        finding("109-preview-bound/cycle-repeats.nc")
+            .to_str()
+            .expect("utf8"),
+        "-o",
+        svg.to_str().expect("utf8"),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("the posted program:84")
+            && err.contains("more than 4000000 points")
+            && err.contains("preview a smaller program"),
+        "{err}"
+    );
+    assert!(!svg.exists());
+}

@@ -131,7 +131,7 @@ impl PostError {
     pub fn hint(&self) -> &'static str {
         match self {
             PostError::Input { .. } => "fix the input program (`lampost check` lists every problem)",
-            PostError::Unsupported { .. } => "change the input as the message says (in the CAM system, or in the slicer's start and end code), then post again",
+            PostError::Unsupported { .. } => "change the input as the message says (in the CAM system, or in the slicer's start and end code), then run the command again",
             PostError::OutOfRange { .. } => "the input's value does not fit the controller's word: check the program's feeds and units (a feed written for another machine, or millimetres read as inches); a rotary wound many turns within one run (a spiral path's) needs the run split where the process is off",
             PostError::Units { .. } => "post with --convert-units to scale the program, or output the program in the machine's units",
             PostError::Limit { .. } => "move the part (--origin or the setup), choose another index, or check the machine's limits; a program that gives no G20/G21 is read in the machine's units (a program in mm on an inch machine: --units mm --convert-units)",
