@@ -686,7 +686,8 @@ pub struct PostArgs {
     pub view: String,
     #[command(flatten)]
     pub place: Placement,
-    /// Head: laser, spindle, … (default: laser for deposit, spindle/probe for machine).
+    /// Head: laser, spindle, … (default: laser for deposit, spindle for machine; machining
+    /// on a machine without a spindle head needs one named).
     #[arg(long)]
     pub head: Option<String>,
     #[command(flatten)]
@@ -720,13 +721,25 @@ pub struct PostArgs {
     pub chunk_points: Option<usize>,
 }
 
-/// The head a process uses unless one is named (the library's choice).
-fn default_head(m: &Machine, process: &str, named: Option<&str>) -> String {
-    named.map(str::to_string).unwrap_or_else(|| {
-        m.heads
-            .get(lampost_post::default_head(m, process == "deposit"))
-            .map_or_else(String::new, |h| h.name.clone())
-    })
+/// The head a process uses unless one is named (the library's choice). Machining cuts
+/// with a spindle: on a machine with no head named `spindle` (the NRC cell has a laser
+/// and a sensor) it is refused rather than done with the first head, spindle codes and
+/// all, unless a head is named.
+fn default_head(m: &Machine, process: &str, named: Option<&str>) -> Result<String, CliError> {
+    if let Some(n) = named {
+        return Ok(n.to_string());
+    }
+    if process == "machine" && m.head("spindle").is_err() {
+        let heads: Vec<&str> = m.heads.iter().map(|h| h.name.as_str()).collect();
+        return Err(CliError::usage(format!(
+            "error: --process machine: {} has no spindle (no head named `spindle`; its heads: {})\n  = help: post with --process deposit, or name the head that machines with --head NAME\n",
+            m.name,
+            heads.join(", ")
+        )));
+    }
+    Ok(m.heads
+        .get(lampost_post::default_head(m, process == "deposit"))
+        .map_or_else(String::new, |h| h.name.clone()))
 }
 
 /// The post configuration from the options, the sections and their flavour (resolved once,
@@ -744,7 +757,11 @@ pub fn config(
     let defaults = PostConfig::new(m, process.clone());
     let head = match a.head.as_deref() {
         Some(h) => m.head(h).map_err(crate::kin_cmds::kin_error)?,
-        None => defaults.head,
+        None => {
+            // (The library's choice, refused for machining without a spindle.)
+            default_head(m, &a.proc.process, None)?;
+            defaults.head
+        }
     };
     let head_name = m.heads[head].name.clone();
     let dialect = match a.dialect.as_deref() {
@@ -1063,7 +1080,7 @@ pub fn post(
     if let Some(svg) = &a.preview {
         // Drawn from the program as written (read back as verify reads it); the program
         // stays written whatever happens here.
-        let head_name = default_head(&m, &a.proc.process, a.head.as_deref());
+        let head_name = default_head(&m, &a.proc.process, a.head.as_deref())?;
         let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
         preview_files(&m, h, &written, svg, a.proc.process == "deposit", view).map_err(|e| {
             CliError::failed(format!(
@@ -1158,7 +1175,7 @@ pub fn preview(
 ) -> Result<(), CliError> {
     let m = load_machine(machine, sets)?;
     let view = view_arg(view)?;
-    let head_name = default_head(&m, process, head);
+    let head_name = default_head(&m, process, head)?;
     let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
     preview_files(&m, h, posted, output, process == "deposit", view)
 }
@@ -1218,7 +1235,7 @@ pub fn verify(
     let view = view_arg(view)?;
     let m = load_machine(machine, sets)?;
     let process = proc.to_process()?;
-    let head_name = default_head(&m, &proc.process, head);
+    let head_name = default_head(&m, &proc.process, head)?;
     let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
     let tol = tolerance.unwrap_or(match m.units {
         lampost_kinematics::Units::Inch => 0.001,

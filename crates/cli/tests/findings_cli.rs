@@ -1859,8 +1859,11 @@ fn a_spindle_turning_the_other_way_is_refused_and_speed_and_coolant_named() {
     let work = tempdir("spindle-way");
     let out = work.join("posted.nc");
     let o_arg = out.to_str().expect("utf8");
+    // A machine with a spindle (the NRC cell has none: finding 110).
+    let machine = root().join("fixtures/machines/xyzac-trt.toml");
+    let machine = machine.to_str().expect("utf8");
     let post = |input: &str, extra: &[&str]| {
-        let mut args = vec!["post", "--machine", "nrc-lc", "--process", "machine"];
+        let mut args = vec!["post", "--machine", machine, "--process", "machine"];
         args.extend_from_slice(extra);
         args.extend_from_slice(&[input, "-o", o_arg]);
         lampost(&args)
@@ -1902,7 +1905,7 @@ fn a_spindle_turning_the_other_way_is_refused_and_speed_and_coolant_named() {
     let o = lampost(&[
         "verify",
         "--machine",
-        "nrc-lc",
+        machine,
         "--process",
         "machine",
         "--spindle",
@@ -4564,4 +4567,134 @@ fn a_preview_is_bounded() {
         "{err}"
     );
     assert!(!svg.exists());
+}
+
+/// Finding 110 (h60): `post --machine nrc-lc --process machine` machined with the NRC
+/// cell's laser head, turning a spindle the cell does not have on and off (`S3000 M3`,
+/// `M5`) without a word. Machining on a machine with no spindle is now refused unless a
+/// head is named, by `post`, `verify` and `preview` alike.
+#[test]
+fn machining_without_a_spindle_is_refused() {
+    let work = tempdir("finding-110");
+    let input = work.join("cut.nc");
+    std::fs::write(
+        &input,
+        "G21 G90\nS3000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F300\nG1 X-10 Y-5\nG0 Z5\nM5\nM2\n",
+    )
+    .expect("writes");
+    let input = input.to_str().expect("utf8");
+    let out = work.join("posted.nc");
+    let o_arg = out.to_str().expect("utf8");
+    for args in [
+        vec![
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--process",
+            "machine",
+            input,
+            "-o",
+            o_arg,
+        ],
+        vec![
+            "verify",
+            "--machine",
+            "nrc-lc",
+            "--process",
+            "machine",
+            input,
+            input,
+        ],
+        vec![
+            "preview",
+            "--machine",
+            "nrc-lc",
+            "--process",
+            "machine",
+            input,
+            "-o",
+            o_arg,
+        ],
+    ] {
+        let o = lampost(&args);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?}: {err}");
+        assert!(
+            err.contains(
+                "nrc-lc has no spindle (no head named `spindle`; its heads: laser, sensor)"
+            ) && err.contains("--head NAME"),
+            "{args:?}: {err}"
+        );
+        assert!(!out.exists(), "{args:?}");
+    }
+    // Named, the head machines (the user's choice), and the spindle-equipped FADAL
+    // machines as before.
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--process",
+        "machine",
+        "--head",
+        "laser",
+        input,
+        "-o",
+        o_arg,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Finding 111 (h60): a program whose first cut comes before it gives X and Y (`G1 Z-1`
+/// first thing, as the Shapeoko calibration program starts) was posted from X0 Y0 of the
+/// part without a word, where the machine would cut wherever the head stands. It is
+/// warned of at its line (once a section); a lift written as a feed (`G1 Z3.81` first,
+/// as Easel writes) is not.
+#[test]
+fn a_cut_from_a_start_never_given_is_warned() {
+    let f = finding("111-unplaced-start/first-feed-no-xy.ngc");
+    let work = tempdir("finding-111");
+    let out = work.join("p.nc");
+    let post = |input: &str| {
+        lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--process",
+            "machine",
+            "--head",
+            "laser",
+            input,
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+    };
+    let o = post(f.to_str().expect("utf8"));
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("first-feed-no-xy.ngc:3: this feed starts before the program gives X and Y"),
+        "{err}"
+    );
+    assert_eq!(err.matches("this feed starts before").count(), 1, "{err}");
+    let lift = work.join("lift.nc");
+    std::fs::write(
+        &lift,
+        "G21\nG90\nG1 Z3.810 F228.6\nG0 X110.050 Y8.413\nG1 Z-1.600 F228.6\nG1 X110.804 Y8.631 F1016.0\nG0 Z5\nM2\n",
+    )
+    .expect("writes");
+    let o = post(lift.to_str().expect("utf8"));
+    let err = stderr(&o);
+    assert!(
+        o.status.success() && !err.contains("this feed starts before"),
+        "{err}"
+    );
+    // Only Y never given: named.
+    let y = work.join("y.nc");
+    std::fs::write(&y, "G21 G90\nG0 X5 Z2\nG1 Z-1 F100\nG1 X10\nG0 Z5\nM2\n").expect("writes");
+    let o = post(y.to_str().expect("utf8"));
+    let err = stderr(&o);
+    assert!(
+        err.contains("y.nc:3: this feed starts before the program gives Y:"),
+        "{err}"
+    );
 }

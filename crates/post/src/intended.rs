@@ -255,6 +255,11 @@ pub struct Intended<'a> {
     notes: Vec<String>,
     /// The section a G0 that extrudes in X or Y was warned of in.
     warned_wet_rapid: Option<usize>,
+    /// The axes the section's moves named before the move being read (bits of
+    /// [`lampost_gcode::AXES`]), and the section a feed from a start the program never
+    /// gave (no X or Y yet) was warned of in.
+    axes_before: u16,
+    warned_unplaced: Option<usize>,
     /// The section a feed at a machine-coordinate retract's height was noted in (see
     /// [`Intended::positioning_at_retract`]).
     noted_positioning: Option<usize>,
@@ -394,6 +399,8 @@ impl<'a> Intended<'a> {
             retract_z: None,
             notes: Vec::new(),
             warned_wet_rapid: None,
+            axes_before: 0,
+            warned_unplaced: None,
             noted_positioning: None,
             warned: Vec::new(),
             noted_zero_axes: false,
@@ -604,6 +611,7 @@ impl<'a> Intended<'a> {
                 let src = ProgramReader::new(sec.source.open()?, Order::Execution);
                 self.stream = Some(Stream::new(src, opts, true));
                 self.warned.clear();
+                self.axes_before = 0;
                 self.layer = 0;
                 self.layer_z = None;
                 self.moves_in_section = 0;
@@ -814,6 +822,7 @@ impl<'a> Intended<'a> {
             self.pending = Some(*m);
             return Ok(self.here_step(StepKind::ToolChange(change), line));
         }
+        let axes_before = std::mem::replace(&mut self.axes_before, m.axes_named);
         self.frame_kept(&sec.name, m)?;
         if let Some(posted) = self.posted_spindle {
             self.spindle_kept(&sec.name, m, posted)?;
@@ -876,6 +885,24 @@ impl<'a> Intended<'a> {
                 && m.start == m.end
                 && self.deposit_end != Some(m.start);
         let is_feed = !matches!(m.kind, MoveKind::Rapid) && !dry;
+        // A cut or deposit from a start the program never gave (`G1 Z-1` before any X or
+        // Y): the interpreter starts from 0 there, as rs274 does, and so does the posted
+        // program; on the machine the move would start wherever the head stands. (Not a
+        // lift written as a feed, `G1 Z3.81` first thing, as Easel and GRBLGRU write.)
+        const XY: u16 = 0b11;
+        let lift = m.end[0] == m.start[0] && m.end[1] == m.start[1] && m.end[2] > m.start[2];
+        if is_feed && !lift && axes_before & XY != XY && self.warned_unplaced != Some(self.idx) {
+            self.warned_unplaced = Some(self.idx);
+            let missing = match axes_before & XY {
+                0 => "X and Y",
+                1 => "Y",
+                _ => "X",
+            };
+            self.notes.push(format!(
+                "{}:{}: this feed starts before the program gives {missing}: it is posted from {missing} = 0 of the program (as rs274 reads it), while the machine would start it wherever the head stands; give the start first (a G0 to it) if 0 is not meant",
+                sec.name, m.line
+            ));
+        }
         // Layers: a feed move ending at a new Z level starts a new layer.
         if is_feed && sec.layers.is_some() {
             match self.layer_z {
