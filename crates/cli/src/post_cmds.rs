@@ -18,6 +18,22 @@ use crate::report::CliError;
 /// Render a post error for people.
 pub fn post_error(e: PostError) -> CliError {
     let hint = e.hint();
+    render_post_error(e, hint)
+}
+
+/// Render an error met reading posted programs (`verify`, `preview`), placed in the
+/// files given: an error of the posted text is no fault of the input program.
+pub fn posted_error(posted: &[String], e: PostError) -> CliError {
+    let of_posted = matches!(&e, PostError::Input { file, .. } if file == "the posted program");
+    let e = crate::posted::locate(posted, e);
+    if of_posted {
+        render_post_error(e, "the posted program does not read as one lampost writes: it was changed after it was posted (post it again), or it is not a program lampost posted")
+    } else {
+        post_error(e)
+    }
+}
+
+fn render_post_error(e: PostError, hint: &str) -> CliError {
     let msg = match &e {
         PostError::Input { file, diag } => crate::report::render(file, diag),
         _ => format!("error: {e}\n"),
@@ -1118,8 +1134,7 @@ fn preview_files(
     view: lampost_post::preview::View,
 ) -> Result<(), CliError> {
     let f = crate::posted::open(posted)?;
-    let p = lampost_post::preview::replay(m, head, f)
-        .map_err(|e| post_error(crate::posted::locate(posted, e)))?;
+    let p = lampost_post::preview::replay(m, head, f).map_err(|e| posted_error(posted, e))?;
     let title = format!("{} on {}", posted.join(", "), m.def.name);
     let text = lampost_post::preview::svg(
         m,
@@ -1148,8 +1163,7 @@ fn deviation_preview(
     tolerance: f64,
 ) -> Result<(), CliError> {
     let f = crate::posted::open(posted)?;
-    let p = lampost_post::preview::replay(m, head, f)
-        .map_err(|e| post_error(crate::posted::locate(posted, e)))?;
+    let p = lampost_post::preview::replay(m, head, f).map_err(|e| posted_error(posted, e))?;
     let title = format!(
         "{} on {}: deviation from the intended path",
         posted.join(", "),
@@ -1243,7 +1257,7 @@ pub fn verify(
     });
     // One file, or DNC pieces in order; FADAL subprograms are followed.
     let f = crate::posted::open(posted)?;
-    let located = |e| post_error(crate::posted::locate(posted, e));
+    let located = |e| posted_error(posted, e);
     let part = part_mesh(place, &m)?;
     let bar = crate::progress::Progress::working("verifying", place.quiet);
     // Posted line → the largest deviation of a point it wrote, for `--preview`.

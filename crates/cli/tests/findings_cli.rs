@@ -4698,3 +4698,87 @@ fn a_cut_from_a_start_never_given_is_warned() {
         "{err}"
     );
 }
+
+/// Finding 112 (h60): `verify` on a posted program changed after posting (an arc's
+/// centre moved) said "fix the input program", and at the same tolerance as the post's
+/// `--tolerance` called a passing post's program "a lampost fault". An error of the
+/// posted text now says the program was changed or is not lampost's, and a failed check
+/// names the tolerance the post checked to.
+#[test]
+fn verify_names_the_posted_program_and_the_tolerances() {
+    let work = tempdir("finding-112");
+    let input = work.join("circle.nc");
+    std::fs::write(
+        &input,
+        "G20 G90 G17\nG0 X0.4 Y0 Z0.1\nG1 Z0 F20.\nG3 X-0.4 Y0 I-0.4 J0\nG0 Z0.1\nM30\n",
+    )
+    .expect("writes");
+    let posted = work.join("posted.nc");
+    let (i, p) = (
+        input.to_str().expect("utf8"),
+        posted.to_str().expect("utf8"),
+    );
+    let o = lampost(&[
+        "post",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        i,
+        "-o",
+        p,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&posted).expect("posted");
+    let arc = text
+        .lines()
+        .find(|l| l.contains(" I") && l.contains(" J"))
+        .expect("an arc")
+        .to_string();
+    let bad = arc.replace(" I-0.4000", " I-0.1000");
+    assert_ne!(bad, arc, "{arc}");
+    std::fs::write(&posted, text.replace(&arc, &bad)).expect("writes");
+    let o = lampost(&[
+        "verify",
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        i,
+        p,
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("it was changed after it was posted")
+            && !err.contains("fix the input program"),
+        "{err}"
+    );
+    // Posted tilted at a chord tolerance of 0.0005 in (checked to 0.001 in), verified at
+    // 0.0005 in: the chords and the output rounding are past it, and the help says so.
+    let circle = finding("112-verify-messages/circle.nc");
+    let c = circle.to_str().expect("utf8");
+    let idx = [
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=-20",
+        "--process",
+        "machine",
+    ];
+    let mut args = vec!["post", "--tolerance", "0.0005"];
+    args.extend_from_slice(&idx);
+    args.extend_from_slice(&[c, "-o", p]);
+    let o = lampost(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut args = vec!["verify", "--tolerance", "0.0005"];
+    args.extend_from_slice(&idx);
+    args.extend_from_slice(&[c, p]);
+    let o = lampost(&args);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("verify's --tolerance is tighter than the post's own check (twice the post's chord --tolerance"),
+        "{err}"
+    );
+}

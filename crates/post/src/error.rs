@@ -142,7 +142,7 @@ impl PostError {
             PostError::Empty(_) => "give a program with moves",
             PostError::Io(_) => "check the paths and free space",
             PostError::Collision(_) => "the part (--part) stands in the way of the move named: move the part or the run's start (--origin, the setup), choose another index, or raise the safe height (clearance_z, safe_margin in the machine file); nothing was written",
-            PostError::Verify(_) => "this is a lampost fault, or INPUT and POSTED do not belong together (verify takes the placement and the process options the program was posted with: --process, --power, --spindle, --coolant, --tool, --work-offset, --length-offset); a post that fails its own check writes nothing",
+            PostError::Verify(_) => "INPUT and POSTED do not belong together (verify takes the placement and the process options the program was posted with: --process, --power, --spindle, --coolant, --tool, --work-offset, --length-offset), or POSTED was changed after it was written, or verify's --tolerance is tighter than the post's own check (twice the post's chord --tolerance: 0.001 in or 0.02 mm by default); else it is a lampost fault. A post that fails its own check writes nothing",
             PostError::Options(_) => "see `lampost post --help`",
         }
     }
