@@ -737,25 +737,15 @@ pub struct PostArgs {
     pub chunk_points: Option<usize>,
 }
 
-/// The head a process uses unless one is named (the library's choice). Machining cuts
-/// with a spindle: on a machine with no head named `spindle` (the NRC cell has a laser
-/// and a sensor) it is refused rather than done with the first head, spindle codes and
-/// all, unless a head is named.
+/// The head a process uses unless one is named (the library's choice, which refuses
+/// machining on a machine without a spindle).
 fn default_head(m: &Machine, process: &str, named: Option<&str>) -> Result<String, CliError> {
     if let Some(n) = named {
         return Ok(n.to_string());
     }
-    if process == "machine" && m.head("spindle").is_err() {
-        let heads: Vec<&str> = m.heads.iter().map(|h| h.name.as_str()).collect();
-        return Err(CliError::usage(format!(
-            "error: --process machine: {} has no spindle (no head named `spindle`; its heads: {})\n  = help: post with --process deposit, or name the head that machines with --head NAME\n",
-            m.name,
-            heads.join(", ")
-        )));
-    }
-    Ok(m.heads
-        .get(lampost_post::default_head(m, process == "deposit"))
-        .map_or_else(String::new, |h| h.name.clone()))
+    let h = lampost_post::process_head(m, process == "deposit")
+        .map_err(|e| CliError::usage(format!("error: {e}\n  = help: {}\n", e.hint())))?;
+    Ok(m.heads.get(h).map_or_else(String::new, |h| h.name.clone()))
 }
 
 /// The post configuration from the options, the sections and their flavour (resolved once,

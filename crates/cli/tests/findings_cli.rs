@@ -1957,6 +1957,8 @@ fn pcb2gcode_s_first_tool_and_stop_post_and_verify() {
         "nrc-lc",
         "--process",
         "machine",
+        "--head",
+        "laser",
         "--convert-units",
     ];
     let mut post = vec!["post"];
@@ -3428,6 +3430,8 @@ fn a_printer_flavour_chosen_by_a_dwell_implies_no_extrusion_for_machining() {
         "B=0,C=0",
         "--process",
         "machine",
+        "--head",
+        "laser",
         p,
         "-o",
         out.to_str().expect("utf8"),
@@ -3444,6 +3448,8 @@ fn a_printer_flavour_chosen_by_a_dwell_implies_no_extrusion_for_machining() {
         "B=0,C=0",
         "--process",
         "machine",
+        "--head",
+        "laser",
         p,
         out.to_str().expect("utf8"),
     ]);
@@ -4781,4 +4787,61 @@ fn verify_names_the_posted_program_and_the_tolerances() {
         err.contains("verify's --tolerance is tighter than the post's own check (twice the post's chord --tolerance"),
         "{err}"
     );
+}
+
+/// Finding 113 (h60): verify passed a posted program whose last `M5` was changed to
+/// `M3` (the spindle left turning at the end; a control's program end may not stop
+/// it), as it did coolant left on; the laser and the powder were held to it already.
+#[test]
+fn a_program_ending_with_the_spindle_or_coolant_on_fails_verify() {
+    let work = tempdir("finding-113");
+    let input = work.join("cut.nc");
+    std::fs::write(
+        &input,
+        "G20 G90\nS3000 M3\nM8\nG0 X0 Y0 Z0.1\nG1 Z-0.05 F10.\nG1 X1.\nG0 Z0.1\nM9\nM5\nM30\n",
+    )
+    .expect("writes");
+    let posted = work.join("posted.nc");
+    let (i, p) = (
+        input.to_str().expect("utf8"),
+        posted.to_str().expect("utf8"),
+    );
+    let opts = [
+        "--machine",
+        "fadal-lamp",
+        "--index",
+        "A=0,B=0",
+        "--process",
+        "machine",
+        "--coolant",
+    ];
+    let mut args = vec!["post"];
+    args.extend_from_slice(&opts);
+    args.extend_from_slice(&[i, "-o", p]);
+    let o = lampost(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&posted).expect("posted");
+    let verify = || {
+        let mut args = vec!["verify"];
+        args.extend_from_slice(&opts);
+        args.extend_from_slice(&[i, p]);
+        lampost(&args)
+    };
+    let o = verify();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (from, to, says) in [
+        ("M5", "M3", "ends with the spindle turning"),
+        ("M9", "M8", "ends with the coolant on"),
+    ] {
+        let at = text.rfind(from).expect(from);
+        let mut bad = text.clone();
+        bad.replace_range(at..at + from.len(), to);
+        std::fs::write(&posted, &bad).expect("writes");
+        let o = verify();
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && err.contains(says),
+            "{from}→{to}: {err}"
+        );
+    }
 }

@@ -294,6 +294,8 @@ fn post_reports_the_flavour() {
         "B=0,C=0",
         "--process",
         "machine",
+        "--head",
+        "laser",
         "-o",
         out.to_str().expect("utf8"),
         "--json-report",

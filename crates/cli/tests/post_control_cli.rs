@@ -287,6 +287,8 @@ fn a_macro_b_bolt_hole_circle_traces_and_posts() {
         "B=0,C=0",
         "--process",
         "machine",
+        "--head",
+        "laser",
         p,
         "-o",
         out.to_str().expect("utf-8"),

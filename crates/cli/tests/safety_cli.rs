@@ -1623,6 +1623,8 @@ fn a_dwell_left_out_of_a_posted_program_is_named() {
         "nrc-lc",
         "--process",
         "machine",
+        "--head",
+        "laser",
         "--index",
         "B=0,C=0",
         &input,
@@ -2022,7 +2024,7 @@ fn a_program_stop_in_the_input_is_posted_where_it_stands() {
     );
     // Machining: the spindle and coolant on again after each stop, before the next
     // approach; after the last (no cut after it) the program ends.
-    let mach = ["--process", "machine", "--coolant"];
+    let mach = ["--process", "machine", "--head", "laser", "--coolant"];
     let (m, _) = post("m.nc", &mach);
     let b = blocks(&m);
     let stops: Vec<usize> = (0..b.len())
@@ -2347,6 +2349,8 @@ fn split_pieces_read_alone_and_program_numbers_stay_in_range() {
         "B=0,C=0",
         "--process",
         "machine",
+        "--head",
+        "laser",
         "--tool",
         "1",
         "--length-offset",
@@ -2384,6 +2388,8 @@ fn split_pieces_read_alone_and_program_numbers_stay_in_range() {
     v.extend([
         "--process",
         "machine",
+        "--head",
+        "laser",
         "--tool",
         "1",
         "--length-offset",
@@ -2406,6 +2412,8 @@ fn split_pieces_read_alone_and_program_numbers_stay_in_range() {
             "A=0,B=0",
             "--process",
             "machine",
+            "--head",
+            "laser",
             "--tool",
             "1",
             "--length-offset",

@@ -45,5 +45,5 @@ pub use frame::{read_setup, Frame};
 pub use intended::{IntendedOptions, LayerSchedule, Orient, Section, Source, LASER_LOOK};
 pub use job::{parse as read_job, JobFile, JobSection};
 pub use pipeline::{post, Rewind};
-pub use post::{default_head, PostConfig, PostDialect, PostReport, Process};
+pub use post::{default_head, process_head, PostConfig, PostDialect, PostReport, Process};
 pub use verify::{verify, verify_traced, VerifyReport};

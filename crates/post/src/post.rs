@@ -109,6 +109,22 @@ pub fn default_head(m: &Machine, deposit: bool) -> usize {
         .unwrap_or(0)
 }
 
+/// [`default_head`], where machining takes no head but a spindle: on a machine with no
+/// head named `spindle` (the NRC cell has a laser and a sensor) machining is refused
+/// rather than done with the first head, spindle codes and all. A head named by the user
+/// is taken as named instead.
+pub fn process_head(m: &Machine, deposit: bool) -> Result<usize, PostError> {
+    if !deposit && m.head("spindle").is_err() {
+        let heads: Vec<&str> = m.heads.iter().map(|h| h.name.as_str()).collect();
+        return Err(PostError::Options(format!(
+            "--process machine: {} has no spindle (no head named `spindle`; its heads: {}): post with --process deposit, or name the head that machines with --head NAME",
+            m.name,
+            heads.join(", ")
+        )));
+    }
+    Ok(default_head(m, deposit))
+}
+
 impl PostConfig {
     /// The settings `lampost post` starts from for `process` on `m`: the laser head for
     /// deposition and the spindle for machining (else the first head); the FADAL dialect

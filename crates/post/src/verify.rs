@@ -1077,18 +1077,23 @@ impl Screen {
 }
 
 impl Screen {
-    /// At the end of the posted text: the program ends with M2 or M30, with the laser
-    /// and the powder off (the machine's own codes; a control's program end may leave
-    /// either on). (Read in execution order, a FADAL subprogram's `M99` returns into the
+    /// At the end of the posted text: the program ends with M2 or M30, with the laser,
+    /// the powder, the spindle and the coolant off (the machine's own codes; a control's
+    /// program end may leave any of them on). (Read in execution order, a FADAL subprogram's `M99` returns into the
     /// main program, whose end comes after it; an `M99` read last ends the main program,
     /// and a control runs such a program again without end.)
     pub(crate) fn finish(&self) -> Result<(), PostError> {
         self.check()?;
         let s = self.switches.get();
-        for (what, on) in [("laser", s.laser), ("powder", s.powder)] {
+        for (what, on) in [
+            ("the laser on", s.laser),
+            ("the powder on", s.powder),
+            ("the spindle turning", s.spindle.map(|x| x.0)),
+            ("the coolant on", s.coolant),
+        ] {
             if let Some(l) = on {
                 return Err(PostError::Verify(format!(
-                    "the posted program ends with the {what} on (turned on at posted line {l}): the post turns it off with the machine's code before the end"
+                    "the posted program ends with {what} (turned on at posted line {l}): the post turns it off with the machine's code before the end"
                 )));
             }
         }
