@@ -497,6 +497,7 @@ impl ErrorKind {
             ErrorKind::MacroB(_) => "check the Macro B structure: each WHILE [..] DOm closed by its ENDm (nested loops numbered apart), each GOTO n to a block Nn of the same program, each G65 P.. to a program of this file that ends in M99",
             ErrorKind::MainProgramLoops(_) => "end the program with M30; to run its body several times, make it a subprogram and call it with M98 P… L…",
             ErrorKind::ReturnOutsideSubprogram => "end the program with M30 (M99 returns from a subprogram called with M98)",
+            ErrorKind::Expression(what) if what.contains("is a HAL pin") || what.contains("predefined parameters whose value depends on the machine") => "write the value the machine would give in its place (lampost, like rs274, runs the program without the machine)",
             ErrorKind::Expression(_) => "check the expression and that every parameter it reads is set before (RS274NGC: parameters are set after the line's words are read)",
             ErrorKind::Control(_) => "check the O-word structure: each sub, if, while, do and repeat is closed with the same O number, and loops end",
             ErrorKind::EmptyProgram => "give a file that holds a program",

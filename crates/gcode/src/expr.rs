@@ -791,7 +791,7 @@ impl<'t, 'p> Eval<'t, 'p> {
             Param::Numbered(n) => Ok(self.params.read_numbered(*n)),
             Param::Named(name) => self.params.named(name).ok_or_else(|| {
                 let what = if name.to_ascii_lowercase().starts_with("_hal[") {
-                    format!("#<{name}> is a HAL pin, whose value only the machine knows (QtPlasmaC reads its cut feed rate from one); LinuxCNC's standalone rs274 refuses it too: write the value in its place")
+                    format!("#<{name}> is a HAL pin, whose value only the running machine knows (QtPlasmaC's programs read their cut feed rate and heights from such pins); LinuxCNC's standalone rs274 refuses it too: write the pin's value in its place")
                 } else if PREDEFINED_UNKNOWN.contains(&name.to_ascii_lowercase().as_str()) {
                     format!("#<{name}> is one of LinuxCNC's predefined parameters whose value depends on the machine (its configuration, switches or tool table), which lampost does not hold: write the value in its place")
                 } else {
