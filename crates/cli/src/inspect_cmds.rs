@@ -211,10 +211,13 @@ pub fn plan_cmd(
         }
         None => None,
     };
+    // The measuring program and the plan placed as one set.
+    let mut files: Vec<(Option<&str>, &[u8])> = Vec::new();
     if let (Some(path), Some(p)) = (program_out, &prog) {
-        write_file(Some(path), p)?;
+        files.push((Some(path), p.as_bytes()));
     }
-    write_file(output, &table)?;
+    files.push((output, table.as_bytes()));
+    crate::io::write_set(&files)?;
     let tilted = plan.rows.iter().filter(|r| r.tilt_deg > 0.0).count();
     eprintln!(
         "planned {} points on {} (head {}){}",

@@ -65,10 +65,35 @@ pub fn spool(path: &str) -> Result<TempFile, CliError> {
     Ok(temp)
 }
 
-/// Copy `from` to `to`, stopping with an error at [`MAX_NUL_RUN`] NUL bytes in a row:
-/// binary data is not a program, and a device such as `/dev/zero` never ends.
+/// Copy `from` to `to`, stopping with an error at [`MAX_NUL_RUN`] NUL bytes in a row,
+/// at more than one control byte in 16 in its first 64 KiB (binary data is not a
+/// program: `/dev/urandom`, an image), or past [`MAX_INPUT_BYTES`] (a device or a pipe
+/// that never ends filled the temporary folder at some 300 MB/s).
 fn copy_text(from: &mut dyn Read, to: &mut File) -> io::Result<u64> {
-    copy_checked(from, u64::MAX, "not a program", |chunk| to.write_all(chunk))
+    let (mut seen, mut control) = (0usize, 0usize);
+    copy_checked(from, MAX_INPUT_BYTES, "not a program", |chunk| {
+        if seen < HEAD_BYTES {
+            let head = &chunk[..chunk.len().min(HEAD_BYTES - seen)];
+            seen += head.len();
+            control += head.iter().filter(|&&c| is_binary_byte(c)).count();
+            if seen >= 4096 && control * 16 > seen {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!("{control} control bytes in its first {seen}: binary data, not a program; reading stopped"),
+                ));
+            }
+        }
+        to.write_all(chunk)
+    })
+}
+
+/// How much of a spooled input is looked at for binary data: 64 KiB.
+const HEAD_BYTES: usize = 1 << 16;
+
+/// A byte no text program holds: a control character other than tab, line feed, form
+/// feed and carriage return (and the tape codes DC1–DC4 and SUB a DNC file may carry).
+fn is_binary_byte(c: u8) -> bool {
+    matches!(c, 0..=8 | 0x0e..=0x10 | 0x15..=0x19 | 0x1b..=0x1f | 0x7f)
 }
 
 /// The most bytes an input read whole (a mesh, a per-point path, a log, a point file, a
@@ -126,22 +151,35 @@ pub fn read_settings_file(path: impl AsRef<Path>) -> io::Result<String> {
     Ok(out)
 }
 
-/// The files this run reads (their canonical paths): no output is put in their place
-/// ([`persist_set`] refuses), so `trace in.nc -o in.nc` cannot destroy its program.
-static INPUTS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+/// The files this run reads (their canonical paths), each with its length and time of
+/// change when first noted: no output is put in their place, and no output is put in
+/// place at all once one of them has changed ([`persist_set`] refuses both), so `trace
+/// in.nc -o in.nc` cannot destroy its program, and a program cut short while it was read
+/// (a copy still being written) is not posted as a shorter program.
+static INPUTS: std::sync::Mutex<Vec<(PathBuf, Stamp)>> = std::sync::Mutex::new(Vec::new());
+
+/// A file's length and time of last change.
+type Stamp = (u64, Option<std::time::SystemTime>);
+
+fn stamp(m: &fs::Metadata) -> Stamp {
+    (m.len(), m.modified().ok())
+}
 
 /// Note `path` as an input of this run (a regular file; stdin and devices are not).
 pub fn note_input(path: impl AsRef<Path>) {
     let p = path.as_ref();
-    if p.as_os_str() == "-" || !fs::metadata(p).is_ok_and(|m| m.is_file()) {
+    let Ok(m) = fs::metadata(p) else {
+        return;
+    };
+    if p.as_os_str() == "-" || !m.is_file() {
         return;
     }
     if let Ok(c) = p.canonicalize() {
         let mut inputs = INPUTS
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        if !inputs.contains(&c) {
-            inputs.push(c);
+        if !inputs.iter().any(|(q, _)| *q == c) {
+            inputs.push((c, stamp(&m)));
         }
     }
 }
@@ -152,8 +190,65 @@ fn is_input(target: &Path) -> bool {
         INPUTS
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .contains(&c)
+            .iter()
+            .any(|(q, _)| *q == c)
     })
+}
+
+/// The first input of this run that has changed (or gone) since it was noted: its path,
+/// and what it was and is.
+fn changed_input() -> Option<(PathBuf, String)> {
+    let inputs = INPUTS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    inputs.iter().find_map(|(p, was)| {
+        let now = fs::metadata(p).ok().map(|m| stamp(&m));
+        match now {
+            Some(now) if now == *was => None,
+            Some((len, _)) if len != was.0 => Some((
+                p.clone(),
+                format!("{} bytes when it was opened, {len} now", was.0),
+            )),
+            Some(_) => Some((p.clone(), "written to while it was read".into())),
+            None => Some((p.clone(), "removed while it was read".into())),
+        }
+    })
+}
+
+/// The files this run writes (absolute paths, their folders resolved), as their
+/// temporary files are made.
+static OUTPUTS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Note `real` (the output named `given`) as an output of this run, returning the key it
+/// is noted by; refused when it is one already. A temporary file dropped unplaced forgets
+/// its key ([`forget_output`]): a run may remake an output it has not written.
+fn note_output(real: &Path, given: &str) -> Result<PathBuf, CliError> {
+    let dir = real
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let key = match (dir.canonicalize(), real.file_name()) {
+        (Ok(d), Some(n)) => d.join(n),
+        _ => real.to_path_buf(),
+    };
+    let mut outputs = OUTPUTS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if outputs.contains(&key) {
+        return Err(CliError::usage(format!(
+            "error: {given} is named as two outputs of this run: one would replace the other\n  = help: give each output its own path\n"
+        )));
+    }
+    outputs.push(key.clone());
+    Ok(key)
+}
+
+/// Forget `key` as an output of this run (its temporary file was dropped, not placed).
+fn forget_output(key: &Path) {
+    OUTPUTS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .retain(|k| k != key);
 }
 
 /// Where an output named `target` goes: through a symbolic link to the file it names
@@ -163,6 +258,14 @@ fn real_target(target: &Path) -> PathBuf {
     if fs::symlink_metadata(target).is_ok_and(|m| m.file_type().is_symlink()) {
         if let Ok(c) = target.canonicalize() {
             return c;
+        }
+        // A link to a file not there yet: the file it names is made (the link kept),
+        // one level followed.
+        if let Ok(to) = fs::read_link(target) {
+            return match target.parent() {
+                Some(dir) if to.is_relative() => dir.join(to),
+                _ => to,
+            };
         }
     }
     target.to_path_buf()
@@ -353,6 +456,9 @@ struct Live {
     dirs: Vec<PathBuf>,
 }
 
+/// Set by the interrupt handler before it takes [`LIVE`]'s lock.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 static LIVE: std::sync::Mutex<Live> = std::sync::Mutex::new(Live {
     files: Vec::new(),
     dirs: Vec::new(),
@@ -368,6 +474,8 @@ fn live() -> std::sync::MutexGuard<'static, Live> {
 /// place ([`persist_set`]) is finished first.
 pub fn remove_temps_on_signal() {
     let _ = ctrlc::set_handler(|| {
+        // Said before the lock is taken: a write into a full pipe under it gives up.
+        INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
         let mut live = live();
         for p in live.files.drain(..) {
             let _ = fs::remove_file(p);
@@ -419,6 +527,35 @@ impl Drop for NewDir {
     }
 }
 
+/// Write each text to its file (`-` or `None`: standard output, after the files) as one
+/// set ([`persist_set`]): every file is staged before any is placed, so a refusal (one
+/// path named twice, an input's path) or a failure leaves every target as it was.
+pub fn write_set(files: &[(Option<&str>, &[u8])]) -> Result<(), CliError> {
+    let mut staged = Vec::new();
+    let mut to_stdout = Vec::new();
+    for &(target, text) in files {
+        match target {
+            None | Some("-") => to_stdout.push(text),
+            Some(t) => {
+                let (temp, mut f) = TempFile::beside(Some(t))?;
+                f.write_all(text)
+                    .and_then(|()| f.flush())
+                    .map_err(|e| cannot_write(Path::new(t), &e))?;
+                staged.push((temp, PathBuf::from(t)));
+            }
+        }
+    }
+    persist_set(staged, None, || {})?;
+    for text in to_stdout {
+        let mut o = Output::create(None)?;
+        o.writer()
+            .write_all(text)
+            .map_err(|e| CliError::write(&e))?;
+        o.commit()?;
+    }
+    Ok(())
+}
+
 /// Put a set of temporary files in place, in the order given, as one step: an interrupt
 /// arriving meanwhile waits until every file is renamed, so the set is left entirely old
 /// or entirely new. `first` (a file that names the set, such as a manifest) is removed
@@ -435,6 +572,14 @@ pub fn persist_set(
         Err(e) if e.kind() != io::ErrorKind::NotFound => Err(cannot_write(p, &e)),
         _ => Ok(()),
     });
+    if done.is_ok() {
+        if let Some((input, what)) = changed_input() {
+            done = Err(CliError::failed(format!(
+                "error: {}: the input changed while this run read it ({what}): what was read may be cut short or mixed, and nothing is written\n  = help: let whatever writes the file finish, then run again\n",
+                input.display()
+            )));
+        }
+    }
     if done.is_ok() {
         if let Some((_, target)) = files.iter().find(|(_, t)| is_input(t)) {
             done = Err(CliError::usage(format!(
@@ -474,7 +619,7 @@ fn commit_pause() {
 }
 
 fn cannot_write(target: &Path, e: &io::Error) -> CliError {
-    CliError::usage(format!("error: cannot write {}: {e}", target.display()))
+    CliError::usage(format!("error: cannot write {}: {e}\n", target.display()))
 }
 
 /// Rename `path` over `target`; a device or a pipe (`/dev/null`, a FIFO) gets its
@@ -482,6 +627,12 @@ fn cannot_write(target: &Path, e: &io::Error) -> CliError {
 /// `path` stays for the caller to remove.
 fn place(path: &Path, target: &Path) -> io::Result<()> {
     let target = &real_target(target);
+    if fs::metadata(target).is_ok_and(|m| {
+        use std::os::unix::fs::FileTypeExt;
+        m.file_type().is_fifo()
+    }) {
+        return write_fifo(path, target);
+    }
     if is_special(target) {
         let mut from = File::open(path)?;
         let mut to = fs::OpenOptions::new().write(true).open(target)?;
@@ -489,6 +640,51 @@ fn place(path: &Path, target: &Path) -> io::Result<()> {
         return to.flush();
     }
     fs::rename(path, target)
+}
+
+/// Write the file at `path` into the FIFO (or pipe) `target` without ever blocking: a
+/// blocking open waits for a reader without end, and it and a blocking write wait under
+/// the lock an interrupt needs ([`persist_set`]), so that SIGINT and SIGTERM went
+/// unheard. Opened non-blocking, a FIFO no process reads is refused at once (ENXIO); a
+/// full pipe is waited on in short sleeps that an interrupt ends.
+fn write_fifo(path: &Path, target: &Path) -> io::Result<()> {
+    use std::io::Read;
+    use std::os::unix::fs::OpenOptionsExt;
+    let mut to = match fs::OpenOptions::new()
+        .write(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(target)
+    {
+        Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+            return Err(io::Error::other(
+                "it is a FIFO (named pipe) that no process is reading: start the program that reads it first, or write to a file",
+            ))
+        }
+        r => r?,
+    };
+    let mut from = File::open(path)?;
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = from.read(&mut buf)?;
+        if n == 0 {
+            return Ok(());
+        }
+        let mut chunk = &buf[..n];
+        while !chunk.is_empty() {
+            match to.write(chunk) {
+                Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
+                Ok(k) => chunk = &chunk[k..],
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    if INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) {
+                        return Err(io::Error::from(io::ErrorKind::Interrupted));
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(2));
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
 }
 
 /// Whether `path` names something that is not a regular file or a folder: a character
@@ -503,14 +699,22 @@ pub fn is_special(path: &Path) -> bool {
 #[derive(Debug)]
 pub struct TempFile {
     path: PathBuf,
+    /// The output it is for, as noted ([`note_output`]); forgotten when dropped unplaced.
+    output: Option<PathBuf>,
 }
 
 impl TempFile {
-    /// A new, empty temporary file for `target` (`None` or `-`: standard output).
+    /// A new, empty temporary file for `target` (`None` or `-`: standard output). A
+    /// file named as two outputs of one run (`--svg x --csv x`) is refused at the second:
+    /// one would silently replace the other.
     pub fn beside(target: Option<&str>) -> Result<(TempFile, File), CliError> {
         let real = target
             .filter(|t| *t != "-")
             .map(|t| real_target(Path::new(t)));
+        let output = match real.as_deref().filter(|r| !is_special(r)) {
+            Some(r) => Some(note_output(r, target.unwrap_or_default())?),
+            None => None,
+        };
         let target = real.as_deref().and_then(Path::to_str);
         let dir = match target {
             // A device or a pipe (`-o /dev/null`) is written through, never renamed over:
@@ -527,7 +731,19 @@ impl TempFile {
         let name = target
             .and_then(|t| Path::new(t).file_name())
             .map_or_else(|| "stdout".into(), |n| n.to_string_lossy().into_owned());
-        Self::create(&dir, &name)
+        let made = Self::create(&dir, &name);
+        match made {
+            Ok((mut t, f)) => {
+                t.output = output;
+                Ok((t, f))
+            }
+            Err(e) => {
+                if let Some(k) = &output {
+                    forget_output(k);
+                }
+                Err(e)
+            }
+        }
     }
 
     /// A new, empty temporary file in the temporary folder, its name made from `name`.
@@ -536,6 +752,7 @@ impl TempFile {
     }
 
     fn create(dir: &Path, name: &str) -> Result<(TempFile, File), CliError> {
+        remove_stale(dir, name);
         let mut k = 0u32;
         // Registered before it exists (see [`Live`]).
         let mut live = live();
@@ -549,7 +766,7 @@ impl TempFile {
             {
                 Ok(f) => {
                     live.files.push(path.clone());
-                    return Ok((TempFile { path }, f));
+                    return Ok((TempFile { path, output: None }, f));
                 }
                 Err(e) if e.kind() == io::ErrorKind::AlreadyExists && k < 1000 => k += 1,
                 Err(e) => {
@@ -581,8 +798,46 @@ impl TempFile {
     }
 }
 
+/// Remove the temporary files for `name` in `dir` that a run killed outright (SIGKILL,
+/// a power cut: no handler runs) left: `.NAME.PID.K.tmp` whose process is gone (no
+/// `/proc/PID`; where `/proc` is not there, nothing is removed). A live process's,
+/// or another name's, is never touched.
+fn remove_stale(dir: &Path, name: &str) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    let prefix = format!(".{name}.");
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(rest) = file
+            .to_str()
+            .and_then(|f| f.strip_prefix(&prefix))
+            .and_then(|r| r.strip_suffix(".tmp"))
+        else {
+            continue;
+        };
+        // `PID.K`, both numbers.
+        let Some((pid, k)) = rest.split_once('.') else {
+            continue;
+        };
+        let numbers = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+        if !(numbers(pid) && numbers(k)) || pid == std::process::id().to_string() {
+            continue;
+        }
+        if !Path::new("/proc").join(pid).exists() && e.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = fs::remove_file(e.path());
+        }
+    }
+}
+
 impl Drop for TempFile {
     fn drop(&mut self) {
+        if let Some(k) = &self.output {
+            forget_output(k);
+        }
         let mut live = live();
         let _ = fs::remove_file(&self.path);
         live.files.retain(|p| p != &self.path);
@@ -640,7 +895,10 @@ impl Output {
     /// Flush and, for a file, rename the temporary file over the target.
     pub fn commit(mut self) -> Result<(), CliError> {
         if let Some(mut w) = self.writer.take() {
-            w.flush().map_err(|e| CliError::write(&e))?;
+            w.flush().map_err(|e| match &self.target {
+                Some(t) if e.kind() != io::ErrorKind::BrokenPipe => cannot_write(t, &e),
+                _ => CliError::write(&e),
+            })?;
         }
         if let (Some(temp), Some(target)) = (self.temp.take(), self.target.take()) {
             temp.persist(&target)?;

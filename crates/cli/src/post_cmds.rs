@@ -931,6 +931,13 @@ pub fn post(
                 "error: --max-bytes needs -o OUT (the pieces are files)\n".to_string(),
             ));
         }
+        // The pieces are files beside OUT (OUT.001, …): beside a device they would be
+        // files in /dev.
+        if let Some(o) = output.filter(|o| crate::io::is_special(Path::new(o))) {
+            return Err(CliError::usage(format!(
+                "error: --max-bytes with -o {o}: the pieces are files named after OUT ({o}.001, …), and {o} is a device or a pipe\n  = help: give -o a file path\n"
+            )));
+        }
     }
     let view = view_arg(&a.view)?;
     if a.preview.is_some() && output.is_none_or(|o| o == "-") {
@@ -1016,6 +1023,9 @@ pub fn post(
                 max,
             )
             .map_err(post_error)?;
+            // The whole program's temporary file goes: the first piece takes its name.
+            drop(f);
+            drop(whole.take());
             for p in pieces {
                 let name = if p.number == 0 {
                     out.to_string()
@@ -1090,8 +1100,9 @@ pub fn post(
         let h = m.head(&head_name).map_err(crate::kin_cmds::kin_error)?;
         preview_files(&m, h, &written, svg, a.proc.process == "deposit", view).map_err(|e| {
             CliError::failed(format!(
-                "{}  = note: the program was written ({}); only the preview failed\n",
+                "{}{}  = note: the program was written ({}); only the preview failed\n",
                 e.message,
+                if e.message.ends_with('\n') { "" } else { "\n" },
                 written.join(", ")
             ))
         })?;

@@ -16,6 +16,9 @@ pub fn render(file: &str, d: &Diagnostic) -> String {
     let _ = writeln!(s, "{sev}: {}", d.kind);
     if d.line == 0 {
         let _ = writeln!(s, "  --> {file}");
+    } else if d.column == 0 && d.snippet.text.is_empty() {
+        // A line without its text (a cycle's moves, counted after the line was read).
+        let _ = writeln!(s, "  --> {file}:{}", d.line);
     } else {
         let num = d.line.to_string();
         let pad = " ".repeat(num.len());
@@ -67,6 +70,8 @@ impl CliError {
                 message: String::new(),
                 code: QUIET_EXIT,
             }
+        } else if e.kind() == std::io::ErrorKind::StorageFull {
+            CliError::usage(format!("error: cannot write output: {e}\n  = help: free some space where the output goes (its temporary file is removed, and an older output at its path is left as it was)\n"))
         } else {
             CliError::usage(format!("error: cannot write output: {e}"))
         }

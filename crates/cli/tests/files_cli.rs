@@ -439,3 +439,257 @@ fn an_output_through_a_symbolic_link_writes_its_target() {
         .contains("G0 X1"));
     assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
 }
+
+/// A short program, written to `dir/name`; its path.
+fn small_program(dir: &Path, name: &str) -> String {
+    let prog = dir.join(name);
+    std::fs::write(
+        &prog,
+        "G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F100\nG1 X10\nG0 Z5\nM2\n",
+    )
+    .expect("write");
+    prog.to_str().expect("utf8").to_string()
+}
+
+/// Binary data on standard input (an image, `/dev/urandom`) is refused early, as not a
+/// program, instead of being spooled whole and read as G-code; text with a few tape codes
+/// is still a program.
+#[test]
+fn binary_standard_input_is_refused_as_not_a_program() {
+    // A splitmix stream: every byte value, about one in eight of them control bytes.
+    let mut x = 0x9e37_79b9_7f4a_7c15u64;
+    let bytes: Vec<u8> = (0..200_000)
+        .map(|_| {
+            x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = x;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            (z ^ (z >> 31)) as u8
+        })
+        .collect();
+    let o = lampost_stdin(&["check", "-"], &bytes);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("binary data, not a program"), "{err}");
+    // DC2 ... DC4 around a program (a DNC tape) are not binary.
+    let tape = b"\x12%\nG21 G90\nG0 X1 Y1\nG1 X2 F100\nM30\n%\x14\n".repeat(200);
+    let o = lampost_stdin(&["trace", "-"], &tape);
+    assert!(!stderr(&o).contains("binary data"), "{}", stderr(&o));
+}
+
+/// One path named as two outputs of a run (`inspect plan -o x --program x`) is refused
+/// before anything is written: the second replaced the first.
+#[test]
+fn one_path_named_as_two_outputs_is_refused() {
+    let dir = tempdir("two-outputs");
+    let pts = dir.join("pts.txt");
+    std::fs::write(
+        &pts,
+        "id x y z i j k\n1 0 0 10 0 0 1\n2 5 0 10 0 0 1\n3 0 5 10 0 0 1\n",
+    )
+    .expect("write");
+    let out = dir.join("same.txt");
+    let o = out.to_str().expect("utf8");
+    let r = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--points",
+        pts.to_str().expect("utf8"),
+        "-o",
+        o,
+        "--program",
+        o,
+    ]);
+    let err = stderr(&r);
+    assert!(!r.status.success(), "{err}");
+    assert!(err.contains("named as two outputs"), "{err}");
+    assert!(!out.exists(), "an output was written");
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+    // Two paths: both written.
+    let prog = dir.join("m.nc");
+    let r = lampost(&[
+        "inspect",
+        "plan",
+        "--machine",
+        "nrc-lc",
+        "--points",
+        pts.to_str().expect("utf8"),
+        "-o",
+        o,
+        "--program",
+        prog.to_str().expect("utf8"),
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(out.exists() && prog.exists());
+    let p = small_program(&dir, "in.nc");
+    let o = dir.join("out.nc");
+    let o = o.to_str().expect("utf8");
+    // A split's first piece takes the whole program's name: not two outputs.
+    let r = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        &p,
+        "-o",
+        o,
+        "--max-bytes",
+        "600",
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+}
+
+/// A run killed outright (SIGKILL, a power cut) leaves its temporary file; the next run
+/// writing the same output removes it when its process is gone, and never touches a
+/// live process's.
+#[test]
+fn a_dead_runs_temporary_file_is_removed_by_the_next() {
+    let dir = tempdir("stale-temp");
+    let p = small_program(&dir, "in.nc");
+    // Beyond any pid_max (2^22 at most).
+    let dead = dir.join(".out.nc.99999999.0.tmp");
+    let live = dir.join(format!(".out.nc.{}.0.tmp", std::process::id()));
+    let other = dir.join(".other.nc.99999999.0.tmp");
+    for f in [&dead, &live, &other] {
+        std::fs::write(f, "G0 X9").expect("write");
+    }
+    let out = dir.join("out.nc");
+    let r = lampost(&["fmt", &p, "-o", out.to_str().expect("utf8")]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(!dead.exists(), "the dead run's temporary file stayed");
+    assert!(live.exists(), "a live process's temporary file was removed");
+    assert!(
+        other.exists(),
+        "another output's temporary file was removed"
+    );
+}
+
+/// `-o LINK` where the link names a file not there yet makes that file and keeps the
+/// link (it made a new file in the link's place).
+#[test]
+fn a_link_to_a_missing_file_makes_the_file() {
+    let dir = tempdir("dangling-link");
+    let p = small_program(&dir, "in.nc");
+    let link = dir.join("link.nc");
+    std::os::unix::fs::symlink("made.nc", &link).expect("symlink");
+    let r = lampost(&["fmt", &p, "-o", link.to_str().expect("utf8")]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(std::fs::symlink_metadata(&link)
+        .expect("link")
+        .file_type()
+        .is_symlink());
+    let made = std::fs::read_to_string(dir.join("made.nc")).expect("the link's file");
+    assert!(made.contains("G1 X10"), "{made}");
+}
+
+/// `-o FIFO` with nobody reading it is refused at once (a blocking open waited for a
+/// reader without end, deaf to SIGINT); with a reader, the output goes through it.
+#[test]
+fn a_fifo_output_is_written_through_or_refused_at_once() {
+    let dir = tempdir("fifo-out");
+    let p = small_program(&dir, "in.nc");
+    let fifo = dir.join("pipe");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("no mkfifo here: test skipped");
+        return;
+    }
+    let f = fifo.to_str().expect("utf8");
+    let o = limited(
+        &format!("timeout 20 \"$LAMPOST\" fmt {p} -o {f}"),
+        4 << 20,
+        20,
+    );
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("no process is reading"), "{err}");
+    let got = dir.join("got.nc");
+    let o = limited(
+        &format!(
+            "cat {f} > {} & timeout 20 \"$LAMPOST\" fmt {p} -o {f}; s=$?; wait; exit $s",
+            got.display()
+        ),
+        4 << 20,
+        20,
+    );
+    // The reader may not have opened the FIFO yet when lampost does: then it is refused
+    // as above and nothing is read; either way it never waits.
+    if o.status.success() {
+        let text = std::fs::read_to_string(&got).expect("read");
+        assert!(text.contains("G1 X10"), "{text}");
+    } else {
+        assert!(
+            stderr(&o).contains("no process is reading"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+}
+
+/// `--max-bytes` with `-o /dev/null`: the pieces would be files in /dev; refused.
+#[test]
+fn a_split_to_a_device_is_refused() {
+    let dir = tempdir("split-device");
+    let p = small_program(&dir, "in.nc");
+    let r = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        &p,
+        "-o",
+        "/dev/null",
+        "--max-bytes",
+        "600",
+    ]);
+    let err = stderr(&r);
+    assert!(!r.status.success(), "{err}");
+    assert!(err.contains("is a device or a pipe"), "{err}");
+}
+
+/// An input written to while the run reads it (a copy still arriving) is not posted as a
+/// shorter program: nothing is put in place.
+#[test]
+fn an_input_changed_while_it_is_read_writes_nothing() {
+    let dir = tempdir("input-changed");
+    let input = dir.join("long.nc");
+    std::fs::write(&input, long_program(300_000)).expect("write");
+    let out = dir.join("out.nc");
+    let child = Command::new(env!("CARGO_BIN_EXE_lampost"))
+        .args(["post", "-q", "--machine", "nrc-lc", "--index", "B=30,C=45"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let t0 = std::time::Instant::now();
+    while temps(&dir).is_empty() && t0.elapsed().as_secs() < 20 {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&input)
+            .expect("open");
+        f.write_all(b"G1 X1 Y1\n").expect("append");
+    }
+    let o = child.wait_with_output().expect("wait");
+    let err = stderr(&o);
+    assert!(
+        !o.status.success(),
+        "the post finished before the change: {err}"
+    );
+    assert!(
+        err.contains("the input changed while this run read it"),
+        "{err}"
+    );
+    assert!(!out.exists(), "an output was written");
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+}

@@ -611,10 +611,15 @@ impl<S: LineSource> Stream<S> {
                 return true;
             }
             if expanded_past_cap(&mut self.expanded, moves_in(self.queue.range(start..))) {
-                self.queue.push_back(Event::Diagnostic(Diagnostic::whole(
-                    Severity::Error,
-                    ErrorKind::TooManyExpanded(MAX_EXPANDED),
-                )));
+                // At the line of the cycle's last move (the profile's moves carry it).
+                let line = self.queue.range(start..).rev().find_map(|e| match e {
+                    Event::Move(m) => Some(m.line),
+                    Event::Diagnostic(_) | Event::Stop(_) => None,
+                });
+                let mut d =
+                    Diagnostic::whole(Severity::Error, ErrorKind::TooManyExpanded(MAX_EXPANDED));
+                d.line = line.unwrap_or(0);
+                self.queue.push_back(Event::Diagnostic(d));
                 return true;
             }
         }
