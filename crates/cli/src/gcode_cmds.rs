@@ -308,6 +308,10 @@ pub fn fmt(
 }
 
 fn num(v: f64) -> String {
+    // Beyond 1e15 in exponent form (a 300-digit X is not shown as 300 digits).
+    if v.is_finite() && v.abs() >= 1e15 {
+        return format!("{v:e}");
+    }
     let mut s = fixed(v, 6);
     if s.contains('.') {
         while s.ends_with('0') {

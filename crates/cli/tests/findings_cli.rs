@@ -4845,3 +4845,31 @@ fn a_program_ending_with_the_spindle_or_coolant_on_fails_verify() {
         );
     }
 }
+
+/// h58: a 300-digit coordinate was shown as 300 digits by `trace` and in the post's
+/// travel refusal; beyond 1e15 a number is now shown in exponent form.
+#[test]
+fn a_huge_number_is_shown_in_exponent_form() {
+    let dir = tempdir("huge-number");
+    let prog = dir.join("big.nc");
+    let nines = "9".repeat(300);
+    std::fs::write(
+        &prog,
+        format!("G21 G90\nG0 X0 Y0 Z5\nG1 X{nines} F100\nM30\n"),
+    )
+    .expect("write");
+    let p = prog.to_str().expect("utf8");
+    let long_digits = |t: &str| {
+        t.split(|c: char| !c.is_ascii_digit())
+            .any(|run| run.len() > 20)
+    };
+    let o = lampost(&["trace", p]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(out.contains("X1e300"), "{out}");
+    assert!(!long_digits(&out), "{out}");
+    let o = lampost(&["post", "--machine", "nrc-lc", "--index", "B=0,C=0", p]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("e300 is beyond its travel"), "{err}");
+    assert!(!long_digits(&err), "{err}");
+}

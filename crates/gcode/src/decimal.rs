@@ -67,6 +67,22 @@ impl std::fmt::Display for Readable {
     }
 }
 
+/// A number to a fixed number of places as a message shows it: `{:.places$}` below
+/// 1e15 in magnitude, in exponent form beyond (`1.0000e300`, not 300 digits).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fixed(pub f64, pub usize);
+
+impl std::fmt::Display for Fixed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Fixed(v, places) = *self;
+        if v.is_finite() && v.abs() >= 1e15 {
+            write!(f, "{v:.places$e}")
+        } else {
+            write!(f, "{v:.places$}")
+        }
+    }
+}
+
 /// The largest number of places [`push_exact_fixed`] writes by its fast path.
 const EXACT_MAX_PLACES: usize = 9;
 

@@ -43,7 +43,7 @@ mod stream;
 mod turning;
 
 pub use ast::{Block, BlockKind, Comment, CommentStyle, Item, MacroKind, Span, Text, Word};
-pub use decimal::{parse_number, parse_plain, push_exact_fixed, Readable, POW10};
+pub use decimal::{parse_number, parse_plain, push_exact_fixed, Fixed, Readable, POW10};
 pub use diag::{Diagnostic, ErrorKind, Severity, Snippet};
 pub use emit::{
     fixed, fixed_into, out_of_range, push_fixed, round_half_away, whole_into, Dialect, EmitOptions,

@@ -17,6 +17,15 @@ use crate::{Mesh, P3};
 /// The largest part inflated (bytes).
 pub const MAX_PART: usize = 1 << 30;
 
+/// Most bytes a DEFLATE part may inflate to per compressed byte once it passes
+/// [`RATIO_FREE`]: a 3MF model's XML compresses some 3 to 20 times; a part that says it
+/// inflates 200 times is a ZIP bomb (a megabyte of compressed blanks is a gigabyte of
+/// XML to parse).
+pub const MAX_RATIO: usize = 200;
+
+/// Parts up to this size (16 MiB) are inflated whatever their ratio.
+const RATIO_FREE: usize = 16 << 20;
+
 /// Deepest nesting of components.
 const MAX_DEPTH: usize = 32;
 
@@ -132,6 +141,12 @@ fn part_bytes(b: &[u8], e: &Entry) -> Result<Vec<u8>, MeshError> {
     if e.size > MAX_PART || e.compressed == 0xFFFF_FFFF {
         return Err(bad(&format!(
             "the part is larger than {MAX_PART} bytes (or a ZIP64 part)"
+        )));
+    }
+    if e.method == 8 && e.size > RATIO_FREE && e.size / e.compressed.max(1) > MAX_RATIO {
+        return Err(bad(&format!(
+            "the part says it inflates from {} to {} bytes, more than {MAX_RATIO} times: a ZIP bomb, not a model (a 3MF model's XML compresses 3 to 20 times)",
+            e.compressed, e.size
         )));
     }
     let l = e.local;
@@ -847,6 +862,28 @@ mod tests {
 </model>
 "#
         )
+    }
+
+    /// h58: a megabyte of DEFLATE blanks inflates to a gigabyte of XML (within
+    /// [`MAX_PART`]) and took 1 GB to read; a part claiming more than [`MAX_RATIO`] times
+    /// its compressed size is refused before it is inflated.
+    #[test]
+    fn a_zip_bomb_part_is_refused_before_it_is_inflated() {
+        let model = tetra("millimeter", "1");
+        let mut pkg = zip(&[("3D/3dmodel.model", model.as_bytes())]);
+        // The central directory's entry: say DEFLATE, 64 MiB from the stored bytes.
+        let cd = pkg
+            .windows(4)
+            .position(|w| w == b"PK\x01\x02")
+            .expect("central directory");
+        pkg[cd + 10..cd + 12].copy_from_slice(&8u16.to_le_bytes());
+        pkg[cd + 24..cd + 28].copy_from_slice(&(64u32 << 20).to_le_bytes());
+        let e = read_3mf(&pkg).expect_err("a bomb");
+        let text = e.to_string();
+        assert!(text.contains("ZIP bomb"), "{text}");
+        // The same model stored as it is reads.
+        let ok = zip(&[("3D/3dmodel.model", model.as_bytes())]);
+        assert!(read_3mf(&ok).is_ok());
     }
 
     #[test]

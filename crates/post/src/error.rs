@@ -49,7 +49,7 @@ pub enum PostError {
         machine: &'static str,
     },
     /// A point beyond travel.
-    #[error("{file}:{line}: {axis} = {value:.4} is beyond its travel [{lo}, {hi}]")]
+    #[error("{file}:{line}: {axis} = {} is beyond its travel [{lo}, {hi}]", lampost_gcode::Fixed(*.value, 4))]
     Limit {
         /// Input name.
         file: String,

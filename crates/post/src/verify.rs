@@ -1767,8 +1767,11 @@ impl<'m> Safety<'m> {
                 return Err(Self::fail(
                     line,
                     format!(
-                        "{} = {v:.4} is beyond its travel [{}, {}]",
-                        l.name, l.limits.0, l.limits.1
+                        "{} = {} is beyond its travel [{}, {}]",
+                        l.name,
+                        lampost_gcode::Fixed(v, 4),
+                        l.limits.0,
+                        l.limits.1
                     ),
                 ));
             }
@@ -1777,7 +1780,12 @@ impl<'m> Safety<'m> {
             if !v.is_finite() || !r.within(v) {
                 return Err(Self::fail(
                     line,
-                    format!("{} = {v:.3} is beyond its travel {:?}", r.name, r.limits),
+                    format!(
+                        "{} = {} is beyond its travel {:?}",
+                        r.name,
+                        lampost_gcode::Fixed(v, 3),
+                        r.limits
+                    ),
                 ));
             }
         }
