@@ -4873,3 +4873,31 @@ fn a_huge_number_is_shown_in_exponent_form() {
     assert!(err.contains("e300 is beyond its travel"), "{err}");
     assert!(!long_digits(&err), "{err}");
 }
+
+/// h61: a Fusion/HSM program saved with classic Mac line ends (CR alone; TinyG's
+/// `MAGNET_HOLES.txt`) was refused as Siemens Sinumerik syntax, its tool comment's `CR=0.`
+/// read as Sinumerik's radius word; it is refused at its first bare CR, as documented.
+#[test]
+fn a_tool_comment_with_cr_is_not_sinumerik() {
+    let dir = tempdir("cr-comment");
+    let prog = dir.join("cr.nc");
+    std::fs::write(
+        &prog,
+        "(T2 D=1.587 CR=0. - ZMIN=-8.427 - FLAT END MILL)\rG90 G94 G17\rG21\rG0 X1 Y1\rM30\r",
+    )
+    .expect("write");
+    let o = lampost(&["check", prog.to_str().expect("utf8")]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(!err.contains("Sinumerik"), "{err}");
+    assert!(err.contains("carriage return"), "{err}");
+    // With line feeds it is a program.
+    let lf = dir.join("lf.nc");
+    std::fs::write(
+        &lf,
+        "(T2 D=1.587 CR=0. - ZMIN=-8.427 - FLAT END MILL)\nG90 G94 G17\nG21\nG0 X1 Y1\nM30\n",
+    )
+    .expect("write");
+    let o = lampost(&["check", lf.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -244,7 +244,10 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     }
     // Sinumerik: its cycles, messages, tool names, `NAME=` values, R parameters
     // (`R20=200`, `R101=R101+1`) and frame statements.
-    let code = u.split(';').next().unwrap_or("");
+    // Read without ISO comments: a Fusion or HSM tool comment says `CR=0.` (the corner
+    // radius) in parentheses.
+    let code = without_comments(u.split(';').next().unwrap_or(""));
+    let code = code.as_str();
     let r_parameter = code.split_whitespace().any(|w| {
         w.strip_prefix('R').is_some_and(|r| {
             let d = r.bytes().take_while(u8::is_ascii_digit).count();
@@ -268,6 +271,29 @@ pub fn foreign_language(line: &str) -> Option<Foreign> {
     None
 }
 
+/// `s` without its parenthesised comments: a `(` at the start or after a blank opens
+/// one, to its `)` (or the end), except Sinumerik's `MSG (`; a `(` right after a name or
+/// `=` is Sinumerik's call or value (`CYCLE81(`, `MSG(`, `=AC(`) and is kept.
+fn without_comments(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(k) = rest.find('(') {
+        let before = &rest[..k];
+        let attached = before.chars().last().is_some_and(|c| !c.is_whitespace());
+        let message = before.trim_end().ends_with("MSG");
+        out.push_str(before);
+        if attached || message {
+            out.push('(');
+            rest = &rest[k + 1..];
+        } else {
+            rest = rest[k..].find(')').map_or("", |e| &rest[k + e + 1..]);
+            out.push(' ');
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -280,6 +306,11 @@ mod tests {
             ("3 TOOL CALL 1 Z S3000", Some(HEIDENHAIN)),
             ("N20 T=\"MILL_10\" D1", Some(SINUMERIK)),
             ("N70 G2 X10 Y0 CR=5", Some(SINUMERIK)),
+            // h61: a Fusion/HSM tool comment names the corner radius.
+            ("(T2 D=1.587 CR=0. - ZMIN=-8.427 - FLAT END MILL)", None),
+            ("G0 X1 (R1=5 CR=2)", None),
+            ("MSG (\"ROUGHING\")", Some(SINUMERIK)),
+            ("N10 G0 X=AC(10)", Some(SINUMERIK)),
             ("N80 CYCLE81(10,0,1,-5)", Some(SINUMERIK)),
             ("MSG(\"ROUGHING\")", Some(SINUMERIK)),
             ("GOTO/ 1.0000, 2.0000, 3.0000", Some(APT)),
