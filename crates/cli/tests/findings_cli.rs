@@ -4901,3 +4901,77 @@ fn a_tool_comment_with_cr_is_not_sinumerik() {
     let o = lampost(&["check", lf.to_str().expect("utf8")]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// h62: under a printer's flavour an arc's `P2` was read as LinuxCNC's two turns (Marlin
+/// with `ARC_P_CIRCLES`: three; Klipper, RepRapFirmware: one) and posted so; it is
+/// refused at the word. `P1`, which BambuStudio's spiral lifts write, is the arc itself.
+#[test]
+fn a_printers_arc_p_is_refused() {
+    let dir = tempdir("printer-arc-p");
+    let prog = dir.join("p2.gcode");
+    let head = ";FLAVOR:Marlin\nG21\nG90\nM83\nG0 X10 Y10 Z0.3 F3000\nG1 X20 E1 F600\n";
+    std::fs::write(&prog, format!("{head}G2 X20 Y10 I5 J0 E10 P2\nM2\n")).expect("write");
+    let p = prog.to_str().expect("utf8");
+    let o = lampost(&["post", "--machine", "nrc-lc", "--index", "B=0,C=0", p]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains(":7:") && err.contains("P of 2 or more"),
+        "{err}"
+    );
+    let o = lampost(&["check", p]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    let one = dir.join("p1.gcode");
+    std::fs::write(&one, format!("{head}G2 X20 Y10 I5 J0 E10 P1\nM2\n")).expect("write");
+    let o = lampost(&["trace", "--json", one.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("\"turns\":1"), "{text}");
+}
+
+/// h62: an arc fitted by a slicer (radius 2 m over 1.5 mm, as BambuStudio and OrcaSlicer
+/// write) counted as its whole 4 m circle in the work's height, so the tilted post asked
+/// for a retract far above the NRC cell's travel and refused; it now posts and verifies,
+/// its retract where the same path written with G1 has it.
+#[test]
+fn a_fitted_near_straight_arc_posts_tilted() {
+    let dir = tempdir("fitted-arc");
+    let head = ";FLAVOR:Marlin\nG21\nG90\nM83\nG0 X0 Y0 Z0.2 F3000\nG1 X10 E0.5 F1200\n";
+    let arc = dir.join("arc.gcode");
+    std::fs::write(
+        &arc,
+        format!("{head}G2 X11.5 Y0 I0.75 J-2000 E0.05\nG1 X20 E0.5\nM2\n"),
+    )
+    .expect("write");
+    let line = dir.join("line.gcode");
+    std::fs::write(&line, format!("{head}G1 X11.5 Y0 E0.05\nG1 X20 E0.5\nM2\n")).expect("write");
+    let retract = |input: &Path| -> String {
+        let out = input.with_extension("nc");
+        let o = lampost(&[
+            "post",
+            "--machine",
+            "nrc-lc",
+            "--index",
+            "B=30,C=45",
+            input.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v = lampost(&[
+            "verify",
+            "--machine",
+            "nrc-lc",
+            "--index",
+            "B=30,C=45",
+            input.to_str().expect("utf8"),
+            out.to_str().expect("utf8"),
+        ]);
+        assert!(v.status.success(), "{}", stderr(&v));
+        let text = std::fs::read_to_string(&out).expect("posted");
+        text.lines()
+            .find_map(|l| l.split_once("G0 Z").map(|(_, z)| z.to_string()))
+            .expect("a retract")
+    };
+    assert_eq!(retract(&arc), retract(&line));
+}

@@ -3741,6 +3741,21 @@ impl Interpreter {
         let radius_word = w.word(b'R').or(w.registers[0]);
         let has_ijk = w.word(centre_letter(u)).is_some() || w.word(centre_letter(v)).is_some();
         let turns = match w.word(b'P') {
+            // A printer's firmware reads an arc's P its own way, or not at all (h62): P0
+            // and P1 are the arc itself on every reading of the files slicers write
+            // (BambuStudio's and Creality Print's lifts say `P1`); more turns are refused.
+            Some(p) if self.opts.flavor.is_slicer() && (p.value == 0.0 || p.value == 1.0) => 1,
+            Some(p) if self.opts.flavor.is_slicer() => {
+                return Err(diag(
+                    b,
+                    Severity::Error,
+                    ErrorKind::BadValue {
+                        word: p.display(),
+                        why: "an arc's P of 2 or more means other turns on each printer firmware (Marlin built with ARC_P_CIRCLES makes P whole circles before the arc, other Marlin builds, Klipper and RepRapFirmware ignore it): write each circle as an arc of its own",
+                    },
+                    Some(p.span),
+                ))
+            }
             Some(p) if p.value > f64::from(MAX_REPEATS) => {
                 return Err(diag(
                     b,

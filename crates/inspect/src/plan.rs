@@ -236,15 +236,16 @@ pub fn plan(
                     let d = Vector3::from(t.point) - Vector3::from(p);
                     (rotary_distance(m, &r, q), d.norm())
                 };
-                let mut best = 0;
-                for (i, idx) in left.iter().enumerate() {
+                // The best so far and its cost (priced once, not again at every compare).
+                let mut best = (0, cost(&left[0]));
+                for (i, idx) in left.iter().enumerate().skip(1) {
                     let (a, b) = cost(idx);
-                    let (c, d) = cost(&left[best]);
+                    let (c, d) = best.1;
                     if a < c - 1e-9 || (a <= c + 1e-9 && b < d) {
-                        best = i;
+                        best = (i, (a, b));
                     }
                 }
-                best
+                best.0
             }
         };
         let i = left.remove(k);

@@ -67,7 +67,8 @@ impl WorkBounds {
         self.points.extend_from_slice(&o.points);
     }
 
-    /// Grow to hold the path of a feed step (an arc by its whole circle).
+    /// Grow to hold the path of a feed step: a line by its ends, an arc by the part of
+    /// its circle it sweeps (the whole circle from a turn on).
     pub fn add_step(&mut self, s: &Step) {
         match s.kind {
             StepKind::Rapid | StepKind::Retract | StepKind::Stop(_) | StepKind::ToolChange(_) => {}
@@ -75,23 +76,61 @@ impl WorkBounds {
                 self.add(&s.start);
                 self.add(&s.end);
             }
-            StepKind::Arc { center, normal, .. } => {
-                // The whole circle (its extent along axis k is r·√(1 − n_k²)), at the
-                // start's level and at the end's (a helix rises between them).
+            StepKind::Arc {
+                center,
+                normal,
+                sweep,
+            } => {
                 self.add(&s.start);
                 self.add(&s.end);
                 let n = normal;
                 let rel = s.start - center;
-                let r = (rel - n * n.dot(&rel)).norm();
-                let half = Vector3::new(
-                    r * (1.0 - n.x * n.x).max(0.0).sqrt(),
-                    r * (1.0 - n.y * n.y).max(0.0).sqrt(),
-                    r * (1.0 - n.z * n.z).max(0.0).sqrt(),
-                );
+                let radial = rel - n * n.dot(&rel);
+                let r = radial.norm();
                 let rise = n * n.dot(&(s.end - s.start));
-                for c in [center, center + rise] {
-                    self.add(&(c - half));
-                    self.add(&(c + half));
+                if r.is_nan() || r <= 0.0 {
+                    return;
+                }
+                if sweep.is_nan() || sweep.abs() >= std::f64::consts::TAU {
+                    // The whole circle (its extent along axis k is r·√(1 − n_k²)), at the
+                    // start's level and at the end's (a helix rises between them).
+                    let half = Vector3::new(
+                        r * (1.0 - n.x * n.x).max(0.0).sqrt(),
+                        r * (1.0 - n.y * n.y).max(0.0).sqrt(),
+                        r * (1.0 - n.z * n.z).max(0.0).sqrt(),
+                    );
+                    for c in [center, center + rise] {
+                        self.add(&(c - half));
+                        self.add(&(c + half));
+                    }
+                    return;
+                }
+                // The point at angle θ from the start is c + r(u cos θ + v sin θ): along
+                // axis k it is greatest at θ = atan2(v_k, u_k) and least half a turn on;
+                // each of those within the sweep is added, at the start's level and the
+                // end's. (A near-straight arc fitted by a slicer, radius 2 m over 1.5 mm,
+                // is its 1.5 mm, not a 4 m circle.)
+                // The ends at both levels too: along the helix the rise adds to the
+                // flat arc's extent anywhere between 0 and all of it.
+                self.add(&(s.start + rise));
+                self.add(&(s.end - rise));
+                let u = radial / r;
+                let v = n.cross(&u);
+                for k in 0..3 {
+                    let top = v[k].atan2(u[k]);
+                    for phi in [top, top + std::f64::consts::PI] {
+                        let a = if sweep >= 0.0 {
+                            phi.rem_euclid(std::f64::consts::TAU)
+                        } else {
+                            phi.rem_euclid(std::f64::consts::TAU) - std::f64::consts::TAU
+                        };
+                        let within = if sweep >= 0.0 { a <= sweep } else { a >= sweep };
+                        if within {
+                            let p = center + (u * a.cos() + v * a.sin()) * r;
+                            self.add(&p);
+                            self.add(&(p + rise));
+                        }
+                    }
                 }
             }
         }
@@ -319,4 +358,94 @@ pub(crate) fn sweep_slack(m: &Machine, work: &WorkBounds, from: &[f64; 2], to: &
     let reach = work.extremes().map(|c| c.norm()).fold(0.0, f64::max)
         + m.rotary.iter().map(|r| r.pivot.norm()).fold(0.0, f64::max);
     reach * (1.0 - 0.5f64.to_radians().cos())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn arc_step(
+        center: Vector3<f64>,
+        n: Vector3<f64>,
+        start: Vector3<f64>,
+        sweep: f64,
+        rise: f64,
+    ) -> Step {
+        let u = start - center;
+        let v = n.cross(&u);
+        let end = center + u * sweep.cos() + v * sweep.sin() + n * rise;
+        Step {
+            section: 0,
+            layer: 0,
+            line: 1,
+            kind: StepKind::Arc {
+                center,
+                normal: n,
+                sweep,
+            },
+            start,
+            end,
+            feed: 100.0,
+            deposit: true,
+            tool: 0,
+        }
+    }
+
+    proptest! {
+        /// The box of an arc holds every point of it (sampled at 2,000 angles, the helix
+        /// rising evenly), and is no larger than the whole circle's.
+        #[test]
+        fn an_arcs_box_holds_the_arc(
+            c in prop::array::uniform3(-50.0f64..50.0),
+            n in prop::array::uniform3(-1.0f64..1.0),
+            d in prop::array::uniform3(-1.0f64..1.0),
+            r in 0.01f64..2000.0,
+            sweep in -7.0f64..7.0,
+            rise in -5.0f64..5.0,
+        ) {
+            let n = Vector3::from(n);
+            prop_assume!(n.norm() > 0.1);
+            let n = n.normalize();
+            let d = Vector3::from(d);
+            let radial = d - n * n.dot(&d);
+            prop_assume!(radial.norm() > 0.1);
+            let center = Vector3::from(c);
+            let start = center + radial.normalize() * r;
+            let s = arc_step(center, n, start, sweep, rise);
+            let mut b = WorkBounds::empty();
+            b.add_step(&s);
+            let u = (start - center) / r;
+            let v = n.cross(&u);
+            let tol = 1e-9 * (1.0 + r);
+            for i in 0..=2000 {
+                let t = f64::from(i) / 2000.0;
+                let a = sweep * t;
+                let p = center + (u * a.cos() + v * a.sin()) * r + n * (rise * t);
+                for k in 0..3 {
+                    prop_assert!(p[k] >= b.min[k] - tol && p[k] <= b.max[k] + tol,
+                        "axis {k}: {} outside [{}, {}] at t {t}", p[k], b.min[k], b.max[k]);
+                }
+            }
+            let mut whole = WorkBounds::empty();
+            whole.add_step(&arc_step(center, n, start, 7.0, rise));
+            for k in 0..3 {
+                prop_assert!(b.min[k] >= whole.min[k] - tol && b.max[k] <= whole.max[k] + tol);
+            }
+        }
+    }
+
+    /// h62: an arc-fitted slicer's near-straight arc (radius 2 m, 1.5 mm long) is its
+    /// 1.5 mm, not a 4 m circle (the tilted post asked for a retract above its travel).
+    #[test]
+    fn a_near_straight_arc_is_as_tall_as_its_chord() {
+        let center = Vector3::new(0.75, -2000.0, 0.0);
+        let start = Vector3::new(0.0, 0.0, 0.0);
+        let r: f64 = (start - center).norm();
+        let sweep = -2.0 * (0.75 / r).asin();
+        let s = arc_step(center, Vector3::z(), start, sweep, 0.0);
+        let mut b = WorkBounds::empty();
+        b.add_step(&s);
+        assert!((b.max - b.min).norm() < 1.6, "{:?} {:?}", b.min, b.max);
+    }
 }
