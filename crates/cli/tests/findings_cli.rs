@@ -4975,3 +4975,40 @@ fn a_fitted_near_straight_arc_posts_tilted() {
     };
     assert_eq!(retract(&arc), retract(&line));
 }
+
+/// h62: a travel that goes nowhere in the middle of a deposit (PrusaSlicer's spiral vase
+/// writes `G1 Z4.800 F9000` at Z4.8 at every layer) split the run: laser off, a lift to
+/// the safe height and down again over the same point. The run now goes on.
+#[test]
+fn a_travel_to_where_the_head_stands_keeps_the_run() {
+    let dir = tempdir("standing-travel");
+    let prog = dir.join("vase.gcode");
+    std::fs::write(
+        &prog,
+        ";FLAVOR:Marlin\nG21\nG90\nM83\nG0 X10 Y10 Z0.3 F3000\nG1 X20 E1 F600\nG1 Z0.3 F9000\nG1 X30 E1 F600\nG1 Z0.6 F9000\nG1 X40 E1\nM2\n",
+    )
+    .expect("write");
+    let p = prog.to_str().expect("utf8");
+    let out = dir.join("vase.nc");
+    let o = out.to_str().expect("utf8");
+    let r = lampost(&[
+        "post",
+        "--machine",
+        "nrc-lc",
+        "--index",
+        "B=0,C=0",
+        p,
+        "-o",
+        o,
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let text = std::fs::read_to_string(&out).expect("posted");
+    // One run up to the lift to Z0.6 (a move: travel, the laser off), then another.
+    assert_eq!(text.matches("M71").count(), 2, "{text}");
+    let v = lampost(&["verify", "--machine", "nrc-lc", "--index", "B=0,C=0", p, o]);
+    assert!(v.status.success(), "{}", stderr(&v));
+    // The first run holds both deposits: no M72 between.
+    let a = text.find("X-20.000").expect("first deposit");
+    let b = text.find("X-30.000").expect("second deposit");
+    assert!(!text[a..b].contains("M72"), "{text}");
+}

@@ -564,6 +564,21 @@ pub(crate) fn post_steps<W: Write>(
             );
             // The move being written, for the in-process verification (approach included).
             w.feed_check.step = if travel { None } else { Some(*step) };
+            // A travel that goes nowhere from where the head stands in a run (a slicer's
+            // `G1 Z0.3 F9000` at Z0.3 between two extrusions, as PrusaSlicer's spiral
+            // vase writes at every layer) moves nothing: the run goes on, not lifted off
+            // and started again over the same point (h62).
+            let standing = step.kind == StepKind::Rapid
+                && step.start == step.end
+                && w.in_run
+                && !need_approach
+                && w.pos.is_some_and(|p| {
+                    let here = w.on_grid(&start);
+                    (0..3).all(|k| (p[k] - here[k]).abs() <= 1e-6)
+                });
+            if standing {
+                continue;
+            }
             if travel {
                 // Input travel is not written as it stands: the head lifts off the end of
                 // the run to the safe height, and is brought over the next start from there.

@@ -505,7 +505,11 @@ pub fn extruding_runs_with(src: &str, letters: &[char]) -> (usize, f64) {
                 runs += 1;
             }
         }
-        in_run = extrudes;
+        // A move that goes nowhere and extrudes nothing (a slicer's `G1 Z0.3 F9000` at
+        // Z0.3) ends no run: the head stands where it was.
+        if extrudes || end != pos {
+            in_run = extrudes;
+        }
         pos = end;
     }
     (runs, length)
